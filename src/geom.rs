@@ -1,0 +1,139 @@
+//! Plane geometry: a small `Vec2` value type and point–segment queries.
+
+use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
+
+/// A 2D vector or point, `f64` components.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Vec2 {
+    pub x: f64,
+    pub y: f64,
+}
+
+impl Vec2 {
+    pub const ZERO: Vec2 = Vec2 { x: 0.0, y: 0.0 };
+
+    #[inline]
+    pub const fn new(x: f64, y: f64) -> Self {
+        Vec2 { x, y }
+    }
+    #[inline]
+    pub fn dot(self, o: Vec2) -> f64 {
+        self.x * o.x + self.y * o.y
+    }
+    /// z-component of the 3D cross product `self × o`.
+    #[inline]
+    pub fn cross(self, o: Vec2) -> f64 {
+        self.x * o.y - self.y * o.x
+    }
+    #[inline]
+    pub fn norm2(self) -> f64 {
+        self.dot(self)
+    }
+    #[inline]
+    pub fn norm(self) -> f64 {
+        self.norm2().sqrt()
+    }
+    /// Rotated by +90°: `(−y, x)`.
+    #[inline]
+    pub fn perp(self) -> Vec2 {
+        Vec2::new(-self.y, self.x)
+    }
+    #[inline]
+    pub fn to_array(self) -> [f64; 2] {
+        [self.x, self.y]
+    }
+}
+
+impl From<[f64; 2]> for Vec2 {
+    #[inline]
+    fn from(a: [f64; 2]) -> Self {
+        Vec2::new(a[0], a[1])
+    }
+}
+
+impl Add for Vec2 {
+    type Output = Vec2;
+    #[inline]
+    fn add(self, o: Vec2) -> Vec2 {
+        Vec2::new(self.x + o.x, self.y + o.y)
+    }
+}
+impl Sub for Vec2 {
+    type Output = Vec2;
+    #[inline]
+    fn sub(self, o: Vec2) -> Vec2 {
+        Vec2::new(self.x - o.x, self.y - o.y)
+    }
+}
+impl Neg for Vec2 {
+    type Output = Vec2;
+    #[inline]
+    fn neg(self) -> Vec2 {
+        Vec2::new(-self.x, -self.y)
+    }
+}
+impl Mul<f64> for Vec2 {
+    type Output = Vec2;
+    #[inline]
+    fn mul(self, s: f64) -> Vec2 {
+        Vec2::new(self.x * s, self.y * s)
+    }
+}
+impl Mul<Vec2> for f64 {
+    type Output = Vec2;
+    #[inline]
+    fn mul(self, v: Vec2) -> Vec2 {
+        v * self
+    }
+}
+impl AddAssign for Vec2 {
+    #[inline]
+    fn add_assign(&mut self, o: Vec2) {
+        self.x += o.x;
+        self.y += o.y;
+    }
+}
+impl SubAssign for Vec2 {
+    #[inline]
+    fn sub_assign(&mut self, o: Vec2) {
+        self.x -= o.x;
+        self.y -= o.y;
+    }
+}
+
+/// Closest point of segment `[a, b]` to `p`, as the parameter `s ∈ [0, 1]`
+/// along the segment and the point itself.
+#[inline]
+pub fn closest_on_segment(p: Vec2, a: Vec2, b: Vec2) -> (f64, Vec2) {
+    let ab = b - a;
+    let l2 = ab.norm2();
+    let s = if l2 > 0.0 {
+        ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (s, a + ab * s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn closest_point_interior_and_ends() {
+        let a = Vec2::new(0.0, 0.0);
+        let b = Vec2::new(2.0, 0.0);
+        let (s, q) = closest_on_segment(Vec2::new(0.5, 3.0), a, b);
+        assert_eq!((s, q), (0.25, Vec2::new(0.5, 0.0)));
+        let (s, q) = closest_on_segment(Vec2::new(-1.0, 1.0), a, b);
+        assert_eq!((s, q), (0.0, a));
+        let (s, q) = closest_on_segment(Vec2::new(5.0, -1.0), a, b);
+        assert_eq!((s, q), (1.0, b));
+    }
+
+    #[test]
+    fn cross_sign_is_counter_clockwise_positive() {
+        assert_eq!(Vec2::new(1.0, 0.0).cross(Vec2::new(0.0, 1.0)), 1.0);
+        assert_eq!(Vec2::new(1.0, 0.0).perp(), Vec2::new(0.0, 1.0));
+    }
+}

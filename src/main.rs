@@ -1,0 +1,95 @@
+//! `efgdem`: the command-line interface.
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use efgdem::scenario::{self, ScenarioError};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Element-free Galerkin continua coupled with discrete elements (Wang et al. 2020).
+#[derive(Parser)]
+#[command(version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Run a scenario file and write summary.json, history.csv and ParaView frames.
+    Run {
+        /// The scenario (TOML), see docs/scenario.md.
+        file: PathBuf,
+        /// Output directory (created if missing).
+        #[arg(short, long, default_value = "out")]
+        out: PathBuf,
+        /// Worker threads (0 = all cores; results do not depend on it).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// No progress bar.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// Validate a scenario without running it; print sizes and time-step diagnostics.
+    Check {
+        /// The scenario (TOML).
+        file: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match dispatch(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // Bad input is exit code 2; anything else 1.
+            if let Some(se) = e.downcast_ref::<ScenarioError>() {
+                eprintln!("error: {se}");
+                return ExitCode::from(2);
+            }
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn set_threads(n: usize) -> anyhow::Result<()> {
+    if n > 0 {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("setting up the thread pool")?;
+    }
+    Ok(())
+}
+
+fn dispatch(cli: Cli) -> anyhow::Result<()> {
+    match cli.cmd {
+        Cmd::Run {
+            file,
+            out,
+            threads,
+            quiet,
+        } => {
+            let sc = scenario::load(&file)?;
+            set_threads(threads.unwrap_or(sc.simulation.threads))?;
+            let opts = efgdem::run::RunOptions {
+                out_dir: out.clone(),
+                quiet,
+            };
+            let t0 = std::time::Instant::now();
+            efgdem::run::run(&sc, &opts).with_context(|| format!("running {}", file.display()))?;
+            eprintln!(
+                "done in {:.3} s; results in {}",
+                t0.elapsed().as_secs_f64(),
+                out.display()
+            );
+        }
+        Cmd::Check { file } => {
+            let sc = scenario::load(&file)?;
+            let report = efgdem::run::check(&sc)?;
+            println!("{}: ok\n{report}", file.display());
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,1 @@
+//! Generators: node grids for bodies, particle packings for the granular assembly.

@@ -1,0 +1,449 @@
+//! The scenario: one TOML format for EFG-only, DEM-only and coupled runs.
+//!
+//! A run differs only in which sections are present (`[[body]]`,
+//! `[granular]`, `[[wall]]`). Every table denies unknown fields. Semantic
+//! checks (`validate`) report a dotted path such as `body.0.elastic.E`,
+//! which [`parse`] maps back to the line of the file with `toml_edit`, so
+//! that every error reads `file:line: field: what is wrong (what is allowed)`.
+//! Every field and its default is documented in `docs/scenario.md`.
+
+pub mod body;
+pub mod generate;
+pub mod granular;
+
+use serde::Deserialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A whole scenario file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    #[serde(default)]
+    pub simulation: Simulation,
+    /// Contact materials, referenced by name from discs and walls.
+    #[serde(default)]
+    pub material: Vec<Material>,
+    /// Continuum bodies (EFG or FE).
+    #[serde(default)]
+    pub body: Vec<body::BodySpec>,
+    /// The granular assembly (discs).
+    pub granular: Option<granular::GranularSpec>,
+    /// Rigid walls (line segments).
+    #[serde(default)]
+    pub wall: Vec<granular::WallSpec>,
+    /// History outputs, one `history.csv` column each.
+    #[serde(default)]
+    pub probe: Vec<Probe>,
+    #[serde(default)]
+    pub output: Output,
+    /// Directory of the scenario file: relative paths inside it resolve here.
+    #[serde(skip)]
+    pub base_dir: PathBuf,
+}
+
+/// `[simulation]`: time stepping and global loads.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Simulation {
+    /// `"static"` (one linear solve) or `"dynamic"` (time stepping).
+    #[serde(default)]
+    pub analysis: Analysis,
+    /// Time step; for DEM runs `None` means `dt_safety ×` the critical step.
+    pub dt: Option<f64>,
+    /// Number of steps (or give `end_time`).
+    pub steps: Option<usize>,
+    pub end_time: Option<f64>,
+    /// Gravity acceleration vector.
+    #[serde(default)]
+    pub gravity: [f64; 2],
+    /// Worker threads; 0 = all cores. Results do not depend on it.
+    #[serde(default)]
+    pub threads: usize,
+}
+
+impl Default for Simulation {
+    fn default() -> Self {
+        Simulation {
+            analysis: Analysis::Dynamic,
+            dt: None,
+            steps: None,
+            end_time: None,
+            gravity: [0.0, 0.0],
+            threads: 0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Analysis {
+    Static,
+    #[default]
+    Dynamic,
+}
+
+/// `[[material]]`: a contact material (discs, walls, body contact edges).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    pub name: String,
+    /// Mass density of discs made of this material.
+    #[serde(default)]
+    pub density: f64,
+    /// Normal contact stiffness `k_n` (force / length).
+    #[serde(default)]
+    pub kn: f64,
+    /// Shear contact stiffness `k_s`.
+    #[serde(default)]
+    pub ks: f64,
+    /// Friction coefficient `tan φ` (Eq. 37).
+    #[serde(default)]
+    pub friction: f64,
+    /// Cohesion `c` (force) in the Coulomb cap (Eq. 37).
+    #[serde(default)]
+    pub cohesion: f64,
+}
+
+/// `[[probe]]`: one named time series in `history.csv`. Which fields are
+/// meaningful depends on `quantity`; each driver checks the probes it knows.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Probe {
+    /// Column name in `history.csv`.
+    pub name: String,
+    /// What to record, e.g. `"uy"` at a body point, `"normal_elastic"` at a contact.
+    pub quantity: String,
+    /// A point of a body (reference configuration).
+    pub point: Option<[f64; 2]>,
+    /// Body name (default: the first body).
+    pub body: Option<String>,
+    /// A contact between two discs, 1-based disc numbers.
+    pub contact: Option<[usize; 2]>,
+    /// A disc, 1-based.
+    pub disc: Option<usize>,
+    /// A wall name.
+    pub wall: Option<String>,
+}
+
+/// `[output]`: what is written and how often.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// A `history.csv` row every this many steps.
+    #[serde(default = "one")]
+    pub every: usize,
+    /// A ParaView frame every this many steps; 0 = none.
+    #[serde(default)]
+    pub vtk_every: usize,
+}
+
+fn one() -> usize {
+    1
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            every: 1,
+            vtk_every: 0,
+        }
+    }
+}
+
+/// One semantic problem found by `validate`, before it is located in the file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Invalid {
+    /// Dotted path into the TOML tree, array indices as numbers: `body.0.elastic.E`.
+    pub path: String,
+    /// What is wrong and what is allowed.
+    pub message: String,
+}
+
+/// Collects [`Invalid`]s during validation.
+#[derive(Debug, Default)]
+pub struct Problems(pub Vec<Invalid>);
+
+impl Problems {
+    pub fn push(&mut self, path: impl Into<String>, message: impl Into<String>) {
+        self.0.push(Invalid {
+            path: path.into(),
+            message: message.into(),
+        });
+    }
+    /// Record `message` at `path` unless `ok`.
+    pub fn check(&mut self, ok: bool, path: impl Into<String>, message: impl Into<String>) {
+        if !ok {
+            self.push(path, message);
+        }
+    }
+    /// `value` must be finite and > 0.
+    pub fn positive(&mut self, value: f64, path: impl Into<String>) {
+        self.check(
+            value.is_finite() && value > 0.0,
+            path,
+            format!("must be a finite number > 0 (got {value})"),
+        );
+    }
+    /// `value` must be finite and ≥ 0.
+    pub fn non_negative(&mut self, value: f64, path: impl Into<String>) {
+        self.check(
+            value.is_finite() && value >= 0.0,
+            path,
+            format!("must be a finite number ≥ 0 (got {value})"),
+        );
+    }
+}
+
+/// A problem with its place in the file.
+#[derive(Debug, Clone)]
+pub struct Located {
+    pub line: Option<usize>,
+    /// Field path as the user writes it: `body[0].elastic.E`.
+    pub field: String,
+    pub message: String,
+}
+
+/// Why a scenario could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    #[error("{file}: cannot read the scenario: {source}")]
+    Io {
+        file: String,
+        source: std::io::Error,
+    },
+    #[error("{}", format_located(file, errors))]
+    Invalid { file: String, errors: Vec<Located> },
+}
+
+fn format_located(file: &str, errors: &[Located]) -> String {
+    let mut s = String::new();
+    for (i, e) in errors.iter().enumerate() {
+        if i > 0 {
+            s.push('\n');
+        }
+        match e.line {
+            Some(l) => s.push_str(&format!("{file}:{l}: ")),
+            None => s.push_str(&format!("{file}: ")),
+        }
+        if !e.field.is_empty() {
+            s.push_str(&format!("{}: ", e.field));
+        }
+        s.push_str(&e.message);
+    }
+    s
+}
+
+impl fmt::Display for Located {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.field, self.message)
+    }
+}
+
+/// Read, parse and validate a scenario file.
+pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
+    let file = path.display().to_string();
+    let src = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
+        file: file.clone(),
+        source,
+    })?;
+    let mut sc = parse(&src, &file)?;
+    sc.base_dir = path
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
+    Ok(sc)
+}
+
+/// Parse and validate scenario text; `file` names it in error messages.
+pub fn parse(src: &str, file: &str) -> Result<Scenario, ScenarioError> {
+    let sc: Scenario = toml::from_str(src).map_err(|e| ScenarioError::Invalid {
+        file: file.to_string(),
+        errors: vec![Located {
+            line: e.span().map(|s| line_of(src, s.start)),
+            field: String::new(),
+            message: e.message().trim().to_string(),
+        }],
+    })?;
+    let problems = sc.validate();
+    if problems.is_empty() {
+        return Ok(sc);
+    }
+    let doc = toml_edit::Document::parse(src.to_string()).ok();
+    let errors = problems
+        .into_iter()
+        .map(|p| Located {
+            line: doc
+                .as_ref()
+                .and_then(|d| locate(d, &p.path))
+                .map(|off| line_of(src, off)),
+            field: display_path(&p.path),
+            message: p.message,
+        })
+        .collect();
+    Err(ScenarioError::Invalid {
+        file: file.to_string(),
+        errors,
+    })
+}
+
+impl Scenario {
+    /// All semantic problems of the scenario (empty = valid).
+    pub fn validate(&self) -> Vec<Invalid> {
+        let mut p = Problems::default();
+        let sim = &self.simulation;
+        if let Some(dt) = sim.dt {
+            p.positive(dt, "simulation.dt");
+        }
+        if let Some(t) = sim.end_time {
+            p.positive(t, "simulation.end_time");
+        }
+        if sim.steps.is_some() && sim.end_time.is_some() {
+            p.push(
+                "simulation.end_time",
+                "give either `steps` or `end_time`, not both",
+            );
+        }
+        p.check(
+            sim.gravity.iter().all(|g| g.is_finite()),
+            "simulation.gravity",
+            "must be two finite numbers [gx, gy]",
+        );
+        p.check(self.output.every >= 1, "output.every", "must be ≥ 1");
+        let mut names = std::collections::HashSet::new();
+        for (i, m) in self.material.iter().enumerate() {
+            let at = |f: &str| format!("material.{i}.{f}");
+            p.check(
+                names.insert(m.name.as_str()),
+                at("name"),
+                format!("material `{}` is defined twice", m.name),
+            );
+            p.non_negative(m.density, at("density"));
+            p.non_negative(m.kn, at("kn"));
+            p.non_negative(m.ks, at("ks"));
+            p.non_negative(m.friction, at("friction"));
+            p.non_negative(m.cohesion, at("cohesion"));
+        }
+        p.check(
+            !self.body.is_empty() || self.granular.is_some(),
+            "",
+            "the scenario has neither a [[body]] nor a [granular] section: nothing to run",
+        );
+        body::validate(self, &mut p);
+        granular::validate(self, &mut p);
+        p.0
+    }
+
+    /// The material named `name`.
+    pub fn material(&self, name: &str) -> Option<&Material> {
+        self.material.iter().find(|m| m.name == name)
+    }
+
+    /// Resolve a path given in the scenario relative to its directory.
+    pub fn resolve(&self, p: &Path) -> PathBuf {
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.base_dir.join(p)
+        }
+    }
+}
+
+/// 1-based line number of byte offset `off`.
+pub fn line_of(src: &str, off: usize) -> usize {
+    src.as_bytes()[..off.min(src.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
+/// `body.0.elastic.E` → `body[0].elastic.E`.
+pub fn display_path(path: &str) -> String {
+    let mut s = String::new();
+    for seg in path.split('.').filter(|s| !s.is_empty()) {
+        if seg.chars().all(|c| c.is_ascii_digit()) {
+            s.push_str(&format!("[{seg}]"));
+        } else {
+            if !s.is_empty() {
+                s.push('.');
+            }
+            s.push_str(seg);
+        }
+    }
+    s
+}
+
+/// Byte offset of the deepest part of `path` present in the document: the
+/// key of the field if it is there, else the nearest enclosing entry.
+fn locate(doc: &toml_edit::Document<String>, path: &str) -> Option<usize> {
+    use toml_edit::{Item, TableLike, Value};
+    enum Node<'a> {
+        Table(&'a dyn TableLike),
+        Item(&'a Item),
+        Value(&'a Value),
+    }
+    let mut node = Node::Table(doc.as_table());
+    let mut best = None;
+    for seg in path.split('.').filter(|s| !s.is_empty()) {
+        let next = if let Ok(i) = seg.parse::<usize>() {
+            match node {
+                Node::Item(Item::ArrayOfTables(a)) => a.get(i).map(|t| {
+                    let first = t.iter().next().and_then(|(k, _)| t.key(k)?.span());
+                    (first.map(|s| s.start), Node::Table(t as &dyn TableLike))
+                }),
+                Node::Item(Item::Value(Value::Array(a))) | Node::Value(Value::Array(a)) => a
+                    .get(i)
+                    .map(|v| (v.span().map(|s| s.start), Node::Value(v))),
+                _ => None,
+            }
+        } else {
+            let table: Option<&dyn TableLike> = match node {
+                Node::Table(t) => Some(t),
+                Node::Item(it) => it.as_table_like(),
+                Node::Value(v) => v.as_inline_table().map(|t| t as &dyn TableLike),
+            };
+            table
+                .and_then(|t| t.get_key_value(seg))
+                .map(|(k, v)| (k.span().map(|s| s.start), Node::Item(v)))
+        };
+        match next {
+            Some((off, n)) => {
+                best = off.or(best);
+                node = n;
+            }
+            None => break,
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn display_path_brackets_indices() {
+        assert_eq!(display_path("body.0.elastic.E"), "body[0].elastic.E");
+        assert_eq!(display_path("simulation.dt"), "simulation.dt");
+    }
+
+    #[test]
+    fn locate_finds_nested_keys_in_arrays_of_tables() {
+        let src = "[simulation]\ndt = 1.0\n\n[[body]]\nname = \"a\"\n[[body]]\nname = \"b\"\nelastic = { E = -1.0, nu = 0.3 }\n";
+        let doc = toml_edit::Document::parse(src.to_string()).unwrap();
+        let line = |p: &str| locate(&doc, p).map(|o| line_of(src, o));
+        assert_eq!(line("simulation.dt"), Some(2));
+        assert_eq!(line("body.1.elastic.E"), Some(8));
+        assert_eq!(line("body.1.name"), Some(7));
+        // missing field: falls back to the nearest enclosing entry
+        assert_eq!(line("body.1.nodes"), Some(7));
+    }
+
+    #[test]
+    fn line_of_counts_newlines() {
+        assert_eq!(line_of("a\nb\nc", 0), 1);
+        assert_eq!(line_of("a\nb\nc", 2), 2);
+        assert_eq!(line_of("a\nb\nc", 4), 3);
+    }
+}
