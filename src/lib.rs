@@ -14,6 +14,8 @@
 //! - [`output`]: history CSV, ParaView files, summary JSON.
 //! - [`run`]: runs a scenario end to end (what `efgdem run` does).
 
+pub mod continuum;
+pub mod coupling;
 pub mod dem;
 pub mod efg;
 pub mod geom;

@@ -1,0 +1,220 @@
+//! Disc–boundary contact detection on a body's contact boundary (§2.4.1,
+//! Figs. 4–5), on the body's true displaced boundary (ERRATA E7).
+//!
+//! The paper finds the nearest boundary node, then the adjacent segment
+//! whose far node is nearer (Fig. 4), and distinguishes particle–segment
+//! contacts (Fig. 5a) from particle–point contacts (Fig. 5b) so that a disc
+//! sitting on a node is not counted twice. The same result, robust to ties
+//! and to uneven node spacing, is the *closest feature* of the polyline:
+//! the closest point `H` of the whole chain to the disc centre `O` lies
+//! either inside one segment (particle–segment) or on a vertex
+//! (particle–point). Each disc gets at most one contact per chain, and the
+//! contact is keyed by `(disc, chain)`, so a disc sliding from one segment
+//! to the next keeps its shear history.
+
+use crate::continuum::BoundaryChain;
+use crate::geom::{Vec2, closest_on_segment};
+
+/// Which primitive of the boundary the disc touches (Fig. 5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Feature {
+    /// Inside segment `i` (between chain points `i` and `i + 1`), Fig. 5a.
+    Segment(usize),
+    /// On chain point `j`, Fig. 5b.
+    Point(usize),
+}
+
+/// A disc touching a boundary chain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Touch {
+    pub feature: Feature,
+    /// Segment holding the contact point and the parameter `s ∈ [0, 1]` on
+    /// it (for a point contact: an adjacent segment, `s` = 0 or 1).
+    pub seg: usize,
+    pub s: f64,
+    /// Contact point `H` on the current boundary.
+    pub point: Vec2,
+    /// Unit normal from the boundary towards the disc centre.
+    pub normal: Vec2,
+    /// Overlap `δ = r − (O − H)·n` (> 0 when in contact; > r when the
+    /// centre has passed through the boundary).
+    pub overlap: f64,
+    /// Material (reference) coordinates `X_H` of the contact point: where the
+    /// body's shape functions are evaluated for the velocity of `H` and for
+    /// distributing the reaction (Eqs. 41, 46, ERRATA E7).
+    pub material: Vec2,
+}
+
+/// Outward unit normal of the segment `a → b` of a chain that has the body
+/// on its left.
+#[inline]
+pub fn outward_normal(a: Vec2, b: Vec2) -> Vec2 {
+    let t = b - a;
+    let l = t.norm();
+    if l > 0.0 {
+        Vec2::new(t.y / l, -t.x / l)
+    } else {
+        Vec2::ZERO
+    }
+}
+
+/// The contact of a disc (centre `c`, radius `r`) with `chain`, if any.
+/// Cost: linear in the number of segments; the caller prunes with a
+/// bounding-box test when chains are long.
+pub fn detect(chain: &BoundaryChain, c: Vec2, r: f64) -> Option<Touch> {
+    let pts = &chain.current;
+    let nseg = chain.segments();
+    // Closest point over the whole chain; on a tie the first segment wins,
+    // which makes a point contact at a shared vertex unique.
+    let mut best: Option<(usize, f64, Vec2, f64)> = None;
+    for i in 0..nseg {
+        let (s, q) = closest_on_segment(c, pts[i], pts[i + 1]);
+        let d2 = (c - q).norm2();
+        if best.is_none_or(|b| d2 < b.3) {
+            best = Some((i, s, q, d2));
+        }
+    }
+    let (seg, s, point, d2) = best?;
+    if d2 > r * r * 4.0 {
+        return None; // far away, whatever the side
+    }
+    let vertex = if s <= 0.0 {
+        Some(seg)
+    } else if s >= 1.0 {
+        Some(seg + 1)
+    } else {
+        None
+    };
+    let (feature, outward) = match vertex {
+        None => (
+            Feature::Segment(seg),
+            outward_normal(pts[seg], pts[seg + 1]),
+        ),
+        Some(j) => {
+            // Mean outward normal of the segments meeting at vertex j.
+            let mut n = Vec2::ZERO;
+            if j > 0 {
+                n += outward_normal(pts[j - 1], pts[j]);
+            }
+            if j < nseg {
+                n += outward_normal(pts[j], pts[j + 1]);
+            }
+            let l = n.norm();
+            (Feature::Point(j), if l > 0.0 { n * (1.0 / l) } else { n })
+        }
+    };
+    let d = c - point;
+    let dist = d2.sqrt();
+    let (normal, gap) = match feature {
+        // A segment contact: the normal is the segment's own normal; the
+        // signed gap is negative when the centre is inside the body.
+        Feature::Segment(_) => (outward, d.dot(outward)),
+        // A point contact: the normal points from the vertex to the centre
+        // (Fig. 5b), unless the centre is inside the body.
+        Feature::Point(_) => {
+            if dist > 1e-12 * r && d.dot(outward) >= 0.0 {
+                (d * (1.0 / dist), dist)
+            } else {
+                (outward, -dist)
+            }
+        }
+    };
+    let overlap = r - gap;
+    (overlap > 0.0).then(|| Touch {
+        feature,
+        seg,
+        s,
+        point,
+        normal,
+        overlap,
+        material: chain.material_point(seg, s),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Top edge of a body occupying y < 0, traversed right to left so the
+    /// body is on the left (counter-clockwise around the body).
+    fn top_edge(n: usize) -> BoundaryChain {
+        BoundaryChain::new((0..n).rev().map(|i| Vec2::new(i as f64, 0.0)).collect())
+    }
+
+    #[test]
+    fn disc_above_a_segment_is_a_segment_contact() {
+        let ch = top_edge(5);
+        let t = detect(&ch, Vec2::new(2.3, 0.4), 0.5).unwrap();
+        assert!(matches!(t.feature, Feature::Segment(_)));
+        assert!((t.overlap - 0.1).abs() < 1e-14);
+        assert!((t.normal - Vec2::new(0.0, 1.0)).norm() < 1e-14);
+        assert!((t.point - Vec2::new(2.3, 0.0)).norm() < 1e-14);
+        assert!((t.material - Vec2::new(2.3, 0.0)).norm() < 1e-14);
+    }
+
+    #[test]
+    fn disc_on_a_node_gets_exactly_one_point_contact() {
+        let ch = top_edge(5);
+        let t = detect(&ch, Vec2::new(2.0, 0.45), 0.5).unwrap();
+        assert_eq!(t.feature, Feature::Point(2));
+        assert!((t.overlap - 0.05).abs() < 1e-14);
+        assert!((t.normal - Vec2::new(0.0, 1.0)).norm() < 1e-14);
+    }
+
+    #[test]
+    fn sliding_across_nodes_keeps_overlap_and_normal_continuous() {
+        let ch = top_edge(6);
+        let mut prev: Option<Touch> = None;
+        for k in 0..=400 {
+            let x = 0.5 + 4.0 * k as f64 / 400.0;
+            let t = detect(&ch, Vec2::new(x, 0.4), 0.5).unwrap();
+            assert!((t.overlap - 0.1).abs() < 1e-14, "x = {x}");
+            assert!((t.normal - Vec2::new(0.0, 1.0)).norm() < 1e-14);
+            if let Some(p) = prev {
+                assert!((t.point - p.point).norm() < 0.011 + 1e-12);
+            }
+            prev = Some(t);
+        }
+    }
+
+    #[test]
+    fn convex_corner_gives_a_point_contact_with_a_radial_normal() {
+        // Body [0,1]×[-1,0]: chain goes up the right edge then left along the top.
+        let ch = BoundaryChain::new(vec![
+            Vec2::new(1.0, -1.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(0.0, 0.0),
+        ]);
+        let c = Vec2::new(1.3, 0.4);
+        let t = detect(&ch, c, 0.6).unwrap();
+        assert_eq!(t.feature, Feature::Point(1));
+        assert!((t.overlap - (0.6 - 0.5)).abs() < 1e-14);
+        assert!((t.normal - Vec2::new(0.6, 0.8)).norm() < 1e-14);
+        // Just inside the end, above the top: a segment contact on the top.
+        let t = detect(&ch, Vec2::new(1.0 - 1e-6, 0.05), 0.1).unwrap();
+        assert_eq!(t.feature, Feature::Segment(1));
+        assert!((t.overlap - 0.05).abs() < 1e-14);
+    }
+
+    #[test]
+    fn centre_through_the_boundary_has_overlap_beyond_the_radius() {
+        let ch = top_edge(5);
+        let t = detect(&ch, Vec2::new(2.5, -0.1), 0.5).unwrap();
+        assert!((t.overlap - 0.6).abs() < 1e-14);
+        assert!((t.normal - Vec2::new(0.0, 1.0)).norm() < 1e-14);
+    }
+
+    #[test]
+    fn no_contact_when_apart_and_material_point_follows_reference() {
+        let mut ch = top_edge(3);
+        assert!(detect(&ch, Vec2::new(1.0, 0.6), 0.5).is_none());
+        // Deform: shift current positions down by 0.2; the material point of
+        // a contact is still the reference point.
+        for p in &mut ch.current {
+            p.y -= 0.2;
+        }
+        let t = detect(&ch, Vec2::new(0.5, 0.2), 0.5).unwrap();
+        assert!((t.overlap - 0.1).abs() < 1e-14);
+        assert!((t.material - Vec2::new(0.5, 0.0)).norm() < 1e-14);
+    }
+}
