@@ -18,6 +18,7 @@ pub mod continuum;
 pub mod coupling;
 pub mod dem;
 pub mod efg;
+pub mod fem;
 pub mod geom;
 pub mod newmark;
 pub mod output;
