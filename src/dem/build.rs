@@ -1,0 +1,1 @@
+//! Building a [`Granular`](super::Granular) from a scenario.
