@@ -4,6 +4,7 @@
 
 pub mod csv;
 pub mod vtk;
+pub mod vtp;
 
 use std::io::Write;
 use std::path::Path;
