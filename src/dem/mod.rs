@@ -1,10 +1,509 @@
-//! The element-free Galerkin continuum (§2.1–2.2 of the paper).
+//! The discrete-element granular assembly (§2.3, §3 and Table 1, DE column).
+//!
+//! [`Granular`] holds the discs ([`particles`]), the rigid walls
+//! ([`walls`]), the contact list with its shear histories ([`broadphase`])
+//! and the contact laws ([`contact`]). One time step is a sequence of
+//! public phases, so that a coupled loop can add forces between them:
+//!
+//! ```text
+//! prepare_contacts()        rebuild the Verlet list if a disc moved > skin/2
+//! compute_contact_forces()  force/torque := Σ contact forces (disc–disc, disc–wall)
+//! ... add external forces:  add_external_force(slot, f, point)
+//! integrate()               gravity, damping, central difference (Eqs. 50–54), walls move
+//! ```
+//! [`Granular::step`] runs the three in order.
 
+pub mod broadphase;
+pub mod build;
+pub mod contact;
+pub mod integrate;
+pub mod particles;
 pub mod run;
+pub mod walls;
+
+use crate::geom::Vec2;
+use broadphase::{ContactList, NeighbourGrid};
+use contact::{ContactForce, ContactLaw, Side, effective_mass, normal_between};
+use particles::Particles;
+use rayon::prelude::*;
+use walls::Wall;
 
 /// Errors of the DEM.
 #[derive(Debug, thiserror::Error)]
 pub enum DemError {
-    #[error("DEM assemblies are not implemented yet")]
-    NotImplemented,
+    /// The scenario is valid TOML but cannot be built (e.g. a bad disc file).
+    #[error("{0}")]
+    Input(String),
+    #[error("i/o: {0}")]
+    Io(#[from] std::io::Error),
+    /// A disc position or velocity became non-finite.
+    #[error(
+        "the assembly became unstable at step {step} (non-finite disc state); reduce dt (critical step {dt_crit:e})"
+    )]
+    Unstable { step: usize, dt_crit: f64 },
+}
+
+/// Damping that acts on each disc's motion rather than in the contacts.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum BodyDamping {
+    #[default]
+    None,
+    /// Cundall's non-viscous local damping: each component of the
+    /// out-of-balance force (and the moment) is reduced by `α|F|`, against
+    /// the velocity: `F ← F − α|F| sign(v)` (as in PFC and Yade).
+    Local { alpha: f64 },
+    /// Global mass damping of Eqs. (33)–(34): `m ü + c u̇ = F`,
+    /// `I θ̈ + c* θ̇ = M`, integrated with the central difference.
+    Mass { c: f64, c_rot: f64 },
+}
+
+/// Kinetic, rotational and contact-spring energies.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct Energies {
+    pub kinetic: f64,
+    pub rotational: f64,
+    /// `½k_nδ² + F_s²/(2k_s)` over all contacts (disc–disc and disc–wall).
+    pub spring: f64,
+    /// `−Σ m g·x` (relative to the origin).
+    pub gravity: f64,
+}
+
+impl Energies {
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.rotational + self.spring + self.gravity
+    }
+}
+
+/// A granular assembly: discs, walls, contact laws and contact state.
+#[derive(Debug, Clone)]
+pub struct Granular {
+    pub particles: Particles,
+    pub walls: Vec<Wall>,
+    /// Per-material contact parameters (own values, dashpots from the damping).
+    pub materials: Vec<ContactLaw>,
+    /// Disc–disc laws, `laws[a * n_mat + b]` for materials a, b.
+    pub laws: Vec<ContactLaw>,
+    /// Disc–wall laws, `wall_laws[w * n_mat + a]`.
+    pub wall_laws: Vec<ContactLaw>,
+    pub damping: BodyDamping,
+    pub gravity: Vec2,
+    pub dt: f64,
+    /// Steps done.
+    pub step: usize,
+    /// Time reached.
+    pub time: f64,
+    pub contacts: ContactList,
+    pub grid: NeighbourGrid,
+    /// Largest disc displacement since the last rebuild.
+    pub max_disp: f64,
+}
+
+const CHUNK: usize = 2048;
+
+impl Granular {
+    /// An assembly with the given discs, materials (dashpots already set in
+    /// each law) and walls. The Verlet skin defaults to 0.1 × the largest
+    /// radius.
+    pub fn new(
+        particles: Particles,
+        materials: Vec<ContactLaw>,
+        walls: Vec<Wall>,
+        dt: f64,
+    ) -> Granular {
+        let skin = 0.1 * particles.max_radius().max(f64::MIN_POSITIVE);
+        let mut g = Granular {
+            particles,
+            walls,
+            materials,
+            laws: Vec::new(),
+            wall_laws: Vec::new(),
+            damping: BodyDamping::None,
+            gravity: Vec2::ZERO,
+            dt,
+            step: 0,
+            time: 0.0,
+            contacts: ContactList::default(),
+            grid: NeighbourGrid::new(skin),
+            max_disp: 0.0,
+        };
+        g.update_laws();
+        g
+    }
+
+    /// Recompute the pair tables after changing `materials` or wall materials.
+    pub fn update_laws(&mut self) {
+        let nm = self.materials.len();
+        self.laws = (0..nm * nm)
+            .map(|k| ContactLaw::mix(&self.materials[k / nm], &self.materials[k % nm]))
+            .collect();
+        self.wall_laws = self
+            .walls
+            .iter()
+            .flat_map(|w| {
+                (0..nm).map(move |a| match w.material {
+                    Some(m) => m as usize,
+                    None => a,
+                })
+            })
+            .map(|m| self.materials[m])
+            .collect();
+    }
+
+    /// The Verlet skin (pairs with a gap below it are listed).
+    pub fn set_skin(&mut self, skin: f64) {
+        self.grid.skin = skin;
+        self.grid.stale = true;
+    }
+
+    /// Largest contact stiffness of any law in use.
+    pub fn k_max(&self) -> f64 {
+        self.laws
+            .iter()
+            .chain(&self.wall_laws)
+            .map(|l| l.kn.max(l.ks))
+            .fold(0.0, f64::max)
+    }
+
+    /// Critical time step of the central difference, `2√(m_min/k_max)`
+    /// (ERRATA E11); use a fraction 0.1–0.2 of it.
+    pub fn critical_dt(&self) -> f64 {
+        let k = self.k_max();
+        let m = self.particles.min_mass();
+        if k > 0.0 && m.is_finite() {
+            2.0 * (m / k).sqrt()
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// One full time step: the three phases in order.
+    pub fn step(&mut self) {
+        self.prepare_contacts();
+        self.compute_contact_forces();
+        self.integrate();
+    }
+
+    /// Phase 1: rebuild the neighbour list when the Verlet criterion says
+    /// so (or it was never built).
+    pub fn prepare_contacts(&mut self) {
+        if self.grid.needs_rebuild(self.max_disp, &self.walls) {
+            self.grid
+                .rebuild(&mut self.particles, &self.walls, &mut self.contacts);
+            self.max_disp = 0.0;
+        }
+    }
+
+    /// Phase 2: evaluate every listed contact (in parallel, one result per
+    /// contact) and *overwrite* each disc's force and torque with the sum
+    /// of its contacts, gathered per disc in a fixed order (bitwise
+    /// independent of the thread count). Also sets each wall's force.
+    pub fn compute_contact_forces(&mut self) {
+        let p = &self.particles;
+        let dt = self.dt;
+        let nm = self.materials.len();
+        let laws = &self.laws;
+        self.contacts
+            .pairs
+            .par_chunks_mut(CHUNK)
+            .zip(self.contacts.buf.par_chunks_mut(CHUNK))
+            .for_each(|(pc, bc)| {
+                for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
+                    *out = pair_contact(p, laws, nm, q.i as usize, q.j as usize, &mut q.fs, dt);
+                }
+            });
+        // disc–wall contacts: few, sequential, fixed order
+        for (q, out) in self
+            .contacts
+            .walls
+            .iter_mut()
+            .zip(self.contacts.wall_buf.iter_mut())
+        {
+            let w = &self.walls[q.wall as usize];
+            let d = q.disc as usize;
+            let law = &self.wall_laws[q.wall as usize * nm + p.material[d] as usize];
+            *out = wall_contact(p, w, law, d, &mut q.fs, dt);
+        }
+        // gather
+        let list = &self.contacts;
+        let p = &mut self.particles;
+        p.force
+            .par_chunks_mut(CHUNK)
+            .zip(p.torque.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(c, (fc, tc))| {
+                let base = c * CHUNK;
+                for (k, (f, t)) in fc.iter_mut().zip(tc.iter_mut()).enumerate() {
+                    let d = base + k;
+                    let mut sf = Vec2::ZERO;
+                    let mut st = 0.0;
+                    let (a, b) = (list.first[d] as usize, list.first[d + 1] as usize);
+                    for cf in &list.buf[a..b] {
+                        sf += cf.f;
+                        st += cf.ti;
+                    }
+                    let (a, b) = (
+                        list.second_start[d] as usize,
+                        list.second_start[d + 1] as usize,
+                    );
+                    for &e in &list.second[a..b] {
+                        let cf = &list.buf[e as usize];
+                        sf -= cf.f;
+                        st += cf.tj;
+                    }
+                    *f = sf;
+                    *t = st;
+                }
+            });
+        for w in &mut self.walls {
+            w.force = Vec2::ZERO;
+        }
+        for (q, cf) in list.walls.iter().zip(&list.wall_buf) {
+            let d = q.disc as usize;
+            p.force[d] += cf.f;
+            p.torque[d] += cf.ti;
+            self.walls[q.wall as usize].force -= cf.f;
+        }
+    }
+
+    /// Add an external force `f` acting at `point` on the disc in `slot`
+    /// (e.g. a disc–body-boundary contact of the coupling): force plus the
+    /// moment `(point − x) × f` (ERRATA E12). Call between
+    /// [`compute_contact_forces`](Self::compute_contact_forces) and
+    /// [`integrate`](Self::integrate).
+    pub fn add_external_force(&mut self, slot: usize, f: Vec2, point: Vec2) {
+        let p = &mut self.particles;
+        p.force[slot] += f;
+        p.torque[slot] += (point - p.pos[slot]).cross(f);
+    }
+
+    /// Phase 3: gravity, damping, central difference (Eqs. 50–54, E10),
+    /// then the walls move and the clock advances.
+    pub fn integrate(&mut self) {
+        let d = integrate::central_difference(
+            &mut self.particles,
+            &self.grid.ref_pos,
+            self.gravity,
+            self.damping,
+            self.dt,
+        );
+        self.max_disp = d;
+        for w in &mut self.walls {
+            let v = w.motion.velocity(self.step, self.time, self.dt);
+            w.translate(v * self.dt);
+            w.vel = v;
+        }
+        self.step += 1;
+        self.time = self.step as f64 * self.dt;
+    }
+
+    /// Is every disc state finite?
+    pub fn is_finite(&self) -> bool {
+        let p = &self.particles;
+        p.pos
+            .iter()
+            .chain(&p.vel)
+            .all(|v| v.x.is_finite() && v.y.is_finite())
+            && p.omega.iter().all(|w| w.is_finite())
+    }
+
+    /// Slot of scenario disc `id` (0-based).
+    pub fn slot(&self, id: usize) -> usize {
+        self.particles.slot[id] as usize
+    }
+
+    /// The law between the discs in slots `a` and `b`.
+    pub fn law(&self, a: usize, b: usize) -> &ContactLaw {
+        let p = &self.particles;
+        &self.laws[p.material[a] as usize * self.materials.len() + p.material[b] as usize]
+    }
+
+    /// Normal force between the discs in slots `a` and `b` from the present
+    /// positions and velocities: (elastic `k_n δ`, total with the dashpot).
+    pub fn normal_force(&self, a: usize, b: usize) -> (f64, f64) {
+        let p = &self.particles;
+        let (n, dist) = normal_between(p.pos[a], p.pos[b]);
+        let delta = p.radius[a] + p.radius[b] - dist;
+        let vn = (p.vel[a] - p.vel[b]).dot(n);
+        let m_eff = effective_mass(p.inv_mass[a], p.inv_mass[b]);
+        contact::normal_force(self.law(a, b), delta, vn, m_eff)
+    }
+
+    /// Energies from the present positions, the given velocities and spins,
+    /// and the present shear histories. With the central difference the
+    /// state after a step has positions at t + Δt and velocities at
+    /// t + Δt/2; pass synchronous velocities for an exact energy balance.
+    pub fn energies_with(&self, vel: &[Vec2], omega: &[f64]) -> Energies {
+        let p = &self.particles;
+        let mut e = Energies::default();
+        for k in 0..p.len() {
+            e.kinetic += 0.5 * p.mass[k] * vel[k].norm2();
+            e.rotational += 0.5 * p.inertia[k] * omega[k] * omega[k];
+            e.gravity -= p.mass[k] * self.gravity.dot(p.pos[k]);
+        }
+        let spring = |law: &ContactLaw, delta: f64, fs: f64| {
+            if delta <= 0.0 {
+                return 0.0;
+            }
+            let mut s = 0.5 * law.kn * delta * delta;
+            if law.ks > 0.0 {
+                s += 0.5 * fs * fs / law.ks;
+            }
+            s
+        };
+        for q in &self.contacts.pairs {
+            let (i, j) = (q.i as usize, q.j as usize);
+            let dist = (p.pos[j] - p.pos[i]).norm();
+            e.spring += spring(self.law(i, j), p.radius[i] + p.radius[j] - dist, q.fs);
+        }
+        let nm = self.materials.len();
+        for q in &self.contacts.walls {
+            let d = q.disc as usize;
+            let w = &self.walls[q.wall as usize];
+            let dist = (w.closest(p.pos[d]) - p.pos[d]).norm();
+            let law = &self.wall_laws[q.wall as usize * nm + p.material[d] as usize];
+            e.spring += spring(law, p.radius[d] - dist, q.fs);
+        }
+        e
+    }
+
+    /// Energies of the present state (velocities at the half step).
+    pub fn energies(&self) -> Energies {
+        self.energies_with(&self.particles.vel, &self.particles.omega)
+    }
+
+    /// Number of listed pairs that are touching (disc–disc, disc–wall).
+    pub fn touching(&self) -> (usize, usize) {
+        let p = &self.particles;
+        let dd = self
+            .contacts
+            .pairs
+            .iter()
+            .filter(|q| {
+                let r = p.radius[q.i as usize] + p.radius[q.j as usize];
+                (p.pos[q.j as usize] - p.pos[q.i as usize]).norm2() < r * r
+            })
+            .count();
+        let dw = self
+            .contacts
+            .walls
+            .iter()
+            .filter(|q| {
+                let d = q.disc as usize;
+                let w = &self.walls[q.wall as usize];
+                (w.closest(p.pos[d]) - p.pos[d]).norm2() < p.radius[d] * p.radius[d]
+            })
+            .count();
+        (dd, dw)
+    }
+
+    /// Heap bytes held by the assembly (discs + contact list + grid).
+    pub fn heap_bytes(&self) -> usize {
+        self.particles.heap_bytes() + self.contacts.heap_bytes() + self.grid.heap_bytes()
+    }
+}
+
+/// One disc–disc contact of the list (slots `i < j`).
+#[inline(always)]
+fn pair_contact(
+    p: &Particles,
+    laws: &[ContactLaw],
+    nm: usize,
+    i: usize,
+    j: usize,
+    fs: &mut f64,
+    dt: f64,
+) -> ContactForce {
+    let (pi, pj) = (p.pos[i], p.pos[j]);
+    let (ri, rj) = (p.radius[i], p.radius[j]);
+    let rsum = ri + rj;
+    let d = pj - pi;
+    let d2 = d.norm2();
+    if d2 >= rsum * rsum {
+        *fs = 0.0;
+        return ContactForce::default();
+    }
+    let (n, dist) = if d2 > 0.0 {
+        let dist = d2.sqrt();
+        (d * (1.0 / dist), dist)
+    } else {
+        (Vec2::new(1.0, 0.0), 0.0)
+    };
+    let law = &laws[p.material[i] as usize * nm + p.material[j] as usize];
+    let m_eff = effective_mass(p.inv_mass[i], p.inv_mass[j]);
+    contact::evaluate(
+        law,
+        n,
+        rsum - dist,
+        &Side {
+            pos: pi,
+            vel: p.vel[i],
+            omega: p.omega[i],
+            radius: ri,
+        },
+        &Side {
+            pos: pj,
+            vel: p.vel[j],
+            omega: p.omega[j],
+            radius: rj,
+        },
+        m_eff,
+        fs,
+        dt,
+    )
+}
+
+/// One disc–wall contact: the wall is side j with zero radius, the normal
+/// points from the disc centre to the closest point of the wall.
+#[inline(always)]
+fn wall_contact(
+    p: &Particles,
+    w: &Wall,
+    law: &ContactLaw,
+    d: usize,
+    fs: &mut f64,
+    dt: f64,
+) -> ContactForce {
+    let x = p.pos[d];
+    let r = p.radius[d];
+    let c = w.closest(x);
+    let dd = c - x;
+    let d2 = dd.norm2();
+    if d2 >= r * r {
+        *fs = 0.0;
+        return ContactForce::default();
+    }
+    let dist = d2.sqrt();
+    let n = if dist > 0.0 {
+        dd * (1.0 / dist)
+    } else {
+        // centre on the wall: push along the wall's left normal
+        let t = w.b - w.a;
+        let l = t.norm();
+        if l > 0.0 {
+            t.perp() * (-1.0 / l)
+        } else {
+            Vec2::new(1.0, 0.0)
+        }
+    };
+    let delta = r - dist;
+    contact::evaluate(
+        law,
+        n,
+        delta,
+        &Side {
+            pos: x,
+            vel: p.vel[d],
+            omega: p.omega[d],
+            radius: r,
+        },
+        &Side {
+            pos: c,
+            vel: w.vel,
+            omega: 0.0,
+            radius: 0.5 * delta,
+        },
+        effective_mass(p.inv_mass[d], 0.0),
+        fs,
+        dt,
+    )
 }

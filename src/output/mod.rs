@@ -5,6 +5,7 @@
 pub mod csv;
 pub mod plot;
 pub mod vtk;
+pub mod vtp;
 
 use std::io::Write;
 use std::path::Path;

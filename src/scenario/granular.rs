@@ -1,8 +1,31 @@
 //! `[granular]` and `[[wall]]`: discs, their damping and rigid walls.
-//! Filled in by the DEM work (issue 3).
+//!
+//! ```toml
+//! [granular]
+//! material = "disc"            # default material of the discs
+//! thickness = 1.0              # discs are cylinders: m = ρπr²t, I = m r²/2
+//! discs = [[50.0, 250.0, 50.0], [150.0, 250.0, 50.0]]   # inline [x, y, r]
+//! # discs = { csv = "discs.csv" }                         # x,y,r[,material]
+//! # discs = { generate = "hex", box = [[0, 0], [100, 50]], radius = 1.0 }
+//! # discs = { generate = "random", box = [[0, 0], [100, 200]], radius = [0.8, 1.2],
+//! #           count = 5000, seed = 7, method = "deposit" }
+//! damping = { kind = "contact-viscous", beta = 0.1 }
+//!
+//! [[wall]]
+//! name = "right"
+//! from = [300.0, 0.0]
+//! to = [300.0, 300.0]
+//! velocity = [-0.12, 0.0]
+//! until_step = 40
+//! ```
 
 use super::{Problems, Scenario};
 use serde::Deserialize;
+use std::path::PathBuf;
+
+fn one() -> f64 {
+    1.0
+}
 
 /// The granular assembly.
 #[derive(Debug, Clone, Deserialize)]
@@ -10,6 +33,128 @@ use serde::Deserialize;
 pub struct GranularSpec {
     /// Default contact material of the discs (a `[[material]]` name).
     pub material: String,
+    /// Disc thickness t (default 1): `m = ρπr²t`, `I = m r²/2`.
+    #[serde(default = "one")]
+    pub thickness: f64,
+    /// Where the discs come from.
+    pub discs: DiscsSpec,
+    /// Damping, named explicitly (default: none).
+    #[serde(default)]
+    pub damping: DampingSpec,
+    /// Verlet skin of the contact search (default 0.1 × largest radius).
+    pub skin: Option<f64>,
+    /// Initial velocity of every disc (default at rest).
+    pub velocity: Option<[f64; 2]>,
+}
+
+/// The discs: inline `[x, y, r]` rows or a table (CSV file or generator).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(
+    untagged,
+    expecting = "a list of [x, y, r] rows, or a table { csv = \"file\" } or { generate = \"square\" | \"hex\" | \"random\", box = [[x0, y0], [x1, y1]], radius = r | [rmin, rmax], count, seed, method = \"loose\" | \"deposit\", jitter, deposit_steps } (no other keys)"
+)]
+pub enum DiscsSpec {
+    Inline(Vec<[f64; 3]>),
+    Table(DiscsTable),
+}
+
+/// `discs = { ... }`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiscsTable {
+    /// CSV file with columns `x,y,r[,material]` (header line optional).
+    pub csv: Option<PathBuf>,
+    /// Generated packing.
+    pub generate: Option<Generator>,
+    /// Box `[[x0, y0], [x1, y1]]` to fill.
+    #[serde(rename = "box")]
+    pub region: Option<[[f64; 2]; 2]>,
+    /// One radius, or `[rmin, rmax]` for radii uniform in the range.
+    pub radius: Option<Radius>,
+    /// Number of discs (default: as many as the box holds).
+    pub count: Option<usize>,
+    /// Seed of the random generator (default 1).
+    #[serde(default = "seed1")]
+    pub seed: u64,
+    /// `random` only: `loose` (jittered sites, no overlap) or `deposit`
+    /// (loose, then settled under gravity inside the box).
+    #[serde(default)]
+    pub method: Packing,
+    /// Random displacement of lattice sites as a fraction of the free gap
+    /// (0–1; default 0 for lattices, 1 for random).
+    pub jitter: Option<f64>,
+    /// `deposit`: settling steps (default 20 000).
+    pub deposit_steps: Option<usize>,
+}
+
+fn seed1() -> u64 {
+    1
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Generator {
+    Square,
+    Hex,
+    Random,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Packing {
+    #[default]
+    Loose,
+    Deposit,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(untagged, expecting = "a radius r > 0 or a range [rmin, rmax]")]
+pub enum Radius {
+    One(f64),
+    Range([f64; 2]),
+}
+
+impl Radius {
+    pub fn range(self) -> (f64, f64) {
+        match self {
+            Radius::One(r) => (r, r),
+            Radius::Range([a, b]) => (a, b),
+        }
+    }
+}
+
+/// Damping of the assembly. ERRATA E6: the paper's "damping coefficient"
+/// is ambiguous, so the kind is always named.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Default)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum DampingSpec {
+    #[default]
+    None,
+    /// Stiffness-proportional dashpots: `c_n = β k_n` (Cundall & Strack),
+    /// optional shear `c_s = β_s k_s`.
+    ContactViscous {
+        beta: f64,
+        #[serde(default)]
+        beta_shear: f64,
+        #[serde(default)]
+        no_tension: bool,
+    },
+    /// Dashpots at a fraction ζ of critical, `c = ζ 2√(k m_eff)`.
+    CriticalRatio {
+        zeta: f64,
+        #[serde(default)]
+        zeta_shear: f64,
+        #[serde(default)]
+        no_tension: bool,
+    },
+    /// Cundall's non-viscous local damping `F ← F − α|F| sign(v)`.
+    Local { alpha: f64 },
+    /// Global mass damping of Eqs. (33)–(34), coefficients c and c*.
+    Global {
+        c: f64,
+        #[serde(default)]
+        c_rot: f64,
+    },
 }
 
 /// A rigid wall segment.
@@ -19,9 +164,285 @@ pub struct WallSpec {
     pub name: String,
     pub from: [f64; 2],
     pub to: [f64; 2],
+    /// Contact material of the wall (default: the disc's).
+    pub material: Option<String>,
+    /// Constant velocity (default: at rest) ...
+    pub velocity: Option<[f64; 2]>,
+    /// ... during the first `until_step` steps (default: all).
+    pub until_step: Option<usize>,
+    /// Or a piecewise-linear velocity history `[[t, vx, vy], ...]`.
+    pub history: Option<Vec<[f64; 3]>>,
+}
+
+/// Probe quantities a granular run knows, and what each needs.
+pub const CONTACT_QUANTITIES: &[&str] = &["normal_elastic", "normal_total"];
+pub const WALL_QUANTITIES: &[&str] = &["wall_fx", "wall_fy", "wall_x", "wall_y"];
+pub const DISC_QUANTITIES: &[&str] = &["x", "y", "vx", "vy", "theta", "omega"];
+pub const GLOBAL_QUANTITIES: &[&str] = &[
+    "kinetic",
+    "rotational",
+    "spring",
+    "gravity_energy",
+    "total_energy",
+    "contacts",
+];
+
+/// Number of discs the scenario describes, if known without generating.
+pub fn inline_count(g: &GranularSpec) -> Option<usize> {
+    match &g.discs {
+        DiscsSpec::Inline(v) => Some(v.len()),
+        _ => None,
+    }
 }
 
 /// Semantic checks of `[granular]` and every `[[wall]]`.
 pub fn validate(sc: &Scenario, p: &mut Problems) {
-    let _ = (sc, p);
+    let Some(g) = &sc.granular else {
+        p.check(
+            sc.wall.is_empty(),
+            "wall",
+            "walls need a [granular] section (discs)",
+        );
+        return;
+    };
+    match sc.material(&g.material) {
+        None => p.push(
+            "granular.material",
+            format!("no [[material]] named `{}`", g.material),
+        ),
+        Some(m) => {
+            let i = sc
+                .material
+                .iter()
+                .position(|x| x.name == m.name)
+                .unwrap_or(0);
+            p.positive(m.density, format!("material.{i}.density"));
+            p.positive(m.kn, format!("material.{i}.kn"));
+        }
+    }
+    p.positive(g.thickness, "granular.thickness");
+    if let Some(s) = g.skin {
+        p.positive(s, "granular.skin");
+    }
+    if let Some(v) = g.velocity {
+        p.check(
+            v.iter().all(|x| x.is_finite()),
+            "granular.velocity",
+            "must be two finite numbers",
+        );
+    }
+    match &g.discs {
+        DiscsSpec::Inline(rows) => {
+            p.check(
+                !rows.is_empty(),
+                "granular.discs",
+                "the list of discs is empty",
+            );
+            for (k, r) in rows.iter().enumerate() {
+                p.check(
+                    r[0].is_finite() && r[1].is_finite() && r[2].is_finite() && r[2] > 0.0,
+                    format!("granular.discs.{k}"),
+                    format!(
+                        "disc {}: [x, y, r] must be finite with r > 0 (got {r:?})",
+                        k + 1
+                    ),
+                );
+            }
+        }
+        DiscsSpec::Table(t) => validate_table(t, p),
+    }
+    match g.damping {
+        DampingSpec::None => {}
+        DampingSpec::ContactViscous {
+            beta, beta_shear, ..
+        } => {
+            p.non_negative(beta, "granular.damping.beta");
+            p.non_negative(beta_shear, "granular.damping.beta_shear");
+        }
+        DampingSpec::CriticalRatio {
+            zeta, zeta_shear, ..
+        } => {
+            for (v, f) in [(zeta, "zeta"), (zeta_shear, "zeta_shear")] {
+                p.check(
+                    v.is_finite() && (0.0..1.0).contains(&v),
+                    format!("granular.damping.{f}"),
+                    format!("must be in [0, 1) (got {v})"),
+                );
+            }
+        }
+        DampingSpec::Local { alpha } => p.check(
+            alpha.is_finite() && (0.0..1.0).contains(&alpha),
+            "granular.damping.alpha",
+            format!("must be in [0, 1) (got {alpha})"),
+        ),
+        DampingSpec::Global { c, c_rot } => {
+            p.non_negative(c, "granular.damping.c");
+            p.non_negative(c_rot, "granular.damping.c_rot");
+        }
+    }
+    let mut names = std::collections::HashSet::new();
+    for (i, w) in sc.wall.iter().enumerate() {
+        let at = |f: &str| format!("wall.{i}.{f}");
+        p.check(
+            names.insert(w.name.as_str()),
+            at("name"),
+            format!("wall `{}` is defined twice", w.name),
+        );
+        let finite = w.from.iter().chain(&w.to).all(|x| x.is_finite());
+        p.check(finite, at("to"), "end points must be finite");
+        p.check(
+            !finite || w.from != w.to,
+            at("to"),
+            "the wall has zero length (from == to)",
+        );
+        if let Some(m) = &w.material {
+            p.check(
+                sc.material(m).is_some(),
+                at("material"),
+                format!("no [[material]] named `{m}`"),
+            );
+        }
+        if let Some(v) = w.velocity {
+            p.check(
+                v.iter().all(|x| x.is_finite()),
+                at("velocity"),
+                "must be two finite numbers",
+            );
+        }
+        p.check(
+            w.until_step.is_none() || w.velocity.is_some(),
+            at("until_step"),
+            "`until_step` needs a `velocity`",
+        );
+        if let Some(h) = &w.history {
+            p.check(
+                w.velocity.is_none(),
+                at("history"),
+                "give either `velocity` or `history`, not both",
+            );
+            p.check(
+                !h.is_empty(),
+                at("history"),
+                "needs at least one [t, vx, vy] point",
+            );
+            p.check(
+                h.iter().all(|r| r.iter().all(|x| x.is_finite()))
+                    && h.windows(2).all(|w| w[1][0] >= w[0][0]),
+                at("history"),
+                "points [t, vx, vy] must be finite with t non-decreasing",
+            );
+        }
+    }
+    if sc.body.is_empty() {
+        validate_probes(sc, p);
+    }
+}
+
+fn validate_table(t: &DiscsTable, p: &mut Problems) {
+    let at = |f: &str| format!("granular.discs.{f}");
+    match (&t.csv, t.generate) {
+        (Some(_), Some(_)) => p.push(at("generate"), "give either `csv` or `generate`, not both"),
+        (None, None) => p.push(
+            "granular.discs",
+            "needs `csv = \"file\"` or `generate = \"square\" | \"hex\" | \"random\"`",
+        ),
+        (Some(_), None) => {
+            for (set, f) in [
+                (t.region.is_some(), "box"),
+                (t.radius.is_some(), "radius"),
+                (t.count.is_some(), "count"),
+            ] {
+                p.check(!set, at(f), "only for `generate`");
+            }
+        }
+        (None, Some(gen_kind)) => {
+            match t.region {
+                None => p.push(
+                    at("generate"),
+                    "a generated packing needs `box = [[x0, y0], [x1, y1]]`",
+                ),
+                Some([a, b]) => p.check(
+                    a.iter().chain(&b).all(|x| x.is_finite()) && b[0] > a[0] && b[1] > a[1],
+                    at("box"),
+                    "must be [[x0, y0], [x1, y1]] with x1 > x0 and y1 > y0",
+                ),
+            }
+            match t.radius {
+                None => p.push(at("generate"), "a generated packing needs `radius`"),
+                Some(r) => {
+                    let (a, b) = r.range();
+                    p.check(
+                        a.is_finite() && b.is_finite() && a > 0.0 && b >= a,
+                        at("radius"),
+                        "must be r > 0 or [rmin, rmax] with 0 < rmin ≤ rmax",
+                    );
+                }
+            }
+            if let Some(c) = t.count {
+                p.check(c >= 1, at("count"), "must be ≥ 1");
+            }
+            if let Some(j) = t.jitter {
+                p.check(
+                    j.is_finite() && (0.0..=1.0).contains(&j),
+                    at("jitter"),
+                    "must be in [0, 1]",
+                );
+            }
+            p.check(
+                t.method == Packing::Loose || gen_kind == Generator::Random,
+                at("method"),
+                "`method` applies to `generate = \"random\"` only",
+            );
+        }
+    }
+}
+
+fn validate_probes(sc: &Scenario, p: &mut Problems) {
+    let n = sc.granular.as_ref().and_then(inline_count);
+    for (i, pr) in sc.probe.iter().enumerate() {
+        let at = |f: &str| format!("probe.{i}.{f}");
+        let q = pr.quantity.as_str();
+        let disc_ok = |k: usize| k >= 1 && n.is_none_or(|n| k <= n);
+        if CONTACT_QUANTITIES.contains(&q) {
+            match pr.contact {
+                None => p.push(
+                    at("quantity"),
+                    format!("`{q}` needs `contact = [a, b]` (1-based disc numbers)"),
+                ),
+                Some([a, b]) => p.check(
+                    disc_ok(a) && disc_ok(b) && a != b,
+                    at("contact"),
+                    format!(
+                        "needs two different disc numbers in 1..={}",
+                        n.map_or("N".into(), |n| n.to_string())
+                    ),
+                ),
+            }
+        } else if WALL_QUANTITIES.contains(&q) {
+            match &pr.wall {
+                None => p.push(at("quantity"), format!("`{q}` needs `wall = \"name\"`")),
+                Some(w) => p.check(
+                    sc.wall.iter().any(|x| &x.name == w),
+                    at("wall"),
+                    format!("no [[wall]] named `{w}`"),
+                ),
+            }
+        } else if DISC_QUANTITIES.contains(&q) {
+            match pr.disc {
+                None => p.push(at("quantity"), format!("`{q}` needs `disc = k` (1-based)")),
+                Some(k) => p.check(disc_ok(k), at("disc"), "disc number out of range (1-based)"),
+            }
+        } else if !GLOBAL_QUANTITIES.contains(&q) {
+            p.push(
+                at("quantity"),
+                format!(
+                    "unknown quantity `{q}` for a granular run (allowed: {}, {}, {}, {})",
+                    CONTACT_QUANTITIES.join(", "),
+                    WALL_QUANTITIES.join(", "),
+                    DISC_QUANTITIES.join(", "),
+                    GLOBAL_QUANTITIES.join(", ")
+                ),
+            );
+        }
+    }
 }

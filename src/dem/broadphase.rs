@@ -1,0 +1,341 @@
+//! Contact search: a uniform cell grid with a Verlet skin.
+//!
+//! The grid's cell is at least the largest diameter plus the skin, so every
+//! pair closer than the skin lies in neighbouring cells: the search costs
+//! O(N). Pairs whose gap is below the skin are kept in a flat, sorted
+//! [`ContactList`] (pair indices + shear history) that is reused until some
+//! disc has moved more than half the skin (or a disc and a wall together
+//! more than the skin); only then is the grid rebuilt. Every few rebuilds
+//! the discs are renumbered in cell order so that neighbours in space are
+//! neighbours in memory.
+//!
+//! Shear histories survive rebuilds and renumberings: the new pair list is
+//! merged with the old one on the sorted keys `(i, j)`, `i < j` (slots).
+
+use super::contact::ContactForce;
+use super::particles::Particles;
+use super::walls::Wall;
+use crate::geom::Vec2;
+use rayon::prelude::*;
+
+/// A disc–disc pair closer than the skin, `i < j` (slots), and its shear
+/// history `fs` (force along `t = perp(n)`, n from i to j; 0 when open).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pair {
+    pub i: u32,
+    pub j: u32,
+    pub fs: f64,
+}
+
+/// A disc–wall pair closer than the skin and its shear history.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WallPair {
+    pub disc: u32,
+    pub wall: u32,
+    pub fs: f64,
+}
+
+/// The flat contact arrays and the per-disc index (CSR) used to gather the
+/// per-contact forces in a fixed order.
+#[derive(Debug, Clone, Default)]
+pub struct ContactList {
+    /// Sorted by `(i, j)`.
+    pub pairs: Vec<Pair>,
+    /// Force of each pair in the current step (same index as `pairs`).
+    pub buf: Vec<ContactForce>,
+    /// Pairs whose first disc is `k`: `first[k]..first[k + 1]`.
+    pub first: Vec<u32>,
+    /// Pairs whose second disc is `k`: `second[second_start[k]..second_start[k + 1]]`.
+    pub second_start: Vec<u32>,
+    pub second: Vec<u32>,
+    /// Disc–wall pairs, sorted by `(disc, wall)`.
+    pub walls: Vec<WallPair>,
+    pub wall_buf: Vec<ContactForce>,
+}
+
+impl ContactList {
+    /// Bytes held (capacity).
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.pairs.capacity() * size_of::<Pair>()
+            + self.buf.capacity() * size_of::<ContactForce>()
+            + (self.first.capacity() + self.second_start.capacity() + self.second.capacity()) * 4
+            + self.walls.capacity() * size_of::<WallPair>()
+            + self.wall_buf.capacity() * size_of::<ContactForce>()
+    }
+
+    /// Index of the pair of slots `(a, b)` in any order, if it is listed.
+    pub fn find(&self, a: u32, b: u32) -> Option<usize> {
+        let (i, j) = if a < b { (a, b) } else { (b, a) };
+        let lo = *self.first.get(i as usize)? as usize;
+        let hi = *self.first.get(i as usize + 1)? as usize;
+        self.pairs[lo..hi]
+            .binary_search_by_key(&j, |p| p.j)
+            .ok()
+            .map(|k| lo + k)
+    }
+}
+
+/// The grid and the Verlet-list bookkeeping.
+#[derive(Debug, Clone, Default)]
+pub struct NeighbourGrid {
+    /// Verlet skin: pairs with a gap below it are listed.
+    pub skin: f64,
+    /// Renumber the discs in cell order every this many rebuilds (0 = never).
+    pub reorder_every: usize,
+    /// Positions at the last rebuild.
+    pub ref_pos: Vec<Vec2>,
+    /// Wall first end points at the last rebuild.
+    pub wall_ref: Vec<Vec2>,
+    /// Number of rebuilds so far.
+    pub rebuilds: usize,
+    /// Force a rebuild before the next force computation.
+    pub stale: bool,
+    cell_of: Vec<u32>,
+    cell_start: Vec<u32>,
+    cell_items: Vec<u32>,
+    nx: usize,
+    ny: usize,
+    origin: Vec2,
+    h: f64,
+}
+
+const CHUNK: usize = 4096;
+
+impl NeighbourGrid {
+    pub fn new(skin: f64) -> Self {
+        NeighbourGrid {
+            skin,
+            reorder_every: 8,
+            stale: true,
+            ..Default::default()
+        }
+    }
+
+    /// Bytes held (capacity).
+    pub fn heap_bytes(&self) -> usize {
+        self.ref_pos.capacity() * 16
+            + (self.cell_of.capacity() + self.cell_start.capacity() + self.cell_items.capacity())
+                * 4
+    }
+
+    /// Does the list have to be rebuilt? `max_disp` is the largest disc
+    /// displacement since the last rebuild.
+    pub fn needs_rebuild(&self, max_disp: f64, walls: &[Wall]) -> bool {
+        if self.stale {
+            return true;
+        }
+        let wmax = walls
+            .iter()
+            .zip(&self.wall_ref)
+            .map(|(w, r)| (w.a - *r).norm())
+            .fold(0.0, f64::max);
+        2.0 * max_disp > self.skin || max_disp + wmax > self.skin
+    }
+
+    /// Bin the discs (counting sort, stable in slot order).
+    fn bin(&mut self, p: &Particles) {
+        let n = p.len();
+        let (mut lo, mut hi) = (
+            Vec2::new(f64::INFINITY, f64::INFINITY),
+            Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+        );
+        for q in &p.pos {
+            lo = Vec2::new(lo.x.min(q.x), lo.y.min(q.y));
+            hi = Vec2::new(hi.x.max(q.x), hi.y.max(q.y));
+        }
+        if n == 0 {
+            lo = Vec2::ZERO;
+            hi = Vec2::ZERO;
+        }
+        let mut h = (2.0 * p.max_radius() + self.skin).max(1e-300);
+        let ext = hi - lo;
+        // Cap the number of cells at ~4 per disc (a disc flying far away
+        // must not blow up the grid).
+        let max_cells = 4 * n + 16;
+        loop {
+            let nx = (ext.x / h).floor() as usize + 1;
+            let ny = (ext.y / h).floor() as usize + 1;
+            if nx.saturating_mul(ny) <= max_cells {
+                self.nx = nx;
+                self.ny = ny;
+                break;
+            }
+            h *= 2.0;
+        }
+        self.h = h;
+        self.origin = lo;
+        let ncell = self.nx * self.ny;
+        self.cell_of.clear();
+        self.cell_of.extend(p.pos.iter().map(|q| {
+            let cx = (((q.x - lo.x) / h) as usize).min(self.nx - 1);
+            let cy = (((q.y - lo.y) / h) as usize).min(self.ny - 1);
+            (cy * self.nx + cx) as u32
+        }));
+        self.cell_start.clear();
+        self.cell_start.resize(ncell + 1, 0);
+        for &c in &self.cell_of {
+            self.cell_start[c as usize + 1] += 1;
+        }
+        for c in 0..ncell {
+            self.cell_start[c + 1] += self.cell_start[c];
+        }
+        self.cell_items.clear();
+        self.cell_items.resize(n, 0);
+        let mut fill = self.cell_start.clone();
+        for (k, &c) in self.cell_of.iter().enumerate() {
+            self.cell_items[fill[c as usize] as usize] = k as u32;
+            fill[c as usize] += 1;
+        }
+    }
+
+    /// Rebuild the pair lists (and renumber the discs every
+    /// `reorder_every` rebuilds), carrying shear histories over.
+    pub fn rebuild(&mut self, p: &mut Particles, walls: &[Wall], list: &mut ContactList) {
+        self.bin(p);
+        if self.reorder_every > 0 && self.rebuilds.is_multiple_of(self.reorder_every) {
+            let order = self.cell_items.clone();
+            let new_of_old = p.permute(&order);
+            for q in &mut list.pairs {
+                let (a, b) = (new_of_old[q.i as usize], new_of_old[q.j as usize]);
+                (q.i, q.j) = if a < b { (a, b) } else { (b, a) };
+            }
+            list.pairs.sort_unstable_by_key(|q| (q.i, q.j));
+            for w in &mut list.walls {
+                w.disc = new_of_old[w.disc as usize];
+            }
+            list.walls.sort_unstable_by_key(|w| (w.disc, w.wall));
+            self.bin(p);
+        }
+        self.rebuilds += 1;
+        self.search(p, list);
+        self.search_walls(p, walls, list);
+        self.ref_pos.clear();
+        self.ref_pos.extend_from_slice(&p.pos);
+        self.wall_ref = walls.iter().map(|w| w.a).collect();
+        self.stale = false;
+    }
+
+    /// Disc–disc candidates: for each disc, the discs of higher slot in the
+    /// 3×3 neighbouring cells with a gap below the skin; merged with the old
+    /// list to keep shear histories.
+    fn search(&self, p: &Particles, list: &mut ContactList) {
+        let n = p.len();
+        let skin = self.skin;
+        let (nx, ny) = (self.nx as isize, self.ny as isize);
+        let chunks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let lo = c * CHUNK;
+                let hi = (lo + CHUNK).min(n);
+                let mut counts = Vec::with_capacity(hi - lo);
+                let mut js = Vec::with_capacity(4 * (hi - lo));
+                for i in lo..hi {
+                    let start = js.len();
+                    let pi = p.pos[i];
+                    let ri = p.radius[i];
+                    let cell = self.cell_of[i] as isize;
+                    let (cx, cy) = (cell % nx, cell / nx);
+                    for yy in (cy - 1).max(0)..=(cy + 1).min(ny - 1) {
+                        for xx in (cx - 1).max(0)..=(cx + 1).min(nx - 1) {
+                            let cc = (yy * nx + xx) as usize;
+                            let (a, b) = (self.cell_start[cc], self.cell_start[cc + 1]);
+                            for &j in &self.cell_items[a as usize..b as usize] {
+                                if (j as usize) <= i {
+                                    continue;
+                                }
+                                let reach = ri + p.radius[j as usize] + skin;
+                                if (p.pos[j as usize] - pi).norm2() < reach * reach {
+                                    js.push(j);
+                                }
+                            }
+                        }
+                    }
+                    js[start..].sort_unstable();
+                    counts.push((js.len() - start) as u32);
+                }
+                (counts, js)
+            })
+            .collect();
+        let total: usize = chunks.iter().map(|c| c.1.len()).sum();
+        let old = std::mem::take(&mut list.pairs);
+        let mut pairs = Vec::with_capacity(total + total / 8);
+        list.first.clear();
+        list.first.reserve(n + 1);
+        list.first.push(0);
+        let mut i = 0u32;
+        let mut o = 0usize;
+        for (counts, js) in &chunks {
+            let mut at = 0usize;
+            for &cnt in counts {
+                for &j in &js[at..at + cnt as usize] {
+                    // merge: advance the old list to (i, j)
+                    while o < old.len() && (old[o].i, old[o].j) < (i, j) {
+                        o += 1;
+                    }
+                    let fs = if o < old.len() && old[o].i == i && old[o].j == j {
+                        old[o].fs
+                    } else {
+                        0.0
+                    };
+                    pairs.push(Pair { i, j, fs });
+                }
+                at += cnt as usize;
+                list.first.push(pairs.len() as u32);
+                i += 1;
+            }
+        }
+        list.pairs = pairs;
+        list.buf.clear();
+        list.buf.resize(list.pairs.len(), ContactForce::default());
+        // CSR of the second disc of each pair, pair indices ascending.
+        list.second_start.clear();
+        list.second_start.resize(n + 1, 0);
+        for q in &list.pairs {
+            list.second_start[q.j as usize + 1] += 1;
+        }
+        for k in 0..n {
+            list.second_start[k + 1] += list.second_start[k];
+        }
+        list.second.clear();
+        list.second.resize(list.pairs.len(), 0);
+        let mut fill: Vec<u32> = list.second_start[..n].to_vec();
+        for (k, q) in list.pairs.iter().enumerate() {
+            let f = &mut fill[q.j as usize];
+            list.second[*f as usize] = k as u32;
+            *f += 1;
+        }
+    }
+
+    /// Disc–wall candidates (O(N × walls); walls are few).
+    fn search_walls(&self, p: &Particles, walls: &[Wall], list: &mut ContactList) {
+        let old = std::mem::take(&mut list.walls);
+        let mut out = Vec::new();
+        let mut o = 0usize;
+        for (d, (&q, &r)) in p.pos.iter().zip(&p.radius).enumerate() {
+            for (w, wall) in walls.iter().enumerate() {
+                let reach = r + self.skin;
+                if (wall.closest(q) - q).norm2() < reach * reach {
+                    let key = (d as u32, w as u32);
+                    while o < old.len() && (old[o].disc, old[o].wall) < key {
+                        o += 1;
+                    }
+                    let fs = if o < old.len() && (old[o].disc, old[o].wall) == key {
+                        old[o].fs
+                    } else {
+                        0.0
+                    };
+                    out.push(WallPair {
+                        disc: key.0,
+                        wall: key.1,
+                        fs,
+                    });
+                }
+            }
+        }
+        list.walls = out;
+        list.wall_buf.clear();
+        list.wall_buf
+            .resize(list.walls.len(), ContactForce::default());
+    }
+}

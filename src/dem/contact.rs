@@ -1,0 +1,183 @@
+//! The linear contact law: normal spring + dashpot, incremental shear spring
+//! with a Coulomb–cohesion cap (Eqs. 35–38 corrected per ERRATA E6, E12).
+//!
+//! Geometry of a contact between disc i and an entity j (disc or wall):
+//! `n` is the unit normal from i towards j, `t = perp(n)` (n rotated +90°),
+//! δ the overlap. The contact point lies in the middle of the overlap, at
+//! the arm `l_i = r_i − δ/2` from the centre of i (and `l_j = r_j − δ/2`
+//! from j). The same arms are used for the contact-point velocity and for
+//! the moments, so the pair is work-consistent.
+
+use crate::geom::Vec2;
+
+/// Stiffness, friction, cohesion and dashpot coefficients of one material
+/// pair (disc–disc) or of a wall against a disc material.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ContactLaw {
+    /// Normal stiffness `k_n`.
+    pub kn: f64,
+    /// Shear stiffness `k_s`.
+    pub ks: f64,
+    /// Friction coefficient `tan φ` (the smaller of the two, Eq. 37).
+    pub mu: f64,
+    /// Cohesion `c` (the smaller of the two, Eq. 37).
+    pub cohesion: f64,
+    /// Stiffness-proportional normal dashpot: `c_n = β_n k_n` (ERRATA E6).
+    pub beta_n: f64,
+    /// Stiffness-proportional shear dashpot: `c_s = β_s k_s`.
+    pub beta_s: f64,
+    /// Normal dashpot as a fraction of critical: `c_n = ζ_n 2√(k_n m_eff)`.
+    pub zeta_n: f64,
+    /// Shear dashpot as a fraction of critical: `c_s = ζ_s 2√(k_s m_eff)`.
+    pub zeta_s: f64,
+    /// Clamp the total normal force (spring + dashpot) at zero. When false
+    /// (the default, as PFC's "full" dashpot mode and LIGGGHTS), the spring is
+    /// never tensile but the dashpot may pull while the discs overlap, which
+    /// gives the textbook restitution `exp(−πζ/√(1−ζ²))`.
+    pub no_tension: bool,
+}
+
+impl ContactLaw {
+    /// Combine two materials (disc–disc): stiffnesses in series scaled so
+    /// that equal materials give back their own value (`2 k_i k_j/(k_i+k_j)`),
+    /// friction and cohesion the smaller of the two (Eq. 37).
+    pub fn mix(a: &ContactLaw, b: &ContactLaw) -> ContactLaw {
+        let h = |x: f64, y: f64| {
+            if x + y > 0.0 {
+                2.0 * x * y / (x + y)
+            } else {
+                0.0
+            }
+        };
+        ContactLaw {
+            kn: h(a.kn, b.kn),
+            ks: h(a.ks, b.ks),
+            mu: a.mu.min(b.mu),
+            cohesion: a.cohesion.min(b.cohesion),
+            ..*a
+        }
+    }
+
+    /// Normal and shear dashpot coefficients for effective mass `m_eff`.
+    #[inline(always)]
+    pub fn dashpots(&self, m_eff: f64) -> (f64, f64) {
+        let mut cn = self.beta_n * self.kn;
+        let mut cs = self.beta_s * self.ks;
+        if self.zeta_n != 0.0 {
+            cn += self.zeta_n * 2.0 * (self.kn * m_eff).sqrt();
+        }
+        if self.zeta_s != 0.0 {
+            cs += self.zeta_s * 2.0 * (self.ks * m_eff).sqrt();
+        }
+        (cn, cs)
+    }
+}
+
+/// What one contact contributes: force on i (the force on j is its
+/// opposite) and the moments on i and j about their centres.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ContactForce {
+    pub f: Vec2,
+    pub ti: f64,
+    pub tj: f64,
+}
+
+/// Kinematic state of one side of a contact.
+#[derive(Debug, Clone, Copy)]
+pub struct Side {
+    pub pos: Vec2,
+    pub vel: Vec2,
+    pub omega: f64,
+    pub radius: f64,
+}
+
+/// One contact evaluation, Eqs. (35)–(38) per ERRATA E6/E12.
+///
+/// * normal: `F_n = k_n δ + c_n δ̇`, the spring part only while δ > 0 (never
+///   tensile), `δ̇ = (v_i − v_j)·n` at the contact;
+/// * shear: `F_s ← F_s − k_s v_t Δt` with the contact-point relative
+///   tangential velocity `v_t = (v_i − v_j)·t + ω_i l_i + ω_j l_j`, capped at
+///   `|F_s| ≤ k_n δ tan φ + c` (Eq. 37); the shear dashpot `−c_s v_t` acts
+///   only while the contact sticks;
+/// * moments `r_c × F` about each centre (E12): `l_i F_s` and `l_j F_s`.
+///
+/// `fs` is the contact's shear history (force along `t`); it is reset to
+/// zero when the entities do not overlap. `n` is the unit normal from i to
+/// j and `dist` the centre (or centre-to-wall) distance; `rsum` the sum of
+/// the reaches (`r_i + r_j` for discs, `r_i` for a wall with `r_j = 0`).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate(
+    law: &ContactLaw,
+    n: Vec2,
+    delta: f64,
+    i: &Side,
+    j: &Side,
+    m_eff: f64,
+    fs: &mut f64,
+    dt: f64,
+) -> ContactForce {
+    let t = n.perp();
+    let li = i.radius - 0.5 * delta;
+    let lj = (j.radius - 0.5 * delta).max(0.0);
+    let dv = i.vel - j.vel;
+    let vn = dv.dot(n);
+    let vt = dv.dot(t) + i.omega * li + j.omega * lj;
+    let (cn, cs) = law.dashpots(m_eff);
+    let fn_el = law.kn * delta;
+    let mut fn_tot = fn_el + cn * vn;
+    if law.no_tension && fn_tot < 0.0 {
+        fn_tot = 0.0;
+    }
+    let trial = *fs - law.ks * vt * dt;
+    let cap = law.mu * fn_el + law.cohesion;
+    let fs_tot = if trial.abs() > cap {
+        let s = cap.copysign(trial);
+        *fs = s;
+        s
+    } else {
+        *fs = trial;
+        trial - cs * vt
+    };
+    ContactForce {
+        f: n * (-fn_tot) + t * fs_tot,
+        ti: li * fs_tot,
+        tj: lj * fs_tot,
+    }
+}
+
+/// Normal force of a contact from the present state (for probes): elastic
+/// `k_n δ` and total `k_n δ + c_n δ̇` (clamped at 0 with `no_tension`).
+pub fn normal_force(law: &ContactLaw, delta: f64, vn: f64, m_eff: f64) -> (f64, f64) {
+    if delta <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let (cn, _) = law.dashpots(m_eff);
+    let el = law.kn * delta;
+    let mut tot = el + cn * vn;
+    if law.no_tension && tot < 0.0 {
+        tot = 0.0;
+    }
+    (el, tot)
+}
+
+/// Effective mass `m_i m_j/(m_i + m_j)` from inverse masses (a wall or a
+/// fixed disc has inverse mass 0).
+#[inline(always)]
+pub fn effective_mass(inv_mi: f64, inv_mj: f64) -> f64 {
+    let s = inv_mi + inv_mj;
+    if s > 0.0 { 1.0 / s } else { 0.0 }
+}
+
+/// Unit normal and distance from `a` to `b`, with a fixed fallback
+/// direction for coincident centres (no NaN).
+#[inline(always)]
+pub fn normal_between(a: Vec2, b: Vec2) -> (Vec2, f64) {
+    let d = b - a;
+    let dist = d.norm();
+    if dist > 0.0 {
+        (d * (1.0 / dist), dist)
+    } else {
+        (Vec2::new(1.0, 0.0), 0.0)
+    }
+}

@@ -1,0 +1,139 @@
+//! Discs in structure-of-arrays form (§2.3 of the paper).
+//!
+//! Each quantity is its own array, indexed by the disc's *slot*. Planar
+//! vectors are stored as [`Vec2`] (x and y side by side: the contact kernel
+//! always reads both). Slots are permuted from time to time so that discs
+//! close in space are close in memory (see [`Particles::permute`]); the
+//! scenario's numbering is kept in [`Particles::id`] and its inverse
+//! [`Particles::slot`].
+
+use crate::geom::Vec2;
+
+/// Fixity flag: the x velocity is prescribed (not changed by forces).
+pub const FIX_X: u8 = 1;
+/// Fixity flag: the y velocity is prescribed.
+pub const FIX_Y: u8 = 2;
+/// Fixity flag: the spin is prescribed (rotation locked when it is zero).
+pub const FIX_ROT: u8 = 4;
+
+/// The discs of a granular assembly.
+#[derive(Debug, Clone, Default)]
+pub struct Particles {
+    /// Centre position at time t (after a step: t + Δt).
+    pub pos: Vec<Vec2>,
+    /// Velocity at the half step t − Δt/2 (Eq. 53).
+    pub vel: Vec<Vec2>,
+    /// Rotation θ (Eq. 51).
+    pub theta: Vec<f64>,
+    /// Spin ω at the half step (Eq. 54), counter-clockwise positive.
+    pub omega: Vec<f64>,
+    pub radius: Vec<f64>,
+    /// m = ρ π r² t.
+    pub mass: Vec<f64>,
+    /// I = m r² / 2 (a solid cylinder about its axis).
+    pub inertia: Vec<f64>,
+    pub inv_mass: Vec<f64>,
+    pub inv_inertia: Vec<f64>,
+    /// Resultant force of the current step (contacts + external; gravity is
+    /// added during integration).
+    pub force: Vec<Vec2>,
+    /// Resultant moment about the centre (ERRATA E12).
+    pub torque: Vec<f64>,
+    /// Bit set of [`FIX_X`], [`FIX_Y`], [`FIX_ROT`].
+    pub fixity: Vec<u8>,
+    /// Index into the assembly's material table.
+    pub material: Vec<u16>,
+    /// Scenario number (0-based) of the disc in each slot.
+    pub id: Vec<u32>,
+    /// Slot of each scenario disc: `slot[id[k]] == k`.
+    pub slot: Vec<u32>,
+}
+
+impl Particles {
+    pub fn len(&self) -> usize {
+        self.pos.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.pos.is_empty()
+    }
+
+    /// Append a disc of radius `r`, density `rho` and thickness `t` at rest.
+    /// Mass `m = ρ π r² t`, inertia `I = m r²/2`.
+    pub fn push(&mut self, pos: Vec2, r: f64, rho: f64, thickness: f64, material: u16) {
+        let m = rho * std::f64::consts::PI * r * r * thickness;
+        let inertia = 0.5 * m * r * r;
+        let k = self.len() as u32;
+        self.pos.push(pos);
+        self.vel.push(Vec2::ZERO);
+        self.theta.push(0.0);
+        self.omega.push(0.0);
+        self.radius.push(r);
+        self.mass.push(m);
+        self.inertia.push(inertia);
+        self.inv_mass.push(if m > 0.0 { 1.0 / m } else { 0.0 });
+        self.inv_inertia
+            .push(if inertia > 0.0 { 1.0 / inertia } else { 0.0 });
+        self.force.push(Vec2::ZERO);
+        self.torque.push(0.0);
+        self.fixity.push(0);
+        self.material.push(material);
+        self.id.push(k);
+        self.slot.push(k);
+    }
+
+    /// Largest radius (0 when empty).
+    pub fn max_radius(&self) -> f64 {
+        self.radius.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// Smallest mass among discs that move.
+    pub fn min_mass(&self) -> f64 {
+        self.mass
+            .iter()
+            .copied()
+            .filter(|&m| m > 0.0)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Reorder slots: the disc now in slot `k` is the one that was in slot
+    /// `order[k]`. Returns `new_slot_of_old` (the inverse permutation), which
+    /// callers use to remap contact keys.
+    pub fn permute(&mut self, order: &[u32]) -> Vec<u32> {
+        fn apply<T: Copy>(v: &mut Vec<T>, order: &[u32]) {
+            let out: Vec<T> = order.iter().map(|&o| v[o as usize]).collect();
+            *v = out;
+        }
+        apply(&mut self.pos, order);
+        apply(&mut self.vel, order);
+        apply(&mut self.theta, order);
+        apply(&mut self.omega, order);
+        apply(&mut self.radius, order);
+        apply(&mut self.mass, order);
+        apply(&mut self.inertia, order);
+        apply(&mut self.inv_mass, order);
+        apply(&mut self.inv_inertia, order);
+        apply(&mut self.force, order);
+        apply(&mut self.torque, order);
+        apply(&mut self.fixity, order);
+        apply(&mut self.material, order);
+        apply(&mut self.id, order);
+        let mut new_of_old = vec![0u32; order.len()];
+        for (k, &o) in order.iter().enumerate() {
+            new_of_old[o as usize] = k as u32;
+        }
+        for (k, &id) in self.id.iter().enumerate() {
+            self.slot[id as usize] = k as u32;
+        }
+        new_of_old
+    }
+
+    /// Bytes held by the per-disc arrays (capacity, not length).
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.pos.capacity() * size_of::<Vec2>() * 3
+            + self.theta.capacity() * size_of::<f64>() * 8
+            + self.fixity.capacity()
+            + self.material.capacity() * 2
+            + self.id.capacity() * 4 * 2
+    }
+}
