@@ -37,3 +37,41 @@ impl BoundaryChain {
         a + (self.reference[seg + 1] - a) * s
     }
 }
+
+/// Energies of a body (for the coupled energy account).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BodyEnergies {
+    /// `½ U̇ᵀ M U̇`.
+    pub kinetic: f64,
+    /// `½ Uᵀ K̄ U` (elastic plus penalty springs).
+    pub strain: f64,
+}
+
+/// Why a body could not advance.
+#[derive(Debug, thiserror::Error)]
+#[error("body `{body}`: {message}")]
+pub struct SolveError {
+    pub body: String,
+    pub message: String,
+}
+
+/// What the coupling needs from a continuum body (EFG or FE).
+pub trait Continuum: Send {
+    /// Name (for messages and outputs).
+    fn name(&self) -> &str;
+    /// The contact boundary: polylines through boundary points at their true
+    /// current positions (ERRATA E7), refreshed by [`advance`](Self::advance).
+    fn contact_boundary(&self) -> &[BoundaryChain];
+    /// Velocity of the boundary material point `x` (reference coordinates)
+    /// of chain `chain`: `Σ_J φ_J(x) U̇_J` (Eq. 41 per ERRATA E7).
+    fn boundary_velocity(&self, chain: usize, x: Vec2) -> Vec2;
+    /// Accumulate a point load `f` at material point `x` of chain `chain`
+    /// for the next step: `F += Φᵀ(x) f` (Eqs. 43–46), with the same shape
+    /// functions as [`boundary_velocity`](Self::boundary_velocity).
+    fn add_point_load(&mut self, chain: usize, x: Vec2, f: Vec2);
+    /// Advance one time step with the accumulated loads, clear them, and
+    /// refresh the contact boundary.
+    fn advance(&mut self) -> Result<(), SolveError>;
+    /// Kinetic and strain energy of the present state.
+    fn energies(&self) -> BodyEnergies;
+}

@@ -1,3 +1,258 @@
-//! EFG–DE coupling (§2.4 and §3 of the paper).
+//! EFG–DE coupling (§2.4 and §3 of the paper): the time loop.
+//!
+//! One coupled step (explicit DEM, implicit Newmark, one Δt for both by
+//! default — ERRATA E11):
+//! 1. DEM contacts: disc–disc and disc–wall forces ([`Granular`] phases).
+//! 2. Disc–body contacts on each body's current boundary
+//!    ([`interface::detect`]): the body side moves with the velocity of the
+//!    material point `H` (Eq. 41, E7), the contact law is the DEM's
+//!    (Eqs. 35–37, E6); the force acts on the disc and its opposite on the
+//!    body as a point load through the same shape functions (Eq. 46, E7).
+//! 3. Discs advance by the central difference.
+//! 4. Every `substeps` DEM steps each body advances one Newmark step with the
+//!    loads averaged over those DEM steps.
 
 pub mod interface;
+
+use crate::continuum::Continuum;
+use crate::dem::Granular;
+use crate::dem::contact::{self, ContactLaw, Side, effective_mass};
+use crate::geom::Vec2;
+
+/// Shear history and last state of one disc–body contact, keyed by
+/// `(disc id, body, chain)` so that a disc sliding from one segment to the
+/// next keeps its shear force.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyContact {
+    pub disc: u32,
+    pub body: u16,
+    pub chain: u16,
+    /// Shear force history along `t = perp(n_disc→body)`.
+    pub fs: f64,
+    /// Overlap at the last evaluation.
+    pub overlap: f64,
+    /// Elastic normal force `k_n δ` and total normal force (with dashpot).
+    pub fn_elastic: f64,
+    pub fn_total: f64,
+    /// Force on the disc.
+    pub force: Vec2,
+    /// Contact point on the body boundary (current configuration).
+    pub point: Vec2,
+    /// Feature touched (Fig. 5).
+    pub feature: interface::Feature,
+}
+
+impl BodyContact {
+    fn key(&self) -> (u32, u16, u16) {
+        (self.disc, self.body, self.chain)
+    }
+}
+
+/// A granular assembly coupled with continuum bodies.
+pub struct CoupledModel {
+    pub granular: Granular,
+    pub bodies: Vec<Box<dyn Continuum>>,
+    /// Contact law of body `b` against disc material `a`: `body_laws[b * n_mat + a]`.
+    pub body_laws: Vec<ContactLaw>,
+    /// DEM steps per body step (1 = same Δt for both).
+    pub substeps: usize,
+    /// Live disc–body contacts, sorted by key.
+    pub contacts: Vec<BodyContact>,
+    scratch: Vec<BodyContact>,
+    loads: Vec<Load>,
+    sub: usize,
+}
+
+/// A disc–body force waiting to be applied.
+#[derive(Debug, Clone, Copy)]
+struct Load {
+    slot: usize,
+    body: usize,
+    chain: usize,
+    /// Material point of the body where the reaction acts.
+    material: Vec2,
+    /// Contact point on the disc (for its moment).
+    arm: Vec2,
+    /// Force on the disc.
+    f: Vec2,
+}
+
+/// Why a coupled step failed.
+#[derive(Debug, thiserror::Error)]
+pub enum CouplingError {
+    #[error(transparent)]
+    Solve(#[from] crate::continuum::SolveError),
+    #[error(
+        "the discs became unstable at step {step} (non-finite state); reduce dt (DEM critical step {dt_crit:e})"
+    )]
+    Unstable { step: usize, dt_crit: f64 },
+}
+
+impl CoupledModel {
+    /// Couple `granular` with `bodies`; `body_material[b]` is the contact
+    /// material index of body `b` (`None`: the disc's own material, as for walls).
+    pub fn new(
+        granular: Granular,
+        bodies: Vec<Box<dyn Continuum>>,
+        body_material: &[Option<u16>],
+        substeps: usize,
+    ) -> Self {
+        let nm = granular.materials.len();
+        let body_laws = (0..bodies.len())
+            .flat_map(|b| {
+                (0..nm).map(move |a| {
+                    body_material
+                        .get(b)
+                        .copied()
+                        .flatten()
+                        .map_or(a, usize::from)
+                })
+            })
+            .map(|m| granular.materials[m])
+            .collect();
+        CoupledModel {
+            granular,
+            bodies,
+            body_laws,
+            substeps: substeps.max(1),
+            contacts: Vec::new(),
+            scratch: Vec::new(),
+            loads: Vec::new(),
+            sub: 0,
+        }
+    }
+
+    /// One DEM step, and a body step every `substeps` of them.
+    pub fn step(&mut self) -> Result<(), CouplingError> {
+        self.granular.prepare_contacts();
+        self.granular.compute_contact_forces();
+        self.body_contact_forces();
+        self.granular.integrate();
+        if !self.granular.is_finite() {
+            return Err(CouplingError::Unstable {
+                step: self.granular.step,
+                dt_crit: self.granular.critical_dt(),
+            });
+        }
+        self.sub += 1;
+        if self.sub == self.substeps {
+            self.sub = 0;
+            for b in &mut self.bodies {
+                b.advance()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Detect disc–body contacts, evaluate them with the DEM contact law,
+    /// apply the force to the disc and the reaction to the body.
+    fn body_contact_forces(&mut self) {
+        let dt = self.granular.dt;
+        let nm = self.granular.materials.len();
+        let share = 1.0 / self.substeps as f64;
+        let mut next = std::mem::take(&mut self.scratch);
+        next.clear();
+        self.loads.clear();
+        let p = &self.granular.particles;
+        for (b, body) in self.bodies.iter().enumerate() {
+            for (c, chain) in body.contact_boundary().iter().enumerate() {
+                if chain.segments() == 0 {
+                    continue;
+                }
+                let (lo, hi) = bounds(&chain.current);
+                for d in 0..p.len() {
+                    let (x, r) = (p.pos[d], p.radius[d]);
+                    if x.x + r < lo.x || x.x - r > hi.x || x.y + r < lo.y || x.y - r > hi.y {
+                        continue;
+                    }
+                    let Some(t) = interface::detect(chain, x, r) else {
+                        continue;
+                    };
+                    let key = (p.id[d], b as u16, c as u16);
+                    let mut fs = self
+                        .contacts
+                        .binary_search_by(|q| q.key().cmp(&key))
+                        .map_or(0.0, |i| self.contacts[i].fs);
+                    let v_h = body.boundary_velocity(c, t.material);
+                    let law = &self.body_laws[b * nm + p.material[d] as usize];
+                    let n = -t.normal; // from the disc towards the body
+                    let m_eff = effective_mass(p.inv_mass[d], 0.0);
+                    let i = Side {
+                        pos: x,
+                        vel: p.vel[d],
+                        omega: p.omega[d],
+                        radius: r,
+                    };
+                    let j = Side {
+                        pos: t.point,
+                        vel: v_h,
+                        omega: 0.0,
+                        radius: 0.5 * t.overlap,
+                    };
+                    let cf = contact::evaluate(law, n, t.overlap, &i, &j, m_eff, &mut fs, dt);
+                    let vn = (i.vel - v_h).dot(n);
+                    let (fe, ft) = contact::normal_force(law, t.overlap, vn, m_eff);
+                    next.push(BodyContact {
+                        disc: key.0,
+                        body: key.1,
+                        chain: key.2,
+                        fs,
+                        overlap: t.overlap,
+                        fn_elastic: fe,
+                        fn_total: ft,
+                        force: cf.f,
+                        point: t.point,
+                        feature: t.feature,
+                    });
+                    self.loads.push(Load {
+                        slot: d,
+                        body: b,
+                        chain: c,
+                        material: t.material,
+                        arm: x + n * (r - 0.5 * t.overlap),
+                        f: cf.f,
+                    });
+                }
+            }
+        }
+        for l in &self.loads {
+            self.granular.add_external_force(l.slot, l.f, l.arm);
+            self.bodies[l.body].add_point_load(l.chain, l.material, -l.f * share);
+        }
+        next.sort_by_key(|q| q.key());
+        self.scratch = std::mem::replace(&mut self.contacts, next);
+    }
+
+    /// Contact spring energy of the disc–body contacts, `½k_nδ² + F_s²/(2k_s)`.
+    pub fn body_contact_energy(&self) -> f64 {
+        let nm = self.granular.materials.len();
+        self.contacts
+            .iter()
+            .map(|q| {
+                let slot = self.granular.slot(q.disc as usize);
+                let law = &self.body_laws
+                    [q.body as usize * nm + self.granular.particles.material[slot] as usize];
+                let mut e = 0.5 * law.kn * q.overlap * q.overlap;
+                if law.ks > 0.0 {
+                    e += 0.5 * q.fs * q.fs / law.ks;
+                }
+                e
+            })
+            .sum()
+    }
+}
+
+fn bounds(pts: &[Vec2]) -> (Vec2, Vec2) {
+    pts.iter().fold(
+        (
+            Vec2::new(f64::INFINITY, f64::INFINITY),
+            Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+        ),
+        |(lo, hi), p| {
+            (
+                Vec2::new(lo.x.min(p.x), lo.y.min(p.y)),
+                Vec2::new(hi.x.max(p.x), hi.y.max(p.y)),
+            )
+        },
+    )
+}
