@@ -5,9 +5,9 @@ use crate::run::RunOptions;
 use crate::scenario::Scenario;
 
 pub fn run(_sc: &Scenario, _opts: &RunOptions) -> Result<serde_json::Value, EfgError> {
-    Err(EfgError::NotImplemented)
+    Err(EfgError::Invalid("not yet".into()))
 }
 
 pub fn check(_sc: &Scenario) -> Result<String, EfgError> {
-    Err(EfgError::NotImplemented)
+    Err(EfgError::Invalid("not yet".into()))
 }
