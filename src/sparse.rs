@@ -19,7 +19,9 @@ use std::sync::Arc;
 /// Errors of the sparse linear algebra.
 #[derive(Debug, thiserror::Error)]
 pub enum SparseError {
-    #[error("the matrix is not positive definite (pivot {0}); check the boundary conditions (is the body fixed somewhere?) and the material")]
+    #[error(
+        "the matrix is not positive definite (pivot {0}); check the boundary conditions (is the body fixed somewhere?) and the material"
+    )]
     NotPositiveDefinite(usize),
     #[error("sparse factorisation failed: {0}")]
     Faer(String),
@@ -61,7 +63,9 @@ impl Pattern {
         }
         (0..self.n).all(|j| {
             let r = &self.row_idx[self.col_ptr[j]..self.col_ptr[j + 1]];
-            r.first() == Some(&j) && r.windows(2).all(|w| w[0] < w[1]) && r.iter().all(|&i| i < self.n)
+            r.first() == Some(&j)
+                && r.windows(2).all(|w| w[0] < w[1])
+                && r.iter().all(|&i| i < self.n)
         })
     }
 }
@@ -162,7 +166,12 @@ pub struct Cholesky {
 
 impl std::fmt::Debug for Cholesky {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Cholesky(n = {}, nnz(L) = {})", self.symbolic.nrows(), self.values.len())
+        write!(
+            f,
+            "Cholesky(n = {}, nnz(L) = {})",
+            self.symbolic.nrows(),
+            self.values.len()
+        )
     }
 }
 
@@ -256,7 +265,11 @@ mod tests {
             col_ptr.push(row_idx.len());
         }
         SymCsc {
-            pattern: Arc::new(Pattern { n, col_ptr, row_idx }),
+            pattern: Arc::new(Pattern {
+                n,
+                col_ptr,
+                row_idx,
+            }),
             values,
         }
     }
@@ -268,7 +281,9 @@ mod tests {
         let x: Vec<f64> = (0..50).map(|i| (i as f64 * 0.37).sin()).collect();
         let mut b = vec![0.0; 50];
         a.mul_add(&x, &mut b);
-        assert!((a.quad_form(&x) - x.iter().zip(&b).map(|(p, q)| p * q).sum::<f64>()).abs() < 1e-12);
+        assert!(
+            (a.quad_form(&x) - x.iter().zip(&b).map(|(p, q)| p * q).sum::<f64>()).abs() < 1e-12
+        );
         let mut ch = Cholesky::factor(&a).unwrap();
         ch.solve_in_place(&mut b);
         for (p, q) in x.iter().zip(&b) {

@@ -1,4 +1,5 @@
 //! Validation 1: MLS shape functions (consistency and derivatives).
+#![allow(clippy::needless_range_loop)]
 
 use efgdem::Vec2;
 use efgdem::efg::shape::{ShapeRow, shape_functions};
@@ -7,7 +8,10 @@ use efgdem::efg::support::Support;
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
@@ -33,7 +37,8 @@ fn check_grid(xs: &[f64], ys: &[f64], d_max: f64, seed: u64) -> (f64, f64, f64) 
         let p = Vec2::new(x0 + rng.next() * (x1 - x0), y0 + rng.next() * (y1 - y0));
         let v = dense(&s, p, &mut row);
         let (mut sum, mut sx, mut sy) = (0.0, 0.0, 0.0);
-        let (mut dsum, mut dxx, mut dxy, mut dyx, mut dyy, mut dysum) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut dsum, mut dxx, mut dxy, mut dyx, mut dyy, mut dysum) =
+            (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
         for (i, f) in v.iter().enumerate() {
             let n = s.node[i];
             sum += f[0];
@@ -46,7 +51,10 @@ fn check_grid(xs: &[f64], ys: &[f64], d_max: f64, seed: u64) -> (f64, f64, f64) 
             dyx += f[2] * n[0];
             dyy += f[2] * n[1];
         }
-        e0 = e0.max((sum - 1.0).abs()).max((sx - p.x).abs() / scale).max((sy - p.y).abs() / scale);
+        e0 = e0
+            .max((sum - 1.0).abs())
+            .max((sx - p.x).abs() / scale)
+            .max((sy - p.y).abs() / scale);
         e1 = e1
             .max(dsum.abs() * scale)
             .max(dysum.abs() * scale)
@@ -60,11 +68,16 @@ fn check_grid(xs: &[f64], ys: &[f64], d_max: f64, seed: u64) -> (f64, f64, f64) 
         let vxm = dense(&s, Vec2::new(p.x - h, p.y), &mut row);
         let vyp = dense(&s, Vec2::new(p.x, p.y + h), &mut row);
         let vym = dense(&s, Vec2::new(p.x, p.y - h), &mut row);
-        let dmax = v.iter().map(|f| f[1].abs().max(f[2].abs())).fold(0.0, f64::max);
+        let dmax = v
+            .iter()
+            .map(|f| f[1].abs().max(f[2].abs()))
+            .fold(0.0, f64::max);
         for i in 0..v.len() {
             let fx = (vxp[i][0] - vxm[i][0]) / (2.0 * h);
             let fy = (vyp[i][0] - vym[i][0]) / (2.0 * h);
-            efd = efd.max((fx - v[i][1]).abs() / dmax).max((fy - v[i][2]).abs() / dmax);
+            efd = efd
+                .max((fx - v[i][1]).abs() / dmax)
+                .max((fy - v[i][2]).abs() / dmax);
         }
     }
     (e0, e1, efd)
@@ -85,7 +98,10 @@ fn shape_functions_reproduce_linear_fields_and_match_finite_differences() {
     let ys: Vec<f64> = (0..9).map(|j| (j as f64 / 8.0).powi(2) * 2.0).collect();
     let (e0, e1, efd) = check_grid(&xs, &ys, 2.5, 7);
     println!("graded: consistency {e0:.2e}, derivative consistency {e1:.2e}, FD {efd:.2e}");
-    assert!(e0 < 1e-12 && e1 < 1e-10 && efd < 1e-6, "{e0:e} {e1:e} {efd:e}");
+    assert!(
+        e0 < 1e-12 && e1 < 1e-10 && efd < 1e-6,
+        "{e0:e} {e1:e} {efd:e}"
+    );
 }
 
 #[test]

@@ -49,7 +49,13 @@ const CHUNK: usize = 256;
 pub fn point_shapes(support: &Support, points: &[Vec2]) -> Result<PointShapes, CoverageError> {
     let counts: Vec<usize> = points
         .par_iter()
-        .map(|&p| support.candidates(p).iter().filter(|&&k| support.covers(k as usize, p)).count())
+        .map(|&p| {
+            support
+                .candidates(p)
+                .iter()
+                .filter(|&&k| support.covers(k as usize, p))
+                .count()
+        })
         .collect();
     let mut ptr = Vec::with_capacity(points.len() + 1);
     ptr.push(0usize);
@@ -101,7 +107,12 @@ pub fn point_shapes(support: &Support, points: &[Vec2]) -> Result<PointShapes, C
 pub fn elasticity(e: f64, nu: f64, plane_strain: bool) -> [f64; 4] {
     if plane_strain {
         let c = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
-        [c * (1.0 - nu), c * nu, c * (1.0 - nu), c * (1.0 - 2.0 * nu) / 2.0]
+        [
+            c * (1.0 - nu),
+            c * nu,
+            c * (1.0 - nu),
+            c * (1.0 - 2.0 * nu) / 2.0,
+        ]
     } else {
         let c = e / (1.0 - nu * nu);
         [c, c * nu, c, c * (1.0 - nu) / 2.0]
@@ -130,7 +141,12 @@ pub struct Operators {
 
 /// Assemble `K̄`, `G` and `∫φ t` from precomputed point shapes. `roles[g]`
 /// says how point `g` contributes; `d` is the elasticity matrix.
-pub fn assemble(n_nodes: usize, shapes: &PointShapes, roles: &[PointRole], d: [f64; 4]) -> Operators {
+pub fn assemble(
+    n_nodes: usize,
+    shapes: &PointShapes,
+    roles: &[PointRole],
+    d: [f64; 4],
+) -> Operators {
     let npts = shapes.len();
     assert_eq!(roles.len(), npts);
     // node → (point, local index) in increasing point order (counting sort)
@@ -281,8 +297,8 @@ pub fn assemble(n_nodes: usize, shapes: &PointShapes, roles: &[PointRole], d: [f
     drop(list);
     // ∫ φ_I t dΩ, fixed (point) order
     let mut phi_integral = vec![0.0; n_nodes];
-    for g in 0..npts {
-        if let PointRole::Domain(w) = roles[g] {
+    for (g, role) in roles.iter().enumerate() {
+        if let PointRole::Domain(w) = *role {
             for t in shapes.ptr[g]..shapes.ptr[g + 1] {
                 phi_integral[shapes.idx[t] as usize] += w * shapes.val[t][0];
             }

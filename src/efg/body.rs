@@ -326,7 +326,9 @@ impl EfgBody {
     /// equation of motion under the permanent loads (released loads off).
     pub fn start_dynamic(&mut self, dt: f64) -> Result<(), EfgError> {
         if !(dt.is_finite() && dt > 0.0) {
-            return Err(EfgError::Invalid(format!("time step must be > 0 (got {dt})")));
+            return Err(EfgError::Invalid(format!(
+                "time step must be > 0 (got {dt})"
+            )));
         }
         if self.material.density <= 0.0 {
             return Err(EfgError::Invalid(format!(
@@ -368,7 +370,8 @@ impl EfgBody {
     /// Shape functions (and derivatives) of this body at `p`: the row
     /// `φ_J(p)` used for sampling, boundary velocity and point loads (E7).
     pub fn shape_row(&self, p: Vec2, row: &mut ShapeRow) -> Result<(), EfgError> {
-        shape_functions(&self.support, p, row).map_err(|e| EfgError::coverage(e, self.d_max, &self.name))
+        shape_functions(&self.support, p, row)
+            .map_err(|e| EfgError::coverage(e, self.d_max, &self.name))
     }
 
     /// Add the point load `f` at `p` to the next step's force:
@@ -437,7 +440,13 @@ impl EfgBody {
         let [d11, d12, _d22, d33] = self.material.d;
         // D⁻¹ for the isotropic D
         let det = d11 * d11 - d12 * d12;
-        let compl = |s: [f64; 3]| [(d11 * s[0] - d12 * s[1]) / det, (d11 * s[1] - d12 * s[0]) / det, s[2] / d33];
+        let compl = |s: [f64; 3]| {
+            [
+                (d11 * s[0] - d12 * s[1]) / det,
+                (d11 * s[1] - d12 * s[0]) / det,
+                s[2] / d33,
+            ]
+        };
         let mut row = ShapeRow::new();
         let (mut num, mut den) = (0.0, 0.0);
         for q in quadrature::domain_points(self.origin, self.size, cells, gauss) {
@@ -445,8 +454,16 @@ impl EfgBody {
             let s = self.sample_row(&row);
             let se = exact_stress(q.x);
             let ee = compl(se);
-            let ds = [s.stress[0] - se[0], s.stress[1] - se[1], s.stress[2] - se[2]];
-            let de = [s.strain[0] - ee[0], s.strain[1] - ee[1], s.strain[2] - ee[2]];
+            let ds = [
+                s.stress[0] - se[0],
+                s.stress[1] - se[1],
+                s.stress[2] - se[2],
+            ];
+            let de = [
+                s.strain[0] - ee[0],
+                s.strain[1] - ee[1],
+                s.strain[2] - ee[2],
+            ];
             num += q.w * (ds[0] * de[0] + ds[1] * de[1] + ds[2] * de[2]);
             den += q.w * (se[0] * ee[0] + se[1] * ee[1] + se[2] * ee[2]);
         }
@@ -456,7 +473,8 @@ impl EfgBody {
     /// Shape functions at every node position (for nodal output).
     pub fn nodal_shapes(&self) -> Result<PointShapes, EfgError> {
         let pts: Vec<Vec2> = (0..self.n_nodes()).map(|i| self.node(i)).collect();
-        assemble::point_shapes(&self.support, &pts).map_err(|e| EfgError::coverage(e, self.d_max, &self.name))
+        assemble::point_shapes(&self.support, &pts)
+            .map_err(|e| EfgError::coverage(e, self.d_max, &self.name))
     }
 }
 

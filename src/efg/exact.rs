@@ -19,14 +19,32 @@ pub struct Timoshenko {
 }
 
 impl Timoshenko {
+    #[allow(clippy::too_many_arguments)]
     /// `plane_strain` converts (E, ν) to the plane-stress equivalents.
-    pub fn new(p: f64, l: f64, d: f64, e: f64, nu: f64, plane_strain: bool, x0: f64, yc: f64) -> Self {
+    pub fn new(
+        p: f64,
+        l: f64,
+        d: f64,
+        e: f64,
+        nu: f64,
+        plane_strain: bool,
+        x0: f64,
+        yc: f64,
+    ) -> Self {
         let (e, nu) = if plane_strain {
             (e / (1.0 - nu * nu), nu / (1.0 - nu))
         } else {
             (e, nu)
         };
-        Timoshenko { p, l, d, e, nu, x0, yc }
+        Timoshenko {
+            p,
+            l,
+            d,
+            e,
+            nu,
+            x0,
+            yc,
+        }
     }
 
     fn inertia(&self) -> f64 {
@@ -40,7 +58,9 @@ impl Timoshenko {
         let c = p / (6.0 * self.e * self.inertia());
         [
             -c * y * ((6.0 * l - 3.0 * x) * x + (2.0 + nu) * (y * y - d * d / 4.0)),
-            c * (3.0 * nu * y * y * (l - x) + (4.0 + 5.0 * nu) * d * d * x / 4.0 + (3.0 * l - x) * x * x),
+            c * (3.0 * nu * y * y * (l - x)
+                + (4.0 + 5.0 * nu) * d * d * x / 4.0
+                + (3.0 * l - x) * x * x),
         ]
     }
 

@@ -75,7 +75,11 @@ const MIN_HADAMARD: f64 = 1e-10;
 /// ERRATA E3), written into `row`. Error if fewer than 3 non-collinear nodes
 /// cover `p`.
 #[inline]
-pub fn shape_functions(support: &Support, p: Vec2, row: &mut ShapeRow) -> Result<(), CoverageError> {
+pub fn shape_functions(
+    support: &Support,
+    p: Vec2,
+    row: &mut ShapeRow,
+) -> Result<(), CoverageError> {
     row.idx.clear();
     row.phi.clear();
     row.dx.clear();
@@ -125,7 +129,7 @@ pub fn shape_functions(support: &Support, p: Vec2, row: &mut ShapeRow) -> Result
     let c02 = a01 * a12 - a02 * a11;
     let det = a00 * c00 + a01 * c01 + a02 * c02;
     let diag = a00 * a11 * a22;
-    if !(det > MIN_HADAMARD * diag) || !det.is_finite() {
+    if !det.is_finite() || det <= MIN_HADAMARD * diag {
         return Err(err());
     }
     let id = 1.0 / det;

@@ -26,7 +26,11 @@ pub fn grid_spacing(xs: &[f64], ys: &[f64]) -> (Vec<f64>, Vec<f64>) {
         (0..v.len())
             .map(|i| {
                 let l = if i > 0 { v[i] - v[i - 1] } else { 0.0 };
-                let r = if i + 1 < v.len() { v[i + 1] - v[i] } else { 0.0 };
+                let r = if i + 1 < v.len() {
+                    v[i + 1] - v[i]
+                } else {
+                    0.0
+                };
                 l.max(r)
             })
             .collect()
@@ -123,7 +127,11 @@ impl Support {
     }
 
     fn bin_of(&self, x: f64, axis: usize) -> usize {
-        let o = if axis == 0 { self.origin.x } else { self.origin.y };
+        let o = if axis == 0 {
+            self.origin.x
+        } else {
+            self.origin.y
+        };
         let t = ((x - o) * self.inv_bin[axis]).floor();
         if t <= 0.0 {
             0
@@ -189,19 +197,27 @@ mod tests {
 
     #[test]
     fn lookup_matches_brute_force() {
-        let xs: Vec<f64> = (0..11).map(|i| i as f64 * 0.3 + 0.01 * (i * i) as f64).collect();
+        let xs: Vec<f64> = (0..11)
+            .map(|i| i as f64 * 0.3 + 0.01 * (i * i) as f64)
+            .collect();
         let ys: Vec<f64> = (0..7).map(|j| -1.0 + j as f64 * 0.5).collect();
         let s = Support::for_grid(&xs, &ys, 2.0);
         let mut out = Vec::new();
         let mut seed = 12345u64;
         for _ in 0..2000 {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let a = (seed >> 11) as f64 / (1u64 << 53) as f64;
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let b = (seed >> 11) as f64 / (1u64 << 53) as f64;
             let p = Vec2::new(-1.0 + a * 6.0, -2.0 + b * 5.0);
             s.covering(p, &mut out);
-            let brute: Vec<u32> = (0..s.len() as u32).filter(|&k| s.covers(k as usize, p)).collect();
+            let brute: Vec<u32> = (0..s.len() as u32)
+                .filter(|&k| s.covers(k as usize, p))
+                .collect();
             assert_eq!(out, brute, "at {p:?}");
         }
     }
