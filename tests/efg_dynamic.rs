@@ -27,6 +27,8 @@ fn run(nodes: [usize; 2], gamma: f64, beta: f64, steps_per_period: f64, steps: u
         r#"
 [simulation]
 analysis = "dynamic"
+dt = {dt}
+steps = {steps}
 [[body]]
 name = "beam"
 rectangle = {{ origin = [0.0, {y0}], size = [{L}, {H}] }}
@@ -42,7 +44,8 @@ name = "tip"
 edge = "right"
 parabolic_shear = -1.0
 "#,
-        y0 = -H / 2.0
+        y0 = -H / 2.0,
+        dt = euler_bernoulli_period() / steps_per_period
     );
     let sc = scenario::parse(&src, "vib.toml").unwrap_or_else(|e| panic!("{e}"));
     let mut b = EfgBody::from_spec(&sc.body[0], sc.simulation.gravity).unwrap();
@@ -61,7 +64,8 @@ parabolic_shear = -1.0
         r.t.push(b.time);
         r.tip.push(b.sample_row(&row).u.y);
         let nm = b.newmark().unwrap();
-        r.energy.push(nm.kinetic_energy(&b.state) + nm.strain_energy(&b.state));
+        r.energy
+            .push(nm.kinetic_energy(&b.state) + nm.strain_energy(&b.state));
     }
     r
 }
@@ -95,7 +99,11 @@ fn free_vibration_average_acceleration() {
     let t1 = euler_bernoulli_period();
     let t = period(&r);
     let e0 = r.energy[0];
-    let drift = r.energy.iter().map(|e| (e - e0).abs() / e0).fold(0.0, f64::max);
+    let drift = r
+        .energy
+        .iter()
+        .map(|e| (e - e0).abs() / e0)
+        .fold(0.0, f64::max);
     println!(
         "period {t:.6} vs Euler–Bernoulli {t1:.6}: {:+.3} %; energy drift {drift:.2e} over 1000 steps",
         100.0 * (t - t1) / t1

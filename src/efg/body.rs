@@ -363,7 +363,7 @@ impl EfgBody {
         nm.advance(&mut self.state, &self.f_point);
         self.f_point.iter_mut().for_each(|x| *x = 0.0);
         self.step += 1;
-        self.time += self.params.dt;
+        self.time = self.step as f64 * self.params.dt;
         Ok(())
     }
 

@@ -16,7 +16,6 @@ pub mod quadrature;
 pub mod run;
 pub mod shape;
 pub mod support;
-pub mod vtu;
 pub mod weight;
 
 pub use body::{EfgBody, Sample};

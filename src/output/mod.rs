@@ -4,6 +4,7 @@
 
 pub mod csv;
 pub mod vtk;
+pub mod vtu;
 
 use std::io::Write;
 use std::path::Path;

@@ -399,6 +399,18 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
         return;
     }
     let continuum_only = sc.granular.is_none() && sc.wall.is_empty();
+    if continuum_only && sc.simulation.analysis == Analysis::Dynamic {
+        p.check(
+            sc.simulation.dt.is_some(),
+            "simulation.dt",
+            "a dynamic continuum analysis needs a time step `dt` (or set `analysis = \"static\"`)",
+        );
+        p.check(
+            sc.simulation.steps.is_some() || sc.simulation.end_time.is_some(),
+            "simulation",
+            "a dynamic analysis needs `steps` or `end_time`",
+        );
+    }
     for (k, pr) in sc.probe.iter().enumerate() {
         let at = |f: &str| format!("probe.{k}.{f}");
         let q = pr.quantity.as_str();
