@@ -109,19 +109,7 @@ impl Newmark {
     /// The acceleration that satisfies the equation of motion at the current
     /// state: `M Ü = F − C U̇ − K̄ U` (factors M once; call at t = 0).
     pub fn initial_acceleration(&self, state: &mut State, f: &[f64]) -> Result<(), SparseError> {
-        let mut r = f.to_vec();
-        let mut ku = vec![0.0; r.len()];
-        self.stiffness.mul_add(&state.u, &mut ku);
-        if let Some(c) = &self.damping {
-            c.mul_add(&state.v, &mut ku);
-        }
-        for (ri, k) in r.iter_mut().zip(&ku) {
-            *ri -= k;
-        }
-        let mut mf = Cholesky::factor(&self.mass)?;
-        mf.solve_in_place(&mut r);
-        state.a = r;
-        Ok(())
+        consistent_acceleration(&self.mass, self.damping.as_ref(), &self.stiffness, state, f)
     }
 
     /// One step `t → t + Δt` under the external force `f` at `t + Δt`
@@ -161,6 +149,35 @@ impl Newmark {
     pub fn strain_energy(&self, state: &State) -> f64 {
         0.5 * self.stiffness.quad_form(&state.u)
     }
+}
+
+/// `Ü` from `M Ü = F − C U̇ − K̄ U` (a temporary Cholesky factor of M; zero
+/// without factoring when the right-hand side vanishes). Call it before
+/// [`Newmark::new`] to keep the two factors from coexisting in memory.
+pub fn consistent_acceleration(
+    mass: &SymCsc,
+    damping: Option<&SymCsc>,
+    stiffness: &SymCsc,
+    state: &mut State,
+    f: &[f64],
+) -> Result<(), SparseError> {
+    let mut r = f.to_vec();
+    let mut ku = vec![0.0; r.len()];
+    stiffness.mul_add(&state.u, &mut ku);
+    if let Some(c) = damping {
+        c.mul_add(&state.v, &mut ku);
+    }
+    for (ri, k) in r.iter_mut().zip(&ku) {
+        *ri -= k;
+    }
+    if r.iter().all(|&x| x == 0.0) {
+        state.a = r;
+        return Ok(());
+    }
+    let mut mf = Cholesky::factor(mass)?;
+    mf.solve_in_place(&mut r);
+    state.a = r;
+    Ok(())
 }
 
 #[cfg(test)]

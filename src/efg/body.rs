@@ -339,11 +339,17 @@ impl EfgBody {
         self.params.dt = dt;
         let m = self.ops.gram.scaled(self.material.density);
         let c = (self.material.damping > 0.0).then(|| self.ops.gram.scaled(self.material.damping));
-        let nm = Newmark::new(m, c, self.ops.kbar.clone(), self.params)?;
         let f: Vec<f64> = (0..self.n_dofs())
             .map(|i| self.f_permanent[i] + self.f_point[i])
             .collect();
-        nm.initial_acceleration(&mut self.state, &f)?;
+        crate::newmark::consistent_acceleration(
+            &m,
+            c.as_ref(),
+            &self.ops.kbar,
+            &mut self.state,
+            &f,
+        )?;
+        let nm = Newmark::new(m, c, self.ops.kbar.clone(), self.params)?;
         self.newmark = Some(nm);
         Ok(())
     }

@@ -35,6 +35,8 @@ pub struct ShapeRow {
     pub phi: Vec<f64>,
     pub dx: Vec<f64>,
     pub dy: Vec<f64>,
+    /// Scratch: the shifted, scaled basis `p_I` of each covering node.
+    basis: Vec<[f64; 2]>,
 }
 
 impl ShapeRow {
@@ -47,6 +49,7 @@ impl ShapeRow {
             phi: Vec::with_capacity(n),
             dx: Vec::with_capacity(n),
             dy: Vec::with_capacity(n),
+            basis: Vec::with_capacity(n),
         }
     }
     pub fn len(&self) -> usize {
@@ -84,16 +87,52 @@ pub fn shape_functions(
     row.phi.clear();
     row.dx.clear();
     row.dy.clear();
+    row.basis.clear();
     let cand = support.candidates(p);
-    // weights, stored temporarily in phi/dx/dy
+    let Some(&c0) = cand.first() else {
+        return Err(CoverageError {
+            x: p.x,
+            y: p.y,
+            covering: 0,
+        });
+    };
+    // basis scale: the support half-widths of one candidate (any fixed
+    // positive scale gives the same φ; this one keeps A well conditioned)
+    let inv = &support.inv_half;
+    let (ihx, ihy) = (inv[c0 as usize][0], inv[c0 as usize][1]);
+    // one pass: weights (Eqs. 5–8), shifted-scaled basis, moment matrix
+    // A = Σ w p pᵀ and its derivatives (symmetric: 6 entries each)
+    let mut a = [0.0f64; 6];
+    let mut ax = [0.0f64; 6];
+    let mut ay = [0.0f64; 6];
     for &k in cand {
         let n = &support.node[k as usize];
-        if let Some(w) = super::weight::tensor_weight(p.x, p.y, n[0], n[1], n[2], n[3]) {
-            row.idx.push(k);
-            row.phi.push(w[0]);
-            row.dx.push(w[1]);
-            row.dy.push(w[2]);
+        let iv = inv[k as usize];
+        let ddx = p.x - n[0];
+        let ddy = p.y - n[1];
+        let rx = ddx.abs() * iv[0];
+        let ry = ddy.abs() * iv[1];
+        if rx >= 1.0 || ry >= 1.0 {
+            continue;
         }
+        let (wx, dwx) = super::weight::cubic_spline(rx);
+        let (wy, dwy) = super::weight::cubic_spline(ry);
+        let dwx = dwx * ddx.signum() * iv[0];
+        let dwy = dwy * ddy.signum() * iv[1];
+        let (w, w_x, w_y) = (wx * wy, dwx * wy, wx * dwy);
+        let px = -ddx * ihx;
+        let py = -ddy * ihy;
+        let q = [1.0, px, py, px * px, px * py, py * py];
+        for t in 0..6 {
+            a[t] += w * q[t];
+            ax[t] += w_x * q[t];
+            ay[t] += w_y * q[t];
+        }
+        row.idx.push(k);
+        row.phi.push(w);
+        row.dx.push(w_x);
+        row.dy.push(w_y);
+        row.basis.push([px, py]);
     }
     let m = row.idx.len();
     let err = || CoverageError {
@@ -103,24 +142,6 @@ pub fn shape_functions(
     };
     if m < 3 {
         return Err(err());
-    }
-    let first = &support.node[row.idx[0] as usize];
-    let (ihx, ihy) = (1.0 / first[2], 1.0 / first[3]);
-    // moment matrix A = Σ w p pᵀ and its derivatives (symmetric: 6 entries)
-    let mut a = [0.0f64; 6];
-    let mut ax = [0.0f64; 6];
-    let mut ay = [0.0f64; 6];
-    for k in 0..m {
-        let n = &support.node[row.idx[k] as usize];
-        let px = (n[0] - p.x) * ihx;
-        let py = (n[1] - p.y) * ihy;
-        let q = [1.0, px, py, px * px, px * py, py * py];
-        let (w, wx, wy) = (row.phi[k], row.dx[k], row.dy[k]);
-        for t in 0..6 {
-            a[t] += w * q[t];
-            ax[t] += wx * q[t];
-            ay[t] += wy * q[t];
-        }
     }
     // a = [a00, a01, a02, a11, a12, a22]
     let [a00, a01, a02, a11, a12, a22] = a;
@@ -153,9 +174,7 @@ pub fn shape_functions(
     let ayg = mulsym(&ay, g);
     let gy = mulsym(&inv, [-ayg[0], -ayg[1], ihy - ayg[2]]);
     for k in 0..m {
-        let n = &support.node[row.idx[k] as usize];
-        let px = (n[0] - p.x) * ihx;
-        let py = (n[1] - p.y) * ihy;
+        let [px, py] = row.basis[k];
         let (w, wx, wy) = (row.phi[k], row.dx[k], row.dy[k]);
         let gp = g[0] + g[1] * px + g[2] * py;
         let gxp = gx[0] + gx[1] * px + gx[2] * py;

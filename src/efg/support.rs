@@ -8,6 +8,8 @@ use crate::geom::Vec2;
 pub struct Support {
     /// Per node `[x_I, y_I, d_mx, d_my]` (position and support half-widths).
     pub node: Vec<[f64; 4]>,
+    /// Per node `[1/d_mx, 1/d_my]`.
+    pub inv_half: Vec<[f64; 2]>,
     /// Bin grid over the union of the supports.
     origin: Vec2,
     inv_bin: [f64; 2],
@@ -87,7 +89,9 @@ impl Support {
             (((hi.y - lo.y) / bs[1]).ceil() as usize).max(1),
         ];
         let inv_bin = [1.0 / bs[0], 1.0 / bs[1]];
+        let inv_half = node.iter().map(|n| [1.0 / n[2], 1.0 / n[3]]).collect();
         let mut s = Support {
+            inv_half,
             node,
             origin: lo,
             inv_bin,
