@@ -51,7 +51,7 @@ traction = [0.0, -1.0e6]
     let t = Instant::now();
     b.start_dynamic(1e-4).expect("factor");
     println!(
-        "Newmark setup (factor α₁M + α₄C + K̄, then M for Ü₀): {:.3} s; nnz(L) = {}",
+        "Newmark setup (factor M for Ü₀, then α₁M + α₄C + K̄): {:.3} s; nnz(L) = {}",
         t.elapsed().as_secs_f64(),
         b.newmark().map_or(0, |nm| nm.factor_nnz())
     );

@@ -125,19 +125,27 @@ fn timoshenko_tip_deflection_33x9() {
 
 fn convergence(grids: &[[usize; 2]]) -> Vec<(f64, f64)> {
     let mut out = vec![];
+    let mut tips = vec![];
     for &g in grids {
-        let (_, e) = timoshenko(g);
+        let (b, e) = timoshenko(g);
         let h = 48.0 / (g[0] - 1) as f64;
         out.push((h, e));
+        tips.push(b.sample(Vec2::new(48.0, 0.0)).unwrap().u.y);
     }
-    println!("h, energy error, rate");
+    let exact = -0.0089;
+    println!("| grid | h | tip u_y | tip error | energy-norm error | rate |");
     for (k, (h, e)) in out.iter().enumerate() {
         let rate = if k > 0 {
             (out[k - 1].1 / e).ln() / (out[k - 1].0 / h).ln()
         } else {
             f64::NAN
         };
-        println!("{h:.4} {e:.4e} {rate:.3}");
+        println!(
+            "| {:?} | {h} | {:.5e} | {:+.3} % | {e:.3e} | {rate:.2} |",
+            grids[k],
+            tips[k],
+            100.0 * (tips[k] - exact) / exact.abs()
+        );
     }
     out
 }
