@@ -273,6 +273,17 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 format!("must be ≥ 1 per direction (got {c:?})"),
             );
         }
+        let cells = b
+            .cells
+            .unwrap_or([b.nodes[0].saturating_sub(1), b.nodes[1].saturating_sub(1)]);
+        p.check(
+            cells[0]
+                .saturating_mul(cells[1])
+                .saturating_mul(b.gauss.saturating_mul(b.gauss))
+                <= 200_000_000,
+            at("gauss"),
+            "too many Gauss points (cells × gauss² must be ≤ 2·10⁸)",
+        );
         p.check(
             (1..=10).contains(&b.gauss),
             at("gauss"),
