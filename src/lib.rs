@@ -24,5 +24,6 @@ pub mod newmark;
 pub mod output;
 pub mod run;
 pub mod scenario;
+pub mod sparse;
 
 pub use geom::Vec2;

@@ -6,6 +6,7 @@ pub mod csv;
 pub mod plot;
 pub mod vtk;
 pub mod vtp;
+pub mod vtu;
 
 use std::io::Write;
 use std::path::Path;

@@ -1,0 +1,505 @@
+//! [`EfgBody`]: one EFG continuum on a rectangular node grid, built from a
+//! [`BodySpec`]: nodes, supports, assembled operators, loads, state, and
+//! what the coupling needs (true sampling, shape rows, point loads, Newmark
+//! advance).
+
+use super::EfgError;
+use super::assemble::{self, Operators, PointRole, PointShapes};
+use super::exact::Timoshenko;
+use super::quadrature::{self, QuadPoint};
+use super::shape::{ShapeRow, shape_functions};
+use super::support::Support;
+use crate::geom::Vec2;
+use crate::newmark::{Newmark, NewmarkParams, State};
+use crate::scenario::body::{BcSpec, BodySpec, Edge, Plane};
+use crate::sparse::Cholesky;
+use std::time::Instant;
+
+/// Material data of a body.
+#[derive(Debug, Clone, Copy)]
+pub struct Material {
+    pub e: f64,
+    pub nu: f64,
+    pub density: f64,
+    pub thickness: f64,
+    pub plane: Plane,
+    /// Damping coefficient c (Eq. 24).
+    pub damping: f64,
+    /// `[D11, D12, D22, D33]` (Eq. 31 or 32).
+    pub d: [f64; 4],
+}
+
+impl Material {
+    /// Stress `D ε` from engineering strain `(ε_xx, ε_yy, γ_xy)`.
+    pub fn stress(&self, e: [f64; 3]) -> [f64; 3] {
+        let [d11, d12, d22, d33] = self.d;
+        [d11 * e[0] + d12 * e[1], d12 * e[0] + d22 * e[1], d33 * e[2]]
+    }
+}
+
+/// True (interpolated) fields at a point.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Sample {
+    /// Displacement `u(x) = Σ φ_I(x) u_I` (Eq. 12).
+    pub u: Vec2,
+    /// Velocity `Σ φ_I(x) u̇_I`.
+    pub v: Vec2,
+    /// Engineering strain `(ε_xx, ε_yy, γ_xy) = B u` (E5).
+    pub strain: [f64; 3],
+    /// Stress `(σ_xx, σ_yy, σ_xy) = D ε`.
+    pub stress: [f64; 3],
+}
+
+/// Sizes and timings of a build, for `check` and summaries.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct BuildInfo {
+    pub nodes: usize,
+    pub dofs: usize,
+    pub domain_points: usize,
+    pub boundary_points: usize,
+    /// Fewest / most nodes covering a quadrature point.
+    pub min_cover: usize,
+    pub max_cover: usize,
+    /// Stored entries of the lower triangle of K̄.
+    pub nnz: usize,
+    pub shape_seconds: f64,
+    pub assembly_seconds: f64,
+}
+
+/// An element-free Galerkin body.
+#[derive(Debug)]
+pub struct EfgBody {
+    pub name: String,
+    /// Node grid `[nx, ny]`; node `(i, j)` is `j·nx + i` at `(xs[i], ys[j])`.
+    pub grid: [usize; 2],
+    pub xs: Vec<f64>,
+    pub ys: Vec<f64>,
+    pub origin: Vec2,
+    pub size: Vec2,
+    pub support: Support,
+    pub material: Material,
+    pub d_max: f64,
+    /// K̄ (with penalty), Gram matrix G (M = ρG, C = cG), ∫φ t.
+    pub ops: Operators,
+    /// Loads present throughout: penalty `F^α` (Eq. 28 / E4), permanent
+    /// tractions and body force (Eq. 27).
+    pub f_permanent: Vec<f64>,
+    /// Loads named in `initial.static_under`: applied for the initial static
+    /// state only, released at t = 0.
+    pub f_released: Vec<f64>,
+    /// Point loads accumulated for the next step (Eq. 46), cleared by `advance`.
+    pub f_point: Vec<f64>,
+    /// Nodal parameters (not nodal displacements: no Kronecker-delta property).
+    pub state: State,
+    pub time: f64,
+    pub step: usize,
+    pub params: NewmarkParams,
+    newmark: Option<Newmark>,
+    /// The Timoshenko field if a bc uses it (for error norms and summaries).
+    pub timoshenko: Option<Timoshenko>,
+    pub info: BuildInfo,
+}
+
+fn edge_ends(origin: Vec2, size: Vec2, e: Edge) -> (Vec2, Vec2) {
+    let (x0, y0, x1, y1) = (origin.x, origin.y, origin.x + size.x, origin.y + size.y);
+    match e {
+        Edge::Left => (Vec2::new(x0, y0), Vec2::new(x0, y1)),
+        Edge::Right => (Vec2::new(x1, y0), Vec2::new(x1, y1)),
+        Edge::Bottom => (Vec2::new(x0, y0), Vec2::new(x1, y0)),
+        Edge::Top => (Vec2::new(x0, y1), Vec2::new(x1, y1)),
+    }
+}
+
+impl EfgBody {
+    /// Build the body: node grid, supports, quadrature, shape functions at
+    /// all quadrature points (parallel), operators K̄, G (parallel,
+    /// thread-count independent), and load vectors. `gravity` is the
+    /// acceleration of `[simulation] gravity`.
+    pub fn from_spec(spec: &BodySpec, gravity: [f64; 2]) -> Result<EfgBody, EfgError> {
+        let [nx, ny] = spec.nodes;
+        if nx < 2 || ny < 2 {
+            return Err(EfgError::Invalid(format!(
+                "body `{}`: the node grid needs at least 2 × 2 nodes",
+                spec.name
+            )));
+        }
+        let origin = Vec2::from(spec.rectangle.origin);
+        let size = Vec2::from(spec.rectangle.size);
+        let xs: Vec<f64> = (0..nx)
+            .map(|i| origin.x + size.x * i as f64 / (nx - 1) as f64)
+            .collect();
+        let ys: Vec<f64> = (0..ny)
+            .map(|j| origin.y + size.y * j as f64 / (ny - 1) as f64)
+            .collect();
+        let support = Support::for_grid(&xs, &ys, spec.d_max);
+        let el = spec.elastic;
+        let plane_strain = el.plane == Plane::Strain;
+        let material = Material {
+            e: el.e,
+            nu: el.nu,
+            density: el.density,
+            thickness: el.thickness,
+            plane: el.plane,
+            damping: spec.damping,
+            d: assemble::elasticity(el.e, el.nu, plane_strain),
+        };
+        let t = el.thickness;
+        let alpha = spec.penalty.unwrap_or(1e5 * el.e);
+        let cells = spec.cells.unwrap_or([nx - 1, ny - 1]);
+        let n = spec.gauss;
+        let timoshenko = spec.bc.iter().find_map(|bc| {
+            bc.timoshenko.map(|ts| {
+                Timoshenko::new(
+                    ts.p,
+                    size.x,
+                    size.y,
+                    el.e,
+                    el.nu,
+                    plane_strain,
+                    origin.x,
+                    origin.y + 0.5 * size.y,
+                )
+            })
+        });
+        // quadrature points: domain, then penalty points of each Γu bc
+        let domain = quadrature::domain_points(origin, size, cells, n);
+        let mut points: Vec<Vec2> = domain.iter().map(|q| q.x).collect();
+        let mut roles: Vec<PointRole> = domain.iter().map(|q| PointRole::Domain(q.w * t)).collect();
+        let mut penalty_values: Vec<[f64; 2]> = Vec::new();
+        let segs = |e: Edge| match e {
+            Edge::Left | Edge::Right => cells[1],
+            Edge::Top | Edge::Bottom => cells[0],
+        };
+        for bc in spec.bc.iter().filter(|b| !b.is_load()) {
+            let (a, b) = edge_ends(origin, size, bc.edge);
+            let (cx, cy) = constrained(bc);
+            for q in quadrature::edge_points(a, b, segs(bc.edge), n) {
+                points.push(q.x);
+                let w = q.w * t * alpha;
+                roles.push(PointRole::Penalty(
+                    if cx { w } else { 0.0 },
+                    if cy { w } else { 0.0 },
+                ));
+                penalty_values.push(prescribed(bc, q.x, timoshenko.as_ref()));
+            }
+        }
+        let t0 = Instant::now();
+        let shapes = assemble::point_shapes(&support, &points)
+            .map_err(|e| EfgError::coverage(e, spec.d_max, &spec.name))?;
+        let shape_seconds = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let ops = assemble::assemble(support.len(), &shapes, &roles, material.d);
+        let assembly_seconds = t1.elapsed().as_secs_f64();
+        let ndof = 2 * support.len();
+        // penalty force F^α (Eq. 28 / E4) from the boundary point shapes
+        let mut f_permanent = vec![0.0; ndof];
+        let nd = domain.len();
+        for (k, ub) in penalty_values.iter().enumerate() {
+            let g = nd + k;
+            if let PointRole::Penalty(px, py) = roles[g] {
+                for s in shapes.ptr[g]..shapes.ptr[g + 1] {
+                    let i = shapes.idx[s] as usize;
+                    let phi = shapes.val[s][0];
+                    f_permanent[2 * i] += px * phi * ub[0];
+                    f_permanent[2 * i + 1] += py * phi * ub[1];
+                }
+            }
+        }
+        let info = BuildInfo {
+            nodes: support.len(),
+            dofs: ndof,
+            domain_points: nd,
+            boundary_points: points.len() - nd,
+            min_cover: shapes.min_cover(),
+            max_cover: shapes.max_cover(),
+            nnz: ops.kbar.pattern.nnz(),
+            shape_seconds,
+            assembly_seconds,
+        };
+        drop(shapes);
+        let mut f_released = vec![0.0; ndof];
+        let released = |name: &str| {
+            spec.initial
+                .as_ref()
+                .is_some_and(|i| i.static_under.iter().any(|s| s == name))
+        };
+        // loads: tractions (Eq. 27, boundary term)
+        let mut row = ShapeRow::new();
+        for bc in spec.bc.iter().filter(|b| b.is_load()) {
+            let target = if bc.name.as_deref().is_some_and(released) {
+                &mut f_released
+            } else {
+                &mut f_permanent
+            };
+            let (a, b) = edge_ends(origin, size, bc.edge);
+            let len = (b - a).norm();
+            let mid = (a + b) * 0.5;
+            for QuadPoint { x, w } in quadrature::edge_points(a, b, segs(bc.edge), n) {
+                let tr = if let Some(tv) = bc.traction {
+                    tv
+                } else {
+                    let p = bc.parabolic_shear.unwrap_or(0.0);
+                    let s = (x - mid).norm();
+                    let tau = 1.5 * p / len * (1.0 - 4.0 * s * s / (len * len));
+                    match bc.edge {
+                        Edge::Left | Edge::Right => [0.0, tau],
+                        Edge::Top | Edge::Bottom => [tau, 0.0],
+                    }
+                };
+                shape_functions(&support, x, &mut row)
+                    .map_err(|e| EfgError::coverage(e, spec.d_max, &spec.name))?;
+                for k in 0..row.len() {
+                    let i = row.idx[k] as usize;
+                    target[2 * i] += w * t * row.phi[k] * tr[0];
+                    target[2 * i + 1] += w * t * row.phi[k] * tr[1];
+                }
+            }
+        }
+        // body force ρ g (Eq. 27, domain term)
+        if gravity != [0.0, 0.0] && el.density > 0.0 {
+            let target = if released("gravity") {
+                &mut f_released
+            } else {
+                &mut f_permanent
+            };
+            for (i, s) in ops.phi_integral.iter().enumerate() {
+                target[2 * i] += el.density * gravity[0] * s;
+                target[2 * i + 1] += el.density * gravity[1] * s;
+            }
+        }
+        Ok(EfgBody {
+            name: spec.name.clone(),
+            grid: spec.nodes,
+            xs,
+            ys,
+            origin,
+            size,
+            support,
+            material,
+            d_max: spec.d_max,
+            ops,
+            f_permanent,
+            f_released,
+            f_point: vec![0.0; ndof],
+            state: State::zeros(ndof),
+            time: 0.0,
+            step: 0,
+            params: NewmarkParams {
+                dt: 0.0,
+                gamma: spec.newmark.gamma,
+                beta: spec.newmark.beta,
+            },
+            newmark: None,
+            timoshenko,
+            info,
+        })
+    }
+
+    pub fn n_nodes(&self) -> usize {
+        self.support.len()
+    }
+    pub fn n_dofs(&self) -> usize {
+        2 * self.support.len()
+    }
+    /// Reference position of node `i`.
+    pub fn node(&self, i: usize) -> Vec2 {
+        let n = &self.support.node[i];
+        Vec2::new(n[0], n[1])
+    }
+
+    /// Static solve `K̄ U = F` with the permanent and released loads plus the
+    /// accumulated point loads; the state becomes (U, 0, 0).
+    pub fn solve_static(&mut self) -> Result<(), EfgError> {
+        let mut f: Vec<f64> = (0..self.n_dofs())
+            .map(|i| self.f_permanent[i] + self.f_released[i] + self.f_point[i])
+            .collect();
+        let mut ch = Cholesky::factor(&self.ops.kbar)?;
+        ch.solve_in_place(&mut f);
+        self.state.u = f;
+        self.state.v.iter_mut().for_each(|x| *x = 0.0);
+        self.state.a.iter_mut().for_each(|x| *x = 0.0);
+        Ok(())
+    }
+
+    /// Prepare time stepping with step `dt` and the body's γ, β: factor
+    /// `α₁M + α₄C + K̄` once and compute the initial acceleration from the
+    /// equation of motion under the permanent loads (released loads off).
+    pub fn start_dynamic(&mut self, dt: f64) -> Result<(), EfgError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(EfgError::Invalid(format!(
+                "time step must be > 0 (got {dt})"
+            )));
+        }
+        if self.material.density <= 0.0 {
+            return Err(EfgError::Invalid(format!(
+                "body `{}`: dynamics needs a density > 0",
+                self.name
+            )));
+        }
+        self.params.dt = dt;
+        let m = self.ops.gram.scaled(self.material.density);
+        let c = (self.material.damping > 0.0).then(|| self.ops.gram.scaled(self.material.damping));
+        let f: Vec<f64> = (0..self.n_dofs())
+            .map(|i| self.f_permanent[i] + self.f_point[i])
+            .collect();
+        crate::newmark::consistent_acceleration(
+            &m,
+            c.as_ref(),
+            &self.ops.kbar,
+            &mut self.state,
+            &f,
+        )?;
+        let nm = Newmark::new(m, c, self.ops.kbar.clone(), self.params)?;
+        self.newmark = Some(nm);
+        Ok(())
+    }
+
+    /// The integrator, once [`EfgBody::start_dynamic`] was called.
+    pub fn newmark(&self) -> Option<&Newmark> {
+        self.newmark.as_ref()
+    }
+
+    /// One Newmark step with the permanent loads plus the point loads
+    /// accumulated since the last step (then cleared).
+    pub fn advance(&mut self) -> Result<(), EfgError> {
+        let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;
+        for (p, f) in self.f_point.iter_mut().zip(&self.f_permanent) {
+            *p += f;
+        }
+        nm.advance(&mut self.state, &self.f_point);
+        self.f_point.iter_mut().for_each(|x| *x = 0.0);
+        self.step += 1;
+        self.time = self.step as f64 * self.params.dt;
+        Ok(())
+    }
+
+    /// Shape functions (and derivatives) of this body at `p`: the row
+    /// `φ_J(p)` used for sampling, boundary velocity and point loads (E7).
+    pub fn shape_row(&self, p: Vec2, row: &mut ShapeRow) -> Result<(), EfgError> {
+        shape_functions(&self.support, p, row)
+            .map_err(|e| EfgError::coverage(e, self.d_max, &self.name))
+    }
+
+    /// Add the point load `f` at `p` to the next step's force:
+    /// `F += Φᵀ(p) f` (Eq. 46, same φ_J as the sampling, E7).
+    pub fn add_point_load_row(&mut self, row: &ShapeRow, f: Vec2) {
+        for (&i, &phi) in row.idx.iter().zip(&row.phi) {
+            self.f_point[2 * i as usize] += phi * f.x;
+            self.f_point[2 * i as usize + 1] += phi * f.y;
+        }
+    }
+
+    /// [`EfgBody::add_point_load_row`] at a point.
+    pub fn add_point_load(&mut self, p: Vec2, f: Vec2) -> Result<(), EfgError> {
+        let mut row = ShapeRow::new();
+        self.shape_row(p, &mut row)?;
+        self.add_point_load_row(&row, f);
+        Ok(())
+    }
+
+    /// True fields from a precomputed shape row.
+    pub fn sample_row(&self, row: &ShapeRow) -> Sample {
+        let (u, v) = (&self.state.u, &self.state.v);
+        let mut s = Sample::default();
+        let mut e = [0.0; 3];
+        for k in 0..row.len() {
+            let i = row.idx[k] as usize;
+            let (ux, uy) = (u[2 * i], u[2 * i + 1]);
+            s.u.x += row.phi[k] * ux;
+            s.u.y += row.phi[k] * uy;
+            s.v.x += row.phi[k] * v[2 * i];
+            s.v.y += row.phi[k] * v[2 * i + 1];
+            e[0] += row.dx[k] * ux;
+            e[1] += row.dy[k] * uy;
+            e[2] += row.dy[k] * ux + row.dx[k] * uy;
+        }
+        s.strain = e;
+        s.stress = self.material.stress(e);
+        s
+    }
+
+    /// True displacement, velocity, strain and stress at `p`.
+    pub fn sample(&self, p: Vec2) -> Result<Sample, EfgError> {
+        let mut row = ShapeRow::new();
+        self.shape_row(p, &mut row)?;
+        Ok(self.sample_row(&row))
+    }
+
+    /// Kinetic energy `½ U̇ᵀ M U̇`.
+    pub fn kinetic_energy(&self) -> f64 {
+        0.5 * self.material.density * self.ops.gram.quad_form(&self.state.v)
+    }
+    /// Strain energy including the penalty term, `½ Uᵀ K̄ U`.
+    pub fn strain_energy(&self) -> f64 {
+        0.5 * self.ops.kbar.quad_form(&self.state.u)
+    }
+
+    /// Relative energy-norm error `‖ε − ε_ex‖_E / ‖ε_ex‖_E` against an exact
+    /// stress field (strain recovered with `D⁻¹`), integrated with `gauss`²
+    /// points on `cells`.
+    pub fn energy_error(
+        &self,
+        exact_stress: impl Fn(Vec2) -> [f64; 3],
+        cells: [usize; 2],
+        gauss: usize,
+    ) -> Result<f64, EfgError> {
+        let [d11, d12, _d22, d33] = self.material.d;
+        // D⁻¹ for the isotropic D
+        let det = d11 * d11 - d12 * d12;
+        let compl = |s: [f64; 3]| {
+            [
+                (d11 * s[0] - d12 * s[1]) / det,
+                (d11 * s[1] - d12 * s[0]) / det,
+                s[2] / d33,
+            ]
+        };
+        let mut row = ShapeRow::new();
+        let (mut num, mut den) = (0.0, 0.0);
+        for q in quadrature::domain_points(self.origin, self.size, cells, gauss) {
+            self.shape_row(q.x, &mut row)?;
+            let s = self.sample_row(&row);
+            let se = exact_stress(q.x);
+            let ee = compl(se);
+            let ds = [
+                s.stress[0] - se[0],
+                s.stress[1] - se[1],
+                s.stress[2] - se[2],
+            ];
+            let de = [
+                s.strain[0] - ee[0],
+                s.strain[1] - ee[1],
+                s.strain[2] - ee[2],
+            ];
+            num += q.w * (ds[0] * de[0] + ds[1] * de[1] + ds[2] * de[2]);
+            den += q.w * (se[0] * ee[0] + se[1] * ee[1] + se[2] * ee[2]);
+        }
+        Ok((num / den).sqrt())
+    }
+
+    /// Shape functions at every node position (for nodal output).
+    pub fn nodal_shapes(&self) -> Result<PointShapes, EfgError> {
+        let pts: Vec<Vec2> = (0..self.n_nodes()).map(|i| self.node(i)).collect();
+        assemble::point_shapes(&self.support, &pts)
+            .map_err(|e| EfgError::coverage(e, self.d_max, &self.name))
+    }
+}
+
+/// Which components a displacement bc constrains.
+fn constrained(bc: &BcSpec) -> (bool, bool) {
+    if bc.fixed || bc.timoshenko.is_some() {
+        (true, true)
+    } else {
+        (bc.ux.is_some(), bc.uy.is_some())
+    }
+}
+
+/// The prescribed displacement `ū` of a bc at `x`.
+fn prescribed(bc: &BcSpec, x: Vec2, tim: Option<&Timoshenko>) -> [f64; 2] {
+    if let (Some(_), Some(t)) = (bc.timoshenko, tim) {
+        return t.displacement(x);
+    }
+    [
+        bc.ux.map_or(0.0, |v| v.at(x.x, x.y)),
+        bc.uy.map_or(0.0, |v| v.at(x.x, x.y)),
+    ]
+}

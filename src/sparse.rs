@@ -1,0 +1,305 @@
+//! Symmetric sparse matrices stored as their lower triangle in CSC form, and
+//! their sparse Cholesky factor (faer, AMD ordering), factored once and
+//! solved many times without allocating.
+//!
+//! Shared by the EFG body and (later) the bilinear FE body: every operator of
+//! one body (K̄, M, C) lives on one [`Pattern`], so that the Newmark matrix
+//! `α₁M + α₄C + K̄` is a value-wise linear combination.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
+use std::sync::Arc;
+
+/// Errors of the sparse linear algebra.
+#[derive(Debug, thiserror::Error)]
+pub enum SparseError {
+    #[error(
+        "the matrix is not positive definite (pivot {0}); check the boundary conditions (is the body fixed somewhere?) and the material"
+    )]
+    NotPositiveDefinite(usize),
+    #[error("sparse factorisation failed: {0}")]
+    Faer(String),
+    #[error("matrices on different sparsity patterns cannot be combined")]
+    PatternMismatch,
+}
+
+/// The sparsity pattern of the lower triangle of a symmetric `n × n` matrix
+/// (CSC: column `j` holds rows `row_idx[col_ptr[j]..col_ptr[j+1]]`, sorted,
+/// the first one being `j` itself).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pattern {
+    pub n: usize,
+    pub col_ptr: Vec<usize>,
+    pub row_idx: Vec<usize>,
+}
+
+impl Pattern {
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+    fn faer(&self) -> SymbolicSparseColMatRef<'_, usize> {
+        // SAFETY: built sorted and in bounds by the assembler; checked in debug builds.
+        debug_assert!(self.check());
+        unsafe {
+            SymbolicSparseColMatRef::new_unchecked(
+                self.n,
+                self.n,
+                &self.col_ptr,
+                None,
+                &self.row_idx,
+            )
+        }
+    }
+    /// Invariants: monotone `col_ptr`, rows sorted, unique, ≥ the column, < n.
+    pub fn check(&self) -> bool {
+        if self.col_ptr.len() != self.n + 1 || self.col_ptr[self.n] != self.row_idx.len() {
+            return false;
+        }
+        (0..self.n).all(|j| {
+            let r = &self.row_idx[self.col_ptr[j]..self.col_ptr[j + 1]];
+            r.first() == Some(&j)
+                && r.windows(2).all(|w| w[0] < w[1])
+                && r.iter().all(|&i| i < self.n)
+        })
+    }
+}
+
+/// A symmetric matrix: lower-triangle values on a shared [`Pattern`].
+#[derive(Debug, Clone)]
+pub struct SymCsc {
+    pub pattern: Arc<Pattern>,
+    pub values: Vec<f64>,
+}
+
+impl SymCsc {
+    pub fn zeros(pattern: Arc<Pattern>) -> Self {
+        let values = vec![0.0; pattern.nnz()];
+        SymCsc { pattern, values }
+    }
+    pub fn n(&self) -> usize {
+        self.pattern.n
+    }
+    /// `a·self + b·other` (same pattern).
+    pub fn combine(&self, a: f64, other: &SymCsc, b: f64) -> Result<SymCsc, SparseError> {
+        if !Arc::ptr_eq(&self.pattern, &other.pattern) && self.pattern != other.pattern {
+            return Err(SparseError::PatternMismatch);
+        }
+        let values = self
+            .values
+            .iter()
+            .zip(&other.values)
+            .map(|(x, y)| a * x + b * y)
+            .collect();
+        Ok(SymCsc {
+            pattern: self.pattern.clone(),
+            values,
+        })
+    }
+    /// `self · s`.
+    pub fn scaled(&self, s: f64) -> SymCsc {
+        SymCsc {
+            pattern: self.pattern.clone(),
+            values: self.values.iter().map(|v| v * s).collect(),
+        }
+    }
+    /// `y += A x` for the full symmetric matrix. Serial, fixed order.
+    pub fn mul_add(&self, x: &[f64], y: &mut [f64]) {
+        let p = &*self.pattern;
+        for j in 0..p.n {
+            let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
+            let xj = x[j];
+            // diagonal first
+            let mut acc = self.values[s] * xj;
+            for k in s + 1..e {
+                let i = p.row_idx[k];
+                let a = self.values[k];
+                y[i] += a * xj;
+                acc += a * x[i];
+            }
+            y[j] += acc;
+        }
+    }
+    /// `xᵀ A x`.
+    pub fn quad_form(&self, x: &[f64]) -> f64 {
+        let p = &*self.pattern;
+        let mut q = 0.0;
+        for j in 0..p.n {
+            let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
+            let mut off = 0.0;
+            for k in s + 1..e {
+                off += self.values[k] * x[p.row_idx[k]];
+            }
+            q += x[j] * (self.values[s] * x[j] + 2.0 * off);
+        }
+        q
+    }
+    /// Entry `(i, j)` of the symmetric matrix (zero if not stored).
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        let (r, c) = if i >= j { (i, j) } else { (j, i) };
+        let p = &*self.pattern;
+        let rows = &p.row_idx[p.col_ptr[c]..p.col_ptr[c + 1]];
+        match rows.binary_search(&r) {
+            Ok(k) => self.values[p.col_ptr[c] + k],
+            Err(_) => 0.0,
+        }
+    }
+    fn faer(&self) -> SparseColMatRef<'_, usize, f64> {
+        SparseColMatRef::new(self.pattern.faer(), &self.values)
+    }
+}
+
+/// Sparse Cholesky `A = LLᵀ` (AMD fill-reducing ordering, faer's supernodal
+/// or simplicial kernel as it sees fit). The solve workspace is allocated
+/// once, so [`Cholesky::solve_in_place`] does not allocate.
+pub struct Cholesky {
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+    solve_mem: MemBuffer,
+    par: Par,
+}
+
+impl std::fmt::Debug for Cholesky {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Cholesky(n = {}, nnz(L) = {})",
+            self.symbolic.nrows(),
+            self.values.len()
+        )
+    }
+}
+
+fn par() -> Par {
+    let n = rayon::current_num_threads();
+    if n > 1 { Par::rayon(n) } else { Par::Seq }
+}
+
+impl Cholesky {
+    /// Symbolic analysis (AMD) + numeric factorisation of `a`.
+    pub fn factor(a: &SymCsc) -> Result<Self, SparseError> {
+        let symbolic = factorize_symbolic_cholesky(
+            a.pattern.faer(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
+        let par = par();
+        let solve_mem = MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, par))
+            .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
+        let mut c = Cholesky {
+            values: vec![0.0; symbolic.len_val()],
+            symbolic,
+            solve_mem,
+            par,
+        };
+        c.refactor(a)?;
+        Ok(c)
+    }
+
+    /// Numeric factorisation of a matrix with the analysed pattern.
+    pub fn refactor(&mut self, a: &SymCsc) -> Result<(), SparseError> {
+        let mut mem = MemBuffer::try_new(
+            self.symbolic
+                .factorize_numeric_llt_scratch::<f64>(self.par, Default::default()),
+        )
+        .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
+        self.symbolic
+            .factorize_numeric_llt(
+                &mut self.values,
+                a.faer(),
+                Side::Lower,
+                LltRegularization::default(),
+                self.par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map_err(|e| match e {
+                faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                    SparseError::NotPositiveDefinite(index)
+                }
+            })?;
+        Ok(())
+    }
+
+    /// Number of stored entries of `L`.
+    pub fn nnz_l(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Overwrite `rhs` with `A⁻¹ rhs`. Does not allocate.
+    pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
+        let n = rhs.len();
+        let llt = LltRef::new(&self.symbolic, &self.values);
+        llt.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(rhs, n, 1),
+            self.par,
+            MemStack::new(&mut self.solve_mem),
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 1D Laplacian + identity on n points, lower triangle.
+    fn lap(n: usize) -> SymCsc {
+        let mut col_ptr = vec![0];
+        let mut row_idx = vec![];
+        let mut values = vec![];
+        for j in 0..n {
+            row_idx.push(j);
+            values.push(3.0);
+            if j + 1 < n {
+                row_idx.push(j + 1);
+                values.push(-1.0);
+            }
+            col_ptr.push(row_idx.len());
+        }
+        SymCsc {
+            pattern: Arc::new(Pattern {
+                n,
+                col_ptr,
+                row_idx,
+            }),
+            values,
+        }
+    }
+
+    #[test]
+    fn cholesky_solves_and_matvec_is_symmetric() {
+        let a = lap(50);
+        assert!(a.pattern.check());
+        let x: Vec<f64> = (0..50).map(|i| (i as f64 * 0.37).sin()).collect();
+        let mut b = vec![0.0; 50];
+        a.mul_add(&x, &mut b);
+        assert!(
+            (a.quad_form(&x) - x.iter().zip(&b).map(|(p, q)| p * q).sum::<f64>()).abs() < 1e-12
+        );
+        let mut ch = Cholesky::factor(&a).unwrap();
+        ch.solve_in_place(&mut b);
+        for (p, q) in x.iter().zip(&b) {
+            assert!((p - q).abs() < 1e-12);
+        }
+        assert_eq!(a.get(3, 4), -1.0);
+        assert_eq!(a.get(4, 3), -1.0);
+        assert_eq!(a.get(3, 5), 0.0);
+    }
+
+    #[test]
+    fn indefinite_matrix_is_an_error() {
+        let a = lap(5).scaled(-1.0);
+        assert!(matches!(
+            Cholesky::factor(&a),
+            Err(SparseError::NotPositiveDefinite(_))
+        ));
+    }
+}
