@@ -11,7 +11,7 @@ use super::shape::{ShapeRow, shape_functions};
 use super::support::Support;
 use crate::geom::Vec2;
 use crate::newmark::{Newmark, NewmarkParams, State};
-use crate::scenario::body::{BcSpec, BodySpec, Edge, Plane};
+use crate::scenario::body::{BcSpec, BodySpec, Edge, MotionField, Plane, Prescribed};
 use crate::sparse::Cholesky;
 use std::time::Instant;
 
@@ -89,6 +89,8 @@ pub struct EfgBody {
     pub f_released: Vec<f64>,
     /// Point loads accumulated for the next step (Eq. 46), cleared by `advance`.
     pub f_point: Vec<f64>,
+    /// Moving edges: penalty force per unit edge displacement and the motion.
+    pub f_motion: Vec<(Vec<f64>, MotionField)>,
     /// Nodal parameters (not nodal displacements: no Kronecker-delta property).
     pub state: State,
     pub time: f64,
@@ -166,11 +168,12 @@ impl EfgBody {
         let mut points: Vec<Vec2> = domain.iter().map(|q| q.x).collect();
         let mut roles: Vec<PointRole> = domain.iter().map(|q| PointRole::Domain(q.w * t)).collect();
         let mut penalty_values: Vec<[f64; 2]> = Vec::new();
+        let mut penalty_bc: Vec<usize> = Vec::new();
         let segs = |e: Edge| match e {
             Edge::Left | Edge::Right => cells[1],
             Edge::Top | Edge::Bottom => cells[0],
         };
-        for bc in spec.bc.iter().filter(|b| !b.is_load()) {
+        for (bi, bc) in spec.bc.iter().enumerate().filter(|(_, b)| !b.is_load()) {
             let (a, b) = edge_ends(origin, size, bc.edge);
             let (cx, cy) = constrained(bc);
             for q in quadrature::edge_points(a, b, segs(bc.edge), n) {
@@ -181,6 +184,7 @@ impl EfgBody {
                     if cy { w } else { 0.0 },
                 ));
                 penalty_values.push(prescribed(bc, q.x, timoshenko.as_ref()));
+                penalty_bc.push(bi);
             }
         }
         let t0 = Instant::now();
@@ -203,6 +207,27 @@ impl EfgBody {
                     f_permanent[2 * i] += px * phi * ub[0];
                     f_permanent[2 * i + 1] += py * phi * ub[1];
                 }
+            }
+        }
+        // moving edges: F^α(t) = d(t) ∫ Φᵀ α e_c dΓ (E4), one unit vector
+        // per moving component, scaled by the edge displacement each step
+        let mut f_motion = Vec::new();
+        for (bi, bc) in spec.bc.iter().enumerate() {
+            for (c, pr) in [(0, bc.ux), (1, bc.uy)] {
+                let Some(Prescribed::Motion(m)) = pr else {
+                    continue;
+                };
+                let mut unit = vec![0.0; ndof];
+                for k in (0..penalty_bc.len()).filter(|&k| penalty_bc[k] == bi) {
+                    let g = nd + k;
+                    if let PointRole::Penalty(px, py) = roles[g] {
+                        let w = if c == 0 { px } else { py };
+                        for s in shapes.ptr[g]..shapes.ptr[g + 1] {
+                            unit[2 * shapes.idx[s] as usize + c] += w * shapes.val[s][0];
+                        }
+                    }
+                }
+                f_motion.push((unit, m));
             }
         }
         let info = BuildInfo {
@@ -256,7 +281,7 @@ impl EfgBody {
             }
         }
         // body force ρ g (Eq. 27, domain term)
-        if gravity != [0.0, 0.0] && el.density > 0.0 {
+        if spec.self_weight && gravity != [0.0, 0.0] && el.density > 0.0 {
             let target = if released("gravity") {
                 &mut f_released
             } else {
@@ -281,6 +306,7 @@ impl EfgBody {
             f_permanent,
             f_released,
             f_point: vec![0.0; ndof],
+            f_motion,
             state: State::zeros(ndof),
             time: 0.0,
             step: 0,
@@ -365,6 +391,15 @@ impl EfgBody {
         let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;
         for (p, f) in self.f_point.iter_mut().zip(&self.f_permanent) {
             *p += f;
+        }
+        // prescribed edge motion at the end of the step, t + Δt
+        for (unit, m) in &self.f_motion {
+            let d = m.displacement(self.step + 1, self.params.dt);
+            if d != 0.0 {
+                for (p, u) in self.f_point.iter_mut().zip(unit) {
+                    *p += d * u;
+                }
+            }
         }
         nm.advance(&mut self.state, &self.f_point);
         self.f_point.iter_mut().for_each(|x| *x = 0.0);

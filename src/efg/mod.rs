@@ -11,6 +11,7 @@
 
 pub mod assemble;
 pub mod body;
+pub mod boundary;
 pub mod exact;
 pub mod quadrature;
 pub mod run;

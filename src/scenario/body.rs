@@ -60,6 +60,30 @@ pub struct BodySpec {
     pub bc: Vec<BcSpec>,
     /// Initial state of a dynamic run (default: at rest, undeformed).
     pub initial: Option<InitialSpec>,
+    /// Edges that discs can touch (coupled runs), e.g. `["top", "right"]`.
+    /// Adjacent edges are joined around their common corner.
+    #[serde(default)]
+    pub contact_edges: Vec<Edge>,
+    /// Contact material (a `[[material]]` name) of the body's boundary;
+    /// default: the disc's own material, as for walls.
+    pub contact_material: Option<String>,
+    /// Boundary points per node spacing along contact edges (≥ 1): the
+    /// contact boundary is the polyline through these points at their true
+    /// displaced positions (ERRATA E7). Default 4.
+    #[serde(default = "default_contact_refine")]
+    pub contact_refine: usize,
+    /// Apply `[simulation] gravity` to the body's own mass (default true).
+    /// The paper's Example 1 has gravity on the disc only.
+    #[serde(default = "yes")]
+    pub self_weight: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn default_contact_refine() -> usize {
+    4
 }
 
 fn default_gauss() -> usize {
@@ -175,6 +199,25 @@ pub struct BcSpec {
 pub enum Prescribed {
     Value(f64),
     Linear(LinearField),
+    Motion(MotionField),
+}
+
+/// `{ velocity = v, until_step = N }`: the edge moves with velocity `v`
+/// (displacement `v t`) during the first `N` steps (all steps if absent),
+/// then stays where it is — e.g. an edge following a rigid plate.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotionField {
+    pub velocity: f64,
+    pub until_step: Option<usize>,
+}
+
+impl MotionField {
+    /// Displacement after `steps` steps of `dt`.
+    pub fn displacement(&self, steps: usize, dt: f64) -> f64 {
+        let n = self.until_step.map_or(steps, |u| steps.min(u));
+        self.velocity * n as f64 * dt
+    }
 }
 
 #[derive(Debug, Clone, Copy, Deserialize)]
@@ -188,12 +231,14 @@ impl Prescribed {
         match *self {
             Prescribed::Value(v) => v,
             Prescribed::Linear(LinearField { linear: [a, b, c] }) => a + b * x + c * y,
+            Prescribed::Motion(_) => 0.0,
         }
     }
     fn finite(&self) -> bool {
         match self {
             Prescribed::Value(v) => v.is_finite(),
             Prescribed::Linear(l) => l.linear.iter().all(|v| v.is_finite()),
+            Prescribed::Motion(m) => m.velocity.is_finite(),
         }
     }
 }
@@ -313,7 +358,27 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 "a dynamic analysis needs a density > 0",
             );
         }
-        if sc.simulation.gravity != [0.0, 0.0] && el.density <= 0.0 {
+        p.check(
+            b.contact_refine >= 1 && b.contact_refine <= 64,
+            at("contact_refine"),
+            format!("must be between 1 and 64 (got {})", b.contact_refine),
+        );
+        if let Some(m) = &b.contact_material {
+            p.check(
+                sc.material(m).is_some(),
+                at("contact_material"),
+                format!("no [[material]] named `{m}`"),
+            );
+        }
+        let mut seen = std::collections::HashSet::new();
+        for (k, e) in b.contact_edges.iter().enumerate() {
+            p.check(
+                seen.insert(*e),
+                format!("body.{i}.contact_edges.{k}"),
+                format!("edge `{e:?}` is listed twice"),
+            );
+        }
+        if b.self_weight && sc.simulation.gravity != [0.0, 0.0] && el.density <= 0.0 {
             p.push(
                 at("elastic.density"),
                 "gravity is set but the density is 0: give the body a density",
