@@ -74,4 +74,6 @@ pub trait Continuum: Send {
     fn advance(&mut self) -> Result<(), SolveError>;
     /// Kinetic and strain energy of the present state.
     fn energies(&self) -> BodyEnergies;
+    /// The concrete body (for outputs that need more than the trait).
+    fn as_any(&self) -> &dyn std::any::Any;
 }

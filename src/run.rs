@@ -21,8 +21,8 @@ pub enum RunError {
     Efg(#[from] crate::efg::EfgError),
     #[error(transparent)]
     Dem(#[from] crate::dem::DemError),
-    #[error("{0}")]
-    Unsupported(String),
+    #[error(transparent)]
+    Coupling(#[from] crate::coupling::CouplingError),
 }
 
 /// Which kind of run a scenario describes.
@@ -51,9 +51,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunErr
     match kind(sc) {
         Kind::Continuum => Ok(crate::efg::run::run(sc, opts)?),
         Kind::Granular => Ok(crate::dem::run::run(sc, opts)?),
-        Kind::Coupled => Err(RunError::Unsupported(
-            "coupled body + granular scenarios are not implemented yet (issue 4)".into(),
-        )),
+        Kind::Coupled => Ok(crate::coupling::run::run(sc, opts)?),
     }
 }
 
@@ -62,8 +60,6 @@ pub fn check(sc: &Scenario) -> Result<String, RunError> {
     match kind(sc) {
         Kind::Continuum => Ok(crate::efg::run::check(sc)?),
         Kind::Granular => Ok(crate::dem::run::check(sc)?),
-        Kind::Coupled => Err(RunError::Unsupported(
-            "coupled body + granular scenarios are not implemented yet (issue 4)".into(),
-        )),
+        Kind::Coupled => Ok(crate::coupling::run::check(sc)?),
     }
 }

@@ -40,6 +40,9 @@ impl Continuum for Fixed {
     fn energies(&self) -> BodyEnergies {
         BodyEnergies::default()
     }
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
 }
 
 fn disc(dt: f64) -> Granular {

@@ -168,6 +168,9 @@ impl Continuum for EfgContinuum {
             strain: self.body.strain_energy(),
         }
     }
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
 }
 
 #[cfg(test)]

@@ -123,7 +123,7 @@ fn record(
 }
 
 /// Nodal values: true displacement, velocity and stress at every node.
-fn write_frame(
+pub(crate) fn write_frame(
     b: &EfgBody,
     shapes: &super::assemble::PointShapes,
     path: &Path,

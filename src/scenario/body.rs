@@ -275,6 +275,15 @@ pub const POINT_QUANTITIES: &[&str] = &[
 /// Body-wide quantities (no `point`).
 pub const BODY_QUANTITIES: &[&str] = &["kinetic_energy", "strain_energy", "total_energy"];
 
+/// Is `pr` a probe of a body? In a continuum-only run every point quantity
+/// is; in a coupled run a probe belongs to a body when it has a `point` or
+/// a body-wide quantity (so `vx` of a disc stays a disc probe).
+pub fn is_body_probe(pr: &crate::scenario::Probe, continuum_only: bool) -> bool {
+    let q = pr.quantity.as_str();
+    BODY_QUANTITIES.contains(&q)
+        || (POINT_QUANTITIES.contains(&q) && (continuum_only || pr.point.is_some()))
+}
+
 /// Semantic checks of every `[[body]]` and of the body probes.
 pub fn validate(sc: &Scenario, p: &mut Problems) {
     let mut names = std::collections::HashSet::new();
@@ -490,7 +499,7 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
     for (k, pr) in sc.probe.iter().enumerate() {
         let at = |f: &str| format!("probe.{k}.{f}");
         let q = pr.quantity.as_str();
-        let is_body = POINT_QUANTITIES.contains(&q) || BODY_QUANTITIES.contains(&q);
+        let is_body = is_body_probe(pr, continuum_only);
         if !is_body {
             if continuum_only {
                 p.push(

@@ -333,9 +333,7 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             );
         }
     }
-    if sc.body.is_empty() {
-        validate_probes(sc, p);
-    }
+    validate_probes(sc, p);
 }
 
 fn validate_table(t: &DiscsTable, p: &mut Problems) {
@@ -397,11 +395,21 @@ fn validate_table(t: &DiscsTable, p: &mut Problems) {
     }
 }
 
+/// Disc quantities that only a coupled run records: displacement since t = 0.
+pub const COUPLED_DISC_QUANTITIES: &[&str] = &["ux", "uy"];
+
+/// Probes of a granular run; in a coupled run (bodies present) the body
+/// probes — those with a `point` or a body-wide quantity — are checked by
+/// the body validation instead.
 fn validate_probes(sc: &Scenario, p: &mut Problems) {
     let n = sc.granular.as_ref().and_then(inline_count);
+    let coupled = !sc.body.is_empty();
     for (i, pr) in sc.probe.iter().enumerate() {
         let at = |f: &str| format!("probe.{i}.{f}");
         let q = pr.quantity.as_str();
+        if coupled && crate::scenario::body::is_body_probe(pr, false) {
+            continue;
+        }
         let disc_ok = |k: usize| k >= 1 && n.is_none_or(|n| k <= n);
         if CONTACT_QUANTITIES.contains(&q) {
             match pr.contact {
@@ -427,7 +435,8 @@ fn validate_probes(sc: &Scenario, p: &mut Problems) {
                     format!("no [[wall]] named `{w}`"),
                 ),
             }
-        } else if DISC_QUANTITIES.contains(&q) {
+        } else if DISC_QUANTITIES.contains(&q) || (coupled && COUPLED_DISC_QUANTITIES.contains(&q))
+        {
             match pr.disc {
                 None => p.push(at("quantity"), format!("`{q}` needs `disc = k` (1-based)")),
                 Some(k) => p.check(disc_ok(k), at("disc"), "disc number out of range (1-based)"),

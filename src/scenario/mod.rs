@@ -60,6 +60,10 @@ pub struct Simulation {
     /// Worker threads; 0 = all cores. Results do not depend on it.
     #[serde(default)]
     pub threads: usize,
+    /// Coupled runs: DEM steps per body (Newmark) step; the body sees the
+    /// contact loads averaged over them (ERRATA E11). Default 1.
+    #[serde(default = "one")]
+    pub substeps: usize,
 }
 
 impl Default for Simulation {
@@ -71,6 +75,7 @@ impl Default for Simulation {
             end_time: None,
             gravity: [0.0, 0.0],
             threads: 0,
+            substeps: 1,
         }
     }
 }
@@ -310,6 +315,11 @@ impl Scenario {
             "must be two finite numbers [gx, gy]",
         );
         p.check(self.output.every >= 1, "output.every", "must be ≥ 1");
+        p.check(
+            (1..=100_000).contains(&sim.substeps),
+            "simulation.substeps",
+            format!("must be between 1 and 100000 (got {})", sim.substeps),
+        );
         let mut names = std::collections::HashSet::new();
         for (i, m) in self.material.iter().enumerate() {
             let at = |f: &str| format!("material.{i}.{f}");

@@ -1,0 +1,427 @@
+//! Driver for coupled scenarios (bodies and discs): `efgdem run` / `check`.
+
+use super::{CoupledModel, CouplingError};
+use crate::continuum::Continuum;
+use crate::dem::{Granular, build as dem_build};
+use crate::efg::body::EfgBody;
+use crate::efg::boundary::EfgContinuum;
+use crate::efg::shape::ShapeRow;
+use crate::geom::Vec2;
+use crate::output::csv::HistoryWriter;
+use crate::output::vtk::PvdSeries;
+use crate::output::{progress, write_json};
+use crate::run::RunOptions;
+use crate::scenario::body::is_body_probe;
+use crate::scenario::{Probe, Scenario};
+use serde_json::{Value, json};
+use std::time::Instant;
+
+/// A coupled model built from a scenario, with what the driver needs to
+/// know about it.
+pub struct Built {
+    pub model: CoupledModel,
+    /// The EFG bodies, in scenario order (also inside `model.bodies`).
+    pub body_names: Vec<String>,
+    pub steps: usize,
+    /// Body time step (`dt × substeps`).
+    pub body_dt: f64,
+}
+
+/// Build discs, walls and EFG bodies; factor each body's Newmark matrix.
+pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
+    let granular = dem_build::build(sc)?;
+    let dt = granular.dt;
+    let substeps = sc.simulation.substeps.max(1);
+    let body_dt = dt * substeps as f64;
+    let mut bodies: Vec<Box<dyn Continuum>> = Vec::new();
+    let mut mats = Vec::new();
+    for spec in &sc.body {
+        let mut body = EfgBody::from_spec(spec, sc.simulation.gravity)?;
+        body.start_dynamic(body_dt)?;
+        let c = EfgContinuum::new(body, &spec.contact_edges, spec.contact_refine)?;
+        bodies.push(Box::new(c));
+        mats.push(
+            spec.contact_material
+                .as_ref()
+                .and_then(|m| sc.material.iter().position(|x| &x.name == m))
+                .map(|i| i as u16),
+        );
+    }
+    let steps = dem_build::steps(sc, dt);
+    Ok(Built {
+        model: CoupledModel::new(granular, bodies, &mats, substeps),
+        body_names: sc.body.iter().map(|b| b.name.clone()).collect(),
+        steps,
+        body_dt,
+    })
+}
+
+/// A probe bound to the model.
+enum Bound {
+    BodyPoint {
+        body: usize,
+        row: ShapeRow,
+        q: String,
+    },
+    Disc {
+        id: usize,
+        q: String,
+        x0: Vec2,
+    },
+    Contact {
+        a: usize,
+        b: usize,
+        total: bool,
+    },
+    Wall {
+        w: usize,
+        q: String,
+    },
+}
+
+fn bind(
+    sc: &Scenario,
+    m: &CoupledModel,
+    names: &[String],
+) -> Result<Vec<(String, Bound)>, CouplingError> {
+    let input = |s: String| CouplingError::Input(s);
+    let g = &m.granular;
+    let disc = |k: usize, pr: &Probe| {
+        (k >= 1 && k <= g.particles.len())
+            .then(|| k - 1)
+            .ok_or_else(|| {
+                input(format!(
+                    "probe `{}`: disc {k} does not exist ({} discs, numbered from 1)",
+                    pr.name,
+                    g.particles.len()
+                ))
+            })
+    };
+    sc.probe
+        .iter()
+        .map(|pr| {
+            let q = pr.quantity.clone();
+            let b = if is_body_probe(pr, false) {
+                let bi = match &pr.body {
+                    Some(n) => names.iter().position(|x| x == n),
+                    None => Some(0),
+                }
+                .ok_or_else(|| input(format!("probe `{}`: no such body", pr.name)))?;
+                let p = pr.point.ok_or_else(|| {
+                    input(format!("probe `{}`: body-wide quantities are not recorded in coupled runs; use the energy columns", pr.name))
+                })?;
+                let mut row = ShapeRow::new();
+                efg_body(m, bi).shape_row(Vec2::from(p), &mut row)?;
+                Bound::BodyPoint { body: bi, row, q }
+            } else if let Some([a, b]) = pr.contact {
+                Bound::Contact {
+                    a: disc(a, pr)?,
+                    b: disc(b, pr)?,
+                    total: q == "normal_total",
+                }
+            } else if let Some(w) = &pr.wall {
+                let w = g
+                    .walls
+                    .iter()
+                    .position(|x| &x.name == w)
+                    .ok_or_else(|| input(format!("probe `{}`: no wall `{w}`", pr.name)))?;
+                Bound::Wall { w, q }
+            } else {
+                let id = disc(pr.disc.unwrap_or(0), pr)?;
+                let x0 = g.particles.pos[g.slot(id)];
+                Bound::Disc { id, q, x0 }
+            };
+            Ok((pr.name.clone(), b))
+        })
+        .collect()
+}
+
+/// The EFG body behind `model.bodies[i]` (all bodies of a coupled run are EFG).
+fn efg_body(m: &CoupledModel, i: usize) -> &EfgBody {
+    m.bodies[i]
+        .as_any()
+        .downcast_ref::<EfgContinuum>()
+        .map(|c| &c.body)
+        .expect("coupled bodies are EFG bodies")
+}
+
+fn value(m: &CoupledModel, b: &Bound) -> f64 {
+    let g = &m.granular;
+    match b {
+        Bound::BodyPoint { body, row, q } => {
+            let s = efg_body(m, *body).sample_row(row);
+            match q.as_str() {
+                "ux" => s.u.x,
+                "uy" => s.u.y,
+                "vx" => s.v.x,
+                "vy" => s.v.y,
+                "exx" => s.strain[0],
+                "eyy" => s.strain[1],
+                "gxy" => s.strain[2],
+                "sxx" => s.stress[0],
+                "syy" => s.stress[1],
+                _ => s.stress[2],
+            }
+        }
+        Bound::Disc { id, q, x0 } => {
+            let k = g.slot(*id);
+            let p = &g.particles;
+            match q.as_str() {
+                "x" => p.pos[k].x,
+                "y" => p.pos[k].y,
+                "ux" => p.pos[k].x - x0.x,
+                "uy" => p.pos[k].y - x0.y,
+                "vx" => p.vel[k].x,
+                "vy" => p.vel[k].y,
+                "theta" => p.theta[k],
+                _ => p.omega[k],
+            }
+        }
+        Bound::Contact { a, b, total } => {
+            let (el, tot) = g.normal_force(g.slot(*a), g.slot(*b));
+            if *total { tot } else { el }
+        }
+        Bound::Wall { w, q } => {
+            let w = &g.walls[*w];
+            match q.as_str() {
+                "wall_fx" => w.force.x,
+                "wall_fy" => w.force.y,
+                "wall_x" => w.a.x,
+                _ => w.a.y,
+            }
+        }
+    }
+}
+
+/// Energy account of the coupled system (all in the scenario's units).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct EnergyAccount {
+    pub kin_dem: f64,
+    pub kin_body: f64,
+    pub strain: f64,
+    pub contact: f64,
+    /// Work of gravity on the discs, of the bodies' permanent loads and of
+    /// the walls since t = 0.
+    pub w_ext: f64,
+    /// `W_ext − (stored)`: friction, dashpots and numerical dissipation.
+    pub diss: f64,
+}
+
+/// Tracks the external work between steps.
+struct WorkMeter {
+    x0: Vec<Vec2>,
+    wall_work: f64,
+}
+
+impl WorkMeter {
+    fn new(g: &Granular) -> Self {
+        WorkMeter {
+            x0: g.particles.pos.clone(),
+            wall_work: 0.0,
+        }
+    }
+    /// After a step: work the walls did on the discs during it.
+    fn after_step(&mut self, g: &Granular) {
+        for w in &g.walls {
+            self.wall_work -= w.force.dot(w.vel) * g.dt;
+        }
+    }
+    fn account(&self, m: &CoupledModel) -> EnergyAccount {
+        let g = &m.granular;
+        let p = &g.particles;
+        let e = g.energies();
+        let mut w_grav = 0.0;
+        for k in 0..p.len() {
+            w_grav += p.mass[k] * g.gravity.dot(p.pos[k] - self.x0[k]);
+        }
+        let (mut kin_body, mut strain, mut w_body) = (0.0, 0.0, 0.0);
+        for i in 0..m.bodies.len() {
+            let en = m.bodies[i].energies();
+            kin_body += en.kinetic;
+            strain += en.strain;
+            let b = efg_body(m, i);
+            w_body += b
+                .f_permanent
+                .iter()
+                .zip(&b.state.u)
+                .map(|(f, u)| f * u)
+                .sum::<f64>();
+        }
+        let contact = e.spring + m.body_contact_energy();
+        let w_ext = w_grav + w_body + self.wall_work;
+        let kin_dem = e.kinetic + e.rotational;
+        EnergyAccount {
+            kin_dem,
+            kin_body,
+            strain,
+            contact,
+            w_ext,
+            diss: w_ext - (kin_dem + kin_body + strain + contact),
+        }
+    }
+}
+
+/// Run a coupled scenario.
+pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
+    let t0 = Instant::now();
+    let dir = &opts.out_dir;
+    std::fs::create_dir_all(dir)?;
+    let Built {
+        mut model,
+        body_names,
+        steps,
+        body_dt,
+    } = build(sc)?;
+    let t_build = t0.elapsed().as_secs_f64();
+    if let Some(w) = dem_build::dt_warning(&model.granular) {
+        eprintln!("warning: {w}");
+    }
+    let probes = bind(sc, &model, &body_names)?;
+    let mut cols: Vec<&str> = vec!["step", "t"];
+    cols.extend(probes.iter().map(|p| p.0.as_str()));
+    cols.extend([
+        "contact_fn",
+        "E_kin_dem",
+        "E_kin_body",
+        "E_strain",
+        "E_contact",
+        "W_ext",
+        "E_diss",
+    ]);
+    let mut hist = HistoryWriter::create(&dir.join("history.csv"), &cols)?;
+    let mut meter = WorkMeter::new(&model.granular);
+    let vtk_every = sc.output.vtk_every;
+    let mut pvd_discs = PvdSeries::new(&dir.join("discs.pvd"));
+    let mut pvd_bodies: Vec<PvdSeries> = body_names
+        .iter()
+        .map(|n| PvdSeries::new(&dir.join(format!("{n}.pvd"))))
+        .collect();
+    let nodal: Vec<_> = (0..model.bodies.len())
+        .map(|i| efg_body(&model, i).nodal_shapes())
+        .collect::<Result<_, _>>()?;
+    if vtk_every > 0 {
+        std::fs::create_dir_all(dir.join("frames"))?;
+    }
+    let mut row = Vec::with_capacity(cols.len());
+    let mut peak = (0.0f64, 0.0f64);
+    let mut first_contact: Option<f64> = None;
+    // §4.1.4: after the peak, the disc falls off when the contact force no
+    // longer carries its weight (single-disc runs only)
+    let weight = (model.granular.particles.len() == 1)
+        .then(|| model.granular.particles.mass[0] * model.granular.gravity.norm());
+    let mut fall_off: Option<f64> = None;
+    let mut lost_contact: Option<f64> = None;
+    let pb = progress(steps as u64, opts.quiet);
+    let mut t_total = 0.0;
+    for step in 0..=steps {
+        if step > 0 {
+            let ts = Instant::now();
+            model.step()?;
+            t_total += ts.elapsed().as_secs_f64();
+            meter.after_step(&model.granular);
+            pb.inc(1);
+        }
+        let t = model.granular.time;
+        let fn_sum: f64 = model.contacts.iter().map(|c| c.fn_elastic).sum();
+        if fn_sum > peak.0 {
+            peak = (fn_sum, t);
+            fall_off = None;
+        } else if let Some(w) = weight {
+            if fall_off.is_none() && peak.0 > w && fn_sum < w {
+                fall_off = Some(t);
+            }
+        }
+        if !model.contacts.is_empty() && first_contact.is_none() {
+            first_contact = Some(t);
+        }
+        if model.contacts.is_empty() && first_contact.is_some() && lost_contact.is_none() {
+            lost_contact = Some(t);
+        }
+        if step % sc.output.every == 0 || step == steps {
+            let e = meter.account(&model);
+            row.clear();
+            row.push(step as f64);
+            row.push(t);
+            row.extend(probes.iter().map(|(_, b)| value(&model, b)));
+            row.extend([
+                fn_sum, e.kin_dem, e.kin_body, e.strain, e.contact, e.w_ext, e.diss,
+            ]);
+            hist.row(&row)?;
+        }
+        if vtk_every > 0 && (step % vtk_every == 0 || step == steps) {
+            let f = format!("frames/discs_{step:07}.vtp");
+            crate::dem::run::write_frame(&model.granular, &dir.join(&f))?;
+            pvd_discs.add(t, &f)?;
+            for (i, n) in body_names.iter().enumerate() {
+                let f = format!("frames/{n}_{step:07}.vtu");
+                crate::efg::run::write_frame(efg_body(&model, i), &nodal[i], &dir.join(&f))?;
+                pvd_bodies[i].add(t, &f)?;
+            }
+        }
+    }
+    pb.finish_and_clear();
+    hist.flush()?;
+    let e = meter.account(&model);
+    let summary = json!({
+        "kind": "coupled",
+        "steps": steps,
+        "dt": model.granular.dt,
+        "body_dt": body_dt,
+        "substeps": model.substeps,
+        "dem_critical_dt": model.granular.critical_dt(),
+        "discs": model.granular.particles.len(),
+        "bodies": body_names,
+        "peak_contact_force": peak.0,
+        "peak_contact_time": peak.1,
+        "first_contact_time": first_contact,
+        "fall_off_time": fall_off,
+        "contact_lost_time": lost_contact,
+        "energy": {
+            "E_kin_dem": e.kin_dem, "E_kin_body": e.kin_body, "E_strain": e.strain,
+            "E_contact": e.contact, "W_ext": e.w_ext, "E_diss": e.diss,
+        },
+        "timing": {
+            "build_seconds": t_build,
+            "loop_seconds": t_total,
+            "seconds_per_step": if steps > 0 { t_total / steps as f64 } else { 0.0 },
+        },
+    });
+    write_json(&dir.join("summary.json"), &summary)?;
+    Ok(summary)
+}
+
+/// What `efgdem check` prints for a coupled scenario.
+pub fn check(sc: &Scenario) -> Result<String, CouplingError> {
+    let b = build(sc)?;
+    let g = &b.model.granular;
+    let mut s = format!(
+        "coupled run: {} discs, {} walls, {} bodies; {} steps of dt = {:e} (bodies: dt = {:e}, {} DEM steps each)\nDEM critical step 2√(m_min/k_max) = {:e} (dt is {:.3} × it)\n",
+        g.particles.len(),
+        g.walls.len(),
+        b.model.bodies.len(),
+        b.steps,
+        g.dt,
+        b.body_dt,
+        b.model.substeps,
+        g.critical_dt(),
+        g.dt / g.critical_dt()
+    );
+    for (i, c) in b.model.bodies.iter().enumerate() {
+        let body = efg_body(&b.model, i);
+        s += &format!(
+            "body `{}`: {} nodes, {} DOFs, {} contact chain(s) with {} segments\n",
+            c.name(),
+            body.n_nodes(),
+            body.n_dofs(),
+            c.contact_boundary().len(),
+            c.contact_boundary()
+                .iter()
+                .map(|ch| ch.segments())
+                .sum::<usize>()
+        );
+    }
+    if let Some(w) = dem_build::dt_warning(g) {
+        s += &format!("warning: {w}\n");
+    }
+    Ok(s)
+}
