@@ -326,10 +326,12 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         if fn_sum > peak.0 {
             peak = (fn_sum, t);
             fall_off = None;
-        } else if let Some(w) = weight {
-            if fall_off.is_none() && peak.0 > w && fn_sum < w {
-                fall_off = Some(t);
-            }
+        } else if let Some(w) = weight
+            && fall_off.is_none()
+            && peak.0 > w
+            && fn_sum < w
+        {
+            fall_off = Some(t);
         }
         if !model.contacts.is_empty() && first_contact.is_none() {
             first_contact = Some(t);
