@@ -356,7 +356,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
             pvd_discs.add(t, &f)?;
             for (i, n) in body_names.iter().enumerate() {
                 let f = format!("frames/{n}_{step:07}.vtu");
-                crate::efg::run::write_frame(efg_body(&model, i), &nodal[i], &dir.join(&f))?;
+                crate::efg::run::write_frame_efg(efg_body(&model, i), &nodal[i], &dir.join(&f))?;
                 pvd_bodies[i].add(t, &f)?;
             }
         }

@@ -30,6 +30,20 @@ pub struct Material {
 }
 
 impl Material {
+    /// The material of a `[[body]]`: `elastic`, `damping`, and `D` of Eq. (31)
+    /// (plane stress) or Eq. (32) (plane strain).
+    pub fn of_spec(spec: &BodySpec) -> Material {
+        let el = spec.elastic;
+        Material {
+            e: el.e,
+            nu: el.nu,
+            density: el.density,
+            thickness: el.thickness,
+            plane: el.plane,
+            damping: spec.damping,
+            d: assemble::elasticity(el.e, el.nu, el.plane == Plane::Strain),
+        }
+    }
     /// Stress `D ε` from engineering strain `(ε_xx, ε_yy, γ_xy)`.
     pub fn stress(&self, e: [f64; 3]) -> [f64; 3] {
         let [d11, d12, d22, d33] = self.d;
@@ -102,7 +116,9 @@ pub struct EfgBody {
     pub info: BuildInfo,
 }
 
-fn edge_ends(origin: Vec2, size: Vec2, e: Edge) -> (Vec2, Vec2) {
+/// End points of an edge of the rectangle `origin`, `size` (counter-clockwise
+/// order is not implied: left/right go bottom → top, bottom/top left → right).
+pub(crate) fn edge_ends(origin: Vec2, size: Vec2, e: Edge) -> (Vec2, Vec2) {
     let (x0, y0, x1, y1) = (origin.x, origin.y, origin.x + size.x, origin.y + size.y);
     match e {
         Edge::Left => (Vec2::new(x0, y0), Vec2::new(x0, y1)),
@@ -135,34 +151,12 @@ impl EfgBody {
             .collect();
         let support = Support::for_grid(&xs, &ys, spec.d_max);
         let el = spec.elastic;
-        let plane_strain = el.plane == Plane::Strain;
-        let material = Material {
-            e: el.e,
-            nu: el.nu,
-            density: el.density,
-            thickness: el.thickness,
-            plane: el.plane,
-            damping: spec.damping,
-            d: assemble::elasticity(el.e, el.nu, plane_strain),
-        };
+        let material = Material::of_spec(spec);
         let t = el.thickness;
         let alpha = spec.penalty.unwrap_or(1e5 * el.e);
         let cells = spec.cells.unwrap_or([nx - 1, ny - 1]);
         let n = spec.gauss;
-        let timoshenko = spec.bc.iter().find_map(|bc| {
-            bc.timoshenko.map(|ts| {
-                Timoshenko::new(
-                    ts.p,
-                    size.x,
-                    size.y,
-                    el.e,
-                    el.nu,
-                    plane_strain,
-                    origin.x,
-                    origin.y + 0.5 * size.y,
-                )
-            })
-        });
+        let timoshenko = timoshenko_of(spec);
         // quadrature points: domain, then penalty points of each Γu bc
         let domain = quadrature::domain_points(origin, size, cells, n);
         let mut points: Vec<Vec2> = domain.iter().map(|q| q.x).collect();
@@ -243,11 +237,7 @@ impl EfgBody {
         };
         drop(shapes);
         let mut f_released = vec![0.0; ndof];
-        let released = |name: &str| {
-            spec.initial
-                .as_ref()
-                .is_some_and(|i| i.static_under.iter().any(|s| s == name))
-        };
+        let released = |name: &str| is_released(spec, name);
         // loads: tractions (Eq. 27, boundary term)
         let mut row = ShapeRow::new();
         for bc in spec.bc.iter().filter(|b| b.is_load()) {
@@ -257,20 +247,8 @@ impl EfgBody {
                 &mut f_permanent
             };
             let (a, b) = edge_ends(origin, size, bc.edge);
-            let len = (b - a).norm();
-            let mid = (a + b) * 0.5;
             for QuadPoint { x, w } in quadrature::edge_points(a, b, segs(bc.edge), n) {
-                let tr = if let Some(tv) = bc.traction {
-                    tv
-                } else {
-                    let p = bc.parabolic_shear.unwrap_or(0.0);
-                    let s = (x - mid).norm();
-                    let tau = 1.5 * p / len * (1.0 - 4.0 * s * s / (len * len));
-                    match bc.edge {
-                        Edge::Left | Edge::Right => [0.0, tau],
-                        Edge::Top | Edge::Bottom => [tau, 0.0],
-                    }
-                };
+                let tr = traction_at(bc, a, b, x);
                 shape_functions(&support, x, &mut row)
                     .map_err(|e| EfgError::coverage(e, spec.d_max, &spec.name))?;
                 for k in 0..row.len() {
@@ -478,37 +456,19 @@ impl EfgBody {
         cells: [usize; 2],
         gauss: usize,
     ) -> Result<f64, EfgError> {
-        let [d11, d12, _d22, d33] = self.material.d;
-        // D⁻¹ for the isotropic D
-        let det = d11 * d11 - d12 * d12;
-        let compl = |s: [f64; 3]| {
-            [
-                (d11 * s[0] - d12 * s[1]) / det,
-                (d11 * s[1] - d12 * s[0]) / det,
-                s[2] / d33,
-            ]
-        };
         let mut row = ShapeRow::new();
-        let (mut num, mut den) = (0.0, 0.0);
-        for q in quadrature::domain_points(self.origin, self.size, cells, gauss) {
-            self.shape_row(q.x, &mut row)?;
-            let s = self.sample_row(&row);
-            let se = exact_stress(q.x);
-            let ee = compl(se);
-            let ds = [
-                s.stress[0] - se[0],
-                s.stress[1] - se[1],
-                s.stress[2] - se[2],
-            ];
-            let de = [
-                s.strain[0] - ee[0],
-                s.strain[1] - ee[1],
-                s.strain[2] - ee[2],
-            ];
-            num += q.w * (ds[0] * de[0] + ds[1] * de[1] + ds[2] * de[2]);
-            den += q.w * (se[0] * ee[0] + se[1] * ee[1] + se[2] * ee[2]);
-        }
-        Ok((num / den).sqrt())
+        energy_error_of(
+            &self.material,
+            self.origin,
+            self.size,
+            cells,
+            gauss,
+            |p| {
+                self.shape_row(p, &mut row)?;
+                Ok(self.sample_row(&row))
+            },
+            exact_stress,
+        )
     }
 
     /// Shape functions at every node position (for nodal output).
@@ -520,7 +480,7 @@ impl EfgBody {
 }
 
 /// Which components a displacement bc constrains.
-fn constrained(bc: &BcSpec) -> (bool, bool) {
+pub(crate) fn constrained(bc: &BcSpec) -> (bool, bool) {
     if bc.fixed || bc.timoshenko.is_some() {
         (true, true)
     } else {
@@ -529,7 +489,7 @@ fn constrained(bc: &BcSpec) -> (bool, bool) {
 }
 
 /// The prescribed displacement `ū` of a bc at `x`.
-fn prescribed(bc: &BcSpec, x: Vec2, tim: Option<&Timoshenko>) -> [f64; 2] {
+pub(crate) fn prescribed(bc: &BcSpec, x: Vec2, tim: Option<&Timoshenko>) -> [f64; 2] {
     if let (Some(_), Some(t)) = (bc.timoshenko, tim) {
         return t.displacement(x);
     }
@@ -537,4 +497,95 @@ fn prescribed(bc: &BcSpec, x: Vec2, tim: Option<&Timoshenko>) -> [f64; 2] {
         bc.ux.map_or(0.0, |v| v.at(x.x, x.y)),
         bc.uy.map_or(0.0, |v| v.at(x.x, x.y)),
     ]
+}
+
+/// The traction `t̄` of a load bc at the point `x` of its edge `a → b`
+/// (Eq. 27, boundary term): uniform, or the parabolic shear
+/// `τ = 3P/(2D)·(1 − 4s²/D²)` with `s` measured from the edge centre.
+pub(crate) fn traction_at(bc: &BcSpec, a: Vec2, b: Vec2, x: Vec2) -> [f64; 2] {
+    if let Some(tv) = bc.traction {
+        return tv;
+    }
+    let len = (b - a).norm();
+    let mid = (a + b) * 0.5;
+    let p = bc.parabolic_shear.unwrap_or(0.0);
+    let s = (x - mid).norm();
+    let tau = 1.5 * p / len * (1.0 - 4.0 * s * s / (len * len));
+    match bc.edge {
+        Edge::Left | Edge::Right => [0.0, tau],
+        Edge::Top | Edge::Bottom => [tau, 0.0],
+    }
+}
+
+/// Is the load `name` (a bc name or `"gravity"`) listed in
+/// `initial.static_under`, i.e. applied for the initial static state only?
+pub(crate) fn is_released(spec: &BodySpec, name: &str) -> bool {
+    spec.initial
+        .as_ref()
+        .is_some_and(|i| i.static_under.iter().any(|s| s == name))
+}
+
+/// The exact Timoshenko cantilever field of the body if one of its bcs uses
+/// it (clamped at the left edge, centre line at mid-height).
+pub(crate) fn timoshenko_of(spec: &BodySpec) -> Option<Timoshenko> {
+    let (origin, size) = (spec.rectangle.origin, spec.rectangle.size);
+    let el = spec.elastic;
+    spec.bc.iter().find_map(|bc| {
+        bc.timoshenko.map(|ts| {
+            Timoshenko::new(
+                ts.p,
+                size[0],
+                size[1],
+                el.e,
+                el.nu,
+                el.plane == Plane::Strain,
+                origin[0],
+                origin[1] + 0.5 * size[1],
+            )
+        })
+    })
+}
+
+/// Relative energy-norm error `‖ε − ε_ex‖_E / ‖ε_ex‖_E` of the fields given
+/// by `sample` against an exact stress field (exact strain recovered with
+/// `D⁻¹`), integrated with `gauss`² points on `cells` over the rectangle.
+/// Shared by the EFG and FE bodies.
+pub(crate) fn energy_error_of<E>(
+    material: &Material,
+    origin: Vec2,
+    size: Vec2,
+    cells: [usize; 2],
+    gauss: usize,
+    mut sample: impl FnMut(Vec2) -> Result<Sample, E>,
+    exact_stress: impl Fn(Vec2) -> [f64; 3],
+) -> Result<f64, E> {
+    let [d11, d12, _d22, d33] = material.d;
+    // D⁻¹ for the isotropic D
+    let det = d11 * d11 - d12 * d12;
+    let compl = |s: [f64; 3]| {
+        [
+            (d11 * s[0] - d12 * s[1]) / det,
+            (d11 * s[1] - d12 * s[0]) / det,
+            s[2] / d33,
+        ]
+    };
+    let (mut num, mut den) = (0.0, 0.0);
+    for q in quadrature::domain_points(origin, size, cells, gauss) {
+        let s = sample(q.x)?;
+        let se = exact_stress(q.x);
+        let ee = compl(se);
+        let ds = [
+            s.stress[0] - se[0],
+            s.stress[1] - se[1],
+            s.stress[2] - se[2],
+        ];
+        let de = [
+            s.strain[0] - ee[0],
+            s.strain[1] - ee[1],
+            s.strain[2] - ee[2],
+        ];
+        num += q.w * (ds[0] * de[0] + ds[1] * de[1] + ds[2] * de[2]);
+        den += q.w * (se[0] * ee[0] + se[1] * ee[1] + se[2] * ee[2]);
+    }
+    Ok((num / den).sqrt())
 }

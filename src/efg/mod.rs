@@ -41,6 +41,9 @@ pub enum EfgError {
     Invalid(String),
     #[error("i/o: {0}")]
     Io(#[from] std::io::Error),
+    /// From a `fem-q4` body run by the same driver.
+    #[error(transparent)]
+    Fem(#[from] crate::fem::FemError),
 }
 
 impl EfgError {

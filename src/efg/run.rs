@@ -7,9 +7,14 @@
 //! body the exact tip deflection and the energy-norm error), and ParaView
 //! frames `frames/<body>_<step>.vtu` + `<body>.pvd` (dynamic, every
 //! `output.vtk_every` steps) or `<body>.vtu` (static).
+//!
+//! Bodies are EFG ([`EfgBody`]) or bilinear FE ([`FemBody`],
+//! `method = "fem-q4"`); both are driven the same way through [`Body`].
 
 use super::body::EfgBody;
-use super::{EfgError, ShapeRow};
+use super::{EfgError, Sample, ShapeRow};
+use crate::fem::FemBody;
+use crate::fem::body::Located;
 use crate::geom::Vec2;
 use crate::output::csv::HistoryWriter;
 use crate::output::vtk::PvdSeries;
@@ -17,31 +22,111 @@ use crate::output::vtu::{Field, write_quad_grid};
 use crate::output::{progress, write_json};
 use crate::run::RunOptions;
 use crate::scenario::body::BODY_QUANTITIES;
+use crate::scenario::body::Method;
 use crate::scenario::{Analysis, Probe, Scenario};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-/// A probe resolved to a body and, for point quantities, a shape row.
+/// A continuum body of either method, driven the same way.
+enum Body {
+    Efg(Box<EfgBody>),
+    Fem(Box<FemBody>),
+}
+
+impl Body {
+    fn name(&self) -> &str {
+        match self {
+            Body::Efg(b) => &b.name,
+            Body::Fem(b) => &b.name,
+        }
+    }
+    fn time(&self) -> f64 {
+        match self {
+            Body::Efg(b) => b.time,
+            Body::Fem(b) => b.time,
+        }
+    }
+    fn solve_static(&mut self) -> Result<(), EfgError> {
+        match self {
+            Body::Efg(b) => b.solve_static(),
+            Body::Fem(b) => Ok(b.solve_static()?),
+        }
+    }
+    fn start_dynamic(&mut self, dt: f64) -> Result<(), EfgError> {
+        match self {
+            Body::Efg(b) => b.start_dynamic(dt),
+            Body::Fem(b) => Ok(b.start_dynamic(dt)?),
+        }
+    }
+    fn advance(&mut self) -> Result<(), EfgError> {
+        match self {
+            Body::Efg(b) => b.advance(),
+            Body::Fem(b) => Ok(b.advance()?),
+        }
+    }
+    fn kinetic_energy(&self) -> f64 {
+        match self {
+            Body::Efg(b) => b.kinetic_energy(),
+            Body::Fem(b) => b.kinetic_energy(),
+        }
+    }
+    fn strain_energy(&self) -> f64 {
+        match self {
+            Body::Efg(b) => b.strain_energy(),
+            Body::Fem(b) => b.strain_energy(),
+        }
+    }
+    /// Bind a sampling point: a shape row (EFG) or an element (FE).
+    fn bind(&self, p: Vec2) -> Result<At, EfgError> {
+        match self {
+            Body::Efg(b) => {
+                let mut r = ShapeRow::new();
+                b.shape_row(p, &mut r)?;
+                Ok(At::Row(r))
+            }
+            Body::Fem(b) => Ok(At::Element(b.locate(p)?)),
+        }
+    }
+    fn sample_at(&self, at: &At) -> Sample {
+        match (self, at) {
+            (Body::Efg(b), At::Row(r)) => b.sample_row(r),
+            (Body::Fem(b), At::Element(l)) => b.sample_located(l),
+            _ => unreachable!("a probe is bound by its own body"),
+        }
+    }
+}
+
+/// A sampling point bound to a body.
+enum At {
+    Row(ShapeRow),
+    Element(Located),
+}
+
+/// A probe resolved to a body and, for point quantities, a bound point.
 struct BoundProbe {
     name: String,
     body: usize,
     quantity: String,
-    row: Option<ShapeRow>,
+    row: Option<At>,
     min: f64,
     max: f64,
     last: f64,
 }
 
-fn build_bodies(sc: &Scenario) -> Result<Vec<EfgBody>, EfgError> {
+fn build_bodies(sc: &Scenario) -> Result<Vec<Body>, EfgError> {
+    let g = sc.simulation.gravity;
     sc.body
         .iter()
-        .map(|b| EfgBody::from_spec(b, sc.simulation.gravity))
+        .map(|b| match b.method {
+            Method::Efg => Ok(Body::Efg(Box::new(EfgBody::from_spec(b, g)?))),
+            Method::FemQ4 => Ok(Body::Fem(Box::new(FemBody::from_spec(b, g)?))),
+        })
         .collect()
 }
 
-fn bind_probes(sc: &Scenario, bodies: &[EfgBody]) -> Result<Vec<BoundProbe>, EfgError> {
+fn bind_probes(sc: &Scenario, bodies: &[Body]) -> Result<Vec<BoundProbe>, EfgError> {
     let mut out = vec![];
     for p in &sc.probe {
         let Probe {
@@ -52,15 +137,13 @@ fn bind_probes(sc: &Scenario, bodies: &[EfgBody]) -> Result<Vec<BoundProbe>, Efg
             ..
         } = p;
         let bi = match body {
-            Some(n) => bodies.iter().position(|b| &b.name == n),
+            Some(n) => bodies.iter().position(|b| b.name() == n),
             None => Some(0),
         }
         .ok_or_else(|| EfgError::Invalid(format!("probe `{name}`: no body `{body:?}`")))?;
         let row = match point {
             Some(pt) if !BODY_QUANTITIES.contains(&quantity.as_str()) => {
-                let mut r = ShapeRow::new();
-                bodies[bi].shape_row(Vec2::from(*pt), &mut r)?;
-                Some(r)
+                Some(bodies[bi].bind(Vec2::from(*pt))?)
             }
             _ => None,
         };
@@ -77,7 +160,7 @@ fn bind_probes(sc: &Scenario, bodies: &[EfgBody]) -> Result<Vec<BoundProbe>, Efg
     Ok(out)
 }
 
-fn probe_value(p: &BoundProbe, b: &EfgBody) -> f64 {
+fn probe_value(p: &BoundProbe, b: &Body) -> f64 {
     let energy = |q: &str| match q {
         "kinetic_energy" => b.kinetic_energy(),
         "strain_energy" => b.strain_energy(),
@@ -86,7 +169,7 @@ fn probe_value(p: &BoundProbe, b: &EfgBody) -> f64 {
     let Some(row) = &p.row else {
         return energy(&p.quantity);
     };
-    let s = b.sample_row(row);
+    let s = b.sample_at(row);
     match p.quantity.as_str() {
         "ux" => s.u.x,
         "uy" => s.u.y,
@@ -104,7 +187,7 @@ fn probe_value(p: &BoundProbe, b: &EfgBody) -> f64 {
 
 fn record(
     probes: &mut [BoundProbe],
-    bodies: &[EfgBody],
+    bodies: &[Body],
     hist: &mut HistoryWriter,
     step: usize,
     t: f64,
@@ -122,8 +205,32 @@ fn record(
     hist.row(&row)
 }
 
+/// Per-body data for frames: EFG nodal shape rows (FE needs none).
+fn frame_data(b: &Body) -> Result<Option<super::assemble::PointShapes>, EfgError> {
+    match b {
+        Body::Efg(b) => Ok(Some(b.nodal_shapes()?)),
+        Body::Fem(_) => Ok(None),
+    }
+}
+
+fn write_frame(
+    b: &Body,
+    shapes: Option<&super::assemble::PointShapes>,
+    path: &Path,
+) -> Result<(), EfgError> {
+    match (b, shapes) {
+        (Body::Efg(b), Some(s)) => write_frame_efg(b, s, path),
+        (Body::Fem(b), _) => {
+            let (u, v, s) = b.nodal_fields();
+            let pts: Vec<[f64; 2]> = (0..b.n_nodes()).map(|i| b.node(i).to_array()).collect();
+            write_fields(path, b.grid, &pts, &u, &v, &s)
+        }
+        _ => unreachable!("EFG frames need nodal shapes"),
+    }
+}
+
 /// Nodal values: true displacement, velocity and stress at every node.
-pub(crate) fn write_frame(
+pub(crate) fn write_frame_efg(
     b: &EfgBody,
     shapes: &super::assemble::PointShapes,
     path: &Path,
@@ -150,35 +257,77 @@ pub(crate) fn write_frame(
         s[3 * i..3 * i + 3].copy_from_slice(&smp.stress);
     }
     let pts: Vec<[f64; 2]> = (0..n).map(|i| b.node(i).to_array()).collect();
+    write_fields(path, b.grid, &pts, &u, &v, &s)
+}
+
+fn write_fields(
+    path: &Path,
+    grid: [usize; 2],
+    pts: &[[f64; 2]],
+    u: &[f64],
+    v: &[f64],
+    s: &[f64],
+) -> Result<(), EfgError> {
     write_quad_grid(
         path,
-        b.grid[0],
-        b.grid[1],
-        &pts,
+        grid[0],
+        grid[1],
+        pts,
         &[
             Field {
                 name: "displacement",
                 ncomp: 2,
-                values: &u,
+                values: u,
             },
             Field {
                 name: "velocity",
                 ncomp: 2,
-                values: &v,
+                values: v,
             },
             Field {
                 name: "stress_xx_yy_xy",
                 ncomp: 3,
-                values: &s,
+                values: s,
             },
         ],
     )?;
     Ok(())
 }
 
-fn body_summary(b: &EfgBody) -> Result<Value, EfgError> {
+fn body_summary(b: &Body) -> Result<Value, EfgError> {
+    match b {
+        Body::Efg(b) => body_summary_efg(b),
+        Body::Fem(b) => body_summary_fem(b),
+    }
+}
+
+fn body_summary_fem(b: &FemBody) -> Result<Value, EfgError> {
     let mut v = json!({
         "name": b.name,
+        "method": "fem-q4",
+        "build": b.info,
+        "newmark": { "gamma": b.params.gamma, "beta": b.params.beta, "dt": b.params.dt },
+        "kinetic_energy": b.kinetic_energy(),
+        "strain_energy": b.strain_energy(),
+    });
+    if let Some(t) = &b.timoshenko {
+        let tip = b.sample(Vec2::new(t.x0 + t.l, t.yc))?.u.y;
+        let [nx, ny] = b.grid;
+        let err = b.energy_error(|p| t.stress(p), [2 * (nx - 1), 2 * (ny - 1)], 3)?;
+        v["timoshenko"] = json!({
+            "tip_uy": tip,
+            "tip_uy_exact": t.tip_deflection(),
+            "tip_uy_relative_error": (tip - t.tip_deflection()) / t.tip_deflection(),
+            "energy_norm_relative_error": err,
+        });
+    }
+    Ok(v)
+}
+
+fn body_summary_efg(b: &EfgBody) -> Result<Value, EfgError> {
+    let mut v = json!({
+        "name": b.name,
+        "method": "efg",
         "build": b.info,
         "newmark": { "gamma": b.params.gamma, "beta": b.params.beta, "dt": b.params.dt },
         "kinetic_energy": b.kinetic_energy(),
@@ -219,8 +368,8 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, EfgError> {
             }
             record(&mut probes, &bodies, &mut hist, 0, 0.0)?;
             for b in &bodies {
-                let shapes = b.nodal_shapes()?;
-                write_frame(b, &shapes, &dir.join(format!("{}.vtu", b.name)))?;
+                let shapes = frame_data(b)?;
+                write_frame(b, shapes.as_ref(), &dir.join(format!("{}.vtu", b.name())))?;
             }
             summary["analysis"] = json!("static");
         }
@@ -251,21 +400,19 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, EfgError> {
             if vtk_every > 0 {
                 std::fs::create_dir_all(&frames)?;
                 for b in &bodies {
-                    series.push(PvdSeries::new(&dir.join(format!("{}.pvd", b.name))));
-                    nodal.push(b.nodal_shapes()?);
+                    series.push(PvdSeries::new(&dir.join(format!("{}.pvd", b.name()))));
+                    nodal.push(frame_data(b)?);
                 }
             }
-            let frame = |bodies: &[EfgBody],
-                         series: &mut [PvdSeries],
-                         step: usize|
-             -> Result<(), EfgError> {
-                for (k, b) in bodies.iter().enumerate() {
-                    let f = format!("{}_{step:06}.vtu", b.name);
-                    write_frame(b, &nodal[k], &frames.join(&f))?;
-                    series[k].add(b.time, &format!("frames/{f}"))?;
-                }
-                Ok(())
-            };
+            let frame =
+                |bodies: &[Body], series: &mut [PvdSeries], step: usize| -> Result<(), EfgError> {
+                    for (k, b) in bodies.iter().enumerate() {
+                        let f = format!("{}_{step:06}.vtu", b.name());
+                        write_frame(b, nodal[k].as_ref(), &frames.join(&f))?;
+                        series[k].add(b.time(), &format!("frames/{f}"))?;
+                    }
+                    Ok(())
+                };
             record(&mut probes, &bodies, &mut hist, 0, 0.0)?;
             if vtk_every > 0 {
                 frame(&bodies, &mut series, 0)?;
@@ -275,7 +422,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, EfgError> {
                 for b in bodies.iter_mut() {
                     b.advance()?;
                 }
-                let t = bodies[0].time;
+                let t = bodies[0].time();
                 if step % sc.output.every == 0 || step == steps {
                     record(&mut probes, &bodies, &mut hist, step, t)?;
                 }
@@ -288,7 +435,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, EfgError> {
             summary["analysis"] = json!("dynamic");
             summary["steps"] = json!(steps);
             summary["dt"] = json!(dt);
-            summary["end_time"] = json!(bodies[0].time);
+            summary["end_time"] = json!(bodies[0].time());
         }
     }
     hist.flush()?;
@@ -320,6 +467,38 @@ pub fn check(sc: &Scenario) -> Result<String, EfgError> {
     bind_probes(sc, &bodies)?;
     let mut s = String::new();
     for (b, spec) in bodies.iter().zip(&sc.body) {
+        let b = match b {
+            Body::Efg(b) => b,
+            Body::Fem(b) => {
+                let i = &b.info;
+                let _ = writeln!(
+                    s,
+                    "body `{}` (FE, bilinear Q4): {} × {} = {} nodes, {} DOFs ({} prescribed, eliminated); {} elements, 2×2 Gauss; {} mass; K lower triangle: {} entries",
+                    b.name,
+                    b.grid[0],
+                    b.grid[1],
+                    i.nodes,
+                    i.dofs,
+                    i.constrained_dofs,
+                    i.elements,
+                    i.mass,
+                    i.nnz
+                );
+                let _ = writeln!(
+                    s,
+                    "  material: E = {}, ν = {}, ρ = {}, t = {}, plane {:?}",
+                    b.material.e,
+                    b.material.nu,
+                    b.material.density,
+                    b.material.thickness,
+                    b.material.plane
+                );
+                if sc.simulation.analysis == Analysis::Dynamic {
+                    let _ = writeln!(s, "  Newmark γ = {}, β = {}", b.params.gamma, b.params.beta);
+                }
+                continue;
+            }
+        };
         let i = &b.info;
         let _ = writeln!(
             s,

@@ -1,4 +1,24 @@
 //! Bilinear finite elements on the EFG node grid, for the FE–DE comparison
 //! of §4.2.1 (the mesh coincides with the EFG background grid).
+//!
+//! - [`q4`]: the element (shape functions, 2 × 2 Gauss stiffness, mass).
+//! - [`body`]: [`FemBody`], built from a scenario `[[body]]` with
+//!   `method = "fem-q4"`; prescribed displacements imposed exactly on nodes.
 
+pub mod body;
 pub mod q4;
+
+pub use body::FemBody;
+
+/// Errors of the FE continuum.
+#[derive(Debug, thiserror::Error)]
+pub enum FemError {
+    #[error("body `{body}`: the point {point:?} is outside the body")]
+    Outside { body: String, point: [f64; 2] },
+    #[error(transparent)]
+    Solve(#[from] crate::sparse::SparseError),
+    #[error("advance() called before start_dynamic()")]
+    NotStarted,
+    #[error("{0}")]
+    Invalid(String),
+}

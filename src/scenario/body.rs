@@ -31,9 +31,14 @@ use serde::Deserialize;
 pub struct BodySpec {
     /// Name used by probes and outputs.
     pub name: String,
-    /// Discretisation: `"efg"` (default).
+    /// Discretisation: `"efg"` (default) or `"fem-q4"` (bilinear quads on
+    /// the node grid, §4.2.1).
     #[serde(default)]
     pub method: Method,
+    /// Mass matrix of a `fem-q4` body: `"consistent"` (default) or
+    /// `"lumped"` (row sum). EFG bodies always use the consistent Gram matrix.
+    #[serde(default)]
+    pub mass: MassKind,
     /// The body's rectangle.
     pub rectangle: Rectangle,
     /// Node grid `[nx, ny]` (row-major, x fastest).
@@ -101,6 +106,17 @@ fn one() -> f64 {
 pub enum Method {
     #[default]
     Efg,
+    /// 4-node bilinear finite elements on the node grid.
+    FemQ4,
+}
+
+/// Consistent (`∫ρNᵀN`) or lumped (row-sum) mass matrix.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum MassKind {
+    #[default]
+    Consistent,
+    Lumped,
 }
 
 #[derive(Debug, Clone, Copy, Deserialize)]
@@ -343,6 +359,50 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             at("gauss"),
             format!("must be between 1 and 10 (got {})", b.gauss),
         );
+        if b.method == Method::FemQ4 {
+            // EFG-only fields: a value other than the default is a mistake
+            // (the FE mesh is the node grid, integrated with 2 × 2 Gauss).
+            p.check(
+                b.cells.is_none_or(|c| c == [b.nodes[0].saturating_sub(1), b.nodes[1].saturating_sub(1)]),
+                at("cells"),
+                "a `fem-q4` body's elements are the cells of its node grid: omit `cells` (or set it to nodes − 1)",
+            );
+            p.check(
+                b.gauss == default_gauss(),
+                at("gauss"),
+                "`gauss` is an EFG option: `fem-q4` elements use 2 × 2 Gauss points; omit it",
+            );
+            p.check(
+                b.d_max == default_d_max(),
+                at("d_max"),
+                "`d_max` is an EFG option (support size): omit it for a `fem-q4` body",
+            );
+            p.check(
+                b.penalty.is_none(),
+                at("penalty"),
+                "`penalty` is an EFG option: a `fem-q4` body imposes prescribed displacements exactly on its nodes; omit it",
+            );
+            for (k, bc) in b.bc.iter().enumerate() {
+                for (c, pr) in [("ux", bc.ux), ("uy", bc.uy)] {
+                    p.check(
+                        !matches!(pr, Some(Prescribed::Motion(_))),
+                        format!("body.{i}.bc.{k}.{c}"),
+                        "moving edges (`{ velocity = … }`) are not supported by `fem-q4` bodies yet; use `method = \"efg\"`",
+                    );
+                }
+            }
+            p.check(
+                b.contact_edges.is_empty(),
+                at("contact_edges"),
+                "`fem-q4` bodies cannot be coupled with discs yet (issue 5); use `method = \"efg\"`",
+            );
+        } else {
+            p.check(
+                b.mass == MassKind::Consistent,
+                at("mass"),
+                "`mass = \"lumped\"` is only available for `method = \"fem-q4\"` bodies (EFG uses the consistent Gram matrix)",
+            );
+        }
         p.check(
             b.d_max.is_finite() && b.d_max > 1.0 && b.d_max <= 10.0,
             at("d_max"),

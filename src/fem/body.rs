@@ -1,0 +1,639 @@
+//! [`FemBody`]: a bilinear finite-element continuum on the same rectangular
+//! node grid as an [`EfgBody`](crate::efg::EfgBody): the elements are the
+//! `(nx − 1) × (ny − 1)` grid cells, so the mesh coincides with the EFG
+//! background grid (§4.2.1 of the paper). Same material, loads, Newmark
+//! integrator and factor-once Cholesky as the EFG body.
+//!
+//! # Boundary conditions: exact elimination on the nodes
+//! FE shape functions have the Kronecker-delta property, so a prescribed
+//! displacement `ū` is imposed on the nodal DOF itself (no penalty). Every
+//! constrained DOF `c` keeps its place in the DOF numbering (so states are
+//! laid out as in the EFG body), but in the operators used for solving:
+//! - row and column `c` of K are replaced by the identity, and `ū_c` is
+//!   moved to the right-hand side: `F_f −= K_fc ū_c` for every free DOF `f`,
+//!   `F_c = ū_c`;
+//! - row and column `c` of M are replaced by the identity and those of C by
+//!   zero, so `M Ü = F − K U` gives `Ü_c = 0` and each Newmark step gives
+//!   `U_c = ū_c` (the prescribed values are constant in time).
+//!
+//! The matrices stay symmetric positive definite (the constrained block is
+//! the identity, decoupled from the free block), the patch test is exact to
+//! round-off, and after every solve `U_c = ū_c`, `U̇_c = Ü_c = 0` are set
+//! exactly. Point loads on constrained DOFs are reactions and are dropped.
+//! The unmodified K is kept for the strain energy `½ Uᵀ K U`.
+//!
+//! A node in two bcs (a corner) takes the value of the last one listed.
+
+use super::FemError;
+use super::q4;
+use crate::efg::body::{
+    Material, Sample, constrained, edge_ends, energy_error_of, is_released, prescribed,
+    timoshenko_of, traction_at,
+};
+use crate::efg::exact::Timoshenko;
+use crate::efg::quadrature::{self, QuadPoint};
+use crate::geom::Vec2;
+use crate::newmark::{Newmark, NewmarkParams, State};
+use crate::scenario::body::{BodySpec, Edge, MassKind};
+use crate::sparse::{Cholesky, Pattern, SymCsc};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Sizes and timings of a build, for `check` and summaries.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct FemInfo {
+    pub nodes: usize,
+    pub dofs: usize,
+    pub elements: usize,
+    /// DOFs with a prescribed value (eliminated).
+    pub constrained_dofs: usize,
+    /// `"consistent"` or `"lumped"`.
+    pub mass: &'static str,
+    /// Stored entries of the lower triangle of K.
+    pub nnz: usize,
+    pub assembly_seconds: f64,
+}
+
+/// Where a point lies in the mesh: its element's four nodes
+/// (counter-clockwise, see [`q4::CORNERS`]), their coordinates and the
+/// parent coordinates `(ξ, η)` of the point.
+#[derive(Debug, Clone, Copy)]
+pub struct Located {
+    pub nodes: [usize; 4],
+    pub xy: [[f64; 2]; 4],
+    pub xi: f64,
+    pub eta: f64,
+}
+
+impl Located {
+    /// Shape functions `N_a` at the point.
+    pub fn shape(&self) -> [f64; 4] {
+        q4::shape(self.xi, self.eta).0
+    }
+}
+
+/// A bilinear (Q4) finite-element body.
+#[derive(Debug)]
+pub struct FemBody {
+    pub name: String,
+    /// Node grid `[nx, ny]`; node `(i, j)` is `j·nx + i` at `(xs[i], ys[j])`.
+    pub grid: [usize; 2],
+    pub xs: Vec<f64>,
+    pub ys: Vec<f64>,
+    pub origin: Vec2,
+    pub size: Vec2,
+    pub material: Material,
+    pub mass_kind: MassKind,
+    /// Unmodified stiffness K (for the strain energy).
+    pub k_full: SymCsc,
+    /// K with the constrained rows/columns replaced by the identity.
+    pub k: SymCsc,
+    /// `∫ Nᵀ N t dA` (consistent or lumped) with the constrained
+    /// rows/columns replaced by the identity: `M = ρ G`, `C = c G`
+    /// (constrained part zeroed for C).
+    pub gram: SymCsc,
+    /// Per DOF: the prescribed value, if constrained.
+    pub fixed: Vec<Option<f64>>,
+    /// Permanent loads (tractions, body force) with the prescribed values
+    /// lifted to the right-hand side (`F_f − K_fc ū_c`, `F_c = ū_c`).
+    pub f_permanent: Vec<f64>,
+    /// Loads applied for the initial static state only (zero on
+    /// constrained DOFs).
+    pub f_released: Vec<f64>,
+    /// Point loads accumulated for the next step, cleared by `advance`.
+    pub f_point: Vec<f64>,
+    /// Nodal displacements (Kronecker delta: these are the true values).
+    pub state: State,
+    pub time: f64,
+    pub step: usize,
+    pub params: NewmarkParams,
+    newmark: Option<Newmark>,
+    pub timoshenko: Option<Timoshenko>,
+    pub info: FemInfo,
+}
+
+/// Lower-triangle pattern of the Q4 mesh: DOF `2I + a` couples with the
+/// DOFs of every node sharing an element with node `I`.
+fn grid_pattern(nx: usize, ny: usize) -> Pattern {
+    let n = nx * ny;
+    let ndof = 2 * n;
+    let mut col_ptr = Vec::with_capacity(ndof + 1);
+    let mut row_idx = Vec::with_capacity(ndof * 10);
+    col_ptr.push(0);
+    let mut nb = Vec::with_capacity(9);
+    for node in 0..n {
+        let (i, j) = (node % nx, node / nx);
+        nb.clear();
+        for jj in j.saturating_sub(1)..=(j + 1).min(ny - 1) {
+            for ii in i.saturating_sub(1)..=(i + 1).min(nx - 1) {
+                let m = jj * nx + ii;
+                if m >= node {
+                    nb.push(m);
+                }
+            }
+        }
+        nb.sort_unstable();
+        for a in 0..2 {
+            for &m in &nb {
+                for b in 0..2 {
+                    if m > node || b >= a {
+                        row_idx.push(2 * m + b);
+                    }
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+    }
+    Pattern {
+        n: ndof,
+        col_ptr,
+        row_idx,
+    }
+}
+
+/// Position of entry `(r, c)` (`r ≥ c`) in the values of `p`.
+fn slot(p: &Pattern, r: usize, c: usize) -> usize {
+    let s = p.col_ptr[c];
+    let rows = &p.row_idx[s..p.col_ptr[c + 1]];
+    s + rows
+        .binary_search(&r)
+        .expect("entry in the Q4 mesh pattern")
+}
+
+fn add(m: &mut SymCsc, r: usize, c: usize, v: f64) {
+    let (r, c) = if r >= c { (r, c) } else { (c, r) };
+    let k = slot(&m.pattern, r, c);
+    m.values[k] += v;
+}
+
+impl FemBody {
+    /// Build the body: node grid, element matrices (2 × 2 Gauss), global K
+    /// and Gram matrix on one pattern, loads, and the exact elimination of
+    /// the prescribed DOFs (module docs).
+    pub fn from_spec(spec: &BodySpec, gravity: [f64; 2]) -> Result<FemBody, FemError> {
+        let [nx, ny] = spec.nodes;
+        if nx < 2 || ny < 2 {
+            return Err(FemError::Invalid(format!(
+                "body `{}`: the node grid needs at least 2 × 2 nodes",
+                spec.name
+            )));
+        }
+        let t0 = Instant::now();
+        let origin = Vec2::from(spec.rectangle.origin);
+        let size = Vec2::from(spec.rectangle.size);
+        let xs: Vec<f64> = (0..nx)
+            .map(|i| origin.x + size.x * i as f64 / (nx - 1) as f64)
+            .collect();
+        let ys: Vec<f64> = (0..ny)
+            .map(|j| origin.y + size.y * j as f64 / (ny - 1) as f64)
+            .collect();
+        let material = Material::of_spec(spec);
+        let t = material.thickness;
+        let [d11, d12, d22, d33] = material.d;
+        let d = [[d11, d12, 0.0], [d12, d22, 0.0], [0.0, 0.0, d33]];
+        let n = nx * ny;
+        let ndof = 2 * n;
+        let pattern = Arc::new(grid_pattern(nx, ny));
+        let mut k = SymCsc::zeros(pattern.clone());
+        let mut gram = SymCsc::zeros(pattern);
+        let mut phi_integral = vec![0.0; n];
+        for j in 0..ny - 1 {
+            for i in 0..nx - 1 {
+                let nodes = [
+                    j * nx + i,
+                    j * nx + i + 1,
+                    (j + 1) * nx + i + 1,
+                    (j + 1) * nx + i,
+                ];
+                let xy = [
+                    [xs[i], ys[j]],
+                    [xs[i + 1], ys[j]],
+                    [xs[i + 1], ys[j + 1]],
+                    [xs[i], ys[j + 1]],
+                ];
+                let ke = q4::stiffness(&xy, &d, t);
+                let me = q4::consistent_mass(&xy, 1.0, t);
+                for a in 0..4 {
+                    phi_integral[nodes[a]] += me[a].iter().sum::<f64>();
+                    for b in 0..4 {
+                        for r in 0..2 {
+                            for c in 0..2 {
+                                let (gr, gc) = (2 * nodes[a] + r, 2 * nodes[b] + c);
+                                if gr >= gc {
+                                    add(&mut k, gr, gc, ke[2 * a + r][2 * b + c]);
+                                }
+                            }
+                        }
+                        if spec.mass == MassKind::Consistent && nodes[a] >= nodes[b] {
+                            for r in 0..2 {
+                                add(&mut gram, 2 * nodes[a] + r, 2 * nodes[b] + r, me[a][b]);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if spec.mass == MassKind::Lumped {
+            for (i, m) in phi_integral.iter().enumerate() {
+                add(&mut gram, 2 * i, 2 * i, *m);
+                add(&mut gram, 2 * i + 1, 2 * i + 1, *m);
+            }
+        }
+        let timoshenko = timoshenko_of(spec);
+        // prescribed DOFs: the nodes on the edge take ū at their position
+        let mut fixed: Vec<Option<f64>> = vec![None; ndof];
+        let edge_nodes = |e: Edge| -> Vec<usize> {
+            match e {
+                Edge::Left => (0..ny).map(|j| j * nx).collect(),
+                Edge::Right => (0..ny).map(|j| j * nx + nx - 1).collect(),
+                Edge::Bottom => (0..nx).collect(),
+                Edge::Top => (0..nx).map(|i| (ny - 1) * nx + i).collect(),
+            }
+        };
+        for bc in spec.bc.iter().filter(|b| !b.is_load()) {
+            let (cx, cy) = constrained(bc);
+            for node in edge_nodes(bc.edge) {
+                let x = Vec2::new(xs[node % nx], ys[node / nx]);
+                let ub = prescribed(bc, x, timoshenko.as_ref());
+                if cx {
+                    fixed[2 * node] = Some(ub[0]);
+                }
+                if cy {
+                    fixed[2 * node + 1] = Some(ub[1]);
+                }
+            }
+        }
+        let mut f_permanent = vec![0.0; ndof];
+        let mut f_released = vec![0.0; ndof];
+        let mut body = FemBody {
+            name: spec.name.clone(),
+            grid: spec.nodes,
+            xs,
+            ys,
+            origin,
+            size,
+            material,
+            mass_kind: spec.mass,
+            k_full: k.clone(),
+            k,
+            gram,
+            fixed: vec![],
+            f_permanent: vec![],
+            f_released: vec![],
+            f_point: vec![0.0; ndof],
+            state: State::zeros(ndof),
+            time: 0.0,
+            step: 0,
+            params: NewmarkParams {
+                dt: 0.0,
+                gamma: spec.newmark.gamma,
+                beta: spec.newmark.beta,
+            },
+            newmark: None,
+            timoshenko,
+            info: FemInfo::default(),
+        };
+        // tractions (Eq. 27, boundary term), 3 Gauss points per element edge
+        // (exact for the parabolic shear times the linear edge functions)
+        let segs = |e: Edge| match e {
+            Edge::Left | Edge::Right => ny - 1,
+            Edge::Top | Edge::Bottom => nx - 1,
+        };
+        for bc in spec.bc.iter().filter(|b| b.is_load()) {
+            let target = if bc.name.as_deref().is_some_and(|n| is_released(spec, n)) {
+                &mut f_released
+            } else {
+                &mut f_permanent
+            };
+            let (a, b) = edge_ends(origin, size, bc.edge);
+            for QuadPoint { x, w } in quadrature::edge_points(a, b, segs(bc.edge), 3) {
+                let tr = traction_at(bc, a, b, x);
+                let loc = body.locate(x)?;
+                for (&node, phi) in loc.nodes.iter().zip(loc.shape()) {
+                    target[2 * node] += w * t * phi * tr[0];
+                    target[2 * node + 1] += w * t * phi * tr[1];
+                }
+            }
+        }
+        // body force ρ g (Eq. 27, domain term)
+        if gravity != [0.0, 0.0] && material.density > 0.0 {
+            let target = if is_released(spec, "gravity") {
+                &mut f_released
+            } else {
+                &mut f_permanent
+            };
+            for (i, s) in phi_integral.iter().enumerate() {
+                target[2 * i] += material.density * gravity[0] * s;
+                target[2 * i + 1] += material.density * gravity[1] * s;
+            }
+        }
+        // exact elimination of the prescribed DOFs
+        {
+            let p = body.k.pattern.clone();
+            for c in 0..ndof {
+                for s in p.col_ptr[c]..p.col_ptr[c + 1] {
+                    let r = p.row_idx[s];
+                    let v = body.k.values[s];
+                    if r != c {
+                        match (fixed[r], fixed[c]) {
+                            (None, Some(uc)) => f_permanent[r] -= v * uc,
+                            (Some(ur), None) => f_permanent[c] -= v * ur,
+                            _ => {}
+                        }
+                    }
+                    if fixed[r].is_some() || fixed[c].is_some() {
+                        let diag = if r == c { 1.0 } else { 0.0 };
+                        body.k.values[s] = diag;
+                        body.gram.values[s] = diag;
+                    }
+                }
+            }
+            for (i, ub) in fixed.iter().enumerate() {
+                if let Some(u) = ub {
+                    f_permanent[i] = *u;
+                    f_released[i] = 0.0;
+                    body.state.u[i] = *u;
+                }
+            }
+        }
+        body.info = FemInfo {
+            nodes: n,
+            dofs: ndof,
+            elements: (nx - 1) * (ny - 1),
+            constrained_dofs: fixed.iter().filter(|f| f.is_some()).count(),
+            mass: match spec.mass {
+                MassKind::Consistent => "consistent",
+                MassKind::Lumped => "lumped",
+            },
+            nnz: body.k.pattern.nnz(),
+            assembly_seconds: t0.elapsed().as_secs_f64(),
+        };
+        body.fixed = fixed;
+        body.f_permanent = f_permanent;
+        body.f_released = f_released;
+        Ok(body)
+    }
+
+    pub fn n_nodes(&self) -> usize {
+        self.grid[0] * self.grid[1]
+    }
+    pub fn n_dofs(&self) -> usize {
+        2 * self.n_nodes()
+    }
+    /// Reference position of node `i`.
+    pub fn node(&self, i: usize) -> Vec2 {
+        Vec2::new(self.xs[i % self.grid[0]], self.ys[i / self.grid[0]])
+    }
+
+    /// The element containing `p` (on a shared edge or node: the one with
+    /// the lower index; the shape functions agree there) and `(ξ, η)`.
+    pub fn locate(&self, p: Vec2) -> Result<Located, FemError> {
+        let [nx, ny] = self.grid;
+        let tol = 1e-9 * (self.size.x + self.size.y);
+        let inside = p.x >= self.origin.x - tol
+            && p.x <= self.origin.x + self.size.x + tol
+            && p.y >= self.origin.y - tol
+            && p.y <= self.origin.y + self.size.y + tol;
+        if !inside || !p.x.is_finite() || !p.y.is_finite() {
+            return Err(FemError::Outside {
+                body: self.name.clone(),
+                point: [p.x, p.y],
+            });
+        }
+        let cell = |v: f64, o: f64, l: f64, n: usize| -> usize {
+            let s = ((v - o) / l * (n - 1) as f64).floor();
+            (s.max(0.0) as usize).min(n - 2)
+        };
+        let i = cell(p.x, self.origin.x, self.size.x, nx);
+        let j = cell(p.y, self.origin.y, self.size.y, ny);
+        let nodes = [
+            j * nx + i,
+            j * nx + i + 1,
+            (j + 1) * nx + i + 1,
+            (j + 1) * nx + i,
+        ];
+        let xy = nodes.map(|k| self.node(k).to_array());
+        let (xi, eta) = q4::parent_of_rect(&xy, p.to_array());
+        Ok(Located {
+            nodes,
+            xy,
+            xi: xi.clamp(-1.0, 1.0),
+            eta: eta.clamp(-1.0, 1.0),
+        })
+    }
+
+    /// Static solve `K U = F` with the permanent and released loads plus the
+    /// accumulated point loads; the state becomes (U, 0, 0), `U_c = ū_c`.
+    pub fn solve_static(&mut self) -> Result<(), FemError> {
+        let mut f: Vec<f64> = (0..self.n_dofs())
+            .map(|i| match self.fixed[i] {
+                Some(u) => u,
+                None => self.f_permanent[i] + self.f_released[i] + self.f_point[i],
+            })
+            .collect();
+        let mut ch = Cholesky::factor(&self.k)?;
+        ch.solve_in_place(&mut f);
+        self.state.u = f;
+        self.state.v.iter_mut().for_each(|x| *x = 0.0);
+        self.state.a.iter_mut().for_each(|x| *x = 0.0);
+        self.enforce_prescribed();
+        Ok(())
+    }
+
+    /// `U_c = ū_c`, `U̇_c = Ü_c = 0` exactly (removes round-off).
+    fn enforce_prescribed(&mut self) {
+        for (i, ub) in self.fixed.iter().enumerate() {
+            if let Some(u) = ub {
+                self.state.u[i] = *u;
+                self.state.v[i] = 0.0;
+                self.state.a[i] = 0.0;
+            }
+        }
+    }
+
+    /// Point loads on constrained DOFs are reactions: drop them.
+    fn clear_constrained_point_loads(&mut self) {
+        for (f, ub) in self.f_point.iter_mut().zip(&self.fixed) {
+            if ub.is_some() {
+                *f = 0.0;
+            }
+        }
+    }
+
+    /// The mass matrix `ρ G` (constrained part: identity).
+    fn mass_matrix(&self) -> SymCsc {
+        let mut m = self.gram.scaled(self.material.density);
+        self.set_constrained_diagonal(&mut m, 1.0);
+        m
+    }
+
+    fn set_constrained_diagonal(&self, m: &mut SymCsc, v: f64) {
+        let p = m.pattern.clone();
+        for (i, ub) in self.fixed.iter().enumerate() {
+            if ub.is_some() {
+                m.values[p.col_ptr[i]] = v;
+            }
+        }
+    }
+
+    /// Prepare time stepping with step `dt` and the body's γ, β: factor
+    /// `α₁M + α₄C + K` once and compute the initial acceleration under the
+    /// permanent loads (released loads off).
+    pub fn start_dynamic(&mut self, dt: f64) -> Result<(), FemError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(FemError::Invalid(format!(
+                "time step must be > 0 (got {dt})"
+            )));
+        }
+        if self.material.density <= 0.0 {
+            return Err(FemError::Invalid(format!(
+                "body `{}`: dynamics needs a density > 0",
+                self.name
+            )));
+        }
+        self.params.dt = dt;
+        self.clear_constrained_point_loads();
+        self.enforce_prescribed();
+        let m = self.mass_matrix();
+        let c = (self.material.damping > 0.0).then(|| {
+            let mut c = self.gram.scaled(self.material.damping);
+            self.set_constrained_diagonal(&mut c, 0.0);
+            c
+        });
+        let f: Vec<f64> = (0..self.n_dofs())
+            .map(|i| self.f_permanent[i] + self.f_point[i])
+            .collect();
+        crate::newmark::consistent_acceleration(&m, c.as_ref(), &self.k, &mut self.state, &f)?;
+        self.enforce_prescribed();
+        self.newmark = Some(Newmark::new(m, c, self.k.clone(), self.params)?);
+        Ok(())
+    }
+
+    /// The integrator, once [`FemBody::start_dynamic`] was called.
+    pub fn newmark(&self) -> Option<&Newmark> {
+        self.newmark.as_ref()
+    }
+
+    /// One Newmark step with the permanent loads plus the point loads
+    /// accumulated since the last step (then cleared).
+    pub fn advance(&mut self) -> Result<(), FemError> {
+        self.clear_constrained_point_loads();
+        let nm = self.newmark.as_mut().ok_or(FemError::NotStarted)?;
+        for (p, f) in self.f_point.iter_mut().zip(&self.f_permanent) {
+            *p += f;
+        }
+        nm.advance(&mut self.state, &self.f_point);
+        self.f_point.iter_mut().for_each(|x| *x = 0.0);
+        self.enforce_prescribed();
+        self.step += 1;
+        self.time = self.step as f64 * self.params.dt;
+        Ok(())
+    }
+
+    /// Add the point load `f` at `p` to the next step's force:
+    /// `F += Nᵀ(p) f` with the element's shape functions (Eq. 46).
+    pub fn add_point_load(&mut self, p: Vec2, f: Vec2) -> Result<(), FemError> {
+        let loc = self.locate(p)?;
+        for (&i, n) in loc.nodes.iter().zip(loc.shape()) {
+            self.f_point[2 * i] += n * f.x;
+            self.f_point[2 * i + 1] += n * f.y;
+        }
+        Ok(())
+    }
+
+    /// Fields at a located point: `u = Σ N_a u_a`, `v = Σ N_a u̇_a`,
+    /// engineering strain `B u` (ERRATA E5), stress `D ε`.
+    pub fn sample_located(&self, loc: &Located) -> Sample {
+        let (u, v) = (&self.state.u, &self.state.v);
+        let n = loc.shape();
+        let (g, _) = q4::gradients(&loc.xy, loc.xi, loc.eta);
+        let mut s = Sample::default();
+        let mut e = [0.0; 3];
+        for a in 0..4 {
+            let i = loc.nodes[a];
+            let (ux, uy) = (u[2 * i], u[2 * i + 1]);
+            s.u.x += n[a] * ux;
+            s.u.y += n[a] * uy;
+            s.v.x += n[a] * v[2 * i];
+            s.v.y += n[a] * v[2 * i + 1];
+            e[0] += g[a][0] * ux;
+            e[1] += g[a][1] * uy;
+            e[2] += g[a][1] * ux + g[a][0] * uy;
+        }
+        s.strain = e;
+        s.stress = self.material.stress(e);
+        s
+    }
+
+    /// Displacement, velocity, strain and stress at `p`.
+    pub fn sample(&self, p: Vec2) -> Result<Sample, FemError> {
+        Ok(self.sample_located(&self.locate(p)?))
+    }
+
+    /// Kinetic energy `½ U̇ᵀ M U̇` (`U̇_c = 0`).
+    pub fn kinetic_energy(&self) -> f64 {
+        0.5 * self.material.density * self.gram.quad_form(&self.state.v)
+    }
+    /// Strain energy `½ Uᵀ K U` with the unmodified K.
+    pub fn strain_energy(&self) -> f64 {
+        0.5 * self.k_full.quad_form(&self.state.u)
+    }
+
+    /// Relative energy-norm error against an exact stress field (see
+    /// [`EfgBody::energy_error`](crate::efg::EfgBody::energy_error)).
+    pub fn energy_error(
+        &self,
+        exact_stress: impl Fn(Vec2) -> [f64; 3],
+        cells: [usize; 2],
+        gauss: usize,
+    ) -> Result<f64, FemError> {
+        energy_error_of(
+            &self.material,
+            self.origin,
+            self.size,
+            cells,
+            gauss,
+            |p| self.sample(p),
+            exact_stress,
+        )
+    }
+
+    /// Nodal displacement, velocity, and stress averaged over the elements
+    /// around each node (for output frames).
+    pub fn nodal_fields(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let [nx, ny] = self.grid;
+        let n = self.n_nodes();
+        let mut s = vec![0.0; 3 * n];
+        let mut count = vec![0.0; n];
+        for j in 0..ny - 1 {
+            for i in 0..nx - 1 {
+                let nodes = [
+                    j * nx + i,
+                    j * nx + i + 1,
+                    (j + 1) * nx + i + 1,
+                    (j + 1) * nx + i,
+                ];
+                let xy = nodes.map(|k| self.node(k).to_array());
+                for (a, c) in q4::CORNERS.iter().enumerate() {
+                    let loc = Located {
+                        nodes,
+                        xy,
+                        xi: c[0],
+                        eta: c[1],
+                    };
+                    let smp = self.sample_located(&loc);
+                    for q in 0..3 {
+                        s[3 * nodes[a] + q] += smp.stress[q];
+                    }
+                    count[nodes[a]] += 1.0;
+                }
+            }
+        }
+        for (i, c) in count.iter().enumerate() {
+            for q in 0..3 {
+                s[3 * i + q] /= c;
+            }
+        }
+        (self.state.u.clone(), self.state.v.clone(), s)
+    }
+}

@@ -1,0 +1,167 @@
+//! The `efgdem` binary on FE (`method = "fem-q4"`) scenarios: static
+//! Timoshenko example, a dynamic run with frames, and EFG-only options
+//! rejected with file, line and field.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_efgdem"))
+}
+
+fn tmpdir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("efgdem-femcli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(file: &Path, out: &Path) {
+    let o = bin()
+        .args([
+            "run",
+            file.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn fem_timoshenko_example_writes_tip_uy() {
+    let out = tmpdir("tim");
+    let ex = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/timoshenko_fem.toml");
+    run(&ex, &out);
+    let s = summary(&out);
+    let tip = s["tip_uy"].as_f64().unwrap();
+    let b = &s["bodies"][0];
+    assert_eq!(b["method"], "fem-q4");
+    let exact = b["timoshenko"]["tip_uy_exact"].as_f64().unwrap();
+    assert!((tip - exact).abs() < 0.01 * exact.abs(), "{tip} vs {exact}");
+    assert!(out.join("history.csv").exists() && out.join("beam.vtu").exists());
+    let chk = bin()
+        .args(["check", ex.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(chk.status.success());
+    let text = String::from_utf8_lossy(&chk.stdout);
+    assert!(
+        text.contains("1105 nodes") && text.contains("1024 elements"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(out).unwrap();
+}
+
+const DYN: &str = r#"
+[simulation]
+analysis = "dynamic"
+dt = 0.01
+steps = 20
+[[body]]
+name = "b"
+method = "fem-q4"
+mass = "lumped"
+rectangle = { origin = [0.0, 0.0], size = [4.0, 1.0] }
+nodes = [9, 3]
+elastic = { E = 1000.0, nu = 0.3, density = 1.0 }
+initial = { static_under = ["push"] }
+[[body.bc]]
+edge = "left"
+fixed = true
+[[body.bc]]
+name = "push"
+edge = "right"
+traction = [0.0, -1.0]
+[[probe]]
+name = "tip"
+point = [4.0, 0.5]
+quantity = "uy"
+[[probe]]
+name = "energy"
+quantity = "total_energy"
+[output]
+vtk_every = 5
+"#;
+
+#[test]
+fn fem_dynamic_run_writes_frames_and_history() {
+    let out = tmpdir("dyn");
+    let f = out.join("vib.toml");
+    std::fs::write(&f, DYN).unwrap();
+    run(&f, &out);
+    let pvd = std::fs::read_to_string(out.join("b.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 5);
+    let frame = std::fs::read_to_string(out.join("frames/b_000020.vtu")).unwrap();
+    assert!(frame.contains("Name=\"displacement\"") && frame.contains("Name=\"stress_xx_yy_xy\""));
+    let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    assert_eq!(hist.lines().count(), 22);
+    // average acceleration conserves the energy of the released vibration
+    let e = &summary(&out)["probes"]["energy"];
+    let (lo, hi) = (e["min"].as_f64().unwrap(), e["max"].as_f64().unwrap());
+    assert!(hi > 0.0 && (hi - lo) < 1e-9 * hi, "{lo} {hi}");
+    std::fs::remove_dir_all(out).unwrap();
+}
+
+/// EFG-only options on a `fem-q4` body: exit 2, `file:line:` and the field.
+#[test]
+fn efg_options_on_a_fem_body_are_reported() {
+    for (tag, from, to, field) in [
+        (
+            "dmax",
+            "nodes = [9, 3]",
+            "nodes = [9, 3]\nd_max = 3.0",
+            "body[0].d_max",
+        ),
+        (
+            "gauss",
+            "nodes = [9, 3]",
+            "nodes = [9, 3]\ngauss = 6",
+            "body[0].gauss",
+        ),
+        (
+            "cells",
+            "nodes = [9, 3]",
+            "nodes = [9, 3]\ncells = [4, 2]",
+            "body[0].cells",
+        ),
+        (
+            "pen",
+            "nodes = [9, 3]",
+            "nodes = [9, 3]\npenalty = 1e9",
+            "body[0].penalty",
+        ),
+        (
+            "lumped",
+            "method = \"fem-q4\"",
+            "method = \"efg\"",
+            "body[0].mass",
+        ),
+    ] {
+        let d = tmpdir(tag);
+        let f = d.join("bad.toml");
+        let src = DYN.replace(from, to);
+        std::fs::write(&f, &src).unwrap();
+        let o = bin().args(["check", f.to_str().unwrap()]).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{tag}: {err}");
+        let key = field.rsplit('.').next().unwrap();
+        let line = src
+            .lines()
+            .position(|l| l.starts_with(&format!("{key} =")))
+            .unwrap()
+            + 1;
+        let at = format!("{}:{line}:", f.display());
+        assert!(
+            err.contains(&at) && err.contains(field),
+            "{tag}: expected `{at}` `{field}` in: {err}"
+        );
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
