@@ -20,11 +20,13 @@ use rayon::prelude::*;
 
 /// A disc–disc pair closer than the skin, `i < j` (slots), and its shear
 /// history `fs` (force along `t = perp(n)`, n from i to j; 0 when open).
+/// `sqrt_m_eff` caches `√(m_i m_j/(m_i + m_j))` for critical-ratio dashpots.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pair {
     pub i: u32,
     pub j: u32,
     pub fs: f64,
+    pub sqrt_m_eff: f64,
 }
 
 /// A disc–wall pair closer than the skin and its shear history.
@@ -278,7 +280,16 @@ impl NeighbourGrid {
                     } else {
                         0.0
                     };
-                    pairs.push(Pair { i, j, fs });
+                    let m_eff = super::contact::effective_mass(
+                        p.inv_mass[i as usize],
+                        p.inv_mass[j as usize],
+                    );
+                    pairs.push(Pair {
+                        i,
+                        j,
+                        fs,
+                        sqrt_m_eff: m_eff.sqrt(),
+                    });
                 }
                 at += cnt as usize;
                 list.first.push(pairs.len() as u32);

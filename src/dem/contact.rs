@@ -61,15 +61,26 @@ impl ContactLaw {
     /// Normal and shear dashpot coefficients for effective mass `m_eff`.
     #[inline(always)]
     pub fn dashpots(&self, m_eff: f64) -> (f64, f64) {
+        self.dashpots_sqrt(m_eff.sqrt())
+    }
+
+    /// [`dashpots`](Self::dashpots) from `√m_eff` (cached per contact).
+    #[inline(always)]
+    pub fn dashpots_sqrt(&self, sqrt_m_eff: f64) -> (f64, f64) {
         let mut cn = self.beta_n * self.kn;
         let mut cs = self.beta_s * self.ks;
         if self.zeta_n != 0.0 {
-            cn += self.zeta_n * 2.0 * (self.kn * m_eff).sqrt();
+            cn += self.zeta_n * 2.0 * self.kn.sqrt() * sqrt_m_eff;
         }
         if self.zeta_s != 0.0 {
-            cs += self.zeta_s * 2.0 * (self.ks * m_eff).sqrt();
+            cs += self.zeta_s * 2.0 * self.ks.sqrt() * sqrt_m_eff;
         }
         (cn, cs)
+    }
+
+    /// Does the law need the effective mass (critical-ratio dashpots)?
+    pub fn needs_mass(&self) -> bool {
+        self.zeta_n != 0.0 || self.zeta_s != 0.0
     }
 }
 
@@ -103,8 +114,8 @@ pub struct Side {
 ///
 /// `fs` is the contact's shear history (force along `t`); it is reset to
 /// zero when the entities do not overlap. `n` is the unit normal from i to
-/// j and `dist` the centre (or centre-to-wall) distance; `rsum` the sum of
-/// the reaches (`r_i + r_j` for discs, `r_i` for a wall with `r_j = 0`).
+/// j, δ > 0 the overlap, `(cn, cs)` the dashpot coefficients
+/// ([`ContactLaw::dashpots`]).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate(
@@ -113,7 +124,7 @@ pub fn evaluate(
     delta: f64,
     i: &Side,
     j: &Side,
-    m_eff: f64,
+    (cn, cs): (f64, f64),
     fs: &mut f64,
     dt: f64,
 ) -> ContactForce {
@@ -123,7 +134,6 @@ pub fn evaluate(
     let dv = i.vel - j.vel;
     let vn = dv.dot(n);
     let vt = dv.dot(t) + i.omega * li + j.omega * lj;
-    let (cn, cs) = law.dashpots(m_eff);
     let fn_el = law.kn * delta;
     let mut fn_tot = fn_el + cn * vn;
     if law.no_tension && fn_tot < 0.0 {

@@ -22,7 +22,7 @@ pub mod run;
 pub mod walls;
 
 use crate::geom::Vec2;
-use broadphase::{ContactList, NeighbourGrid};
+use broadphase::{ContactList, NeighbourGrid, Pair};
 use contact::{ContactForce, ContactLaw, Side, effective_mass, normal_between};
 use particles::Particles;
 use rayon::prelude::*;
@@ -207,8 +207,17 @@ impl Granular {
             .par_chunks_mut(CHUNK)
             .zip(self.contacts.buf.par_chunks_mut(CHUNK))
             .for_each(|(pc, bc)| {
-                for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
-                    *out = pair_contact(p, laws, nm, q.i as usize, q.j as usize, &mut q.fs, dt);
+                if nm == 1 {
+                    let law = &laws[0];
+                    for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
+                        *out = pair_contact(p, law, q, dt);
+                    }
+                } else {
+                    for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
+                        let (i, j) = (q.i as usize, q.j as usize);
+                        let law = &laws[p.material[i] as usize * nm + p.material[j] as usize];
+                        *out = pair_contact(p, law, q, dt);
+                    }
                 }
             });
         // disc–wall contacts: few, sequential, fixed order
@@ -404,22 +413,15 @@ impl Granular {
 
 /// One disc–disc contact of the list (slots `i < j`).
 #[inline(always)]
-fn pair_contact(
-    p: &Particles,
-    laws: &[ContactLaw],
-    nm: usize,
-    i: usize,
-    j: usize,
-    fs: &mut f64,
-    dt: f64,
-) -> ContactForce {
+fn pair_contact(p: &Particles, law: &ContactLaw, q: &mut Pair, dt: f64) -> ContactForce {
+    let (i, j) = (q.i as usize, q.j as usize);
     let (pi, pj) = (p.pos[i], p.pos[j]);
     let (ri, rj) = (p.radius[i], p.radius[j]);
     let rsum = ri + rj;
     let d = pj - pi;
     let d2 = d.norm2();
     if d2 >= rsum * rsum {
-        *fs = 0.0;
+        q.fs = 0.0;
         return ContactForce::default();
     }
     let (n, dist) = if d2 > 0.0 {
@@ -428,8 +430,6 @@ fn pair_contact(
     } else {
         (Vec2::new(1.0, 0.0), 0.0)
     };
-    let law = &laws[p.material[i] as usize * nm + p.material[j] as usize];
-    let m_eff = effective_mass(p.inv_mass[i], p.inv_mass[j]);
     contact::evaluate(
         law,
         n,
@@ -446,8 +446,8 @@ fn pair_contact(
             omega: p.omega[j],
             radius: rj,
         },
-        m_eff,
-        fs,
+        law.dashpots_sqrt(q.sqrt_m_eff),
+        &mut q.fs,
         dt,
     )
 }
@@ -502,7 +502,7 @@ fn wall_contact(
             omega: 0.0,
             radius: 0.5 * delta,
         },
-        effective_mass(p.inv_mass[d], 0.0),
+        law.dashpots(effective_mass(p.inv_mass[d], 0.0)),
         fs,
         dt,
     )
