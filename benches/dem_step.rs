@@ -52,13 +52,25 @@ fn dense(n: usize) -> Vec<DiscRow> {
     {
         return rows;
     }
-    eprintln!("settling {n} discs once for the dense packing (cached in {})", path.display());
+    eprintln!(
+        "settling {n} discs once for the dense packing (cached in {})",
+        path.display()
+    );
     let (lo, hi) = bounds(n);
     // deposit under 10 g (faster), then relax under g
-    let rows = settle_in_box(&loose(n), lo, hi, law(), 1.0, 1.0, Vec2::new(0.0, -98.1), 6_000)
+    let rows = settle_in_box(
+        &loose(n),
+        lo,
+        hi,
+        law(),
+        1.0,
+        1.0,
+        Vec2::new(0.0, -98.1),
+        6_000,
+    )
+    .expect("settles");
+    let rows = settle_in_box(&rows, lo, hi, law(), 1.0, 1.0, Vec2::new(0.0, -9.81), 3_000)
         .expect("settles");
-    let rows =
-        settle_in_box(&rows, lo, hi, law(), 1.0, 1.0, Vec2::new(0.0, -9.81), 3_000).expect("settles");
     std::fs::create_dir_all(&dir).ok();
     let mut s = String::from("x,y,r\n");
     for r in &rows {
@@ -132,7 +144,10 @@ fn bench(c: &mut Criterion) {
                         })
                     })
                 });
-                eprintln!("  rebuilds so far: {} over {} steps", g.grid.rebuilds, g.step);
+                eprintln!(
+                    "  rebuilds so far: {} over {} steps",
+                    g.grid.rebuilds, g.step
+                );
             }
             group.finish();
         }

@@ -140,7 +140,16 @@ fn deposit(
         Vec2::new(0.0, -9.81)
     };
     let m = &sc.material[mi as usize];
-    settle_in_box(&rows, lo, hi, mats[mi as usize], m.density, g.thickness, grav, steps)
+    settle_in_box(
+        &rows,
+        lo,
+        hi,
+        mats[mi as usize],
+        m.density,
+        g.thickness,
+        grav,
+        steps,
+    )
 }
 
 /// Settle `rows` in the box `[lo, hi]` (four fixed walls) under `gravity`
