@@ -79,6 +79,18 @@ impl ContactLaw {
         (cn, cs)
     }
 
+    /// Dashpot coefficients as `(c_n0, c_n1, c_s0, c_s1)` with
+    /// `c_n = c_n0 + c_n1 √m_eff` and `c_s = c_s0 + c_s1 √m_eff`
+    /// (precomputed once per law: no square root per contact).
+    pub fn dashpot_terms(&self) -> [f64; 4] {
+        [
+            self.beta_n * self.kn,
+            self.zeta_n * 2.0 * self.kn.sqrt(),
+            self.beta_s * self.ks,
+            self.zeta_s * 2.0 * self.ks.sqrt(),
+        ]
+    }
+
     /// Does the law need the effective mass (critical-ratio dashpots)?
     pub fn needs_mass(&self) -> bool {
         self.zeta_n != 0.0 || self.zeta_s != 0.0

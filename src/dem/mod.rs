@@ -85,6 +85,8 @@ pub struct Granular {
     pub laws: Vec<ContactLaw>,
     /// Disc–wall laws, `wall_laws[w * n_mat + a]`.
     pub wall_laws: Vec<ContactLaw>,
+    /// [`ContactLaw::dashpot_terms`] of each entry of `laws`.
+    dash: Vec<[f64; 4]>,
     pub damping: BodyDamping,
     pub gravity: Vec2,
     pub dt: f64,
@@ -117,6 +119,7 @@ impl Granular {
             materials,
             laws: Vec::new(),
             wall_laws: Vec::new(),
+            dash: Vec::new(),
             damping: BodyDamping::None,
             gravity: Vec2::ZERO,
             dt,
@@ -147,6 +150,7 @@ impl Granular {
             })
             .map(|m| self.materials[m])
             .collect();
+        self.dash = self.laws.iter().map(ContactLaw::dashpot_terms).collect();
     }
 
     /// The Verlet skin (pairs with a gap below it are listed).
@@ -278,21 +282,22 @@ impl Granular {
         let dt = self.dt;
         let nm = self.materials.len();
         let laws = &self.laws;
+        let dash = &self.dash;
         self.contacts
             .pairs
             .par_chunks_mut(CHUNK)
             .zip(self.contacts.buf.par_chunks_mut(CHUNK))
             .for_each(|(pc, bc)| {
                 if nm == 1 {
-                    let law = &laws[0];
+                    let (law, dash) = (&laws[0], &dash[0]);
                     for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
-                        *out = pair_contact(p, law, q, dt);
+                        *out = pair_contact(p, law, dash, q, dt);
                     }
                 } else {
                     for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
                         let (i, j) = (q.i as usize, q.j as usize);
-                        let law = &laws[p.material[i] as usize * nm + p.material[j] as usize];
-                        *out = pair_contact(p, law, q, dt);
+                        let k = p.material[i] as usize * nm + p.material[j] as usize;
+                        *out = pair_contact(p, &laws[k], &dash[k], q, dt);
                     }
                 }
             });
@@ -495,7 +500,13 @@ fn gather(list: &ContactList, d: usize, r: f64, wk: &mut usize) -> (Vec2, f64) {
 
 /// One disc–disc contact of the list (slots `i < j`).
 #[inline(always)]
-fn pair_contact(p: &Particles, law: &ContactLaw, q: &mut Pair, dt: f64) -> ContactForce {
+fn pair_contact(
+    p: &Particles,
+    law: &ContactLaw,
+    dash: &[f64; 4],
+    q: &mut Pair,
+    dt: f64,
+) -> ContactForce {
     let (i, j) = (q.i as usize, q.j as usize);
     let (pi, pj) = (p.pos[i], p.pos[j]);
     let (ri, rj) = (p.radius[i], p.radius[j]);
@@ -528,7 +539,10 @@ fn pair_contact(p: &Particles, law: &ContactLaw, q: &mut Pair, dt: f64) -> Conta
             omega: p.omega[j],
             radius: rj,
         },
-        law.dashpots_sqrt(q.sqrt_m_eff),
+        (
+            dash[0] + dash[1] * q.sqrt_m_eff,
+            dash[2] + dash[3] * q.sqrt_m_eff,
+        ),
         &mut q.fs,
         dt,
     )
