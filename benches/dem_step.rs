@@ -69,8 +69,17 @@ fn dense(n: usize) -> Vec<DiscRow> {
         6_000,
     )
     .expect("settles");
-    let rows = settle_in_box(&rows, lo, hi, law(), 1.0, 1.0, Vec2::new(0.0, -9.81), 3_000)
-        .expect("settles");
+    let rows = settle_in_box(
+        &rows,
+        lo,
+        hi,
+        law(),
+        1.0,
+        1.0,
+        Vec2::new(0.0, -9.81),
+        10_000,
+    )
+    .expect("settles");
     std::fs::create_dir_all(&dir).ok();
     let mut s = String::from("x,y,r\n");
     for r in &rows {
