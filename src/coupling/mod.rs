@@ -201,13 +201,15 @@ impl CoupledModel {
                         omega: p.omega[d],
                         radius: r,
                     };
+                    // the body side is a point, like a DEM wall (arm 0)
                     let j = Side {
                         pos: t.point,
                         vel: v_h,
                         omega: 0.0,
-                        radius: 0.5 * t.overlap,
+                        radius: 0.0,
                     };
-                    let cf = contact::evaluate(law, n, t.overlap, &i, &j, m_eff, &mut fs, dt);
+                    let dashpots = law.dashpots(m_eff);
+                    let cf = contact::evaluate(law, n, t.overlap, &i, &j, dashpots, &mut fs, dt);
                     let vn = (i.vel - v_h).dot(n);
                     let (fe, ft) = contact::normal_force(law, t.overlap, vn, m_eff);
                     next.push(BodyContact {
@@ -227,7 +229,8 @@ impl CoupledModel {
                         body: b,
                         chain: c,
                         material: t.material,
-                        arm: x + n * (r - 0.5 * t.overlap),
+                        // torque arm r n, the DEM's convention (E12)
+                        arm: x + n * r,
                         f: cf.f,
                     });
                 }

@@ -20,11 +20,13 @@ use rayon::prelude::*;
 
 /// A disc–disc pair closer than the skin, `i < j` (slots), and its shear
 /// history `fs` (force along `t = perp(n)`, n from i to j; 0 when open).
+/// `sqrt_m_eff` caches `√(m_i m_j/(m_i + m_j))` for critical-ratio dashpots.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pair {
     pub i: u32,
     pub j: u32,
     pub fs: f64,
+    pub sqrt_m_eff: f64,
 }
 
 /// A disc–wall pair closer than the skin and its shear history.
@@ -278,7 +280,16 @@ impl NeighbourGrid {
                     } else {
                         0.0
                     };
-                    pairs.push(Pair { i, j, fs });
+                    let m_eff = super::contact::effective_mass(
+                        p.inv_mass[i as usize],
+                        p.inv_mass[j as usize],
+                    );
+                    pairs.push(Pair {
+                        i,
+                        j,
+                        fs,
+                        sqrt_m_eff: m_eff.sqrt(),
+                    });
                 }
                 at += cnt as usize;
                 list.first.push(pairs.len() as u32);
@@ -307,13 +318,28 @@ impl NeighbourGrid {
         }
     }
 
-    /// Disc–wall candidates (O(N × walls); walls are few).
+    /// Disc–wall candidates: each disc against each wall's bounding box
+    /// (enlarged by the disc's reach), then the exact distance.
     fn search_walls(&self, p: &Particles, walls: &[Wall], list: &mut ContactList) {
         let old = std::mem::take(&mut list.walls);
         let mut out = Vec::new();
         let mut o = 0usize;
+        let reach_max = p.max_radius() + self.skin;
+        let boxes: Vec<(Vec2, Vec2)> = walls
+            .iter()
+            .map(|w| {
+                (
+                    Vec2::new(w.a.x.min(w.b.x) - reach_max, w.a.y.min(w.b.y) - reach_max),
+                    Vec2::new(w.a.x.max(w.b.x) + reach_max, w.a.y.max(w.b.y) + reach_max),
+                )
+            })
+            .collect();
         for (d, (&q, &r)) in p.pos.iter().zip(&p.radius).enumerate() {
             for (w, wall) in walls.iter().enumerate() {
+                let (lo, hi) = boxes[w];
+                if q.x < lo.x || q.x > hi.x || q.y < lo.y || q.y > hi.y {
+                    continue;
+                }
                 let reach = r + self.skin;
                 if (wall.closest(q) - q).norm2() < reach * reach {
                     let key = (d as u32, w as u32);

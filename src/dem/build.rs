@@ -121,9 +121,8 @@ pub fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, DemError> {
 }
 
 /// Gravity deposition: settle a loose packing inside the box under gravity
-/// (the scenario's, or −9.81 ŷ if it has none), with local damping 0.7 and
-/// a normal dashpot at ζ = 0.3, for `steps` steps at 0.15 of the critical
-/// step. Returns the settled positions (velocities are dropped).
+/// (the scenario's, or −9.81 ŷ if it has none). Returns the settled
+/// positions (velocities are dropped).
 fn deposit(
     sc: &Scenario,
     rows: Vec<DiscRow>,
@@ -133,28 +132,55 @@ fn deposit(
 ) -> Result<Vec<DiscRow>, DemError> {
     let g = spec(sc)?;
     let mi = material_index(sc, &g.material)?;
-    let (mut mats, _) = laws(sc, &DampingSpec::None);
-    for m in &mut mats {
-        m.zeta_n = 0.3;
-    }
+    let (mats, _) = laws(sc, &DampingSpec::None);
+    let grav = Vec2::from(sc.simulation.gravity);
+    let grav = if grav.norm2() > 0.0 {
+        grav
+    } else {
+        Vec2::new(0.0, -9.81)
+    };
+    let m = &sc.material[mi as usize];
+    settle_in_box(
+        &rows,
+        lo,
+        hi,
+        mats[mi as usize],
+        m.density,
+        g.thickness,
+        grav,
+        steps,
+    )
+}
+
+/// Settle `rows` in the box `[lo, hi]` (four fixed walls) under `gravity`
+/// for `steps` steps at 0.15 × the critical step, with local damping 0.3
+/// and a normal dashpot at ζ = 0.3 added to `law`. Returns the settled
+/// discs in the input order.
+#[allow(clippy::too_many_arguments)]
+pub fn settle_in_box(
+    rows: &[DiscRow],
+    lo: Vec2,
+    hi: Vec2,
+    law: ContactLaw,
+    density: f64,
+    thickness: f64,
+    gravity: Vec2,
+    steps: usize,
+) -> Result<Vec<DiscRow>, DemError> {
     let mut p = Particles::default();
-    let rho = sc.material[mi as usize].density;
-    for r in &rows {
-        p.push(r.pos, r.r, rho, g.thickness, mi);
+    for r in rows {
+        p.push(r.pos, r.r, density, thickness, 0);
     }
     let corners = [lo, Vec2::new(hi.x, lo.y), hi, Vec2::new(lo.x, hi.y)];
     let walls = (0..4)
         .map(|k| Wall::new("box", corners[k], corners[(k + 1) % 4], WallMotion::Fixed))
         .collect();
-    let mut gr = Granular::new(p, mats, walls, 1.0);
+    let mut law = law;
+    law.zeta_n = 0.3;
+    let mut gr = Granular::new(p, vec![law], walls, 1.0);
     gr.dt = 0.15 * gr.critical_dt();
-    let grav = Vec2::from(sc.simulation.gravity);
-    gr.gravity = if grav.norm2() > 0.0 {
-        grav
-    } else {
-        Vec2::new(0.0, -9.81)
-    };
-    gr.damping = BodyDamping::Local { alpha: 0.7 };
+    gr.gravity = gravity;
+    gr.damping = BodyDamping::Local { alpha: 0.3 };
     for _ in 0..steps {
         gr.step();
     }
@@ -171,7 +197,7 @@ fn deposit(
             DiscRow {
                 pos: p.pos[s],
                 r: p.radius[s],
-                material: None,
+                material: rows[id].material.clone(),
             }
         })
         .collect())

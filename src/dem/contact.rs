@@ -3,10 +3,11 @@
 //!
 //! Geometry of a contact between disc i and an entity j (disc or wall):
 //! `n` is the unit normal from i towards j, `t = perp(n)` (n rotated +90°),
-//! δ the overlap. The contact point lies in the middle of the overlap, at
-//! the arm `l_i = r_i − δ/2` from the centre of i (and `l_j = r_j − δ/2`
-//! from j). The same arms are used for the contact-point velocity and for
-//! the moments, so the pair is work-consistent.
+//! δ the overlap. As in Cundall & Strack (1979), the contact point of each
+//! disc is on its surface along n, at the arm `r_i` from its centre (and
+//! `r_j` from j; 0 for a wall). The same arms are used for the
+//! contact-point velocity (`r_i ω_i + r_j ω_j`) and for the moments
+//! (`r_i F_s`, `r_j F_s`), so the pair is work-consistent.
 
 use crate::geom::Vec2;
 
@@ -61,25 +62,49 @@ impl ContactLaw {
     /// Normal and shear dashpot coefficients for effective mass `m_eff`.
     #[inline(always)]
     pub fn dashpots(&self, m_eff: f64) -> (f64, f64) {
+        self.dashpots_sqrt(m_eff.sqrt())
+    }
+
+    /// [`dashpots`](Self::dashpots) from `√m_eff` (cached per contact).
+    #[inline(always)]
+    pub fn dashpots_sqrt(&self, sqrt_m_eff: f64) -> (f64, f64) {
         let mut cn = self.beta_n * self.kn;
         let mut cs = self.beta_s * self.ks;
         if self.zeta_n != 0.0 {
-            cn += self.zeta_n * 2.0 * (self.kn * m_eff).sqrt();
+            cn += self.zeta_n * 2.0 * self.kn.sqrt() * sqrt_m_eff;
         }
         if self.zeta_s != 0.0 {
-            cs += self.zeta_s * 2.0 * (self.ks * m_eff).sqrt();
+            cs += self.zeta_s * 2.0 * self.ks.sqrt() * sqrt_m_eff;
         }
         (cn, cs)
     }
+
+    /// Dashpot coefficients as `(c_n0, c_n1, c_s0, c_s1)` with
+    /// `c_n = c_n0 + c_n1 √m_eff` and `c_s = c_s0 + c_s1 √m_eff`
+    /// (precomputed once per law: no square root per contact).
+    pub fn dashpot_terms(&self) -> [f64; 4] {
+        [
+            self.beta_n * self.kn,
+            self.zeta_n * 2.0 * self.kn.sqrt(),
+            self.beta_s * self.ks,
+            self.zeta_s * 2.0 * self.ks.sqrt(),
+        ]
+    }
+
+    /// Does the law need the effective mass (critical-ratio dashpots)?
+    pub fn needs_mass(&self) -> bool {
+        self.zeta_n != 0.0 || self.zeta_s != 0.0
+    }
 }
 
-/// What one contact contributes: force on i (the force on j is its
-/// opposite) and the moments on i and j about their centres.
+/// What one contact contributes: force `f` on i (the force on j is its
+/// opposite) and the shear force `fs` along t, from which the moments on i
+/// and j about their centres are `r_i fs` and `r_j fs` (ERRATA E12:
+/// `r_c × F` with `r_c = r_i n` and `r_c = −r_j n`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ContactForce {
     pub f: Vec2,
-    pub ti: f64,
-    pub tj: f64,
+    pub fs: f64,
 }
 
 /// Kinematic state of one side of a contact.
@@ -99,12 +124,13 @@ pub struct Side {
 ///   tangential velocity `v_t = (v_i − v_j)·t + ω_i l_i + ω_j l_j`, capped at
 ///   `|F_s| ≤ k_n δ tan φ + c` (Eq. 37); the shear dashpot `−c_s v_t` acts
 ///   only while the contact sticks;
-/// * moments `r_c × F` about each centre (E12): `l_i F_s` and `l_j F_s`.
+/// * moments `r_c × F` about each centre (E12): `r_i F_s` and `r_j F_s`
+///   (returned as `fs`; the caller multiplies by the radius).
 ///
 /// `fs` is the contact's shear history (force along `t`); it is reset to
 /// zero when the entities do not overlap. `n` is the unit normal from i to
-/// j and `dist` the centre (or centre-to-wall) distance; `rsum` the sum of
-/// the reaches (`r_i + r_j` for discs, `r_i` for a wall with `r_j = 0`).
+/// j, δ > 0 the overlap, `(cn, cs)` the dashpot coefficients
+/// ([`ContactLaw::dashpots`]).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate(
@@ -113,17 +139,14 @@ pub fn evaluate(
     delta: f64,
     i: &Side,
     j: &Side,
-    m_eff: f64,
+    (cn, cs): (f64, f64),
     fs: &mut f64,
     dt: f64,
 ) -> ContactForce {
     let t = n.perp();
-    let li = i.radius - 0.5 * delta;
-    let lj = (j.radius - 0.5 * delta).max(0.0);
     let dv = i.vel - j.vel;
     let vn = dv.dot(n);
-    let vt = dv.dot(t) + i.omega * li + j.omega * lj;
-    let (cn, cs) = law.dashpots(m_eff);
+    let vt = dv.dot(t) + i.omega * i.radius + j.omega * j.radius;
     let fn_el = law.kn * delta;
     let mut fn_tot = fn_el + cn * vn;
     if law.no_tension && fn_tot < 0.0 {
@@ -131,18 +154,15 @@ pub fn evaluate(
     }
     let trial = *fs - law.ks * vt * dt;
     let cap = law.mu * fn_el + law.cohesion;
-    let fs_tot = if trial.abs() > cap {
-        let s = cap.copysign(trial);
-        *fs = s;
-        s
-    } else {
-        *fs = trial;
-        trial - cs * vt
-    };
+    // Coulomb cap, branch-free (min/max): sliding when the cap bites, and
+    // then the shear dashpot is off
+    let capped = trial.max(-cap).min(cap);
+    let damp = if capped == trial { cs * vt } else { 0.0 };
+    *fs = capped;
+    let fs_tot = capped - damp;
     ContactForce {
         f: n * (-fn_tot) + t * fs_tot,
-        ti: li * fs_tot,
-        tj: lj * fs_tot,
+        fs: fs_tot,
     }
 }
 

@@ -22,7 +22,7 @@ pub mod run;
 pub mod walls;
 
 use crate::geom::Vec2;
-use broadphase::{ContactList, NeighbourGrid};
+use broadphase::{ContactList, NeighbourGrid, Pair};
 use contact::{ContactForce, ContactLaw, Side, effective_mass, normal_between};
 use particles::Particles;
 use rayon::prelude::*;
@@ -85,6 +85,8 @@ pub struct Granular {
     pub laws: Vec<ContactLaw>,
     /// Disc–wall laws, `wall_laws[w * n_mat + a]`.
     pub wall_laws: Vec<ContactLaw>,
+    /// [`ContactLaw::dashpot_terms`] of each entry of `laws`.
+    dash: Vec<[f64; 4]>,
     pub damping: BodyDamping,
     pub gravity: Vec2,
     pub dt: f64,
@@ -98,7 +100,7 @@ pub struct Granular {
     pub max_disp: f64,
 }
 
-const CHUNK: usize = 2048;
+use integrate::CHUNK;
 
 impl Granular {
     /// An assembly with the given discs, materials (dashpots already set in
@@ -117,6 +119,7 @@ impl Granular {
             materials,
             laws: Vec::new(),
             wall_laws: Vec::new(),
+            dash: Vec::new(),
             damping: BodyDamping::None,
             gravity: Vec2::ZERO,
             dt,
@@ -147,6 +150,7 @@ impl Granular {
             })
             .map(|m| self.materials[m])
             .collect();
+        self.dash = self.laws.iter().map(ContactLaw::dashpot_terms).collect();
     }
 
     /// The Verlet skin (pairs with a gap below it are listed).
@@ -176,11 +180,66 @@ impl Granular {
         }
     }
 
-    /// One full time step: the three phases in order.
+    /// One full time step: the three phases in order, with no external
+    /// force. The gather of phase 2 and the update of phase 3 are fused into
+    /// one pass over the discs; the result is bitwise the same as calling
+    /// [`prepare_contacts`](Self::prepare_contacts),
+    /// [`compute_contact_forces`](Self::compute_contact_forces) and
+    /// [`integrate`](Self::integrate).
     pub fn step(&mut self) {
         self.prepare_contacts();
-        self.compute_contact_forces();
-        self.integrate();
+        self.evaluate_contacts();
+        let (g, damping, dt) = (self.gravity, self.damping, self.dt);
+        let list = &self.contacts;
+        let ref_pos = &self.grid.ref_pos;
+        let has_ref = ref_pos.len() == self.particles.len();
+        let p = &mut self.particles;
+        let max2 = (
+            p.pos.par_chunks_mut(CHUNK),
+            p.vel.par_chunks_mut(CHUNK),
+            p.theta.par_chunks_mut(CHUNK),
+            p.omega.par_chunks_mut(CHUNK),
+            p.force.par_chunks_mut(CHUNK),
+            p.torque.par_chunks_mut(CHUNK),
+            p.inv_mass.par_chunks(CHUNK),
+            p.inv_inertia.par_chunks(CHUNK),
+            p.fixity.par_chunks(CHUNK),
+            p.radius.par_chunks(CHUNK),
+        )
+            .into_par_iter()
+            .enumerate()
+            .map(|(c, (pos, vel, th, om, f, tq, im, ii, fx, rad))| {
+                let base = c * CHUNK;
+                let mut wk = list.walls.partition_point(|q| (q.disc as usize) < base);
+                let mut m2 = 0.0f64;
+                for k in 0..pos.len() {
+                    let (sf, st) = gather(list, base + k, rad[k], &mut wk);
+                    f[k] = sf;
+                    tq[k] = st;
+                    integrate::advance(
+                        &mut pos[k],
+                        &mut vel[k],
+                        &mut th[k],
+                        &mut om[k],
+                        sf,
+                        st,
+                        im[k],
+                        ii[k],
+                        fx[k],
+                        g,
+                        damping,
+                        dt,
+                    );
+                    if has_ref {
+                        m2 = m2.max((pos[k] - ref_pos[base + k]).norm2());
+                    }
+                }
+                m2
+            })
+            .reduce(|| 0.0, f64::max);
+        self.max_disp = if has_ref { max2.sqrt() } else { f64::INFINITY };
+        self.wall_totals();
+        self.move_walls();
     }
 
     /// Phase 1: rebuild the neighbour list when the Verlet criterion says
@@ -198,20 +257,50 @@ impl Granular {
     /// of its contacts, gathered per disc in a fixed order (bitwise
     /// independent of the thread count). Also sets each wall's force.
     pub fn compute_contact_forces(&mut self) {
+        self.evaluate_contacts();
+        let list = &self.contacts;
+        let p = &mut self.particles;
+        let radius = &p.radius;
+        p.force
+            .par_chunks_mut(CHUNK)
+            .zip(p.torque.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(c, (fc, tc))| {
+                let base = c * CHUNK;
+                let mut wk = list.walls.partition_point(|q| (q.disc as usize) < base);
+                for (k, (f, t)) in fc.iter_mut().zip(tc.iter_mut()).enumerate() {
+                    (*f, *t) = gather(list, base + k, radius[base + k], &mut wk);
+                }
+            });
+        self.wall_totals();
+    }
+
+    /// Evaluate every listed disc–disc (parallel) and disc–wall (few,
+    /// sequential) contact into the per-contact buffers.
+    fn evaluate_contacts(&mut self) {
         let p = &self.particles;
         let dt = self.dt;
         let nm = self.materials.len();
         let laws = &self.laws;
+        let dash = &self.dash;
         self.contacts
             .pairs
             .par_chunks_mut(CHUNK)
             .zip(self.contacts.buf.par_chunks_mut(CHUNK))
             .for_each(|(pc, bc)| {
-                for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
-                    *out = pair_contact(p, laws, nm, q.i as usize, q.j as usize, &mut q.fs, dt);
+                if nm == 1 {
+                    let (law, dash) = (&laws[0], &dash[0]);
+                    for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
+                        *out = pair_contact(p, law, dash, q, dt);
+                    }
+                } else {
+                    for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
+                        let (i, j) = (q.i as usize, q.j as usize);
+                        let k = p.material[i] as usize * nm + p.material[j] as usize;
+                        *out = pair_contact(p, &laws[k], &dash[k], q, dt);
+                    }
                 }
             });
-        // disc–wall contacts: few, sequential, fixed order
         for (q, out) in self
             .contacts
             .walls
@@ -223,44 +312,15 @@ impl Granular {
             let law = &self.wall_laws[q.wall as usize * nm + p.material[d] as usize];
             *out = wall_contact(p, w, law, d, &mut q.fs, dt);
         }
-        // gather
-        let list = &self.contacts;
-        let p = &mut self.particles;
-        p.force
-            .par_chunks_mut(CHUNK)
-            .zip(p.torque.par_chunks_mut(CHUNK))
-            .enumerate()
-            .for_each(|(c, (fc, tc))| {
-                let base = c * CHUNK;
-                for (k, (f, t)) in fc.iter_mut().zip(tc.iter_mut()).enumerate() {
-                    let d = base + k;
-                    let mut sf = Vec2::ZERO;
-                    let mut st = 0.0;
-                    let (a, b) = (list.first[d] as usize, list.first[d + 1] as usize);
-                    for cf in &list.buf[a..b] {
-                        sf += cf.f;
-                        st += cf.ti;
-                    }
-                    let (a, b) = (
-                        list.second_start[d] as usize,
-                        list.second_start[d + 1] as usize,
-                    );
-                    for &e in &list.second[a..b] {
-                        let cf = &list.buf[e as usize];
-                        sf -= cf.f;
-                        st += cf.tj;
-                    }
-                    *f = sf;
-                    *t = st;
-                }
-            });
+    }
+
+    /// Total force on each wall: minus the sum of its contact forces, in
+    /// the fixed order of the wall-pair list.
+    fn wall_totals(&mut self) {
         for w in &mut self.walls {
             w.force = Vec2::ZERO;
         }
-        for (q, cf) in list.walls.iter().zip(&list.wall_buf) {
-            let d = q.disc as usize;
-            p.force[d] += cf.f;
-            p.torque[d] += cf.ti;
+        for (q, cf) in self.contacts.walls.iter().zip(&self.contacts.wall_buf) {
             self.walls[q.wall as usize].force -= cf.f;
         }
     }
@@ -287,6 +347,11 @@ impl Granular {
             self.dt,
         );
         self.max_disp = d;
+        self.move_walls();
+    }
+
+    /// Walls move with their prescribed velocity; the clock advances.
+    fn move_walls(&mut self) {
         for w in &mut self.walls {
             let v = w.motion.velocity(self.step, self.time, self.dt);
             w.translate(v * self.dt);
@@ -402,24 +467,54 @@ impl Granular {
     }
 }
 
+/// Sum of the contact forces and moments on disc `d`: its pairs as first
+/// disc, then as second disc, then its wall contacts (`wk` walks the
+/// wall-pair list, sorted by disc). Always the same order. The moment is
+/// `r_d Σ F_s` (every contact's arm is the radius).
+#[inline(always)]
+fn gather(list: &ContactList, d: usize, r: f64, wk: &mut usize) -> (Vec2, f64) {
+    let mut sf = Vec2::ZERO;
+    let mut st = 0.0;
+    let (a, b) = (list.first[d] as usize, list.first[d + 1] as usize);
+    for cf in &list.buf[a..b] {
+        sf += cf.f;
+        st += cf.fs;
+    }
+    let (a, b) = (
+        list.second_start[d] as usize,
+        list.second_start[d + 1] as usize,
+    );
+    for &e in &list.second[a..b] {
+        let cf = &list.buf[e as usize];
+        sf -= cf.f;
+        st += cf.fs;
+    }
+    while *wk < list.walls.len() && list.walls[*wk].disc as usize == d {
+        let cf = &list.wall_buf[*wk];
+        sf += cf.f;
+        st += cf.fs;
+        *wk += 1;
+    }
+    (sf, r * st)
+}
+
 /// One disc–disc contact of the list (slots `i < j`).
 #[inline(always)]
 fn pair_contact(
     p: &Particles,
-    laws: &[ContactLaw],
-    nm: usize,
-    i: usize,
-    j: usize,
-    fs: &mut f64,
+    law: &ContactLaw,
+    dash: &[f64; 4],
+    q: &mut Pair,
     dt: f64,
 ) -> ContactForce {
+    let (i, j) = (q.i as usize, q.j as usize);
     let (pi, pj) = (p.pos[i], p.pos[j]);
     let (ri, rj) = (p.radius[i], p.radius[j]);
     let rsum = ri + rj;
     let d = pj - pi;
     let d2 = d.norm2();
     if d2 >= rsum * rsum {
-        *fs = 0.0;
+        q.fs = 0.0;
         return ContactForce::default();
     }
     let (n, dist) = if d2 > 0.0 {
@@ -428,8 +523,6 @@ fn pair_contact(
     } else {
         (Vec2::new(1.0, 0.0), 0.0)
     };
-    let law = &laws[p.material[i] as usize * nm + p.material[j] as usize];
-    let m_eff = effective_mass(p.inv_mass[i], p.inv_mass[j]);
     contact::evaluate(
         law,
         n,
@@ -446,8 +539,11 @@ fn pair_contact(
             omega: p.omega[j],
             radius: rj,
         },
-        m_eff,
-        fs,
+        (
+            dash[0] + dash[1] * q.sqrt_m_eff,
+            dash[2] + dash[3] * q.sqrt_m_eff,
+        ),
+        &mut q.fs,
         dt,
     )
 }
@@ -500,9 +596,9 @@ fn wall_contact(
             pos: c,
             vel: w.vel,
             omega: 0.0,
-            radius: 0.5 * delta,
+            radius: 0.0,
         },
-        effective_mass(p.inv_mass[d], 0.0),
+        law.dashpots(effective_mass(p.inv_mass[d], 0.0)),
         fs,
         dt,
     )
