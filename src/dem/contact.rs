@@ -156,7 +156,9 @@ pub fn evaluate(
     let cap = law.mu * fn_el + law.cohesion;
     // Coulomb cap, branch-free (min/max): sliding when the cap bites, and
     // then the shear dashpot is off
-    let capped = trial.max(-cap).min(cap);
+    // (written as selects so that they compile to minsd/maxsd)
+    let capped = if trial > cap { cap } else { trial };
+    let capped = if capped < -cap { -cap } else { capped };
     let damp = if capped == trial { cs * vt } else { 0.0 };
     *fs = capped;
     let fs_tot = capped - damp;

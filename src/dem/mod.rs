@@ -231,7 +231,8 @@ impl Granular {
                         dt,
                     );
                     if has_ref {
-                        m2 = m2.max((pos[k] - ref_pos[base + k]).norm2());
+                        let d2 = (pos[k] - ref_pos[base + k]).norm2();
+                        m2 = if d2 > m2 { d2 } else { m2 };
                     }
                 }
                 m2
@@ -279,6 +280,7 @@ impl Granular {
     /// sequential) contact into the per-contact buffers.
     fn evaluate_contacts(&mut self) {
         let p = &self.particles;
+        let kin = Kin::new(p);
         let dt = self.dt;
         let nm = self.materials.len();
         let laws = &self.laws;
@@ -291,13 +293,13 @@ impl Granular {
                 if nm == 1 {
                     let (law, dash) = (&laws[0], &dash[0]);
                     for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
-                        *out = pair_contact(p, law, dash, q, dt);
+                        *out = pair_contact(kin, law, dash, q, dt);
                     }
                 } else {
                     for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
                         let (i, j) = (q.i as usize, q.j as usize);
                         let k = p.material[i] as usize * nm + p.material[j] as usize;
-                        *out = pair_contact(p, &laws[k], &dash[k], q, dt);
+                        *out = pair_contact(kin, &laws[k], &dash[k], q, dt);
                     }
                 }
             });
@@ -489,27 +491,65 @@ fn gather(list: &ContactList, d: usize, r: f64, wk: &mut usize) -> (Vec2, f64) {
         sf -= cf.f;
         st += cf.fs;
     }
-    while *wk < list.walls.len() && list.walls[*wk].disc as usize == d {
-        let cf = &list.wall_buf[*wk];
-        sf += cf.f;
-        st += cf.fs;
-        *wk += 1;
+    if let Some(q) = list.walls.get(*wk)
+        && q.disc as usize == d
+    {
+        while *wk < list.walls.len() && list.walls[*wk].disc as usize == d {
+            let cf = &list.wall_buf[*wk];
+            sf += cf.f;
+            st += cf.fs;
+            *wk += 1;
+        }
     }
     (sf, r * st)
 }
 
+/// The per-disc arrays the disc–disc kernel reads, cut to one length so
+/// that a single index check covers all of them.
+#[derive(Clone, Copy)]
+struct Kin<'a> {
+    pos: &'a [Vec2],
+    vel: &'a [Vec2],
+    omega: &'a [f64],
+    radius: &'a [f64],
+}
+
+impl<'a> Kin<'a> {
+    /// Panics if the particle arrays have different lengths (a broken
+    /// invariant of [`Particles`]).
+    fn new(p: &'a Particles) -> Self {
+        let n = p.pos.len();
+        Kin {
+            pos: &p.pos[..n],
+            vel: &p.vel[..n],
+            omega: &p.omega[..n],
+            radius: &p.radius[..n],
+        }
+    }
+}
+
 /// One disc–disc contact of the list (slots `i < j`).
 #[inline(always)]
-fn pair_contact(
-    p: &Particles,
-    law: &ContactLaw,
-    dash: &[f64; 4],
-    q: &mut Pair,
-    dt: f64,
-) -> ContactForce {
+fn pair_contact(p: Kin, law: &ContactLaw, dash: &[f64; 4], q: &mut Pair, dt: f64) -> ContactForce {
     let (i, j) = (q.i as usize, q.j as usize);
-    let (pi, pj) = (p.pos[i], p.pos[j]);
-    let (ri, rj) = (p.radius[i], p.radius[j]);
+    let n = p.pos.len();
+    if i >= n || j >= n {
+        return ContactForce::default(); // never: the list is built from these discs
+    }
+    // SAFETY: i, j < n was checked just above, and every slice of `Kin`
+    // has length n (`Kin::new` cuts them all to `pos.len()`).
+    let (pi, pj, ri, rj, vi, vj, wi, wj) = unsafe {
+        (
+            *p.pos.get_unchecked(i),
+            *p.pos.get_unchecked(j),
+            *p.radius.get_unchecked(i),
+            *p.radius.get_unchecked(j),
+            *p.vel.get_unchecked(i),
+            *p.vel.get_unchecked(j),
+            *p.omega.get_unchecked(i),
+            *p.omega.get_unchecked(j),
+        )
+    };
     let rsum = ri + rj;
     let d = pj - pi;
     let d2 = d.norm2();
@@ -529,14 +569,14 @@ fn pair_contact(
         rsum - dist,
         &Side {
             pos: pi,
-            vel: p.vel[i],
-            omega: p.omega[i],
+            vel: vi,
+            omega: wi,
             radius: ri,
         },
         &Side {
             pos: pj,
-            vel: p.vel[j],
-            omega: p.omega[j],
+            vel: vj,
+            omega: wj,
             radius: rj,
         },
         (
