@@ -231,3 +231,25 @@ fn fused_step_equals_public_phases() {
     assert_eq!(bits(&a), bits(&b));
     assert!(a.touching().1 > 0, "exercise wall contacts");
 }
+
+/// The phases are safe to call in any state: forces before any rebuild,
+/// and after discs were added.
+#[test]
+fn phases_rebuild_when_the_list_does_not_match_the_discs() {
+    let law = ContactLaw {
+        kn: 1.0e5,
+        ks: 1.0e5,
+        mu: 0.5,
+        ..Default::default()
+    };
+    let mut p = Particles::default();
+    p.push(Vec2::new(0.0, 0.0), 1.0, 1.0, 1.0, 0);
+    p.push(Vec2::new(1.9, 0.0), 1.0, 1.0, 1.0, 0);
+    let mut g = Granular::new(p, vec![law], vec![], 1e-3);
+    g.compute_contact_forces(); // no prepare_contacts() before
+    assert!(g.particles.force[0].x < 0.0);
+    g.integrate();
+    g.particles.push(Vec2::new(0.0, 1.9), 1.0, 1.0, 1.0, 0);
+    g.step();
+    assert!(g.particles.force[2].y > 0.0);
+}

@@ -49,7 +49,7 @@ fn lattices_fill_the_box() {
 #[test]
 fn random_deposit_settles_into_the_box() {
     let g = build_from(&scenario_with(
-        r#"{ generate = "random", box = [[0, 0], [30, 80]], radius = [0.8, 1.2], count = 300, seed = 4, method = "deposit", deposit_steps = 4000 }"#,
+        r#"{ generate = "random", box = [[0, 0], [30, 80]], radius = [0.8, 1.2], count = 300, seed = 4, method = "deposit", settle_steps = 4000 }"#,
         "",
     ));
     assert_eq!(g.particles.len(), 300);
@@ -100,4 +100,36 @@ fn piecewise_wall_history_moves_the_wall() {
     };
     // v(t) = 2t on [0, 1]: displacement 1 at t = 1 (exact with midpoint sampling)
     assert!((g.walls[0].a.y - 1.0).abs() < 1e-12, "{}", g.walls[0].a.y);
+}
+
+#[test]
+fn radius_growth_fills_the_box_densely() {
+    let g = build_from(&scenario_with(
+        r#"{ generate = "random", box = [[0, 0], [40, 40]], radius = [0.8, 1.2], count = 400, seed = 9, method = "grow", settle_steps = 6000 }"#,
+        "",
+    ));
+    let p = &g.particles;
+    assert_eq!(p.len(), 400);
+    let area: f64 = p.radius.iter().map(|r| std::f64::consts::PI * r * r).sum();
+    assert!(area / 1600.0 > 0.75, "packing fraction {}", area / 1600.0);
+    // final radii in range, inside the box, overlaps small
+    assert!(p.radius.iter().all(|&r| (0.8..=1.2).contains(&r)));
+    assert!(p.pos.iter().zip(&p.radius).all(|(q, r)| q.x > 0.0
+        && q.x < 40.0
+        && q.y > 0.0
+        && q.y < 40.0
+        && *r > 0.0));
+    let mut worst = 0.0f64;
+    for i in 0..p.len() {
+        for j in i + 1..p.len() {
+            let ov = p.radius[i] + p.radius[j] - (p.pos[i] - p.pos[j]).norm();
+            worst = worst.max(ov / p.radius[i].min(p.radius[j]));
+        }
+    }
+    println!(
+        "packing fraction {:.3}, worst overlap {worst:.2e} r",
+        area / 1600.0
+    );
+    // near jamming the soft contacts keep small overlaps
+    assert!(worst < 0.1, "worst relative overlap {worst}");
 }

@@ -110,10 +110,17 @@ pub fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, DemError> {
                 Generator::Random => (Lattice::Hex, 0.1, t.jitter.unwrap_or(1.0)),
             };
             let (lo, hi) = (Vec2::from(a), Vec2::from(b));
+            let steps = t.settle_steps.unwrap_or(20_000);
+            if kind == Generator::Random && t.method == Packing::Grow {
+                let count = t.count.ok_or_else(|| {
+                    DemError::Input("granular.discs: `method = \"grow\"` needs `count`".into())
+                })?;
+                return grow(sc, lo, hi, radius, count, t.seed, steps);
+            }
             let rows = lattice_packing(lat, lo, hi, radius, t.count, gap, jitter, t.seed)
                 .map_err(|e| DemError::Input(format!("granular.discs: {e}")))?;
             if kind == Generator::Random && t.method == Packing::Deposit {
-                return deposit(sc, rows, lo, hi, t.deposit_steps.unwrap_or(20_000));
+                return deposit(sc, rows, lo, hi, steps);
             }
             Ok(rows)
         }
@@ -150,6 +157,93 @@ fn deposit(
         grav,
         steps,
     )
+}
+
+/// Radius growth: `count` centres uniform in the box (seeded), final radii
+/// uniform in `[r_min, r_max]`; the radii start at the scale that gives a
+/// packing fraction of 0.3 and grow linearly to their final size over 70 %
+/// of `steps` DEM steps (no gravity, local damping 0.7, normal dashpot
+/// ζ = 0.3, four fixed walls), then the packing relaxes for the rest.
+fn grow(
+    sc: &Scenario,
+    lo: Vec2,
+    hi: Vec2,
+    (r_min, r_max): (f64, f64),
+    count: usize,
+    seed: u64,
+    steps: usize,
+) -> Result<Vec<DiscRow>, DemError> {
+    let g = spec(sc)?;
+    let mi = material_index(sc, &g.material)?;
+    let (mut mats, _) = laws(sc, &DampingSpec::None);
+    let mut law = mats[mi as usize];
+    law.zeta_n = 0.3;
+    mats = vec![law];
+    let mut rng = oorandom::Rand64::new(seed as u128);
+    let r_final: Vec<f64> = (0..count)
+        .map(|_| r_min + (r_max - r_min) * rng.rand_float())
+        .collect();
+    let area: f64 = r_final.iter().map(|r| std::f64::consts::PI * r * r).sum();
+    let ext = hi - lo;
+    let phi = area / (ext.x * ext.y);
+    if phi > 0.85 {
+        return Err(DemError::Input(format!(
+            "granular.discs: {count} discs of radius {r_min}…{r_max} fill {:.0} % of the box; radius growth reaches at most 85 %",
+            100.0 * phi
+        )));
+    }
+    let s0 = (0.3 / phi).sqrt().min(1.0);
+    let density = sc.material[mi as usize].density;
+    let mut p = Particles::default();
+    for &r in &r_final {
+        let x = lo.x + r_max + (ext.x - 2.0 * r_max).max(0.0) * rng.rand_float();
+        let y = lo.y + r_max + (ext.y - 2.0 * r_max).max(0.0) * rng.rand_float();
+        // mass of the final disc: the critical step stays that of the end state
+        p.push(Vec2::new(x, y), r, density, g.thickness, 0);
+    }
+    for (r, rf) in p.radius.iter_mut().zip(&r_final) {
+        *r = rf * s0;
+    }
+    let corners = [lo, Vec2::new(hi.x, lo.y), hi, Vec2::new(lo.x, hi.y)];
+    let walls = (0..4)
+        .map(|k| Wall::new("box", corners[k], corners[(k + 1) % 4], WallMotion::Fixed))
+        .collect();
+    let mut gr = Granular::new(p, mats, walls, 1.0);
+    gr.dt = 0.15 * gr.critical_dt();
+    gr.damping = BodyDamping::Local { alpha: 0.7 };
+    gr.set_skin(0.1 * r_max);
+    let grow_steps = (0.7 * steps as f64) as usize;
+    for n in 0..steps {
+        if n <= grow_steps {
+            let s = s0 + (1.0 - s0) * (n as f64 / grow_steps.max(1) as f64);
+            let p = &mut gr.particles;
+            for (r, &id) in p.radius.iter_mut().zip(&p.id) {
+                *r = r_final[id as usize] * s;
+            }
+            // radii grow by ≪ skin/2 in 10 steps: rebuild every 10 steps
+            if n % 10 == 0 {
+                gr.grid.stale = true;
+            }
+        }
+        gr.step();
+    }
+    if !gr.is_finite() {
+        return Err(DemError::Unstable {
+            step: gr.step,
+            dt_crit: gr.critical_dt(),
+        });
+    }
+    let p = &gr.particles;
+    Ok((0..count)
+        .map(|id| {
+            let k = p.slot[id] as usize;
+            DiscRow {
+                pos: p.pos[k],
+                r: r_final[id],
+                material: None,
+            }
+        })
+        .collect())
 }
 
 /// Settle `rows` in the box `[lo, hi]` (four fixed walls) under `gravity`

@@ -11,7 +11,21 @@
 //! ... add external forces:  add_external_force(slot, f, point)
 //! integrate()               gravity, damping, central difference (Eqs. 50–54), walls move
 //! ```
-//! [`Granular::step`] runs the three in order.
+//! [`Granular::step`] runs the three in order (with the gather of phase 2
+//! fused into the update of phase 3; bitwise the same result).
+//!
+//! For the coupling (issue 4): build with [`build::build`] from a scenario
+//! (or [`Granular::new`]), then per step call `prepare_contacts`,
+//! `compute_contact_forces`, add the disc–body-boundary contact forces
+//! with [`Granular::add_external_force`] (slot, force, contact point: the
+//! moment follows from the point), then `integrate`. Discs live in
+//! *slots* that are renumbered in space-filling order from time to time
+//! inside `prepare_contacts`; the scenario's disc number `id` (0-based) is
+//! stable, `slot(id)` finds its slot and `particles.id[slot]` goes back. A
+//! coupling that keeps its own shear histories for disc–segment contacts
+//! should key them by disc `id`, not slot. Disc–disc and disc–wall
+//! histories are kept here, keyed by slot pairs `(i < j)` / `(disc, wall)`
+//! and remapped on renumbering.
 
 pub mod broadphase;
 pub mod build;
@@ -279,6 +293,11 @@ impl Granular {
     /// Evaluate every listed disc–disc (parallel) and disc–wall (few,
     /// sequential) contact into the per-contact buffers.
     fn evaluate_contacts(&mut self) {
+        // a list built for another set of discs (or never built) is rebuilt
+        if self.contacts.first.len() != self.particles.len() + 1 {
+            self.grid.stale = true;
+            self.prepare_contacts();
+        }
         let p = &self.particles;
         let kin = Kin::new(p);
         let dt = self.dt;

@@ -51,7 +51,7 @@ pub struct GranularSpec {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(
     untagged,
-    expecting = "a list of [x, y, r] rows, or a table { csv = \"file\" } or { generate = \"square\" | \"hex\" | \"random\", box = [[x0, y0], [x1, y1]], radius = r | [rmin, rmax], count, seed, method = \"loose\" | \"deposit\", jitter, deposit_steps } (no other keys)"
+    expecting = "a list of [x, y, r] rows, or a table { csv = \"file\" } or { generate = \"square\" | \"hex\" | \"random\", box = [[x0, y0], [x1, y1]], radius = r | [rmin, rmax], count, seed, method = \"loose\" | \"deposit\" | \"grow\", jitter, settle_steps } (no other keys)"
 )]
 pub enum DiscsSpec {
     Inline(Vec<[f64; 3]>),
@@ -76,15 +76,17 @@ pub struct DiscsTable {
     /// Seed of the random generator (default 1).
     #[serde(default = "seed1")]
     pub seed: u64,
-    /// `random` only: `loose` (jittered sites, no overlap) or `deposit`
-    /// (loose, then settled under gravity inside the box).
+    /// `random` only: `loose` (jittered sites, no overlap), `deposit`
+    /// (loose, then settled under gravity inside the box) or `grow` (random
+    /// centres, radii grown from small to their final size without gravity:
+    /// fills the box, packing fractions up to 0.85).
     #[serde(default)]
     pub method: Packing,
     /// Random displacement of lattice sites as a fraction of the free gap
     /// (0–1; default 0 for lattices, 1 for random).
     pub jitter: Option<f64>,
-    /// `deposit`: settling steps (default 20 000).
-    pub deposit_steps: Option<usize>,
+    /// `deposit` / `grow`: DEM steps of the settling or growth (default 20 000).
+    pub settle_steps: Option<usize>,
 }
 
 fn seed1() -> u64 {
@@ -105,6 +107,7 @@ pub enum Packing {
     #[default]
     Loose,
     Deposit,
+    Grow,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
