@@ -107,6 +107,13 @@ fn bind(
                     None => Some(0),
                 }
                 .ok_or_else(|| input(format!("probe `{}`: no such body", pr.name)))?;
+                if !crate::scenario::body::POINT_QUANTITIES.contains(&q.as_str()) {
+                    return Err(input(format!(
+                        "probe `{}`: `{q}` is not recorded in coupled runs; body probes take a `point` and one of {}",
+                        pr.name,
+                        crate::scenario::body::POINT_QUANTITIES.join(", ")
+                    )));
+                }
                 let p = pr.point.ok_or_else(|| {
                     input(format!("probe `{}`: body-wide quantities are not recorded in coupled runs; use the energy columns", pr.name))
                 })?;
@@ -148,48 +155,21 @@ fn efg_body(m: &CoupledModel, i: usize) -> &EfgBody {
 fn value(m: &CoupledModel, b: &Bound) -> f64 {
     let g = &m.granular;
     match b {
-        Bound::BodyPoint { body, row, q } => {
-            let s = efg_body(m, *body).sample_row(row);
-            match q.as_str() {
-                "ux" => s.u.x,
-                "uy" => s.u.y,
-                "vx" => s.v.x,
-                "vy" => s.v.y,
-                "exx" => s.strain[0],
-                "eyy" => s.strain[1],
-                "gxy" => s.strain[2],
-                "sxx" => s.stress[0],
-                "syy" => s.stress[1],
-                _ => s.stress[2],
-            }
-        }
-        Bound::Disc { id, q, x0 } => {
-            let k = g.slot(*id);
-            let p = &g.particles;
-            match q.as_str() {
-                "x" => p.pos[k].x,
-                "y" => p.pos[k].y,
-                "ux" => p.pos[k].x - x0.x,
-                "uy" => p.pos[k].y - x0.y,
-                "vx" => p.vel[k].x,
-                "vy" => p.vel[k].y,
-                "theta" => p.theta[k],
-                _ => p.omega[k],
-            }
-        }
+        Bound::BodyPoint { body, row, q } => efg_body(m, *body)
+            .sample_row(row)
+            .field(q)
+            .unwrap_or(f64::NAN),
+        Bound::Disc { id, q, x0 } => match q.as_str() {
+            // displacement since t = 0: only coupled runs record it
+            "ux" => g.particles.pos[g.slot(*id)].x - x0.x,
+            "uy" => g.particles.pos[g.slot(*id)].y - x0.y,
+            q => crate::dem::run::disc_quantity(g, *id, q),
+        },
         Bound::Contact { a, b, total } => {
             let (el, tot) = g.normal_force(g.slot(*a), g.slot(*b));
             if *total { tot } else { el }
         }
-        Bound::Wall { w, q } => {
-            let w = &g.walls[*w];
-            match q.as_str() {
-                "wall_fx" => w.force.x,
-                "wall_fy" => w.force.y,
-                "wall_x" => w.a.x,
-                _ => w.a.y,
-            }
-        }
+        Bound::Wall { w, q } => crate::dem::run::wall_quantity(&g.walls[*w], q),
     }
 }
 

@@ -80,33 +80,39 @@ fn resolve(sc: &Scenario, gr: &Granular) -> Result<Vec<(String, Sample)>, DemErr
         .collect()
 }
 
+/// A wall probe quantity ([`WALL_QUANTITIES`](crate::scenario::granular::WALL_QUANTITIES)).
+pub(crate) fn wall_quantity(w: &super::walls::Wall, q: &str) -> f64 {
+    match q {
+        "wall_fx" => w.force.x,
+        "wall_fy" => w.force.y,
+        "wall_x" => w.a.x,
+        _ => w.a.y,
+    }
+}
+
+/// A disc probe quantity of scenario disc `id` (0-based)
+/// ([`DISC_QUANTITIES`](crate::scenario::granular::DISC_QUANTITIES)).
+pub(crate) fn disc_quantity(gr: &Granular, id: usize, q: &str) -> f64 {
+    let k = gr.slot(id);
+    let p = &gr.particles;
+    match q {
+        "x" => p.pos[k].x,
+        "y" => p.pos[k].y,
+        "vx" => p.vel[k].x,
+        "vy" => p.vel[k].y,
+        "theta" => p.theta[k],
+        _ => p.omega[k],
+    }
+}
+
 fn sample(gr: &Granular, s: &Sample) -> f64 {
     match *s {
         Sample::Normal { a, b, total } => {
             let (el, tot) = gr.normal_force(gr.slot(a), gr.slot(b));
             if total { tot } else { el }
         }
-        Sample::Wall { w, q } => {
-            let w = &gr.walls[w];
-            match q {
-                "wall_fx" => w.force.x,
-                "wall_fy" => w.force.y,
-                "wall_x" => w.a.x,
-                _ => w.a.y,
-            }
-        }
-        Sample::Disc { id, q } => {
-            let k = gr.slot(id);
-            let p = &gr.particles;
-            match q {
-                "x" => p.pos[k].x,
-                "y" => p.pos[k].y,
-                "vx" => p.vel[k].x,
-                "vy" => p.vel[k].y,
-                "theta" => p.theta[k],
-                _ => p.omega[k],
-            }
-        }
+        Sample::Wall { w, q } => wall_quantity(&gr.walls[w], q),
+        Sample::Disc { id, q } => disc_quantity(gr, id, q),
         Sample::Global(q) => {
             if q == "contacts" {
                 let (a, b) = gr.touching();

@@ -64,6 +64,26 @@ pub struct Sample {
     pub stress: [f64; 3],
 }
 
+impl Sample {
+    /// The field named by a point-probe quantity
+    /// ([`POINT_QUANTITIES`](crate::scenario::body::POINT_QUANTITIES)).
+    pub fn field(&self, q: &str) -> Option<f64> {
+        Some(match q {
+            "ux" => self.u.x,
+            "uy" => self.u.y,
+            "vx" => self.v.x,
+            "vy" => self.v.y,
+            "exx" => self.strain[0],
+            "eyy" => self.strain[1],
+            "gxy" => self.strain[2],
+            "sxx" => self.stress[0],
+            "syy" => self.stress[1],
+            "sxy" => self.stress[2],
+            _ => return None,
+        })
+    }
+}
+
 /// Sizes and timings of a build, for `check` and summaries.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct BuildInfo {
