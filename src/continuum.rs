@@ -69,9 +69,30 @@ pub trait Continuum: Send {
     /// for the next step: `F += Φᵀ(x) f` (Eqs. 43–46), with the same shape
     /// functions as [`boundary_velocity`](Self::boundary_velocity).
     fn add_point_load(&mut self, chain: usize, x: Vec2, f: Vec2);
+    /// Displacement `Σ_J φ_J(x) u_J` of the boundary material point `x`.
+    fn boundary_displacement(&self, chain: usize, x: Vec2) -> Vec2;
+    /// First half of an implicit step (contact springs treated implicitly):
+    /// solve the step under the accumulated loads, and report, for the
+    /// material points `points[k] = (chain, x)`, the free displacement
+    /// `free[k]` at `t + Δt` and the compliance `S` (2m × 2m, row-major,
+    /// index `2k + a`): point forces `f` change the displacements at
+    /// `t + Δt` by `S f`.
+    fn begin_step(
+        &mut self,
+        points: &[(usize, Vec2)],
+        free: &mut Vec<Vec2>,
+        compliance: &mut Vec<f64>,
+    ) -> Result<(), SolveError>;
+    /// Second half: add the point forces `forces[k]` at the points of
+    /// [`begin_step`](Self::begin_step), accept the step, clear the loads
+    /// and refresh the contact boundary.
+    fn finish_step(&mut self, forces: &[Vec2]) -> Result<(), SolveError>;
     /// Advance one time step with the accumulated loads, clear them, and
     /// refresh the contact boundary.
-    fn advance(&mut self) -> Result<(), SolveError>;
+    fn advance(&mut self) -> Result<(), SolveError> {
+        self.begin_step(&[], &mut Vec::new(), &mut Vec::new())?;
+        self.finish_step(&[])
+    }
     /// Kinetic and strain energy of the present state.
     fn energies(&self) -> BodyEnergies;
     /// The concrete body (for outputs that need more than the trait).

@@ -12,6 +12,7 @@
 //! Reused by every continuum body (EFG, FE): it only needs three symmetric
 //! matrices on one sparsity pattern.
 
+use crate::geom::Vec2;
 use crate::sparse::{Cholesky, SparseError, SymCsc};
 
 /// Newmark parameters.
@@ -66,6 +67,9 @@ pub struct Newmark {
     factor: Cholesky,
     rhs: Vec<f64>,
     tmp: Vec<f64>,
+    /// `A⁻¹Φᵀ` of the points of the last [`point_compliance`](Self::point_compliance),
+    /// column `2k + a` for point k, component a.
+    cols: Vec<f64>,
 }
 
 impl Newmark {
@@ -93,6 +97,7 @@ impl Newmark {
             factor,
             rhs: vec![0.0; n],
             tmp: vec![0.0; n],
+            cols: Vec::new(),
         })
     }
 
@@ -115,6 +120,15 @@ impl Newmark {
     /// One step `t → t + Δt` under the external force `f` at `t + Δt`
     /// (Eq. 49 per E8, one solve with the cached factor, no allocation).
     pub fn advance(&mut self, state: &mut State, f: &[f64]) {
+        self.predict(state, f);
+        self.commit(state);
+    }
+
+    /// First half of a step: solve Eq. (49) for `U₊` under `f` and keep it
+    /// as the step's solution ([`solution_mut`](Self::solution_mut)), which
+    /// the caller may correct (for loads that depend on `U₊`, e.g. implicit
+    /// contact springs) before [`commit`](Self::commit).
+    pub fn predict(&mut self, state: &State, f: &[f64]) {
         let [a1, a2, a3, a4, a5, a6] = self.alpha;
         let n = self.n();
         debug_assert!(f.len() == n && state.u.len() == n);
@@ -130,8 +144,80 @@ impl Newmark {
             c.mul_add(&self.tmp, &mut self.rhs);
         }
         self.factor.solve_in_place(&mut self.rhs);
+    }
+
+    /// The step's solution `U₊` after [`predict`](Self::predict).
+    pub fn solution_mut(&mut self) -> &mut [f64] {
+        &mut self.rhs
+    }
+
+    /// `x ← (α₁M + α₄C + K̄)⁻¹ x`: the response of `U₊` to an extra load.
+    pub fn solve_in_place(&mut self, x: &mut [f64]) {
+        self.factor.solve_in_place(x);
+    }
+
+    /// After [`predict`](Self::predict): the response of the step to point
+    /// forces at `m` points with shape rows `rows[k] = [(node, φ)]`
+    /// (`u_k = Σ φ U_{2·node+a}`). Writes the free displacements `u_k` of the
+    /// predicted `U₊` and the compliance `S = Φ A⁻¹ Φᵀ` (2m × 2m, row-major,
+    /// index `2k + a`), and keeps `A⁻¹Φᵀ` for
+    /// [`apply_point_forces`](Self::apply_point_forces). Cost: 2m solves.
+    pub fn point_compliance(
+        &mut self,
+        rows: &[Vec<(u32, f64)>],
+        free: &mut Vec<Vec2>,
+        s: &mut Vec<f64>,
+    ) {
+        let n = self.n();
+        let m2 = 2 * rows.len();
+        let dot = |x: &[f64], row: &[(u32, f64)], a: usize| -> f64 {
+            row.iter().map(|&(j, p)| p * x[2 * j as usize + a]).sum()
+        };
+        free.clear();
+        free.extend(
+            rows.iter()
+                .map(|r| Vec2::new(dot(&self.rhs, r, 0), dot(&self.rhs, r, 1))),
+        );
+        let mut cols = std::mem::take(&mut self.cols);
+        cols.clear();
+        cols.resize(m2 * n, 0.0);
+        for (c, col) in cols.chunks_exact_mut(n).enumerate() {
+            for &(j, p) in &rows[c / 2] {
+                col[2 * j as usize + c % 2] += p;
+            }
+            self.factor.solve_in_place(col);
+        }
+        s.clear();
+        s.resize(m2 * m2, 0.0);
+        for (c, col) in cols.chunks_exact(n).enumerate() {
+            for (r, row) in rows.iter().enumerate() {
+                s[(2 * r) * m2 + c] = dot(col, row, 0);
+                s[(2 * r + 1) * m2 + c] = dot(col, row, 1);
+            }
+        }
+        self.cols = cols;
+    }
+
+    /// `U₊ += A⁻¹Φᵀ f`: the forces `f[k]` at the points of the last
+    /// [`point_compliance`](Self::point_compliance) added to the solution.
+    pub fn apply_point_forces(&mut self, f: &[Vec2]) {
+        let n = self.n();
+        for (c, col) in self.cols.chunks_exact(n).enumerate().take(2 * f.len()) {
+            let fc = if c % 2 == 0 { f[c / 2].x } else { f[c / 2].y };
+            if fc != 0.0 {
+                for (u, p) in self.rhs.iter_mut().zip(col) {
+                    *u += fc * p;
+                }
+            }
+        }
+    }
+
+    /// Second half of a step: accept the solution as `U₊` and update `Ü`,
+    /// `U̇` (Table 1).
+    pub fn commit(&mut self, state: &mut State) {
+        let [a1, a2, a3, ..] = self.alpha;
         let (dt, g) = (self.params.dt, self.params.gamma);
-        for i in 0..n {
+        for i in 0..self.n() {
             let u1 = self.rhs[i];
             let acc = a1 * (u1 - state.u[i]) - a2 * state.v[i] - a3 * state.a[i];
             state.v[i] += dt * ((1.0 - g) * state.a[i] + g * acc);

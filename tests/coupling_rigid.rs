@@ -29,11 +29,28 @@ impl Continuum for Fixed {
     fn boundary_velocity(&self, _: usize, _: Vec2) -> Vec2 {
         Vec2::ZERO
     }
+    fn boundary_displacement(&self, _: usize, _: Vec2) -> Vec2 {
+        Vec2::ZERO
+    }
     fn add_point_load(&mut self, _: usize, _: Vec2, f: Vec2) {
         self.pending += f;
     }
-    fn advance(&mut self) -> Result<(), SolveError> {
-        self.received.lock().unwrap().push(self.pending);
+    /// Rigid: no displacement, zero compliance.
+    fn begin_step(
+        &mut self,
+        points: &[(usize, Vec2)],
+        free: &mut Vec<Vec2>,
+        compliance: &mut Vec<f64>,
+    ) -> Result<(), SolveError> {
+        free.clear();
+        free.resize(points.len(), Vec2::ZERO);
+        compliance.clear();
+        compliance.resize(4 * points.len() * points.len(), 0.0);
+        Ok(())
+    }
+    fn finish_step(&mut self, forces: &[Vec2]) -> Result<(), SolveError> {
+        let total = forces.iter().fold(self.pending, |a, &f| a + f);
+        self.received.lock().unwrap().push(total);
         self.pending = Vec2::ZERO;
         Ok(())
     }

@@ -383,9 +383,24 @@ impl EfgBody {
         self.newmark.as_ref()
     }
 
+    /// Mutable access to the integrator (between `predict` and `commit`).
+    pub fn newmark_mut(&mut self) -> Option<&mut Newmark> {
+        self.newmark.as_mut()
+    }
+
     /// One Newmark step with the permanent loads plus the point loads
     /// accumulated since the last step (then cleared).
     pub fn advance(&mut self) -> Result<(), EfgError> {
+        self.predict()?;
+        self.commit()
+    }
+
+    /// First half of [`advance`](Self::advance): solve the step under the
+    /// permanent loads, the accumulated point loads and the prescribed edge
+    /// motion at `t + Δt`; the integrator holds the solution until
+    /// [`commit`](Self::commit) (the coupling adds implicit contact forces
+    /// in between).
+    pub fn predict(&mut self) -> Result<&mut Newmark, EfgError> {
         let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;
         for (p, f) in self.f_point.iter_mut().zip(&self.f_permanent) {
             *p += f;
@@ -399,7 +414,15 @@ impl EfgBody {
                 }
             }
         }
-        nm.advance(&mut self.state, &self.f_point);
+        nm.predict(&self.state, &self.f_point);
+        Ok(nm)
+    }
+
+    /// Second half of [`advance`](Self::advance): accept the solution,
+    /// clear the point loads, advance the clock.
+    pub fn commit(&mut self) -> Result<(), EfgError> {
+        let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;
+        nm.commit(&mut self.state);
         self.f_point.iter_mut().for_each(|x| *x = 0.0);
         self.step += 1;
         self.time = self.step as f64 * self.params.dt;

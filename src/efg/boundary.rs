@@ -64,6 +64,8 @@ pub struct EfgContinuum {
     /// Shape rows `φ_J(X)` of every chain point, per chain: (node, φ).
     rows: Vec<Vec<Vec<(u32, f64)>>>,
     scratch: RefCell<ShapeRow>,
+    /// Rows of the points of the current implicit step.
+    point_rows: Vec<Vec<(u32, f64)>>,
 }
 
 impl EfgContinuum {
@@ -94,6 +96,7 @@ impl EfgContinuum {
             chains,
             rows,
             scratch: RefCell::new(ShapeRow::new()),
+            point_rows: Vec::new(),
         };
         c.refresh();
         Ok(c)
@@ -111,6 +114,25 @@ impl EfgContinuum {
                 }
                 *cur = *x + d;
             }
+        }
+    }
+
+    /// `Σ_J φ_J(x) a_J` of a nodal vector `a` (displacement or velocity).
+    fn interpolate(&self, a: &[f64], x: Vec2) -> Vec2 {
+        self.with_row(x, |row| {
+            let mut s = Vec2::ZERO;
+            for (&j, &phi) in row.idx.iter().zip(&row.phi) {
+                s.x += phi * a[2 * j as usize];
+                s.y += phi * a[2 * j as usize + 1];
+            }
+            s
+        })
+    }
+
+    fn solve_error(&self, e: EfgError) -> SolveError {
+        SolveError {
+            body: self.body.name.clone(),
+            message: e.to_string(),
         }
     }
 
@@ -136,15 +158,10 @@ impl Continuum for EfgContinuum {
     }
     /// Eq. (41) per ERRATA E7: `v_H = Σ_J φ_J(x_H) u̇_J`.
     fn boundary_velocity(&self, _chain: usize, x: Vec2) -> Vec2 {
-        let v = &self.body.state.v;
-        self.with_row(x, |row| {
-            let mut s = Vec2::ZERO;
-            for (&j, &phi) in row.idx.iter().zip(&row.phi) {
-                s.x += phi * v[2 * j as usize];
-                s.y += phi * v[2 * j as usize + 1];
-            }
-            s
-        })
+        self.interpolate(&self.body.state.v, x)
+    }
+    fn boundary_displacement(&self, _chain: usize, x: Vec2) -> Vec2 {
+        self.interpolate(&self.body.state.u, x)
     }
     /// Eq. (46) per ERRATA E7: `F += Φᵀ(x_H) f`.
     fn add_point_load(&mut self, _chain: usize, x: Vec2, f: Vec2) {
@@ -154,11 +171,33 @@ impl Continuum for EfgContinuum {
         }
         *self.scratch.borrow_mut() = row;
     }
-    fn advance(&mut self) -> Result<(), SolveError> {
-        self.body.advance().map_err(|e| SolveError {
-            body: self.body.name.clone(),
-            message: e.to_string(),
-        })?;
+    /// Eqs. (46) and (49): the points' rows `φ_J(x_H)` (E7) give both the
+    /// free displacements and the compliance `Φ A⁻¹ Φᵀ`.
+    fn begin_step(
+        &mut self,
+        points: &[(usize, Vec2)],
+        free: &mut Vec<Vec2>,
+        compliance: &mut Vec<f64>,
+    ) -> Result<(), SolveError> {
+        let mut rows = std::mem::take(&mut self.point_rows);
+        rows.clear();
+        for &(_, x) in points {
+            rows.push(self.with_row(x, |r| {
+                r.idx.iter().copied().zip(r.phi.iter().copied()).collect()
+            }));
+        }
+        let res = self
+            .body
+            .predict()
+            .map(|nm| nm.point_compliance(&rows, free, compliance));
+        self.point_rows = rows;
+        res.map_err(|e| self.solve_error(e))
+    }
+    fn finish_step(&mut self, forces: &[Vec2]) -> Result<(), SolveError> {
+        if let Some(nm) = self.body.newmark_mut() {
+            nm.apply_point_forces(forces);
+        }
+        self.body.commit().map_err(|e| self.solve_error(e))?;
         self.refresh();
         Ok(())
     }
