@@ -43,8 +43,12 @@ impl BoundaryChain {
 pub struct BodyEnergies {
     /// `½ U̇ᵀ M U̇`.
     pub kinetic: f64,
-    /// `½ Uᵀ K̄ U` (elastic plus penalty springs).
+    /// `½ Uᵀ K̄ U` (elastic plus penalty springs, moving springs measured
+    /// from their current position).
     pub strain: f64,
+    /// Work done on the body since t = 0 by its own loads (permanent loads,
+    /// moving edges) — not by the contacts.
+    pub work: f64,
 }
 
 /// Why a body could not advance.

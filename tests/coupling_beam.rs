@@ -47,9 +47,7 @@ fixed = true
 /// damping until at rest, is carried by a contact force equal to its
 /// weight, and the beam deflects as Timoshenko beam theory says for a point
 /// load m g at the disc's position. Run with the paper's dissipative
-/// Newmark (γ = 1.5, β = 0.8): with γ = 1/2 the staggered coupling (the body
-/// sees the contact force of the previous step) is unstable — see the
-/// closing note of issue 4 and `coupling/mod.rs`.
+/// Newmark (γ = 1.5, β = 0.8), which also helps the body come to rest.
 #[test]
 fn disc_resting_on_the_beam_reaches_the_static_solution() {
     let a = 0.95; // load position: the disc lies fully on the beam

@@ -183,7 +183,8 @@ pub struct EnergyAccount {
     /// Work of gravity on the discs, of the bodies' permanent loads and of
     /// the walls since t = 0.
     pub w_ext: f64,
-    /// `W_ext − (stored)`: friction, dashpots and numerical dissipation.
+    /// `W_ext − (stored − stored at t = 0)`: friction, dashpots and
+    /// numerical dissipation.
     pub diss: f64,
 }
 
@@ -191,14 +192,21 @@ pub struct EnergyAccount {
 struct WorkMeter {
     x0: Vec<Vec2>,
     wall_work: f64,
+    /// Energy stored at t = 0 (initial velocities, overlaps, deformation)
+    /// minus the work the permanent loads count at t = 0.
+    stored0: f64,
 }
 
 impl WorkMeter {
-    fn new(g: &Granular) -> Self {
-        WorkMeter {
-            x0: g.particles.pos.clone(),
+    fn new(m: &CoupledModel) -> Self {
+        let mut w = WorkMeter {
+            x0: m.granular.particles.pos.clone(),
             wall_work: 0.0,
-        }
+            stored0: 0.0,
+        };
+        // stored minus external work at t = 0, so that E_diss(0) = 0
+        w.stored0 = -w.account(m).diss;
+        w
     }
     /// After a step: work the walls did on the discs during it.
     fn after_step(&mut self, g: &Granular) {
@@ -219,13 +227,7 @@ impl WorkMeter {
             let en = m.bodies[i].energies();
             kin_body += en.kinetic;
             strain += en.strain;
-            let b = efg_body(m, i);
-            w_body += b
-                .f_permanent
-                .iter()
-                .zip(&b.state.u)
-                .map(|(f, u)| f * u)
-                .sum::<f64>();
+            w_body += en.work;
         }
         let contact = e.spring + m.body_contact_energy();
         let w_ext = w_grav + w_body + self.wall_work;
@@ -236,7 +238,7 @@ impl WorkMeter {
             strain,
             contact,
             w_ext,
-            diss: w_ext - (kin_dem + kin_body + strain + contact),
+            diss: w_ext - (kin_dem + kin_body + strain + contact - self.stored0),
         }
     }
 }
@@ -269,7 +271,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         "E_diss",
     ]);
     let mut hist = HistoryWriter::create(&dir.join("history.csv"), &cols)?;
-    let mut meter = WorkMeter::new(&model.granular);
+    let mut meter = WorkMeter::new(&model);
     let vtk_every = sc.output.vtk_every;
     let mut pvd_discs = PvdSeries::new(&dir.join("discs.pvd"));
     let mut pvd_bodies: Vec<PvdSeries> = body_names

@@ -123,8 +123,10 @@ pub struct EfgBody {
     pub f_released: Vec<f64>,
     /// Point loads accumulated for the next step (Eq. 46), cleared by `advance`.
     pub f_point: Vec<f64>,
-    /// Moving edges: penalty force per unit edge displacement and the motion.
-    pub f_motion: Vec<(Vec<f64>, MotionField)>,
+    /// Moving edges (penalty, E4).
+    pub f_motion: Vec<MovingEdge>,
+    /// Work done on the body by the moving edges since t = 0.
+    pub motion_work: f64,
     /// Nodal parameters (not nodal displacements: no Kronecker-delta property).
     pub state: State,
     pub time: f64,
@@ -134,6 +136,25 @@ pub struct EfgBody {
     /// The Timoshenko field if a bc uses it (for error norms and summaries).
     pub timoshenko: Option<Timoshenko>,
     pub info: BuildInfo,
+}
+
+/// A moving edge component (penalty, E4): `F^α(t) = d(t) F^α₁` with
+/// `F^α₁ = ∫ Φᵀ α e_c dΓ` the load of a unit edge displacement.
+#[derive(Debug, Clone)]
+pub struct MovingEdge {
+    pub unit: Vec<f64>,
+    /// `∫α dΓ`: the penalty springs' total stiffness on this component.
+    pub stiffness: f64,
+    pub motion: MotionField,
+}
+
+impl MovingEdge {
+    /// Force the moving edge exerts on the body along its component after
+    /// `step` steps: `∫α(d − u) dΓ = d ∫α dΓ − Uᵀ F^α₁`.
+    pub fn force(&self, u: &[f64], step: usize, dt: f64) -> f64 {
+        let fu: f64 = self.unit.iter().zip(u).map(|(a, b)| a * b).sum();
+        self.motion.displacement(step, dt) * self.stiffness - fu
+    }
 }
 
 /// End points of an edge of the rectangle `origin`, `size` (counter-clockwise
@@ -241,7 +262,13 @@ impl EfgBody {
                         }
                     }
                 }
-                f_motion.push((unit, m));
+                // Σφ = 1 at every penalty point: the entries sum to ∫α dΓ
+                let stiffness = unit.iter().sum();
+                f_motion.push(MovingEdge {
+                    unit,
+                    stiffness,
+                    motion: m,
+                });
             }
         }
         let info = BuildInfo {
@@ -305,6 +332,7 @@ impl EfgBody {
             f_released,
             f_point: vec![0.0; ndof],
             f_motion,
+            motion_work: 0.0,
             state: State::zeros(ndof),
             time: 0.0,
             step: 0,
@@ -406,10 +434,10 @@ impl EfgBody {
             *p += f;
         }
         // prescribed edge motion at the end of the step, t + Δt
-        for (unit, m) in &self.f_motion {
-            let d = m.displacement(self.step + 1, self.params.dt);
+        for e in &self.f_motion {
+            let d = e.motion.displacement(self.step + 1, self.params.dt);
             if d != 0.0 {
-                for (p, u) in self.f_point.iter_mut().zip(unit) {
+                for (p, u) in self.f_point.iter_mut().zip(&e.unit) {
                     *p += d * u;
                 }
             }
@@ -422,7 +450,21 @@ impl EfgBody {
     /// clear the point loads, advance the clock.
     pub fn commit(&mut self) -> Result<(), EfgError> {
         let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;
+        // work of the moving edges over the step, trapezoidal in time
+        let dt = self.params.dt;
+        let mut work = 0.0;
+        for e in &self.f_motion {
+            let dd =
+                e.motion.displacement(self.step + 1, dt) - e.motion.displacement(self.step, dt);
+            work += 0.5 * dd * e.force(&self.state.u, self.step, dt);
+        }
         nm.commit(&mut self.state);
+        for e in &self.f_motion {
+            let dd =
+                e.motion.displacement(self.step + 1, dt) - e.motion.displacement(self.step, dt);
+            work += 0.5 * dd * e.force(&self.state.u, self.step + 1, dt);
+        }
+        self.motion_work += work;
         self.f_point.iter_mut().for_each(|x| *x = 0.0);
         self.step += 1;
         self.time = self.step as f64 * self.params.dt;
@@ -485,9 +527,20 @@ impl EfgBody {
     pub fn kinetic_energy(&self) -> f64 {
         0.5 * self.material.density * self.ops.gram.quad_form(&self.state.v)
     }
-    /// Strain energy including the penalty term, `½ Uᵀ K̄ U`.
+    /// Strain energy including the penalty springs, `½ Uᵀ K̄ U`, with the
+    /// moving edges' springs measured from their current position:
+    /// `½∫α(u − d)² dΓ = ½ Uᵀ K^α U − d Uᵀ F^α₁ + ½ d² ∫α dΓ`.
     pub fn strain_energy(&self) -> f64 {
-        0.5 * self.ops.kbar.quad_form(&self.state.u)
+        let u = &self.state.u;
+        let mut e = 0.5 * self.ops.kbar.quad_form(u);
+        for m in &self.f_motion {
+            let d = m.motion.displacement(self.step, self.params.dt);
+            if d != 0.0 {
+                let fu: f64 = m.unit.iter().zip(u).map(|(a, b)| a * b).sum();
+                e += -d * fu + 0.5 * d * d * m.stiffness;
+            }
+        }
+        e
     }
 
     /// Relative energy-norm error `‖ε − ε_ex‖_E / ‖ε_ex‖_E` against an exact

@@ -205,6 +205,14 @@ impl Continuum for EfgContinuum {
         BodyEnergies {
             kinetic: self.body.kinetic_energy(),
             strain: self.body.strain_energy(),
+            work: self.body.motion_work
+                + self
+                    .body
+                    .f_permanent
+                    .iter()
+                    .zip(&self.body.state.u)
+                    .map(|(f, u)| f * u)
+                    .sum::<f64>(),
         }
     }
     fn as_any(&self) -> &dyn std::any::Any {
