@@ -22,6 +22,7 @@ pub mod fem;
 pub mod geom;
 pub mod newmark;
 pub mod output;
+pub mod reproduce;
 pub mod run;
 pub mod scenario;
 pub mod sparse;

@@ -30,6 +30,19 @@ enum Cmd {
         #[arg(short, long)]
         quiet: bool,
     },
+    /// Reproduce the paper's §4 (both examples, all variants) from built-in
+    /// scenarios: run data, PNG plots of Figs. 9–17 and report.md.
+    Reproduce {
+        /// Output directory (created if missing).
+        #[arg(short, long, default_value = "reproduce")]
+        out: PathBuf,
+        /// Worker threads (0 = all cores; results do not depend on it).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+        /// No per-run progress lines.
+        #[arg(short, long)]
+        quiet: bool,
+    },
     /// Validate a scenario without running it; print sizes and time-step diagnostics.
     Check {
         /// The scenario (TOML).
@@ -83,6 +96,20 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 "done in {:.3} s; results in {}",
                 t0.elapsed().as_secs_f64(),
                 out.display()
+            );
+        }
+        Cmd::Reproduce {
+            out,
+            threads,
+            quiet,
+        } => {
+            set_threads(threads)?;
+            let t0 = std::time::Instant::now();
+            let report = efgdem::reproduce::reproduce(&out, quiet)?;
+            eprintln!(
+                "done in {:.2} s; report: {}",
+                t0.elapsed().as_secs_f64(),
+                report.display()
             );
         }
         Cmd::Check { file } => {

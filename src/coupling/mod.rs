@@ -52,6 +52,8 @@ pub struct BodyContact {
     /// Unit normal from the disc towards the body (the disc's torque arm is
     /// `r n`, E12).
     pub normal: Vec2,
+    /// Material (reference) coordinates of the contact point `X_H`.
+    pub material: Vec2,
     /// Feature touched (Fig. 5).
     pub feature: interface::Feature,
 }
@@ -299,6 +301,7 @@ impl CoupledModel {
                     force: -e.g,
                     point: point + e.w,
                     normal: w.lin[k].n,
+                    material: w.points[k].1,
                     feature,
                 });
             }
@@ -369,6 +372,7 @@ impl CoupledModel {
                         force: cf.f,
                         point: t.point,
                         normal: n,
+                        material: t.material,
                         feature: t.feature,
                     });
                     self.loads.push(Load {

@@ -243,6 +243,31 @@ impl WorkMeter {
     }
 }
 
+/// Reference points of each body's contact chains where the chain turns
+/// (the rectangle's corners) or ends.
+fn chain_corners(m: &CoupledModel) -> Vec<Vec<Vec<Vec2>>> {
+    m.bodies
+        .iter()
+        .map(|b| {
+            b.contact_boundary()
+                .iter()
+                .map(|c| {
+                    let p = &c.reference;
+                    (0..p.len())
+                        .filter(|&i| {
+                            i == 0
+                                || i + 1 == p.len()
+                                || (p[i] - p[i - 1]).cross(p[i + 1] - p[i]).abs()
+                                    > 1e-12 * (p[i] - p[i - 1]).norm() * (p[i + 1] - p[i]).norm()
+                        })
+                        .map(|i| p[i])
+                        .collect()
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// Run a coupled scenario.
 pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
     let t0 = Instant::now();
@@ -291,8 +316,13 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
     // longer carries its weight (single-disc runs only)
     let weight = (model.granular.particles.len() == 1)
         .then(|| model.granular.particles.mass[0] * model.granular.gravity.norm());
-    let mut fall_off: Option<f64> = None;
+    let mut below_weight: Option<f64> = None;
     let mut lost_contact: Option<f64> = None;
+    // §4.1.2: the disc falls off when its centre's projection leaves the
+    // edge, i.e. its contact point reaches a corner (or end) of the contact
+    // boundary — from there on it is a particle–point contact (Fig. 5b)
+    let corners = chain_corners(&model);
+    let mut fall_off: Option<f64> = None;
     let pb = progress(steps as u64, opts.quiet);
     let mut t_total = 0.0;
     for step in 0..=steps {
@@ -307,11 +337,21 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         let fn_sum: f64 = model.contacts.iter().map(|c| c.fn_elastic).sum();
         if fn_sum > peak.0 {
             peak = (fn_sum, t);
-            fall_off = None;
+            below_weight = None;
         } else if let Some(w) = weight
-            && fall_off.is_none()
+            && below_weight.is_none()
             && peak.0 > w
             && fn_sum < w
+        {
+            below_weight = Some(t);
+        }
+        if weight.is_some()
+            && fall_off.is_none()
+            && model.contacts.iter().any(|c| {
+                corners[c.body as usize][c.chain as usize]
+                    .iter()
+                    .any(|k| (*k - c.material).norm() <= 1e-9 * k.norm().max(1e-300))
+            })
         {
             fall_off = Some(t);
         }
@@ -359,6 +399,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         "peak_contact_time": peak.1,
         "first_contact_time": first_contact,
         "fall_off_time": fall_off,
+        "force_below_weight_time": below_weight,
         "contact_lost_time": lost_contact,
         "energy": {
             "E_kin_dem": e.kin_dem, "E_kin_body": e.kin_body, "E_strain": e.strain,
