@@ -175,9 +175,15 @@ impl std::fmt::Debug for Cholesky {
     }
 }
 
-fn par() -> Par {
+/// Parallelism for a factor with `nnz_l` entries: threads only pay off on
+/// large factors (on small ones the fork/join costs more than the solve).
+fn par(nnz_l: usize) -> Par {
     let n = rayon::current_num_threads();
-    if n > 1 { Par::rayon(n) } else { Par::Seq }
+    if n > 1 && nnz_l > 200_000 {
+        Par::rayon(n)
+    } else {
+        Par::Seq
+    }
 }
 
 impl Cholesky {
@@ -190,7 +196,7 @@ impl Cholesky {
             CholeskySymbolicParams::default(),
         )
         .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
-        let par = par();
+        let par = par(symbolic.len_val());
         let solve_mem = MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, par))
             .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
         let mut c = Cholesky {

@@ -29,6 +29,7 @@ use crate::continuum::Continuum;
 use crate::dem::Granular;
 use crate::dem::contact::{self, ContactLaw, Side, effective_mass};
 use crate::geom::Vec2;
+use std::time::Instant;
 
 /// Shear history and last state of one disc–body contact, keyed by
 /// `(disc id, body, chain)` so that a disc sliding from one segment to the
@@ -82,6 +83,19 @@ pub struct CoupledModel {
     work: Work,
     /// Newton iterations of the last implicit contact solve (diagnostics).
     pub newton_iterations: usize,
+    /// Wall time spent so far in each part of the step.
+    pub timing: StepTiming,
+}
+
+/// Where the time of the coupled steps goes (seconds, accumulated).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StepTiming {
+    /// DEM contacts and integration.
+    pub dem: f64,
+    /// Disc–body detection, contact law, implicit contact solve, transfer.
+    pub transfer: f64,
+    /// Body Newmark solves (free step, compliance, update).
+    pub body: f64,
 }
 
 /// Scratch of the implicit contact step.
@@ -166,13 +180,16 @@ impl CoupledModel {
             primed: false,
             work: Work::default(),
             newton_iterations: 0,
+            timing: StepTiming::default(),
         }
     }
 
     /// One DEM step, and a body step every `substeps` of them.
     pub fn step(&mut self) -> Result<(), CouplingError> {
+        let t0 = Instant::now();
         self.granular.prepare_contacts();
         self.granular.compute_contact_forces();
+        let t1 = Instant::now();
         if self.substeps == 1 {
             if !self.primed {
                 self.implicit_contacts(false)?;
@@ -187,7 +204,11 @@ impl CoupledModel {
         } else {
             self.body_contact_forces();
         }
+        let t2 = Instant::now();
         self.granular.integrate();
+        let t3 = Instant::now();
+        self.timing.dem += (t1 - t0).as_secs_f64() + (t3 - t2).as_secs_f64();
+        self.timing.transfer += (t2 - t1).as_secs_f64();
         if !self.granular.is_finite() {
             return Err(CouplingError::Unstable {
                 step: self.granular.step,
@@ -195,7 +216,9 @@ impl CoupledModel {
             });
         }
         if self.substeps == 1 {
-            return self.implicit_contacts(true);
+            let r = self.implicit_contacts(true);
+            self.timing.transfer += t3.elapsed().as_secs_f64();
+            return r;
         }
         self.sub += 1;
         if self.sub == self.substeps {
@@ -204,6 +227,7 @@ impl CoupledModel {
                 b.advance()?;
             }
         }
+        self.timing.body += t3.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -221,6 +245,7 @@ impl CoupledModel {
         next.clear();
         let w = &mut self.work;
         let p = &self.granular.particles;
+        let mut body_time = 0.0;
         for (b, body) in self.bodies.iter_mut().enumerate() {
             w.lin.clear();
             w.points.clear();
@@ -273,7 +298,9 @@ impl CoupledModel {
                 }
             }
             if advance {
+                let tb = Instant::now();
                 body.begin_step(&w.points, &mut w.free, &mut w.compliance)?;
+                body_time += tb.elapsed().as_secs_f64();
                 self.newton_iterations =
                     implicit::solve(&w.lin, &w.base, &w.free, &w.compliance, &mut w.evals);
             } else {
@@ -283,7 +310,9 @@ impl CoupledModel {
             w.forces.clear();
             w.forces.extend(w.evals.iter().map(|e| e.g));
             if advance {
+                let tb = Instant::now();
                 body.finish_step(&w.forces)?;
+                body_time += tb.elapsed().as_secs_f64();
             }
             for (k, e) in w.evals.iter().enumerate() {
                 if e.regime == 0 {
@@ -308,6 +337,9 @@ impl CoupledModel {
         }
         next.sort_by_key(|q| q.key());
         self.scratch = std::mem::replace(&mut self.contacts, next);
+        // counted in `body`, not in `transfer` (the caller times the whole call)
+        self.timing.body += body_time;
+        self.timing.transfer -= body_time;
         Ok(())
     }
 

@@ -409,6 +409,11 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
             "build_seconds": t_build,
             "loop_seconds": t_total,
             "seconds_per_step": if steps > 0 { t_total / steps as f64 } else { 0.0 },
+            "split_seconds": {
+                "dem": model.timing.dem,
+                "transfer": model.timing.transfer,
+                "body_solve": model.timing.body,
+            },
         },
     });
     write_json(&dir.join("summary.json"), &summary)?;
