@@ -43,6 +43,16 @@ enum Cmd {
         #[arg(short, long)]
         quiet: bool,
     },
+    /// Find by bisection the largest stable Δt of a coupled scenario, up to
+    /// the DEM critical step (same physical time; "stable" = finite and the
+    /// stored energy never above 10× the work put in).
+    StudyDt {
+        /// The coupled scenario (TOML).
+        file: PathBuf,
+        /// Relative tolerance of the bisection.
+        #[arg(long, default_value_t = 0.02)]
+        tol: f64,
+    },
     /// Validate a scenario without running it; print sizes and time-step diagnostics.
     Check {
         /// The scenario (TOML).
@@ -111,6 +121,33 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 t0.elapsed().as_secs_f64(),
                 report.display()
             );
+        }
+        Cmd::StudyDt { file, tol } => {
+            let sc = scenario::load(&file)?;
+            if efgdem::run::kind(&sc) != efgdem::run::Kind::Coupled {
+                anyhow::bail!(
+                    "{}: study-dt needs a coupled scenario ([[body]] and [granular])",
+                    file.display()
+                );
+            }
+            if !(tol > 0.0 && tol < 1.0) {
+                anyhow::bail!("--tol must be in (0, 1), got {tol}");
+            }
+            println!("{:>12}  {:>8}  {:>8}  reason", "dt", "bounded", "seconds");
+            let r = efgdem::coupling::study::study_dt(&sc, tol, |t| {
+                println!(
+                    "{:>12.5e}  {:>8}  {:>8.2}  {}",
+                    t.dt, t.bounded, t.seconds, t.reason
+                )
+            })?;
+            println!("DEM critical step 2√(m_min/k_max): {:.5e}", r.dt_critical);
+            match r.dt_max {
+                Some(dt) => println!(
+                    "largest bounded dt: {dt:.5e} ({:.3} × the DEM critical step)",
+                    dt / r.dt_critical
+                ),
+                None => println!("no bounded dt found down to 1e-4 × the scenario's dt"),
+            }
         }
         Cmd::Check { file } => {
             let sc = scenario::load(&file)?;

@@ -302,3 +302,34 @@ fn tempdir(name: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// `study-dt`: the step found is bounded, the next one up is not, the
+/// rescaled scenario covers the same physical time, and the limit lies below
+/// the DEM critical step (the explicit side bounds it).
+#[test]
+fn dt_study_brackets_the_stability_limit() {
+    use efgdem::coupling::study::{study_dt, trial, with_dt};
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/paper_nine_disc_test1.toml");
+    let sc = parse(&std::fs::read_to_string(&p).unwrap(), "t1.toml").unwrap();
+    let half = with_dt(&sc, 0.5 * 0.01525);
+    assert_eq!(half.simulation.steps, Some(300));
+    assert_eq!(half.wall[0].until_step, Some(80));
+    let r = study_dt(&sc, 0.02, |_| {}).unwrap();
+    let dt = r.dt_max.unwrap();
+    assert!(
+        dt >= 0.01525 && dt < r.dt_critical,
+        "{dt} vs {}",
+        r.dt_critical
+    );
+    let failed_above = r
+        .trials
+        .iter()
+        .filter(|t| !t.bounded)
+        .map(|t| t.dt)
+        .fold(f64::INFINITY, f64::min);
+    assert!(failed_above <= dt * 1.021, "bracket [{dt}, {failed_above}]");
+    let e_ref = trial(&sc, 0.01525, 0.0).unwrap().1;
+    assert!(trial(&sc, dt, e_ref).unwrap().0.bounded);
+    assert!(!trial(&sc, failed_above, e_ref).unwrap().0.bounded);
+}

@@ -24,6 +24,7 @@
 pub mod implicit;
 pub mod interface;
 pub mod run;
+pub mod study;
 
 use crate::continuum::Continuum;
 use crate::dem::Granular;

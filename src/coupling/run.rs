@@ -189,7 +189,7 @@ pub struct EnergyAccount {
 }
 
 /// Tracks the external work between steps.
-struct WorkMeter {
+pub(crate) struct WorkMeter {
     x0: Vec<Vec2>,
     wall_work: f64,
     /// Energy stored at t = 0 (initial velocities, overlaps, deformation)
@@ -198,7 +198,7 @@ struct WorkMeter {
 }
 
 impl WorkMeter {
-    fn new(m: &CoupledModel) -> Self {
+    pub(crate) fn new(m: &CoupledModel) -> Self {
         let mut w = WorkMeter {
             x0: m.granular.particles.pos.clone(),
             wall_work: 0.0,
@@ -209,12 +209,12 @@ impl WorkMeter {
         w
     }
     /// After a step: work the walls did on the discs during it.
-    fn after_step(&mut self, g: &Granular) {
+    pub(crate) fn after_step(&mut self, g: &Granular) {
         for w in &g.walls {
             self.wall_work -= w.force.dot(w.vel) * g.dt;
         }
     }
-    fn account(&self, m: &CoupledModel) -> EnergyAccount {
+    pub(crate) fn account(&self, m: &CoupledModel) -> EnergyAccount {
         let g = &m.granular;
         let p = &g.particles;
         let e = g.energies();

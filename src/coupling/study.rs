@@ -1,0 +1,170 @@
+//! `efgdem study-dt`: the largest stable time step of a coupled scenario
+//! (§4.2.3 of the paper: EFG–DE ran at Δt = 0.01525, FE–DE reportedly
+//! needed 1.525e-5).
+//!
+//! A run at Δt covers the scenario's physical time: its step counts
+//! (`steps`, walls' and edges' `until_step`) are rescaled from the
+//! scenario's Δt. It is **bounded** when it completes with a finite state
+//! and the stored energy (kinetic + strain + contact) never exceeds
+//! [`ENERGY_FACTOR`] times the largest of the external work so far, the
+//! initial stored energy and the energy at the scenario's own Δt. The
+//! search bisects (in log Δt) between the scenario's Δt and the DEM
+//! critical step `2√(m_min/k_max)`, the upper limit of the explicit side.
+
+use super::CouplingError;
+use super::run::{WorkMeter, build};
+use crate::scenario::Scenario;
+use crate::scenario::body::Prescribed;
+
+/// Unbounded when the stored energy exceeds this factor times the work put in.
+pub const ENERGY_FACTOR: f64 = 10.0;
+
+/// One trial run.
+#[derive(Debug, Clone)]
+pub struct Trial {
+    pub dt: f64,
+    pub bounded: bool,
+    /// Why it is not bounded (or "ok").
+    pub reason: String,
+    pub seconds: f64,
+}
+
+/// The result of the study.
+#[derive(Debug, Clone)]
+pub struct DtStudy {
+    /// DEM critical step `2√(m_min/k_max)`.
+    pub dt_critical: f64,
+    /// Largest bounded Δt found (within `rel_tol`), if any.
+    pub dt_max: Option<f64>,
+    pub trials: Vec<Trial>,
+}
+
+/// The scenario with time step `dt` over the same physical time.
+pub fn with_dt(sc: &Scenario, dt: f64) -> Scenario {
+    let mut s = sc.clone();
+    let dt0 = sc.simulation.dt.unwrap_or(dt);
+    let scale = |n: usize| ((n as f64) * dt0 / dt).round().max(1.0) as usize;
+    s.simulation.dt = Some(dt);
+    if let Some(n) = sc.simulation.steps {
+        s.simulation.steps = Some(scale(n));
+    }
+    for w in &mut s.wall {
+        w.until_step = w.until_step.map(scale);
+    }
+    for b in &mut s.body {
+        for bc in &mut b.bc {
+            for p in [&mut bc.ux, &mut bc.uy].into_iter().flatten() {
+                if let Prescribed::Motion(m) = p {
+                    m.until_step = m.until_step.map(scale);
+                }
+            }
+        }
+    }
+    s.output.every = usize::MAX;
+    s
+}
+
+/// Run `sc` at `dt` and decide whether it stays bounded. `e_ref` is an
+/// energy scale below which growth is not judged (the reference run's).
+pub fn trial(sc: &Scenario, dt: f64, e_ref: f64) -> Result<(Trial, f64), CouplingError> {
+    let t0 = std::time::Instant::now();
+    let s = with_dt(sc, dt);
+    let built = build(&s)?;
+    let (mut m, steps) = (built.model, built.steps);
+    let mut meter = WorkMeter::new(&m);
+    let e0 = {
+        let e = meter.account(&m);
+        e.kin_dem + e.kin_body + e.strain + e.contact
+    };
+    let (mut w_max, mut e_max) = (0.0f64, e0);
+    let mut verdict = Ok(());
+    for step in 0..steps {
+        if let Err(e) = m.step() {
+            verdict = Err(match e {
+                CouplingError::Unstable { .. } => format!("non-finite discs at step {step}"),
+                other => other.to_string(),
+            });
+            break;
+        }
+        meter.after_step(&m.granular);
+        let e = meter.account(&m);
+        let stored = e.kin_dem + e.kin_body + e.strain + e.contact;
+        w_max = w_max.max(e.w_ext.abs());
+        e_max = e_max.max(stored);
+        let limit = ENERGY_FACTOR * w_max.max(e0).max(e_ref);
+        if !stored.is_finite() || stored > limit {
+            verdict = Err(format!(
+                "stored energy {stored:.3e} > {ENERGY_FACTOR} × {:.3e} at step {step}",
+                limit / ENERGY_FACTOR
+            ));
+            break;
+        }
+    }
+    let seconds = t0.elapsed().as_secs_f64();
+    Ok((
+        Trial {
+            dt,
+            bounded: verdict.is_ok(),
+            reason: verdict.err().unwrap_or_else(|| "ok".into()),
+            seconds,
+        },
+        e_max,
+    ))
+}
+
+/// Bisect for the largest bounded Δt up to the DEM critical step, to a
+/// relative tolerance `rel_tol`. `progress` is told about every trial.
+pub fn study_dt(
+    sc: &Scenario,
+    rel_tol: f64,
+    mut progress: impl FnMut(&Trial),
+) -> Result<DtStudy, CouplingError> {
+    let dt_critical = build(sc)?.model.granular.critical_dt();
+    let dt0 = sc.simulation.dt.unwrap_or(0.1 * dt_critical);
+    let mut trials = Vec::new();
+    let mut record = |t: Trial, trials: &mut Vec<Trial>| {
+        progress(&t);
+        let ok = t.bounded;
+        trials.push(t);
+        ok
+    };
+    // the scenario's own Δt sets the energy scale; shrink until bounded
+    let mut lo = dt0.min(dt_critical);
+    let e_ref = loop {
+        let (t, e) = trial(sc, lo, 0.0)?;
+        if record(t, &mut trials) {
+            break e;
+        }
+        lo /= 10.0;
+        if lo < dt0 * 1e-4 {
+            return Ok(DtStudy {
+                dt_critical,
+                dt_max: None,
+                trials,
+            });
+        }
+    };
+    let mut hi = dt_critical;
+    let (t, _) = trial(sc, hi, e_ref)?;
+    if record(t, &mut trials) {
+        return Ok(DtStudy {
+            dt_critical,
+            dt_max: Some(hi),
+            trials,
+        });
+    }
+    while hi / lo > 1.0 + rel_tol {
+        let mid = (lo * hi).sqrt();
+        let (t, _) = trial(sc, mid, e_ref)?;
+        if record(t, &mut trials) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(DtStudy {
+        dt_critical,
+        dt_max: Some(lo),
+        trials,
+    })
+}
