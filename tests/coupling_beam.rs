@@ -1,4 +1,4 @@
-//! Coupled EFG–DE validation on the beam of the paper's Example 1.
+//! Coupled EFG–DE and FE–DE validation on the beam of the paper's Example 1.
 
 use efgdem::coupling::run::build;
 use efgdem::scenario::parse;
@@ -93,4 +93,51 @@ fn disc_resting_on_the_beam_reaches_the_static_solution() {
         "tip deflection {tip} vs {exact}: {:.2} %",
         100.0 * err
     );
+}
+
+/// Issue 5 — the same static limit with the beam as bilinear FE (Q4 on the
+/// 20 × 4 node grid): the contact carries the disc's weight, and the tip
+/// deflection is the FE body's own static solution under the contact force
+/// at the contact point (Q4 is stiffer in bending than beam theory, so
+/// beam theory is not the reference here).
+#[test]
+fn disc_resting_on_an_fe_beam_reaches_its_static_solution() {
+    use efgdem::Vec2;
+    use efgdem::fem::{FemBody, FemContinuum};
+    let src = scenario(0.95, "", r#"{ kind = "local", alpha = 0.7 }"#, 6.4e4).replace(
+        "name = \"beam\"\n",
+        "name = \"beam\"\nmethod = \"fem-q4\"\n",
+    );
+    let sc = parse(&src, "fe_static.toml").unwrap();
+    let mut b = build(&sc).unwrap();
+    let m = &mut b.model;
+    let weight = m.granular.particles.mass[0] * 9.81;
+    m.granular.particles.fixity[0] = efgdem::dem::particles::FIX_ROT;
+    for _ in 0..40_000 {
+        m.step().unwrap();
+    }
+    assert_eq!(m.contacts.len(), 1, "the disc rests on the beam");
+    let contact = m.contacts[0];
+    let rel = (contact.force.y - weight).abs() / weight;
+    eprintln!(
+        "FE beam: contact force {:?} vs m g = {weight}: {rel:.1e}",
+        contact.force
+    );
+    assert!(rel < 1e-4, "{rel:e}");
+    let beam = m.bodies[0].as_any().downcast_ref::<FemContinuum>().unwrap();
+    let tip_at = Vec2::new(1.0, 0.0);
+    let tip = beam.body.sample(tip_at).unwrap().u.y;
+    // the material point under the contact: X = x − u(X), by fixed point
+    let on_top = |p: Vec2| Vec2::new(p.x, 0.1);
+    let mut x = on_top(contact.point);
+    for _ in 0..5 {
+        x = on_top(contact.point - beam.body.sample(x).unwrap().u);
+    }
+    let mut reference = FemBody::from_spec(&sc.body[0], sc.simulation.gravity).unwrap();
+    reference.add_point_load(x, -contact.force).unwrap();
+    reference.solve_static().unwrap();
+    let expect = reference.sample(tip_at).unwrap().u.y;
+    let err = (tip - expect).abs() / expect.abs();
+    eprintln!("FE beam: tip {tip:.6e} vs static FE {expect:.6e}: {err:.2e}");
+    assert!(err < 1e-3, "{tip} vs {expect}: {err:e}");
 }

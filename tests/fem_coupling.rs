@@ -1,11 +1,11 @@
 //! The bilinear FE body coupled with discs (issue 5): contact boundary,
-//! implicit contact step, moving edges imposed exactly on the nodes, a disc
-//! resting on an FE cantilever, and a coupled FE run from the CLI.
+//! implicit contact step, moving edges imposed exactly on the nodes. (A
+//! disc resting on an FE cantilever: `tests/coupling_beam.rs`; the
+//! nine-disc test with an FE plate from the CLI: `tests/fem_cli.rs`.)
 #![allow(clippy::needless_range_loop)]
 
 use efgdem::Vec2;
 use efgdem::continuum::Continuum;
-use efgdem::coupling::run::build;
 use efgdem::fem::{FemBody, FemContinuum};
 use efgdem::scenario::{self, body::Edge};
 
@@ -433,129 +433,4 @@ fn moving_edge_work_balances_the_energy() {
         worst / w_max
     );
     assert!(worst < 1e-11 * w_max, "{worst:e} vs {w_max:e}");
-}
-
-/// Example 1's beam as FE (Q4, 20 × 4 nodes) with a disc at `x`.
-fn cantilever(x: f64) -> String {
-    format!(
-        r#"
-[simulation]
-dt = 1.0e-4
-steps = 1
-gravity = [0.0, -9.81]
-
-[[material]]
-name = "disc"
-density = 1000.0
-kn = 1.0e6
-ks = 1.0e6
-friction = 0.5
-
-[granular]
-material = "disc"
-thickness = 1.0
-discs = [[{x}, 0.15, 0.05]]
-damping = {{ kind = "local", alpha = 0.7 }}
-
-[[body]]
-name = "beam"
-method = "fem-q4"
-rectangle = {{ origin = [0.0, -0.1], size = [1.0, 0.2] }}
-nodes = [20, 4]
-elastic = {{ E = 2.1e8, nu = 0.3, density = 2000.0, thickness = 0.025, plane = "stress" }}
-damping = 6.4e4
-newmark = {{ gamma = 1.5, beta = 0.8 }}
-self_weight = false
-contact_edges = ["top", "right"]
-[[body.bc]]
-edge = "left"
-fixed = true
-"#
-    )
-}
-
-/// (c) A damped disc resting on the FE cantilever: the contact carries its
-/// weight, and the tip deflection is the FE body's own static solution
-/// under the contact force at the contact point (Q4 is stiffer in bending
-/// than beam theory, so beam theory is not the reference here).
-#[test]
-fn disc_resting_on_an_fe_cantilever_reaches_its_static_solution() {
-    let sc = scenario::parse(&cantilever(0.95), "fe_static.toml").unwrap();
-    let mut b = build(&sc).unwrap();
-    let m = &mut b.model;
-    let weight = m.granular.particles.mass[0] * 9.81;
-    m.granular.particles.fixity[0] = efgdem::dem::particles::FIX_ROT;
-    for _ in 0..40_000 {
-        m.step().unwrap();
-    }
-    assert_eq!(m.contacts.len(), 1, "the disc rests on the beam");
-    let contact = m.contacts[0];
-    let rel = (contact.force.y - weight).abs() / weight;
-    eprintln!(
-        "FE cantilever: contact force {:?} vs m g = {weight}: {rel:.1e}",
-        contact.force
-    );
-    assert!(rel < 1e-4, "{rel:e}");
-    let beam = m.bodies[0].as_any().downcast_ref::<FemContinuum>().unwrap();
-    let tip_at = Vec2::new(1.0, 0.0);
-    let tip = beam.body.sample(tip_at).unwrap().u.y;
-    // the material point under the contact: X = x − u(X), by fixed point
-    let on_top = |p: Vec2| Vec2::new(p.x, 0.1);
-    let mut x = on_top(contact.point);
-    for _ in 0..5 {
-        x = on_top(contact.point - beam.body.sample(x).unwrap().u);
-    }
-    let mut reference = FemBody::from_spec(&sc.body[0], sc.simulation.gravity).unwrap();
-    reference.add_point_load(x, -contact.force).unwrap();
-    reference.solve_static().unwrap();
-    let expect = reference.sample(tip_at).unwrap().u.y;
-    let err = (tip - expect).abs() / expect.abs();
-    eprintln!(
-        "FE cantilever: tip {tip:.6e} vs static FE {expect:.6e}: {:.2e}",
-        err
-    );
-    assert!(err < 1e-3, "{tip} vs {expect}: {err:e}");
-}
-
-/// The nine-disc test with the left plate as an FE strip, from the CLI:
-/// history with the contact probe, a plate probe and the energy columns,
-/// ParaView frames of the plate, and the plate's edges where the moving
-/// rigid plates put them.
-#[test]
-fn fem_nine_disc_example_runs_from_the_cli() {
-    let ex =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/fem_nine_disc_test1.toml");
-    let out = std::env::temp_dir().join(format!("efgdem-femcoupling-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
-        .args([
-            "run",
-            ex.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
-    let head: Vec<&str> = hist.lines().next().unwrap().split(',').collect();
-    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
-    let last: Vec<f64> = hist
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
-    assert_eq!(hist.lines().count(), 152);
-    assert!(last[col("force_C")] > 0.0);
-    // the plate's top edge moved 0.12 × 40 × Δt and stopped there
-    let ux = last[col("plate_top_ux")];
-    assert!((ux - 0.12 * 40.0 * 0.01525).abs() < 1e-12, "{ux}");
-    assert!(out.join("plate.pvd").exists() && out.join("frames/plate_0000150.vtu").exists());
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(s["kind"], "coupled");
-    std::fs::remove_dir_all(out).unwrap();
 }
