@@ -43,17 +43,19 @@ fixed = true
     )
 }
 
-/// Issue 4, validation 3 — static limit: a disc resting on the beam, with
-/// damping until at rest, is carried by a contact force equal to its
-/// weight, and the beam deflects as Timoshenko beam theory says for a point
-/// load m g at the disc's position. Run with the paper's dissipative
-/// Newmark (γ = 1.5, β = 0.8): with γ = 1/2 the staggered coupling (the body
-/// sees the contact force of the previous step) is unstable — see the
-/// closing note of issue 4 and `coupling/mod.rs`.
-#[test]
-fn disc_resting_on_the_beam_reaches_the_static_solution() {
-    let a = 0.95; // load position: the disc lies fully on the beam
-    let src = scenario(a, "", r#"{ kind = "local", alpha = 0.7 }"#, 6.4e4);
+/// Example 1's disc at `x` on the beam (`method` line added to the body),
+/// damped until at rest: 40 000 steps. Checks that one contact carries the
+/// disc's weight to 1e-4 and returns the scenario, the model and m g.
+fn rest_disc_on_beam(
+    x: f64,
+    method: &str,
+) -> (
+    efgdem::scenario::Scenario,
+    efgdem::coupling::run::Built,
+    f64,
+) {
+    let src = scenario(x, "", r#"{ kind = "local", alpha = 0.7 }"#, 6.4e4)
+        .replace("name = \"beam\"\n", &format!("name = \"beam\"\n{method}\n"));
     let sc = parse(&src, "static.toml").unwrap();
     let mut b = build(&sc).unwrap();
     let m = &mut b.model;
@@ -67,11 +69,27 @@ fn disc_resting_on_the_beam_reaches_the_static_solution() {
     assert_eq!(m.contacts.len(), 1, "the disc rests on the beam");
     let f = m.contacts[0].force;
     let rel = (f.y - weight).abs() / weight;
+    eprintln!("contact force {f:?} vs m g = {weight}: {rel:.1e}");
     assert!(
         rel < 1e-4,
         "vertical contact force {} vs m g = {weight}: {rel:e}",
         f.y
     );
+    (sc, b, weight)
+}
+
+/// Issue 4, validation 3 — static limit: a disc resting on the beam, with
+/// damping until at rest, is carried by a contact force equal to its
+/// weight, and the beam deflects as Timoshenko beam theory says for a point
+/// load m g at the disc's position. Run with the paper's dissipative
+/// Newmark (γ = 1.5, β = 0.8): with γ = 1/2 the staggered coupling (the body
+/// sees the contact force of the previous step) is unstable — see the
+/// closing note of issue 4 and `coupling/mod.rs`.
+#[test]
+fn disc_resting_on_the_beam_reaches_the_static_solution() {
+    let a = 0.95; // load position: the disc lies fully on the beam
+    let (_, b, weight) = rest_disc_on_beam(a, "");
+    let m = &b.model;
     // beam theory (bending + shear, κ = 5/6) for a load P at x = a, at x = L
     let (e, nu, t, h, l) = (2.1e8, 0.3, 0.025, 0.2, 1.0);
     let i = t * h * h * h / 12.0;
@@ -104,26 +122,9 @@ fn disc_resting_on_the_beam_reaches_the_static_solution() {
 fn disc_resting_on_an_fe_beam_reaches_its_static_solution() {
     use efgdem::Vec2;
     use efgdem::fem::{FemBody, FemContinuum};
-    let src = scenario(0.95, "", r#"{ kind = "local", alpha = 0.7 }"#, 6.4e4).replace(
-        "name = \"beam\"\n",
-        "name = \"beam\"\nmethod = \"fem-q4\"\n",
-    );
-    let sc = parse(&src, "fe_static.toml").unwrap();
-    let mut b = build(&sc).unwrap();
-    let m = &mut b.model;
-    let weight = m.granular.particles.mass[0] * 9.81;
-    m.granular.particles.fixity[0] = efgdem::dem::particles::FIX_ROT;
-    for _ in 0..40_000 {
-        m.step().unwrap();
-    }
-    assert_eq!(m.contacts.len(), 1, "the disc rests on the beam");
+    let (sc, b, _) = rest_disc_on_beam(0.95, "method = \"fem-q4\"");
+    let m = &b.model;
     let contact = m.contacts[0];
-    let rel = (contact.force.y - weight).abs() / weight;
-    eprintln!(
-        "FE beam: contact force {:?} vs m g = {weight}: {rel:.1e}",
-        contact.force
-    );
-    assert!(rel < 1e-4, "{rel:e}");
     let beam = m.bodies[0].as_any().downcast_ref::<FemContinuum>().unwrap();
     let tip_at = Vec2::new(1.0, 0.0);
     let tip = beam.body.sample(tip_at).unwrap().u.y;
