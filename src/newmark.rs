@@ -70,6 +70,9 @@ pub struct Newmark {
     /// `A⁻¹Φᵀ` of the points of the last [`point_compliance`](Self::point_compliance),
     /// column `2k + a` for point k, component a.
     cols: Vec<f64>,
+    /// DOFs whose value the body imposes after every solve (FE elimination,
+    /// see [`set_imposed`](Self::set_imposed)); empty: none.
+    imposed: Vec<bool>,
 }
 
 impl Newmark {
@@ -98,7 +101,17 @@ impl Newmark {
             rhs: vec![0.0; n],
             tmp: vec![0.0; n],
             cols: Vec::new(),
+            imposed: Vec::new(),
         })
+    }
+
+    /// Mark DOFs whose value the body imposes after every solve (prescribed
+    /// displacements eliminated from a block-diagonal effective matrix):
+    /// point forces there are support reactions, so the compliance columns
+    /// of [`point_compliance`](Self::point_compliance) put no load on them
+    /// and respond with exactly zero there.
+    pub fn set_imposed(&mut self, imposed: Vec<bool>) {
+        self.imposed = imposed;
     }
 
     /// Number of unknowns.
@@ -158,7 +171,7 @@ impl Newmark {
 
     /// After [`predict`](Self::predict): the response of the step to point
     /// forces at `m` points with shape rows `rows[k] = [(node, φ)]`
-    /// (`u_k = Σ φ U_{2·node+a}`). Writes the free displacements `u_k` of the
+    /// (`u_k = Σ φ U_{2·node+a}`; no load on [imposed](Self::set_imposed) DOFs). Writes the free displacements `u_k` of the
     /// predicted `U₊` and the compliance `S = Φ A⁻¹ Φᵀ` (2m × 2m, row-major,
     /// index `2k + a`), and keeps `A⁻¹Φᵀ` for
     /// [`apply_point_forces`](Self::apply_point_forces). Cost: 2m solves.
@@ -183,7 +196,10 @@ impl Newmark {
         cols.resize(m2 * n, 0.0);
         for (c, col) in cols.chunks_exact_mut(n).enumerate() {
             for &(j, p) in &rows[c / 2] {
-                col[2 * j as usize + c % 2] += p;
+                let dof = 2 * j as usize + c % 2;
+                if !self.imposed.get(dof).copied().unwrap_or(false) {
+                    col[dof] += p;
+                }
             }
             self.factor.solve_in_place(col);
         }
@@ -215,15 +231,21 @@ impl Newmark {
     /// Second half of a step: accept the solution as `U₊` and update `Ü`,
     /// `U̇` (Table 1).
     pub fn commit(&mut self, state: &mut State) {
-        let [a1, a2, a3, ..] = self.alpha;
-        let (dt, g) = (self.params.dt, self.params.gamma);
         for i in 0..self.n() {
             let u1 = self.rhs[i];
-            let acc = a1 * (u1 - state.u[i]) - a2 * state.v[i] - a3 * state.a[i];
-            state.v[i] += dt * ((1.0 - g) * state.a[i] + g * acc);
-            state.a[i] = acc;
+            (state.v[i], state.a[i]) = self.rates(state.u[i], state.v[i], state.a[i], u1);
             state.u[i] = u1;
         }
+    }
+
+    /// Velocity and acceleration at `t + Δt` of a DOF going from
+    /// `(u, u̇, ü)` at `t` to `u₁` (Table 1): `Ü₊ = α₁(U₊ − U) − α₂U̇ − α₃Ü`,
+    /// `U̇₊ = U̇ + Δt((1 − γ)Ü + γÜ₊)`.
+    pub fn rates(&self, u: f64, v: f64, a: f64, u1: f64) -> (f64, f64) {
+        let [a1, a2, a3, ..] = self.alpha;
+        let (dt, g) = (self.params.dt, self.params.gamma);
+        let acc = a1 * (u1 - u) - a2 * v - a3 * a;
+        (v + dt * ((1.0 - g) * a + g * acc), acc)
     }
 
     /// Kinetic energy `½ U̇ᵀ M U̇`.

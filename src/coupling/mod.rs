@@ -135,6 +135,8 @@ pub enum CouplingError {
     #[error(transparent)]
     Efg(#[from] crate::efg::EfgError),
     #[error(transparent)]
+    Fem(#[from] crate::fem::FemError),
+    #[error(transparent)]
     Dem(#[from] crate::dem::DemError),
     #[error("i/o: {0}")]
     Io(#[from] std::io::Error),

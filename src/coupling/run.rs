@@ -5,13 +5,14 @@ use crate::continuum::Continuum;
 use crate::dem::{Granular, build as dem_build};
 use crate::efg::body::EfgBody;
 use crate::efg::boundary::EfgContinuum;
-use crate::efg::shape::ShapeRow;
+use crate::efg::run::{At, BodyRef};
+use crate::fem::{FemBody, FemContinuum};
 use crate::geom::Vec2;
 use crate::output::csv::HistoryWriter;
 use crate::output::vtk::PvdSeries;
 use crate::output::{progress, write_json};
 use crate::run::RunOptions;
-use crate::scenario::body::is_body_probe;
+use crate::scenario::body::{Method, is_body_probe};
 use crate::scenario::{Probe, Scenario};
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -20,14 +21,15 @@ use std::time::Instant;
 /// know about it.
 pub struct Built {
     pub model: CoupledModel,
-    /// The EFG bodies, in scenario order (also inside `model.bodies`).
+    /// The bodies' names, in scenario order (the bodies are `model.bodies`).
     pub body_names: Vec<String>,
     pub steps: usize,
     /// Body time step (`dt × substeps`).
     pub body_dt: f64,
 }
 
-/// Build discs, walls and EFG bodies; factor each body's Newmark matrix.
+/// Build discs, walls and bodies (EFG or FE); factor each body's Newmark
+/// matrix.
 pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
     let granular = dem_build::build(sc)?;
     let dt = granular.dt;
@@ -36,10 +38,23 @@ pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
     let mut bodies: Vec<Box<dyn Continuum>> = Vec::new();
     let mut mats = Vec::new();
     for spec in &sc.body {
-        let mut body = EfgBody::from_spec(spec, sc.simulation.gravity)?;
-        body.start_dynamic(body_dt)?;
-        let c = EfgContinuum::new(body, &spec.contact_edges, spec.contact_refine)?;
-        bodies.push(Box::new(c));
+        let (g, edges, refine) = (
+            sc.simulation.gravity,
+            &spec.contact_edges,
+            spec.contact_refine,
+        );
+        bodies.push(match spec.method {
+            Method::Efg => {
+                let mut body = EfgBody::from_spec(spec, g)?;
+                body.start_dynamic(body_dt)?;
+                Box::new(EfgContinuum::new(body, edges, refine)?)
+            }
+            Method::FemQ4 => {
+                let mut body = FemBody::from_spec(spec, g)?;
+                body.start_dynamic(body_dt)?;
+                Box::new(FemContinuum::new(body, edges, refine)?)
+            }
+        });
         mats.push(
             spec.contact_material
                 .as_ref()
@@ -58,25 +73,10 @@ pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
 
 /// A probe bound to the model.
 enum Bound {
-    BodyPoint {
-        body: usize,
-        row: ShapeRow,
-        q: String,
-    },
-    Disc {
-        id: usize,
-        q: String,
-        x0: Vec2,
-    },
-    Contact {
-        a: usize,
-        b: usize,
-        total: bool,
-    },
-    Wall {
-        w: usize,
-        q: String,
-    },
+    BodyPoint { body: usize, at: At, q: String },
+    Disc { id: usize, q: String, x0: Vec2 },
+    Contact { a: usize, b: usize, total: bool },
+    Wall { w: usize, q: String },
 }
 
 fn bind(
@@ -117,9 +117,8 @@ fn bind(
                 let p = pr.point.ok_or_else(|| {
                     input(format!("probe `{}`: body-wide quantities are not recorded in coupled runs; use the energy columns", pr.name))
                 })?;
-                let mut row = ShapeRow::new();
-                efg_body(m, bi).shape_row(Vec2::from(p), &mut row)?;
-                Bound::BodyPoint { body: bi, row, q }
+                let at = body(m, bi).bind(Vec2::from(p))?;
+                Bound::BodyPoint { body: bi, at, q }
             } else if let Some([a, b]) = pr.contact {
                 Bound::Contact {
                     a: disc(a, pr)?,
@@ -143,22 +142,24 @@ fn bind(
         .collect()
 }
 
-/// The EFG body behind `model.bodies[i]` (all bodies of a coupled run are EFG).
-fn efg_body(m: &CoupledModel, i: usize) -> &EfgBody {
-    m.bodies[i]
-        .as_any()
-        .downcast_ref::<EfgContinuum>()
-        .map(|c| &c.body)
-        .expect("coupled bodies are EFG bodies")
+/// The body behind `model.bodies[i]` (built by [`build`]: EFG or FE).
+fn body(m: &CoupledModel, i: usize) -> BodyRef<'_> {
+    let c = m.bodies[i].as_any();
+    if let Some(c) = c.downcast_ref::<EfgContinuum>() {
+        BodyRef::Efg(&c.body)
+    } else if let Some(c) = c.downcast_ref::<FemContinuum>() {
+        BodyRef::Fem(&c.body)
+    } else {
+        unreachable!("coupled bodies are EFG or FE bodies")
+    }
 }
 
 fn value(m: &CoupledModel, b: &Bound) -> f64 {
     let g = &m.granular;
     match b {
-        Bound::BodyPoint { body, row, q } => efg_body(m, *body)
-            .sample_row(row)
-            .field(q)
-            .unwrap_or(f64::NAN),
+        Bound::BodyPoint { body: b, at, q } => {
+            body(m, *b).sample_at(at).field(q).unwrap_or(f64::NAN)
+        }
         Bound::Disc { id, q, x0 } => match q.as_str() {
             // displacement since t = 0: only coupled runs record it
             "ux" => g.particles.pos[g.slot(*id)].x - x0.x,
@@ -223,8 +224,8 @@ impl WorkMeter {
             w_grav += p.mass[k] * g.gravity.dot(p.pos[k] - self.x0[k]);
         }
         let (mut kin_body, mut strain, mut w_body) = (0.0, 0.0, 0.0);
-        for i in 0..m.bodies.len() {
-            let en = m.bodies[i].energies();
+        for b in &m.bodies {
+            let en = b.energies();
             kin_body += en.kinetic;
             strain += en.strain;
             w_body += en.work;
@@ -304,7 +305,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         .map(|n| PvdSeries::new(&dir.join(format!("{n}.pvd"))))
         .collect();
     let nodal: Vec<_> = (0..model.bodies.len())
-        .map(|i| efg_body(&model, i).nodal_shapes())
+        .map(|i| body(&model, i).frame_data())
         .collect::<Result<_, _>>()?;
     if vtk_every > 0 {
         std::fs::create_dir_all(dir.join("frames"))?;
@@ -378,7 +379,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
             pvd_discs.add(t, &f)?;
             for (i, n) in body_names.iter().enumerate() {
                 let f = format!("frames/{n}_{step:07}.vtu");
-                crate::efg::run::write_frame_efg(efg_body(&model, i), &nodal[i], &dir.join(&f))?;
+                body(&model, i).write_frame(nodal[i].as_ref(), &dir.join(&f))?;
                 pvd_bodies[i].add(t, &f)?;
             }
         }
@@ -437,12 +438,16 @@ pub fn check(sc: &Scenario) -> Result<String, CouplingError> {
         g.dt / g.critical_dt()
     );
     for (i, c) in b.model.bodies.iter().enumerate() {
-        let body = efg_body(&b.model, i);
+        let n = body(&b.model, i).n_nodes();
         s += &format!(
-            "body `{}`: {} nodes, {} DOFs, {} contact chain(s) with {} segments\n",
+            "body `{}` ({}): {} nodes, {} DOFs, {} contact chain(s) with {} segments\n",
             c.name(),
-            body.n_nodes(),
-            body.n_dofs(),
+            match body(&b.model, i) {
+                BodyRef::Efg(_) => "EFG",
+                BodyRef::Fem(_) => "FE Q4",
+            },
+            n,
+            2 * n,
             c.contact_boundary().len(),
             c.contact_boundary()
                 .iter()

@@ -11,6 +11,7 @@
 //! Bodies are EFG ([`EfgBody`]) or bilinear FE ([`FemBody`],
 //! `method = "fem-q4"`); both are driven the same way through [`Body`].
 
+use super::assemble::PointShapes;
 use super::body::EfgBody;
 use super::{EfgError, Sample, ShapeRow};
 use crate::fem::FemBody;
@@ -78,28 +79,74 @@ impl Body {
             Body::Fem(b) => b.strain_energy(),
         }
     }
-    /// Bind a sampling point: a shape row (EFG) or an element (FE).
-    fn bind(&self, p: Vec2) -> Result<At, EfgError> {
+    fn view(&self) -> BodyRef<'_> {
         match self {
-            Body::Efg(b) => {
+            Body::Efg(b) => BodyRef::Efg(b),
+            Body::Fem(b) => BodyRef::Fem(b),
+        }
+    }
+}
+
+/// A borrowed body of either method: what probes and frames need. Shared
+/// with the coupled driver, whose bodies live inside the coupled model.
+#[derive(Clone, Copy)]
+pub(crate) enum BodyRef<'a> {
+    Efg(&'a EfgBody),
+    Fem(&'a FemBody),
+}
+
+impl BodyRef<'_> {
+    pub(crate) fn n_nodes(self) -> usize {
+        match self {
+            BodyRef::Efg(b) => b.n_nodes(),
+            BodyRef::Fem(b) => b.n_nodes(),
+        }
+    }
+    /// Bind a sampling point: a shape row (EFG) or an element (FE).
+    pub(crate) fn bind(self, p: Vec2) -> Result<At, EfgError> {
+        match self {
+            BodyRef::Efg(b) => {
                 let mut r = ShapeRow::new();
                 b.shape_row(p, &mut r)?;
                 Ok(At::Row(r))
             }
-            Body::Fem(b) => Ok(At::Element(b.locate(p)?)),
+            BodyRef::Fem(b) => Ok(At::Element(b.locate(p)?)),
         }
     }
-    fn sample_at(&self, at: &At) -> Sample {
+    pub(crate) fn sample_at(self, at: &At) -> Sample {
         match (self, at) {
-            (Body::Efg(b), At::Row(r)) => b.sample_row(r),
-            (Body::Fem(b), At::Element(l)) => b.sample_located(l),
+            (BodyRef::Efg(b), At::Row(r)) => b.sample_row(r),
+            (BodyRef::Fem(b), At::Element(l)) => b.sample_located(l),
             _ => unreachable!("a probe is bound by its own body"),
+        }
+    }
+    /// Per-body data for frames: EFG nodal shape rows (FE needs none).
+    pub(crate) fn frame_data(self) -> Result<Option<PointShapes>, EfgError> {
+        match self {
+            BodyRef::Efg(b) => Ok(Some(b.nodal_shapes()?)),
+            BodyRef::Fem(_) => Ok(None),
+        }
+    }
+    /// A `.vtu` frame: true nodal displacement, velocity and stress.
+    pub(crate) fn write_frame(
+        self,
+        shapes: Option<&PointShapes>,
+        path: &Path,
+    ) -> Result<(), EfgError> {
+        match (self, shapes) {
+            (BodyRef::Efg(b), Some(s)) => write_frame_efg(b, s, path),
+            (BodyRef::Fem(b), _) => {
+                let (u, v, s) = b.nodal_fields();
+                let pts: Vec<[f64; 2]> = (0..b.n_nodes()).map(|i| b.node(i).to_array()).collect();
+                write_fields(path, b.grid, &pts, &u, &v, &s)
+            }
+            _ => unreachable!("EFG frames need nodal shapes"),
         }
     }
 }
 
 /// A sampling point bound to a body.
-enum At {
+pub(crate) enum At {
     Row(ShapeRow),
     Element(Located),
 }
@@ -143,7 +190,7 @@ fn bind_probes(sc: &Scenario, bodies: &[Body]) -> Result<Vec<BoundProbe>, EfgErr
         .ok_or_else(|| EfgError::Invalid(format!("probe `{name}`: no body `{body:?}`")))?;
         let row = match point {
             Some(pt) if !BODY_QUANTITIES.contains(&quantity.as_str()) => {
-                Some(bodies[bi].bind(Vec2::from(*pt))?)
+                Some(bodies[bi].view().bind(Vec2::from(*pt))?)
             }
             _ => None,
         };
@@ -169,7 +216,8 @@ fn probe_value(p: &BoundProbe, b: &Body) -> f64 {
     let Some(row) = &p.row else {
         return energy(&p.quantity);
     };
-    b.sample_at(row)
+    b.view()
+        .sample_at(row)
         .field(&p.quantity)
         .unwrap_or_else(|| energy(&p.quantity))
 }
@@ -194,36 +242,8 @@ fn record(
     hist.row(&row)
 }
 
-/// Per-body data for frames: EFG nodal shape rows (FE needs none).
-fn frame_data(b: &Body) -> Result<Option<super::assemble::PointShapes>, EfgError> {
-    match b {
-        Body::Efg(b) => Ok(Some(b.nodal_shapes()?)),
-        Body::Fem(_) => Ok(None),
-    }
-}
-
-fn write_frame(
-    b: &Body,
-    shapes: Option<&super::assemble::PointShapes>,
-    path: &Path,
-) -> Result<(), EfgError> {
-    match (b, shapes) {
-        (Body::Efg(b), Some(s)) => write_frame_efg(b, s, path),
-        (Body::Fem(b), _) => {
-            let (u, v, s) = b.nodal_fields();
-            let pts: Vec<[f64; 2]> = (0..b.n_nodes()).map(|i| b.node(i).to_array()).collect();
-            write_fields(path, b.grid, &pts, &u, &v, &s)
-        }
-        _ => unreachable!("EFG frames need nodal shapes"),
-    }
-}
-
 /// Nodal values: true displacement, velocity and stress at every node.
-pub(crate) fn write_frame_efg(
-    b: &EfgBody,
-    shapes: &super::assemble::PointShapes,
-    path: &Path,
-) -> Result<(), EfgError> {
+fn write_frame_efg(b: &EfgBody, shapes: &PointShapes, path: &Path) -> Result<(), EfgError> {
     let n = b.n_nodes();
     let (mut u, mut v, mut s) = (vec![0.0; 2 * n], vec![0.0; 2 * n], vec![0.0; 3 * n]);
     let mut row = ShapeRow::new();
@@ -342,8 +362,9 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, EfgError> {
             }
             record(&mut probes, &bodies, &mut hist, 0, 0.0)?;
             for b in &bodies {
-                let shapes = frame_data(b)?;
-                write_frame(b, shapes.as_ref(), &dir.join(format!("{}.vtu", b.name())))?;
+                let shapes = b.view().frame_data()?;
+                b.view()
+                    .write_frame(shapes.as_ref(), &dir.join(format!("{}.vtu", b.name())))?;
             }
             summary["analysis"] = json!("static");
         }
@@ -375,14 +396,14 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, EfgError> {
                 std::fs::create_dir_all(&frames)?;
                 for b in &bodies {
                     series.push(PvdSeries::new(&dir.join(format!("{}.pvd", b.name()))));
-                    nodal.push(frame_data(b)?);
+                    nodal.push(b.view().frame_data()?);
                 }
             }
             let frame =
                 |bodies: &[Body], series: &mut [PvdSeries], step: usize| -> Result<(), EfgError> {
                     for (k, b) in bodies.iter().enumerate() {
                         let f = format!("{}_{step:06}.vtu", b.name());
-                        write_frame(b, nodal[k].as_ref(), &frames.join(&f))?;
+                        b.view().write_frame(nodal[k].as_ref(), &frames.join(&f))?;
                         series[k].add(b.time(), &format!("frames/{f}"))?;
                     }
                     Ok(())

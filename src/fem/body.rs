@@ -6,23 +6,34 @@
 //!
 //! # Boundary conditions: exact elimination on the nodes
 //! FE shape functions have the Kronecker-delta property, so a prescribed
-//! displacement `ū` is imposed on the nodal DOF itself (no penalty). Every
-//! constrained DOF `c` keeps its place in the DOF numbering (so states are
-//! laid out as in the EFG body), but in the operators used for solving:
-//! - row and column `c` of K are replaced by the identity, and `ū_c` is
-//!   moved to the right-hand side: `F_f −= K_fc ū_c` for every free DOF `f`,
-//!   `F_c = ū_c`;
-//! - row and column `c` of M are replaced by the identity and those of C by
-//!   zero, so `M Ü = F − K U` gives `Ü_c = 0` and each Newmark step gives
-//!   `U_c = ū_c` (the prescribed values are constant in time).
+//! displacement `ū_c(t)` is imposed on the nodal DOF itself (no penalty).
+//! Every constrained DOF `c` keeps its place in the DOF numbering (so states
+//! are laid out as in the EFG body), but in the operators used for solving
+//! rows and columns `c` of K and M are replaced by the identity and those
+//! of C by zero: the effective matrix `α₁M + α₄C + K` is block diagonal
+//! (free block, identity), SPD, factored once. Each solve then
+//! - moves the prescribed DOFs' known terms to the right-hand side of the
+//!   free rows with the unmodified matrices: `F_f −= K_fc u_c + C_fc u̇_c +
+//!   M_fc ü_c`, where for a Newmark step `(u̇_c, ü_c)` at `t + Δt` are the
+//!   Newmark rates of `u_c: ū_c(t) → ū_c(t + Δt)`
+//!   ([`Newmark::rates`]);
+//! - sets `U_c = ū_c(t + Δt)` in the solution, exactly.
 //!
-//! The matrices stay symmetric positive definite (the constrained block is
-//! the identity, decoupled from the free block), the patch test is exact to
-//! round-off, and after every solve `U_c = ū_c`, `U̇_c = Ü_c = 0` are set
-//! exactly. Point loads on constrained DOFs are reactions and are dropped.
-//! The unmodified K is kept for the strain energy `½ Uᵀ K U`.
+//! The free DOFs are then exactly those of the unreduced Newmark system in
+//! which the constrained DOFs are driven through `ū_c(tₙ)` (a Lagrange
+//! multiplier solve gives the same numbers); prescribed velocities and
+//! accelerations are Newmark's, so a sudden start excites the γ = ½
+//! trapezoidal oscillation of `u̇_c` (2v, 0, 2v, … for a ramp from rest)
+//! that a dissipative γ > ½ damps. Constant values (`fixed`, numbers,
+//! linear fields, Timoshenko) have `u̇_c = ü_c = 0`; moving edges
+//! (`{ velocity, until_step }`) follow `ū_c(tₙ) = v·min(n, N)·Δt`.
+//! Loads on constrained DOFs go to the support; the support reaction
+//! `R_c = (M Ü + C U̇ + K U)_c − F_c` of moving DOFs does work
+//! `Σ ½(R_c,n + R_c,n+1) Δū_c`, kept for the energy account
+//! ([`FemBody::work`]). Kinetic and strain energy use the unmodified M, K.
 //!
-//! A node in two bcs (a corner) takes the value of the last one listed.
+//! A node in two bcs (a corner) takes, per component, the value of the
+//! last one listed.
 
 use super::FemError;
 use super::q4;
@@ -34,7 +45,7 @@ use crate::efg::exact::Timoshenko;
 use crate::efg::quadrature::{self, QuadPoint};
 use crate::geom::Vec2;
 use crate::newmark::{Newmark, NewmarkParams, State};
-use crate::scenario::body::{BodySpec, Edge, MassKind};
+use crate::scenario::body::{BodySpec, Edge, MassKind, MotionField, Prescribed};
 use crate::sparse::{Cholesky, Pattern, SymCsc};
 use std::sync::Arc;
 use std::time::Instant;
@@ -84,24 +95,30 @@ pub struct FemBody {
     pub size: Vec2,
     pub material: Material,
     pub mass_kind: MassKind,
-    /// Unmodified stiffness K (for the strain energy).
+    /// Unmodified stiffness K (strain energy, prescribed-DOF couplings).
     pub k_full: SymCsc,
     /// K with the constrained rows/columns replaced by the identity.
     pub k: SymCsc,
-    /// `∫ Nᵀ N t dA` (consistent or lumped) with the constrained
-    /// rows/columns replaced by the identity: `M = ρ G`, `C = c G`
-    /// (constrained part zeroed for C).
+    /// Unmodified `G = ∫ Nᵀ N t dA` (consistent or lumped): `M = ρ G`,
+    /// `C = c G`.
+    pub gram_full: SymCsc,
+    /// G with the constrained rows/columns replaced by the identity
+    /// (zeroed for C).
     pub gram: SymCsc,
-    /// Per DOF: the prescribed value, if constrained.
-    pub fixed: Vec<Option<f64>>,
-    /// Permanent loads (tractions, body force) with the prescribed values
-    /// lifted to the right-hand side (`F_f − K_fc ū_c`, `F_c = ū_c`).
+    /// Per DOF: is it prescribed (eliminated)?
+    pub constrained: Vec<bool>,
+    /// The prescribed DOFs (module docs).
+    constraints: Vec<Constraint>,
+    /// Permanent loads (tractions, body force), prescribed DOFs not lifted.
     pub f_permanent: Vec<f64>,
-    /// Loads applied for the initial static state only (zero on
-    /// constrained DOFs).
+    /// Loads applied for the initial static state only.
     pub f_released: Vec<f64>,
     /// Point loads accumulated for the next step, cleared by `advance`.
     pub f_point: Vec<f64>,
+    /// Right-hand side scratch of a step.
+    rhs: Vec<f64>,
+    /// Work of the supports of moving edges since t = 0.
+    motion_work: f64,
     /// Nodal displacements (Kronecker delta: these are the true values).
     pub state: State,
     pub time: f64,
@@ -110,6 +127,43 @@ pub struct FemBody {
     newmark: Option<Newmark>,
     pub timoshenko: Option<Timoshenko>,
     pub info: FemInfo,
+}
+
+/// A prescribed DOF: its value, its motion, and its couplings in the
+/// unmodified K and G.
+#[derive(Debug, Clone)]
+struct Constraint {
+    dof: usize,
+    /// `ū_c` at t = 0.
+    value: f64,
+    /// A moving edge: `ū_c(tₙ) = value + v·min(n, N)·Δt`.
+    motion: Option<MotionField>,
+    /// `(j, K_cj, G_cj)` for every DOF `j` coupled with this one (itself
+    /// included).
+    row: Vec<(usize, f64, f64)>,
+    /// Support reaction at the last step (moving DOFs).
+    reaction: f64,
+}
+
+impl Constraint {
+    /// The prescribed value after `step` steps of `dt`.
+    fn at(&self, step: usize, dt: f64) -> f64 {
+        self.value + self.motion.map_or(0.0, |m| m.displacement(step, dt))
+    }
+}
+
+/// `U_c = ū_c(step)` in `u`, exactly.
+fn impose(constraints: &[Constraint], u: &mut [f64], step: usize, dt: f64) {
+    for c in constraints {
+        u[c.dof] = c.at(step, dt);
+    }
+}
+
+/// Nodes sharing an element with `node` (itself included), ascending.
+fn neighbours(nx: usize, ny: usize, node: usize) -> impl Iterator<Item = usize> {
+    let (i, j) = (node % nx, node / nx);
+    (j.saturating_sub(1)..=(j + 1).min(ny - 1))
+        .flat_map(move |jj| (i.saturating_sub(1)..=(i + 1).min(nx - 1)).map(move |ii| jj * nx + ii))
 }
 
 /// Lower-triangle pattern of the Q4 mesh: DOF `2I + a` couples with the
@@ -122,17 +176,8 @@ fn grid_pattern(nx: usize, ny: usize) -> Pattern {
     col_ptr.push(0);
     let mut nb = Vec::with_capacity(9);
     for node in 0..n {
-        let (i, j) = (node % nx, node / nx);
         nb.clear();
-        for jj in j.saturating_sub(1)..=(j + 1).min(ny - 1) {
-            for ii in i.saturating_sub(1)..=(i + 1).min(nx - 1) {
-                let m = jj * nx + ii;
-                if m >= node {
-                    nb.push(m);
-                }
-            }
-        }
-        nb.sort_unstable();
+        nb.extend(neighbours(nx, ny, node).filter(|&m| m >= node));
         for a in 0..2 {
             for &m in &nb {
                 for b in 0..2 {
@@ -241,7 +286,7 @@ impl FemBody {
         }
         let timoshenko = timoshenko_of(spec);
         // prescribed DOFs: the nodes on the edge take ū at their position
-        let mut fixed: Vec<Option<f64>> = vec![None; ndof];
+        let mut fixed: Vec<Option<(f64, Option<MotionField>)>> = vec![None; ndof];
         let edge_nodes = |e: Edge| -> Vec<usize> {
             match e {
                 Edge::Left => (0..ny).map(|j| j * nx).collect(),
@@ -255,11 +300,46 @@ impl FemBody {
             for node in edge_nodes(bc.edge) {
                 let x = Vec2::new(xs[node % nx], ys[node / nx]);
                 let ub = prescribed(bc, x, timoshenko.as_ref());
-                if cx {
-                    fixed[2 * node] = Some(ub[0]);
+                for (a, on, pr) in [(0, cx, bc.ux), (1, cy, bc.uy)] {
+                    if on {
+                        let motion = match pr {
+                            Some(Prescribed::Motion(m)) => Some(m),
+                            _ => None,
+                        };
+                        fixed[2 * node + a] = Some((ub[a], motion));
+                    }
                 }
-                if cy {
-                    fixed[2 * node + 1] = Some(ub[1]);
+            }
+        }
+        let constraints: Vec<Constraint> = fixed
+            .iter()
+            .enumerate()
+            .filter_map(|(dof, f)| {
+                let (value, motion) = (*f)?;
+                let row = neighbours(nx, ny, dof / 2)
+                    .flat_map(|m| [2 * m, 2 * m + 1])
+                    .map(|j| (j, k.get(dof, j), gram.get(dof, j)))
+                    .collect();
+                Some(Constraint {
+                    dof,
+                    value,
+                    motion,
+                    row,
+                    reaction: 0.0,
+                })
+            })
+            .collect();
+        let constrained: Vec<bool> = fixed.iter().map(Option::is_some).collect();
+        let (k_full, gram_full) = (k.clone(), gram.clone());
+        // the constrained rows/columns of K and G become the identity
+        let p = k.pattern.clone();
+        for c in 0..ndof {
+            for s in p.col_ptr[c]..p.col_ptr[c + 1] {
+                let r = p.row_idx[s];
+                if constrained[r] || constrained[c] {
+                    let diag = if r == c { 1.0 } else { 0.0 };
+                    k.values[s] = diag;
+                    gram.values[s] = diag;
                 }
             }
         }
@@ -274,13 +354,17 @@ impl FemBody {
             size,
             material,
             mass_kind: spec.mass,
-            k_full: k.clone(),
+            k_full,
             k,
+            gram_full,
             gram,
-            fixed: vec![],
+            constrained,
+            constraints,
             f_permanent: vec![],
             f_released: vec![],
             f_point: vec![0.0; ndof],
+            rhs: vec![0.0; ndof],
+            motion_work: 0.0,
             state: State::zeros(ndof),
             time: 0.0,
             step: 0,
@@ -316,7 +400,7 @@ impl FemBody {
             }
         }
         // body force ρ g (Eq. 27, domain term)
-        if gravity != [0.0, 0.0] && material.density > 0.0 {
+        if spec.self_weight && gravity != [0.0, 0.0] && material.density > 0.0 {
             let target = if is_released(spec, "gravity") {
                 &mut f_released
             } else {
@@ -327,40 +411,12 @@ impl FemBody {
                 target[2 * i + 1] += material.density * gravity[1] * s;
             }
         }
-        // exact elimination of the prescribed DOFs
-        {
-            let p = body.k.pattern.clone();
-            for c in 0..ndof {
-                for s in p.col_ptr[c]..p.col_ptr[c + 1] {
-                    let r = p.row_idx[s];
-                    let v = body.k.values[s];
-                    if r != c {
-                        match (fixed[r], fixed[c]) {
-                            (None, Some(uc)) => f_permanent[r] -= v * uc,
-                            (Some(ur), None) => f_permanent[c] -= v * ur,
-                            _ => {}
-                        }
-                    }
-                    if fixed[r].is_some() || fixed[c].is_some() {
-                        let diag = if r == c { 1.0 } else { 0.0 };
-                        body.k.values[s] = diag;
-                        body.gram.values[s] = diag;
-                    }
-                }
-            }
-            for (i, ub) in fixed.iter().enumerate() {
-                if let Some(u) = ub {
-                    f_permanent[i] = *u;
-                    f_released[i] = 0.0;
-                    body.state.u[i] = *u;
-                }
-            }
-        }
+        impose(&body.constraints, &mut body.state.u, 0, 0.0);
         body.info = FemInfo {
             nodes: n,
             dofs: ndof,
             elements: (nx - 1) * (ny - 1),
-            constrained_dofs: fixed.iter().filter(|f| f.is_some()).count(),
+            constrained_dofs: body.constraints.len(),
             mass: match spec.mass {
                 MassKind::Consistent => "consistent",
                 MassKind::Lumped => "lumped",
@@ -368,7 +424,6 @@ impl FemBody {
             nnz: body.k.pattern.nnz(),
             assembly_seconds: t0.elapsed().as_secs_f64(),
         };
-        body.fixed = fixed;
         body.f_permanent = f_permanent;
         body.f_released = f_released;
         Ok(body)
@@ -425,39 +480,46 @@ impl FemBody {
     /// Static solve `K U = F` with the permanent and released loads plus the
     /// accumulated point loads; the state becomes (U, 0, 0), `U_c = ū_c`.
     pub fn solve_static(&mut self) -> Result<(), FemError> {
+        let (step, dt) = (self.step, self.params.dt);
         let mut f: Vec<f64> = (0..self.n_dofs())
-            .map(|i| match self.fixed[i] {
-                Some(u) => u,
-                None => self.f_permanent[i] + self.f_released[i] + self.f_point[i],
-            })
+            .map(|i| self.f_permanent[i] + self.f_released[i] + self.f_point[i])
             .collect();
+        self.lift(&mut f, |c| [c.at(step, dt), 0.0, 0.0]);
         let mut ch = Cholesky::factor(&self.k)?;
         ch.solve_in_place(&mut f);
+        impose(&self.constraints, &mut f, step, dt);
         self.state.u = f;
         self.state.v.iter_mut().for_each(|x| *x = 0.0);
         self.state.a.iter_mut().for_each(|x| *x = 0.0);
-        self.enforce_prescribed();
         Ok(())
     }
 
-    /// `U_c = ū_c`, `U̇_c = Ü_c = 0` exactly (removes round-off).
-    fn enforce_prescribed(&mut self) {
-        for (i, ub) in self.fixed.iter().enumerate() {
-            if let Some(u) = ub {
-                self.state.u[i] = *u;
-                self.state.v[i] = 0.0;
-                self.state.a[i] = 0.0;
+    /// Move the prescribed DOFs' known terms to the right-hand side of the
+    /// free rows: `f_j −= K_jc u_c + c G_jc u̇_c + ρ G_jc ü_c` (unmodified
+    /// matrices) with `kin(c) = [u_c, u̇_c, ü_c]`.
+    fn lift(&self, f: &mut [f64], kin: impl Fn(&Constraint) -> [f64; 3]) {
+        let (rho, damp) = (self.material.density, self.material.damping);
+        for c in &self.constraints {
+            let [u, v, a] = kin(c);
+            if u == 0.0 && v == 0.0 && a == 0.0 {
+                continue;
+            }
+            for &(j, k, g) in &c.row {
+                if !self.constrained[j] {
+                    f[j] -= k * u + g * (damp * v + rho * a);
+                }
             }
         }
     }
 
-    /// Point loads on constrained DOFs are reactions: drop them.
-    fn clear_constrained_point_loads(&mut self) {
-        for (f, ub) in self.f_point.iter_mut().zip(&self.fixed) {
-            if ub.is_some() {
-                *f = 0.0;
-            }
-        }
+    /// Support reaction `(M Ü + C U̇ + K U)_c − applied_c` at a prescribed DOF.
+    fn reaction(&self, c: &Constraint, applied: f64) -> f64 {
+        let (rho, damp, s) = (self.material.density, self.material.damping, &self.state);
+        c.row
+            .iter()
+            .map(|&(j, k, g)| k * s.u[j] + g * (damp * s.v[j] + rho * s.a[j]))
+            .sum::<f64>()
+            - applied
     }
 
     /// The mass matrix `ρ G` (constrained part: identity).
@@ -469,16 +531,14 @@ impl FemBody {
 
     fn set_constrained_diagonal(&self, m: &mut SymCsc, v: f64) {
         let p = m.pattern.clone();
-        for (i, ub) in self.fixed.iter().enumerate() {
-            if ub.is_some() {
-                m.values[p.col_ptr[i]] = v;
-            }
+        for c in &self.constraints {
+            m.values[p.col_ptr[c.dof]] = v;
         }
     }
 
     /// Prepare time stepping with step `dt` and the body's γ, β: factor
     /// `α₁M + α₄C + K` once and compute the initial acceleration under the
-    /// permanent loads (released loads off).
+    /// permanent loads (released loads off; prescribed DOFs: `ü_c = 0`).
     pub fn start_dynamic(&mut self, dt: f64) -> Result<(), FemError> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(FemError::Invalid(format!(
@@ -492,20 +552,30 @@ impl FemBody {
             )));
         }
         self.params.dt = dt;
-        self.clear_constrained_point_loads();
-        self.enforce_prescribed();
         let m = self.mass_matrix();
         let c = (self.material.damping > 0.0).then(|| {
             let mut c = self.gram.scaled(self.material.damping);
             self.set_constrained_diagonal(&mut c, 0.0);
             c
         });
-        let f: Vec<f64> = (0..self.n_dofs())
+        let mut f: Vec<f64> = (0..self.n_dofs())
             .map(|i| self.f_permanent[i] + self.f_point[i])
             .collect();
+        let s = &self.state;
+        self.lift(&mut f, |c| [s.u[c.dof], s.v[c.dof], 0.0]);
+        for c in &self.constraints {
+            f[c.dof] = s.u[c.dof]; // the identity row gives ü_c = 0
+        }
         crate::newmark::consistent_acceleration(&m, c.as_ref(), &self.k, &mut self.state, &f)?;
-        self.enforce_prescribed();
-        self.newmark = Some(Newmark::new(m, c, self.k.clone(), self.params)?);
+        for i in 0..self.constraints.len() {
+            let c = &self.constraints[i];
+            self.state.a[c.dof] = 0.0;
+            let r = self.reaction(c, self.f_permanent[c.dof] + self.f_point[c.dof]);
+            self.constraints[i].reaction = r;
+        }
+        let mut nm = Newmark::new(m, c, self.k.clone(), self.params)?;
+        nm.set_imposed(self.constrained.clone());
+        self.newmark = Some(nm);
         Ok(())
     }
 
@@ -514,31 +584,92 @@ impl FemBody {
         self.newmark.as_ref()
     }
 
+    /// Mutable access to the integrator (between `predict` and `commit`).
+    pub fn newmark_mut(&mut self) -> Option<&mut Newmark> {
+        self.newmark.as_mut()
+    }
+
     /// One Newmark step with the permanent loads plus the point loads
     /// accumulated since the last step (then cleared).
     pub fn advance(&mut self) -> Result<(), FemError> {
-        self.clear_constrained_point_loads();
-        let nm = self.newmark.as_mut().ok_or(FemError::NotStarted)?;
+        self.predict()?;
+        self.commit()
+    }
+
+    /// First half of [`advance`](Self::advance): solve the step under the
+    /// permanent loads and the accumulated point loads, with the prescribed
+    /// DOFs at `ū_c(t + Δt)` (their terms lifted to the free rows, module
+    /// docs); the integrator holds the solution until
+    /// [`commit`](Self::commit) (the coupling adds implicit contact forces
+    /// in between, which put no load on prescribed DOFs).
+    pub fn predict(&mut self) -> Result<&mut Newmark, FemError> {
+        let nm = self.newmark.as_ref().ok_or(FemError::NotStarted)?;
+        let (next, dt) = (self.step + 1, self.params.dt);
         for (p, f) in self.f_point.iter_mut().zip(&self.f_permanent) {
             *p += f;
         }
-        nm.advance(&mut self.state, &self.f_point);
+        let mut rhs = std::mem::take(&mut self.rhs);
+        rhs.copy_from_slice(&self.f_point);
+        let s = &self.state;
+        self.lift(&mut rhs, |c| {
+            let (i, u1) = (c.dof, c.at(next, dt));
+            let (v1, a1) = nm.rates(s.u[i], s.v[i], s.a[i], u1);
+            [u1, v1, a1]
+        });
+        let nm = self.newmark.as_mut().ok_or(FemError::NotStarted)?;
+        nm.predict(&self.state, &rhs);
+        self.rhs = rhs;
+        impose(&self.constraints, nm.solution_mut(), next, dt);
+        Ok(nm)
+    }
+
+    /// Second half of [`advance`](Self::advance): accept the solution
+    /// (prescribed DOFs reset to `ū_c(t + Δt)` exactly), book the work of
+    /// the supports of moving edges, clear the point loads, advance the
+    /// clock.
+    pub fn commit(&mut self) -> Result<(), FemError> {
+        let (step, dt) = (self.step, self.params.dt);
+        let nm = self.newmark.as_mut().ok_or(FemError::NotStarted)?;
+        impose(&self.constraints, nm.solution_mut(), step + 1, dt);
+        nm.commit(&mut self.state);
+        for i in 0..self.constraints.len() {
+            let c = &self.constraints[i];
+            if c.motion.is_none() {
+                continue;
+            }
+            let r = self.reaction(c, self.f_point[c.dof]);
+            let du = c.at(step + 1, dt) - c.at(step, dt);
+            self.motion_work += 0.5 * (c.reaction + r) * du;
+            self.constraints[i].reaction = r;
+        }
         self.f_point.iter_mut().for_each(|x| *x = 0.0);
-        self.enforce_prescribed();
         self.step += 1;
         self.time = self.step as f64 * self.params.dt;
         Ok(())
     }
 
+    /// The shape row `[(node, N_a(p))]` of the element containing `p`.
+    pub fn row(&self, p: Vec2) -> Result<Vec<(u32, f64)>, FemError> {
+        let loc = self.locate(p)?;
+        Ok(loc
+            .nodes
+            .iter()
+            .map(|&i| i as u32)
+            .zip(loc.shape())
+            .collect())
+    }
+
     /// Add the point load `f` at `p` to the next step's force:
     /// `F += Nᵀ(p) f` with the element's shape functions (Eq. 46).
     pub fn add_point_load(&mut self, p: Vec2, f: Vec2) -> Result<(), FemError> {
-        let loc = self.locate(p)?;
-        for (&i, n) in loc.nodes.iter().zip(loc.shape()) {
-            self.f_point[2 * i] += n * f.x;
-            self.f_point[2 * i + 1] += n * f.y;
-        }
+        let row = self.row(p)?;
+        self.add_point_load_row(&row, f);
         Ok(())
+    }
+
+    /// [`FemBody::add_point_load`] with a precomputed row.
+    pub fn add_point_load_row(&mut self, row: &[(u32, f64)], f: Vec2) {
+        crate::continuum::add_row_load(&mut self.f_point, row, f);
     }
 
     /// Fields at a located point: `u = Σ N_a u_a`, `v = Σ N_a u̇_a`,
@@ -570,9 +701,21 @@ impl FemBody {
         Ok(self.sample_located(&self.locate(p)?))
     }
 
-    /// Kinetic energy `½ U̇ᵀ M U̇` (`U̇_c = 0`).
+    /// Kinetic energy `½ U̇ᵀ M U̇` with the unmodified M.
     pub fn kinetic_energy(&self) -> f64 {
-        0.5 * self.material.density * self.gram.quad_form(&self.state.v)
+        0.5 * self.material.density * self.gram_full.quad_form(&self.state.v)
+    }
+    /// Work done on the body since t = 0 by its permanent loads (`F·U`,
+    /// constant loads from U = 0) and by the supports of moving edges
+    /// (trapezoidal rule, exact for γ = ½, β = ¼).
+    pub fn work(&self) -> f64 {
+        let w: f64 = self
+            .f_permanent
+            .iter()
+            .zip(&self.state.u)
+            .map(|(f, u)| f * u)
+            .sum();
+        w + self.motion_work
     }
     /// Strain energy `½ Uᵀ K U` with the unmodified K.
     pub fn strain_energy(&self) -> f64 {

@@ -3,12 +3,17 @@
 //!
 //! - [`q4`]: the element (shape functions, 2 × 2 Gauss stiffness, mass).
 //! - [`body`]: [`FemBody`], built from a scenario `[[body]]` with
-//!   `method = "fem-q4"`; prescribed displacements imposed exactly on nodes.
+//!   `method = "fem-q4"`; prescribed displacements (fixed or moving)
+//!   imposed exactly on nodes.
+//! - [`boundary`]: [`FemContinuum`], the body as the coupling sees it
+//!   (contact chains, element shape functions at contact points).
 
 pub mod body;
+pub mod boundary;
 pub mod q4;
 
 pub use body::FemBody;
+pub use boundary::FemContinuum;
 
 /// Errors of the FE continuum.
 #[derive(Debug, thiserror::Error)]

@@ -1,4 +1,4 @@
-//! `[[body]]`: a continuum body (EFG; later bilinear FE) on a rectangle.
+//! `[[body]]`: a continuum body (EFG or bilinear FE) on a rectangle.
 //!
 //! ```toml
 //! [[body]]
@@ -381,20 +381,6 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 b.penalty.is_none(),
                 at("penalty"),
                 "`penalty` is an EFG option: a `fem-q4` body imposes prescribed displacements exactly on its nodes; omit it",
-            );
-            for (k, bc) in b.bc.iter().enumerate() {
-                for (c, pr) in [("ux", bc.ux), ("uy", bc.uy)] {
-                    p.check(
-                        !matches!(pr, Some(Prescribed::Motion(_))),
-                        format!("body.{i}.bc.{k}.{c}"),
-                        "moving edges (`{ velocity = … }`) are not supported by `fem-q4` bodies yet; use `method = \"efg\"`",
-                    );
-                }
-            }
-            p.check(
-                b.contact_edges.is_empty(),
-                at("contact_edges"),
-                "`fem-q4` bodies cannot be coupled with discs yet (issue 5); use `method = \"efg\"`",
             );
         } else {
             p.check(
