@@ -74,6 +74,9 @@ pub struct CoupledModel {
     pub body_laws: Vec<ContactLaw>,
     /// DEM steps per body step (1 = same Δt for both).
     pub substeps: usize,
+    /// Body takes the previous state's contact forces (no implicit contact
+    /// springs); always so when `substeps` > 1.
+    pub staggered: bool,
     /// Live disc–body contacts, sorted by key.
     pub contacts: Vec<BodyContact>,
     scratch: Vec<BodyContact>,
@@ -176,6 +179,7 @@ impl CoupledModel {
             bodies,
             body_laws,
             substeps: substeps.max(1),
+            staggered: substeps > 1,
             contacts: Vec::new(),
             scratch: Vec::new(),
             loads: Vec::new(),
@@ -193,7 +197,8 @@ impl CoupledModel {
         self.granular.prepare_contacts();
         self.granular.compute_contact_forces();
         let t1 = Instant::now();
-        if self.substeps == 1 {
+        let implicit = self.substeps == 1 && !self.staggered;
+        if implicit {
             if !self.primed {
                 self.implicit_contacts(false)?;
                 self.primed = true;
@@ -218,7 +223,7 @@ impl CoupledModel {
                 dt_crit: self.granular.critical_dt(),
             });
         }
-        if self.substeps == 1 {
+        if implicit {
             let r = self.implicit_contacts(true);
             self.timing.transfer += t3.elapsed().as_secs_f64();
             return r;

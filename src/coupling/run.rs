@@ -64,7 +64,11 @@ pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
     }
     let steps = dem_build::steps(sc, dt);
     Ok(Built {
-        model: CoupledModel::new(granular, bodies, &mats, substeps),
+        model: {
+            let mut m = CoupledModel::new(granular, bodies, &mats, substeps);
+            m.staggered |= sc.simulation.coupling == crate::scenario::CouplingScheme::Staggered;
+            m
+        },
         body_names: sc.body.iter().map(|b| b.name.clone()).collect(),
         steps,
         body_dt,
@@ -393,6 +397,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         "dt": model.granular.dt,
         "body_dt": body_dt,
         "substeps": model.substeps,
+        "coupling": if model.staggered { "staggered" } else { "implicit" },
         "dem_critical_dt": model.granular.critical_dt(),
         "discs": model.granular.particles.len(),
         "bodies": body_names,

@@ -64,6 +64,21 @@ pub struct Simulation {
     /// contact loads averaged over them (ERRATA E11). Default 1.
     #[serde(default = "one")]
     pub substeps: usize,
+    /// Coupled runs: how disc–body contact forces reach the bodies.
+    #[serde(default)]
+    pub coupling: CouplingScheme,
+}
+
+/// `[simulation] coupling`: `"implicit"` (default: contact springs solved
+/// inside each body's Newmark step) or `"staggered"` (the body takes the
+/// contact forces of the previous state as loads — the plain explicit
+/// transfer, kept for comparison and used with `substeps` > 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum CouplingScheme {
+    #[default]
+    Implicit,
+    Staggered,
 }
 
 impl Default for Simulation {
@@ -76,6 +91,7 @@ impl Default for Simulation {
             gravity: [0.0, 0.0],
             threads: 0,
             substeps: 1,
+            coupling: CouplingScheme::Implicit,
         }
     }
 }
