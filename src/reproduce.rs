@@ -5,7 +5,8 @@
 //! Tests 1 and 2, and the Young's-modulus sweep. Writes every run's
 //! `history.csv` / `summary.json`, the data and PNG plots of Figs. 9, 10,
 //! 11, 12, 14, 15 and 17, and `report.md` with our numbers beside the
-//! paper's and beside theory.
+//! paper's and beside theory. The FE–DE cross-check (§4.2.1, Q4 plate on
+//! the EFG grid) runs beside the EFG plate in Fig. 14.
 
 use crate::coupling::CouplingError;
 use crate::efg::boundary::EfgContinuum;
@@ -24,6 +25,10 @@ pub const EXAMPLE1: &str = include_str!("../examples/paper_cantilever_disc.toml"
 pub const NINE_DISC_EFG: [&str; 2] = [
     include_str!("../examples/paper_nine_disc_test1.toml"),
     include_str!("../examples/paper_nine_disc_test2.toml"),
+];
+pub const NINE_DISC_FEM: [&str; 2] = [
+    include_str!("../examples/fem_nine_disc_test1.toml"),
+    include_str!("../examples/fem_nine_disc_test2.toml"),
 ];
 pub const NINE_DISC_RIGID: [&str; 2] = [
     include_str!("../examples/nine_disc_rigid_test1.toml"),
@@ -570,6 +575,30 @@ fn example2(job: &mut Job) -> Result<()> {
             );
             sweep.push((e, d));
         }
+        // the FE–DE cross-check of §4.2.1 (issue 5): Q4 plate on the same grid
+        let fem_sc = parse(
+            NINE_DISC_FEM[t],
+            &format!("examples/fem_nine_disc_test{tn}.toml (built in)"),
+        )?;
+        let fem = job.run(&format!("nine_disc_fem_test{tn}"), &fem_sc)?;
+        {
+            let f = fem.history.col("force_C")?;
+            let c = fem.history.col("step")?;
+            let dev = c
+                .iter()
+                .zip(&f)
+                .filter(|(c, _)| **c > 20.0)
+                .filter_map(|(&cy, &fv)| at(&rcycle, &rc, cy).map(|fr| (fv - fr).abs() / fr))
+                .fold(0.0, f64::max);
+            let _ = writeln!(
+                table,
+                "| {tn} | FE (Q4), E = 2.1e14 | {} | {} | {:.3} % | {} |",
+                fmt_opt(at(&c, &f, 40.0), 0),
+                fmt_opt(at(&c, &f, 150.0), 0),
+                100.0 * dev,
+                fmt_opt(num(&fem.summary["timing"], "loop_seconds"), 3),
+            );
+        }
         // Fig. 14: EFG (E = 2.1e14) against rigid plates
         job.plot(
             &format!("fig14_test{tn}.png"),
@@ -577,10 +606,16 @@ fn example2(job: &mut Job) -> Result<()> {
                 title: format!("Fig. 14 — force at contact C, Test {tn}"),
                 x_label: "cycle".into(),
                 y_label: "normal force at C (×10⁷)".into(),
+                y_range: Some((-0.2, 5.8)), // room for the legend above the curves
                 series: vec![
                     Series::new(
                         "EFG–DE, E = 2.1e14",
                         sweep[0].1.history.xy("step", "force_C", 1e-7)?,
+                        Mark::Line,
+                    ),
+                    Series::new(
+                        "FE–DE (Q4), E = 2.1e14",
+                        fem.history.xy("step", "force_C", 1e-7)?,
                         Mark::Line,
                     ),
                     Series::new(
@@ -598,6 +633,7 @@ fn example2(job: &mut Job) -> Result<()> {
                 title: format!("Fig. 15 — force at contact C against the plate's E, Test {tn}"),
                 x_label: "cycle".into(),
                 y_label: "normal force at C (×10⁷)".into(),
+                y_range: Some((-0.2, 5.8)), // room for the legend above the curves
                 series: sweep
                     .iter()
                     .map(|(e, d)| {
@@ -614,12 +650,15 @@ fn example2(job: &mut Job) -> Result<()> {
         // the data of Figs. 14–15 side by side
         let mut cols = vec!["cycle".to_string(), "rigid".to_string()];
         cols.extend(E_SWEEP.iter().map(|e| format!("efg_E{e:.1e}")));
+        cols.push("fem_E2.1e14".to_string());
         let colrefs: Vec<&str> = cols.iter().map(String::as_str).collect();
         let mut csv =
             HistoryWriter::create(&job.out.join(format!("fig14_15_test{tn}.csv")), &colrefs)?;
         let fs: Vec<(Vec<f64>, Vec<f64>)> = sweep
             .iter()
-            .map(|(_, d)| Ok((d.history.col("step")?, d.history.col("force_C")?)))
+            .map(|(_, d)| d)
+            .chain(std::iter::once(&fem))
+            .map(|d| Ok((d.history.col("step")?, d.history.col("force_C")?)))
             .collect::<Result<_>>()?;
         for (i, &cy) in rcycle.iter().enumerate() {
             let mut row = vec![cy, rc[i]];
