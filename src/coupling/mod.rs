@@ -26,9 +26,10 @@ pub mod interface;
 pub mod run;
 pub mod study;
 
-use crate::continuum::Continuum;
+use crate::continuum::{BoundaryChain, Continuum};
 use crate::dem::Granular;
 use crate::dem::contact::{self, ContactLaw, Side, effective_mass};
+use crate::dem::particles::Particles;
 use crate::geom::Vec2;
 use std::time::Instant;
 
@@ -263,23 +264,11 @@ impl CoupledModel {
                 if chain.segments() == 0 {
                     continue;
                 }
-                let (lo, hi) = bounds(&chain.current);
-                for d in 0..p.len() {
-                    let (x, r) = (p.pos[d], p.radius[d]);
-                    // candidates within a margin: contacts that close
-                    // during the step are part of the implicit solve
-                    let rm = r * (1.0 + CANDIDATE_MARGIN);
-                    if x.x + rm < lo.x || x.x - rm > hi.x || x.y + rm < lo.y || x.y - rm > hi.y {
-                        continue;
-                    }
-                    let Some(t) = interface::detect(chain, x, rm) else {
-                        continue;
-                    };
-                    let key = (p.id[d], b as u16, c as u16);
-                    let fs_old = self
-                        .contacts
-                        .binary_search_by(|q| q.key().cmp(&key))
-                        .map_or(0.0, |i| self.contacts[i].fs);
+                // candidates within a margin: contacts that close during
+                // the step are part of the implicit solve
+                for (d, t) in touching(chain, p, CANDIDATE_MARGIN) {
+                    let r = p.radius[d];
+                    let fs_old = shear_history(&self.contacts, (p.id[d], b as u16, c as u16));
                     let law = self.body_laws[b * nm + p.material[d] as usize];
                     let (cn, cs) = law.dashpots(effective_mass(p.inv_mass[d], 0.0));
                     let n = -t.normal; // from the disc towards the body
@@ -294,7 +283,7 @@ impl CoupledModel {
                         cn,
                         cs,
                         n,
-                        delta0: t.overlap - (rm - r),
+                        delta0: t.overlap - CANDIDATE_MARGIN * r,
                         vn0,
                         vt0,
                         fs_old: if advance { fs_old } else { 0.0 },
@@ -366,20 +355,10 @@ impl CoupledModel {
                 if chain.segments() == 0 {
                     continue;
                 }
-                let (lo, hi) = bounds(&chain.current);
-                for d in 0..p.len() {
+                for (d, t) in touching(chain, p, 0.0) {
                     let (x, r) = (p.pos[d], p.radius[d]);
-                    if x.x + r < lo.x || x.x - r > hi.x || x.y + r < lo.y || x.y - r > hi.y {
-                        continue;
-                    }
-                    let Some(t) = interface::detect(chain, x, r) else {
-                        continue;
-                    };
                     let key = (p.id[d], b as u16, c as u16);
-                    let mut fs = self
-                        .contacts
-                        .binary_search_by(|q| q.key().cmp(&key))
-                        .map_or(0.0, |i| self.contacts[i].fs);
+                    let mut fs = shear_history(&self.contacts, key);
                     let v_h = body.boundary_velocity(c, t.material);
                     let law = &self.body_laws[b * nm + p.material[d] as usize];
                     let n = -t.normal; // from the disc towards the body
@@ -457,6 +436,30 @@ impl CoupledModel {
 /// Discs within `(1 + CANDIDATE_MARGIN) r` of a boundary enter the implicit
 /// contact solve (as open contacts unless the step closes them).
 const CANDIDATE_MARGIN: f64 = 0.1;
+
+/// Discs touching `chain` with their radius enlarged by `margin × r`
+/// (bounding-box pruned): slot and contact (its overlap includes the margin).
+fn touching<'a>(
+    chain: &'a BoundaryChain,
+    p: &'a Particles,
+    margin: f64,
+) -> impl Iterator<Item = (usize, interface::Touch)> + 'a {
+    let (lo, hi) = bounds(&chain.current);
+    (0..p.len()).filter_map(move |d| {
+        let (x, rm) = (p.pos[d], p.radius[d] * (1.0 + margin));
+        if x.x + rm < lo.x || x.x - rm > hi.x || x.y + rm < lo.y || x.y - rm > hi.y {
+            return None;
+        }
+        interface::detect(chain, x, rm).map(|t| (d, t))
+    })
+}
+
+/// Shear force history of the contact `key`, 0 for a new contact.
+fn shear_history(contacts: &[BodyContact], key: (u32, u16, u16)) -> f64 {
+    contacts
+        .binary_search_by(|q| q.key().cmp(&key))
+        .map_or(0.0, |i| contacts[i].fs)
+}
 
 fn bounds(pts: &[Vec2]) -> (Vec2, Vec2) {
     pts.iter().fold(

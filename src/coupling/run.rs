@@ -193,6 +193,13 @@ pub struct EnergyAccount {
     pub diss: f64,
 }
 
+impl EnergyAccount {
+    /// Energy stored: kinetic (discs, bodies), strain and contact springs.
+    pub fn stored(&self) -> f64 {
+        self.kin_dem + self.kin_body + self.strain + self.contact
+    }
+}
+
 /// Tracks the external work between steps.
 pub(crate) struct WorkMeter {
     x0: Vec<Vec2>,

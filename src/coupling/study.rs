@@ -72,10 +72,7 @@ pub fn trial(sc: &Scenario, dt: f64, e_ref: f64) -> Result<(Trial, f64), Couplin
     let built = build(&s)?;
     let (mut m, steps) = (built.model, built.steps);
     let mut meter = WorkMeter::new(&m);
-    let e0 = {
-        let e = meter.account(&m);
-        e.kin_dem + e.kin_body + e.strain + e.contact
-    };
+    let e0 = meter.account(&m).stored();
     let (mut w_max, mut e_max) = (0.0f64, e0);
     let mut verdict = Ok(());
     for step in 0..steps {
@@ -88,7 +85,7 @@ pub fn trial(sc: &Scenario, dt: f64, e_ref: f64) -> Result<(Trial, f64), Couplin
         }
         meter.after_step(&m.granular);
         let e = meter.account(&m);
-        let stored = e.kin_dem + e.kin_body + e.strain + e.contact;
+        let stored = e.stored();
         w_max = w_max.max(e.w_ext.abs());
         e_max = e_max.max(stored);
         let limit = ENERGY_FACTOR * w_max.max(e0).max(e_ref);
