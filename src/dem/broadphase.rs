@@ -14,6 +14,7 @@
 
 use super::contact::ContactForce;
 use super::particles::Particles;
+use super::sweep::BLOCK;
 use super::walls::Wall;
 use crate::geom::Vec2;
 use rayon::prelude::*;
@@ -37,31 +38,78 @@ pub struct WallPair {
     pub fs: f64,
 }
 
-/// The flat contact arrays and the per-disc index (CSR) used to gather the
-/// per-contact forces in a fixed order.
+/// The flat contact arrays, and the index of the "cross" pairs whose
+/// second disc lies in a later sweep block than the first (see
+/// [`sweep`](super::sweep)).
 #[derive(Debug, Clone, Default)]
 pub struct ContactList {
     /// Sorted by `(i, j)`.
     pub pairs: Vec<Pair>,
-    /// Force of each pair in the current step (same index as `pairs`).
-    pub buf: Vec<ContactForce>,
     /// Pairs whose first disc is `k`: `first[k]..first[k + 1]`.
     pub first: Vec<u32>,
-    /// Pairs whose second disc is `k`: `second[second_start[k]..second_start[k + 1]]`.
-    pub second_start: Vec<u32>,
-    pub second: Vec<u32>,
     /// Disc–wall pairs, sorted by `(disc, wall)`.
     pub walls: Vec<WallPair>,
+    /// Force of each wall pair in the current step (same index as `walls`).
     pub wall_buf: Vec<ContactForce>,
+    /// Indices into `pairs` of the cross pairs, ascending.
+    pub cross: Vec<u32>,
+    /// Force and new shear history of each cross pair in the current step.
+    pub cross_buf: Vec<(ContactForce, f64)>,
+    /// Cross pairs whose first disc is in block `b`: `cross_first[b]..cross_first[b + 1]`.
+    pub cross_first: Vec<u32>,
+    /// Cross pairs whose second disc is in block `b`:
+    /// `cross_in[cross_in_start[b]..cross_in_start[b + 1]]`, as
+    /// (second disc, index into `cross`), in list order.
+    pub cross_in_start: Vec<u32>,
+    pub cross_in: Vec<(u32, u32)>,
 }
 
 impl ContactList {
+    /// Index the cross pairs of the sweep blocks (after `pairs` and
+    /// `first` were built for `n` discs).
+    fn index_cross(&mut self, n: usize) {
+        let nb = n.div_ceil(BLOCK);
+        self.cross.clear();
+        self.cross_first.clear();
+        self.cross_first.push(0);
+        self.cross_in_start.clear();
+        self.cross_in_start.resize(nb + 1, 0);
+        for b in 0..nb {
+            let hi = ((b + 1) * BLOCK).min(n);
+            let (p0, p1) = (self.first[b * BLOCK] as usize, self.first[hi] as usize);
+            for (k, q) in self.pairs[p0..p1].iter().enumerate() {
+                if q.j as usize >= hi {
+                    self.cross.push((p0 + k) as u32);
+                    self.cross_in_start[q.j as usize / BLOCK + 1] += 1;
+                }
+            }
+            self.cross_first.push(self.cross.len() as u32);
+        }
+        for b in 0..nb {
+            self.cross_in_start[b + 1] += self.cross_in_start[b];
+        }
+        self.cross_in.clear();
+        self.cross_in.resize(self.cross.len(), (0, 0));
+        let mut fill: Vec<u32> = self.cross_in_start[..nb].to_vec();
+        for (c, &k) in self.cross.iter().enumerate() {
+            let j = self.pairs[k as usize].j;
+            let f = &mut fill[j as usize / BLOCK];
+            self.cross_in[*f as usize] = (j, c as u32);
+            *f += 1;
+        }
+        self.cross_buf.clear();
+        self.cross_buf
+            .resize(self.cross.len(), (ContactForce::default(), 0.0));
+    }
+
     /// Bytes held (capacity).
     pub fn heap_bytes(&self) -> usize {
         use std::mem::size_of;
         self.pairs.capacity() * size_of::<Pair>()
-            + self.buf.capacity() * size_of::<ContactForce>()
-            + (self.first.capacity() + self.second_start.capacity() + self.second.capacity()) * 4
+            + (self.first.capacity() + self.cross.capacity() + self.cross_first.capacity()) * 4
+            + self.cross_in_start.capacity() * 4
+            + self.cross_buf.capacity() * size_of::<(ContactForce, f64)>()
+            + self.cross_in.capacity() * 8
             + self.walls.capacity() * size_of::<WallPair>()
             + self.wall_buf.capacity() * size_of::<ContactForce>()
     }
@@ -317,25 +365,7 @@ impl NeighbourGrid {
             }
         }
         list.pairs = pairs;
-        list.buf.clear();
-        list.buf.resize(list.pairs.len(), ContactForce::default());
-        // CSR of the second disc of each pair, pair indices ascending.
-        list.second_start.clear();
-        list.second_start.resize(n + 1, 0);
-        for q in &list.pairs {
-            list.second_start[q.j as usize + 1] += 1;
-        }
-        for k in 0..n {
-            list.second_start[k + 1] += list.second_start[k];
-        }
-        list.second.clear();
-        list.second.resize(list.pairs.len(), 0);
-        let mut fill: Vec<u32> = list.second_start[..n].to_vec();
-        for (k, q) in list.pairs.iter().enumerate() {
-            let f = &mut fill[q.j as usize];
-            list.second[*f as usize] = k as u32;
-            *f += 1;
-        }
+        list.index_cross(n);
     }
 
     /// Disc–wall candidates: each disc against each wall's bounding box

@@ -33,13 +33,13 @@ pub mod contact;
 pub mod integrate;
 pub mod particles;
 pub mod run;
+pub mod sweep;
 pub mod walls;
 
 use crate::geom::Vec2;
-use broadphase::{ContactList, NeighbourGrid, Pair};
-use contact::{ContactForce, ContactLaw, Side, effective_mass, normal_between};
+use broadphase::{ContactList, NeighbourGrid};
+use contact::{ContactLaw, effective_mass, normal_between};
 use particles::Particles;
-use rayon::prelude::*;
 use walls::Wall;
 
 /// Errors of the DEM.
@@ -113,8 +113,6 @@ pub struct Granular {
     /// Largest disc displacement since the last rebuild.
     pub max_disp: f64,
 }
-
-use integrate::CHUNK;
 
 impl Granular {
     /// An assembly with the given discs, materials (dashpots already set in
@@ -195,64 +193,14 @@ impl Granular {
     }
 
     /// One full time step: the three phases in order, with no external
-    /// force. The gather of phase 2 and the update of phase 3 are fused into
-    /// one pass over the discs; the result is bitwise the same as calling
-    /// [`prepare_contacts`](Self::prepare_contacts),
+    /// force, fused into one [`sweep`] over the discs (each disc advances
+    /// as soon as its contacts are summed); bitwise the same result as
+    /// calling [`prepare_contacts`](Self::prepare_contacts),
     /// [`compute_contact_forces`](Self::compute_contact_forces) and
     /// [`integrate`](Self::integrate).
     pub fn step(&mut self) {
         self.prepare_contacts();
-        self.evaluate_contacts();
-        let (g, damping, dt) = (self.gravity, self.damping, self.dt);
-        let list = &self.contacts;
-        let ref_pos = &self.grid.ref_pos;
-        let has_ref = ref_pos.len() == self.particles.len();
-        let p = &mut self.particles;
-        let max2 = (
-            p.pos.par_chunks_mut(CHUNK),
-            p.vel.par_chunks_mut(CHUNK),
-            p.theta.par_chunks_mut(CHUNK),
-            p.omega.par_chunks_mut(CHUNK),
-            p.force.par_chunks_mut(CHUNK),
-            p.torque.par_chunks_mut(CHUNK),
-            p.inv_mass.par_chunks(CHUNK),
-            p.inv_inertia.par_chunks(CHUNK),
-            p.fixity.par_chunks(CHUNK),
-            p.radius.par_chunks(CHUNK),
-        )
-            .into_par_iter()
-            .enumerate()
-            .map(|(c, (pos, vel, th, om, f, tq, im, ii, fx, rad))| {
-                let base = c * CHUNK;
-                let mut wk = list.walls.partition_point(|q| (q.disc as usize) < base);
-                let mut m2 = 0.0f64;
-                for k in 0..pos.len() {
-                    let (sf, st) = gather(list, base + k, rad[k], &mut wk);
-                    f[k] = sf;
-                    tq[k] = st;
-                    integrate::advance(
-                        &mut pos[k],
-                        &mut vel[k],
-                        &mut th[k],
-                        &mut om[k],
-                        sf,
-                        st,
-                        im[k],
-                        ii[k],
-                        fx[k],
-                        g,
-                        damping,
-                        dt,
-                    );
-                    if has_ref {
-                        let d2 = (pos[k] - ref_pos[base + k]).norm2();
-                        m2 = if d2 > m2 { d2 } else { m2 };
-                    }
-                }
-                m2
-            })
-            .reduce(|| 0.0, f64::max);
-        self.max_disp = if has_ref { max2.sqrt() } else { f64::INFINITY };
+        self.max_disp = self.sweep::<true>();
         self.wall_totals();
         self.move_walls();
     }
@@ -267,72 +215,13 @@ impl Granular {
         }
     }
 
-    /// Phase 2: evaluate every listed contact (in parallel, one result per
-    /// contact) and *overwrite* each disc's force and torque with the sum
-    /// of its contacts, gathered per disc in a fixed order (bitwise
-    /// independent of the thread count). Also sets each wall's force.
+    /// Phase 2: evaluate every listed contact and *overwrite* each disc's
+    /// force and torque with the sum of its contacts, in a fixed order
+    /// (bitwise independent of the thread count, see [`sweep`]). Also sets
+    /// each wall's force.
     pub fn compute_contact_forces(&mut self) {
-        self.evaluate_contacts();
-        let list = &self.contacts;
-        let p = &mut self.particles;
-        let radius = &p.radius;
-        p.force
-            .par_chunks_mut(CHUNK)
-            .zip(p.torque.par_chunks_mut(CHUNK))
-            .enumerate()
-            .for_each(|(c, (fc, tc))| {
-                let base = c * CHUNK;
-                let mut wk = list.walls.partition_point(|q| (q.disc as usize) < base);
-                for (k, (f, t)) in fc.iter_mut().zip(tc.iter_mut()).enumerate() {
-                    (*f, *t) = gather(list, base + k, radius[base + k], &mut wk);
-                }
-            });
+        self.sweep::<false>();
         self.wall_totals();
-    }
-
-    /// Evaluate every listed disc–disc (parallel) and disc–wall (few,
-    /// sequential) contact into the per-contact buffers.
-    fn evaluate_contacts(&mut self) {
-        // a list built for another set of discs (or never built) is rebuilt
-        if self.contacts.first.len() != self.particles.len() + 1 {
-            self.grid.stale = true;
-            self.prepare_contacts();
-        }
-        let p = &self.particles;
-        let kin = Kin::new(p);
-        let dt = self.dt;
-        let nm = self.materials.len();
-        let laws = &self.laws;
-        let dash = &self.dash;
-        self.contacts
-            .pairs
-            .par_chunks_mut(CHUNK)
-            .zip(self.contacts.buf.par_chunks_mut(CHUNK))
-            .for_each(|(pc, bc)| {
-                if nm == 1 {
-                    let (law, dash) = (&laws[0], &dash[0]);
-                    for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
-                        *out = pair_contact(kin, law, dash, q, dt);
-                    }
-                } else {
-                    for (q, out) in pc.iter_mut().zip(bc.iter_mut()) {
-                        let (i, j) = (q.i as usize, q.j as usize);
-                        let k = p.material[i] as usize * nm + p.material[j] as usize;
-                        *out = pair_contact(kin, &laws[k], &dash[k], q, dt);
-                    }
-                }
-            });
-        for (q, out) in self
-            .contacts
-            .walls
-            .iter_mut()
-            .zip(self.contacts.wall_buf.iter_mut())
-        {
-            let w = &self.walls[q.wall as usize];
-            let d = q.disc as usize;
-            let law = &self.wall_laws[q.wall as usize * nm + p.material[d] as usize];
-            *out = wall_contact(p, w, law, d, &mut q.fs, dt);
-        }
     }
 
     /// Total force on each wall: minus the sum of its contact forces, in
@@ -486,179 +375,4 @@ impl Granular {
     pub fn heap_bytes(&self) -> usize {
         self.particles.heap_bytes() + self.contacts.heap_bytes() + self.grid.heap_bytes()
     }
-}
-
-/// Sum of the contact forces and moments on disc `d`: its pairs as first
-/// disc, then as second disc, then its wall contacts (`wk` walks the
-/// wall-pair list, sorted by disc). Always the same order. The moment is
-/// `r_d Σ F_s` (every contact's arm is the radius).
-#[inline(always)]
-fn gather(list: &ContactList, d: usize, r: f64, wk: &mut usize) -> (Vec2, f64) {
-    let mut sf = Vec2::ZERO;
-    let mut st = 0.0;
-    let (a, b) = (list.first[d] as usize, list.first[d + 1] as usize);
-    for cf in &list.buf[a..b] {
-        sf += cf.f;
-        st += cf.fs;
-    }
-    let (a, b) = (
-        list.second_start[d] as usize,
-        list.second_start[d + 1] as usize,
-    );
-    for &e in &list.second[a..b] {
-        let cf = &list.buf[e as usize];
-        sf -= cf.f;
-        st += cf.fs;
-    }
-    if let Some(q) = list.walls.get(*wk)
-        && q.disc as usize == d
-    {
-        while *wk < list.walls.len() && list.walls[*wk].disc as usize == d {
-            let cf = &list.wall_buf[*wk];
-            sf += cf.f;
-            st += cf.fs;
-            *wk += 1;
-        }
-    }
-    (sf, r * st)
-}
-
-/// The per-disc arrays the disc–disc kernel reads, cut to one length so
-/// that a single index check covers all of them.
-#[derive(Clone, Copy)]
-struct Kin<'a> {
-    pos: &'a [Vec2],
-    vel: &'a [Vec2],
-    omega: &'a [f64],
-    radius: &'a [f64],
-}
-
-impl<'a> Kin<'a> {
-    /// Panics if the particle arrays have different lengths (a broken
-    /// invariant of [`Particles`]).
-    fn new(p: &'a Particles) -> Self {
-        let n = p.pos.len();
-        Kin {
-            pos: &p.pos[..n],
-            vel: &p.vel[..n],
-            omega: &p.omega[..n],
-            radius: &p.radius[..n],
-        }
-    }
-}
-
-/// One disc–disc contact of the list (slots `i < j`).
-#[inline(always)]
-fn pair_contact(p: Kin, law: &ContactLaw, dash: &[f64; 4], q: &mut Pair, dt: f64) -> ContactForce {
-    let (i, j) = (q.i as usize, q.j as usize);
-    let n = p.pos.len();
-    if i >= n || j >= n {
-        return ContactForce::default(); // never: the list is built from these discs
-    }
-    // SAFETY: i, j < n was checked just above, and every slice of `Kin`
-    // has length n (`Kin::new` cuts them all to `pos.len()`).
-    let (pi, pj, ri, rj, vi, vj, wi, wj) = unsafe {
-        (
-            *p.pos.get_unchecked(i),
-            *p.pos.get_unchecked(j),
-            *p.radius.get_unchecked(i),
-            *p.radius.get_unchecked(j),
-            *p.vel.get_unchecked(i),
-            *p.vel.get_unchecked(j),
-            *p.omega.get_unchecked(i),
-            *p.omega.get_unchecked(j),
-        )
-    };
-    let rsum = ri + rj;
-    let d = pj - pi;
-    let d2 = d.norm2();
-    if d2 >= rsum * rsum {
-        q.fs = 0.0;
-        return ContactForce::default();
-    }
-    let (n, dist) = if d2 > 0.0 {
-        let dist = d2.sqrt();
-        (d * (1.0 / dist), dist)
-    } else {
-        (Vec2::new(1.0, 0.0), 0.0)
-    };
-    contact::evaluate(
-        law,
-        n,
-        rsum - dist,
-        &Side {
-            pos: pi,
-            vel: vi,
-            omega: wi,
-            radius: ri,
-        },
-        &Side {
-            pos: pj,
-            vel: vj,
-            omega: wj,
-            radius: rj,
-        },
-        (
-            dash[0] + dash[1] * q.sqrt_m_eff,
-            dash[2] + dash[3] * q.sqrt_m_eff,
-        ),
-        &mut q.fs,
-        dt,
-    )
-}
-
-/// One disc–wall contact: the wall is side j with zero radius, the normal
-/// points from the disc centre to the closest point of the wall.
-#[inline(always)]
-fn wall_contact(
-    p: &Particles,
-    w: &Wall,
-    law: &ContactLaw,
-    d: usize,
-    fs: &mut f64,
-    dt: f64,
-) -> ContactForce {
-    let x = p.pos[d];
-    let r = p.radius[d];
-    let c = w.closest(x);
-    let dd = c - x;
-    let d2 = dd.norm2();
-    if d2 >= r * r {
-        *fs = 0.0;
-        return ContactForce::default();
-    }
-    let dist = d2.sqrt();
-    let n = if dist > 0.0 {
-        dd * (1.0 / dist)
-    } else {
-        // centre on the wall: push along the wall's left normal
-        let t = w.b - w.a;
-        let l = t.norm();
-        if l > 0.0 {
-            t.perp() * (-1.0 / l)
-        } else {
-            Vec2::new(1.0, 0.0)
-        }
-    };
-    let delta = r - dist;
-    contact::evaluate(
-        law,
-        n,
-        delta,
-        &Side {
-            pos: x,
-            vel: p.vel[d],
-            omega: p.omega[d],
-            radius: r,
-        },
-        &Side {
-            pos: c,
-            vel: w.vel,
-            omega: 0.0,
-            radius: 0.0,
-        },
-        law.dashpots(effective_mass(p.inv_mass[d], 0.0)),
-        fs,
-        dt,
-    )
 }
