@@ -9,7 +9,8 @@
 //! is written and read back, and the discs are streamed through memory once
 //! per step instead of three times.
 //!
-//! The discs are cut into fixed blocks of [`BLOCK`] slots, swept in
+//! The discs are cut into blocks of
+//! [`block_size`](super::broadphase::block_size) slots, swept in
 //! parallel. A pair whose second disc lies in a later block ("cross" pair,
 //! a few per cent of the pairs with the space-filling slot order) is
 //! evaluated first, from the state before the step, into a small buffer;
@@ -29,9 +30,10 @@ use super::{BodyDamping, Granular};
 use crate::geom::Vec2;
 use rayon::prelude::*;
 
-/// Discs per sweep block (a parallel task). Fixed, so that the cross pairs
-/// and the summation order do not depend on the thread count.
-pub const BLOCK: usize = 512;
+thread_local! {
+    /// Per-thread accumulators of the block being swept (grown once).
+    static ACC: std::cell::RefCell<Vec<(Vec2, f64)>> = const { std::cell::RefCell::new(Vec::new()) };
+}
 
 /// Per-step constants of the sweep.
 struct Ctx<'a> {
@@ -45,6 +47,7 @@ struct Ctx<'a> {
     cross_first: &'a [u32],
     cross_in_start: &'a [u32],
     cross_in: &'a [(u32, u32)],
+    block: usize,
     gravity: Vec2,
     damping: BodyDamping,
     dt: f64,
@@ -161,6 +164,7 @@ impl Granular {
             cross_first,
             cross_in_start,
             cross_in,
+            block,
         } = &mut self.contacts;
         let nm = self.materials.len();
         cross_pairs(
@@ -184,6 +188,7 @@ impl Granular {
             cross_first,
             cross_in_start,
             cross_in,
+            block: *block,
             gravity: self.gravity,
             damping: self.damping,
             dt: self.dt,
@@ -213,7 +218,7 @@ impl Granular {
             wall_buf,
         };
         let has_ref = !ref_pos.is_empty();
-        let max2 = sweep_blocks::<ADVANCE>(0..n.div_ceil(BLOCK), all, &ctx);
+        let max2 = sweep_blocks::<ADVANCE>(0..n.div_ceil(*block), all, &ctx);
         if has_ref { max2.sqrt() } else { f64::INFINITY }
     }
 }
@@ -257,7 +262,7 @@ fn sweep_blocks<const ADVANCE: bool>(blocks: std::ops::Range<usize>, all: Block,
     }
     let mid = blocks.start + blocks.len() / 2;
     let pair_lo = ctx.first[all.lo] as usize;
-    let (a, b) = all.split(mid * BLOCK, ctx.first, pair_lo);
+    let (a, b) = all.split(mid * ctx.block, ctx.first, pair_lo);
     let (x, y) = rayon::join(
         || sweep_blocks::<ADVANCE>(blocks.start..mid, a, ctx),
         || sweep_blocks::<ADVANCE>(mid..blocks.end, b, ctx),
@@ -267,8 +272,21 @@ fn sweep_blocks<const ADVANCE: bool>(blocks: std::ops::Range<usize>, all: Block,
 
 /// Sweep one block: its discs in slot order, each one's contacts, then (with
 /// `ADVANCE`) the disc's step.
-#[inline(never)]
 fn sweep_block<const ADVANCE: bool>(blk: usize, b: Block, ctx: &Ctx) -> f64 {
+    ACC.with_borrow_mut(|acc| {
+        acc.clear();
+        acc.resize(b.pos.len(), (Vec2::ZERO, 0.0));
+        sweep_block_in::<ADVANCE>(blk, b, acc, ctx)
+    })
+}
+
+#[inline(never)]
+fn sweep_block_in<const ADVANCE: bool>(
+    blk: usize,
+    b: Block,
+    acc: &mut [(Vec2, f64)],
+    ctx: &Ctx,
+) -> f64 {
     let Block {
         lo,
         pos,
@@ -305,9 +323,8 @@ fn sweep_block<const ADVANCE: bool>(blk: usize, b: Block, ctx: &Ctx) -> f64 {
         &fixity[..n],
         &material[..n],
     );
-    // contributions to discs not yet reached, in L1 (the force and torque
-    // arrays are only written, once per disc)
-    let mut acc = [(Vec2::ZERO, 0.0f64); BLOCK];
+    // `acc`: contributions to discs not yet reached, in L1/L2 (the force
+    // and torque arrays are only written, once per disc)
     let acc = &mut acc[..n];
     // cross pairs whose second disc is here (their first disc is in an
     // earlier block), in list order
