@@ -352,34 +352,66 @@ fn sweep_block_in<const ADVANCE: bool>(
     for d in 0..n {
         let (mut sf, mut st) = acc[d];
         let end = ctx.first[lo + d + 1] as usize - pair_lo;
-        for q in &mut pairs[pk..end] {
-            let j = q.j as usize;
-            let cf = if j >= hi {
+        let mut k = pk;
+        while k < end {
+            let j = pairs[k].j as usize;
+            if j >= hi {
                 let (cf, fs) = ctx.cross_buf[ck];
                 ck += 1;
-                q.fs = fs;
-                cf
-            } else {
-                let jl = j - lo;
-                let kin = Kin {
-                    pos,
-                    vel,
-                    omega,
-                    radius,
-                };
-                let cf = if single {
-                    pair_contact(kin, d, jl, &law0, &dash0, q, ctx.dt)
-                } else {
-                    let l = material[d] as usize * ctx.n_mat + material[jl] as usize;
-                    pair_contact(kin, d, jl, &ctx.laws[l], &ctx.dash[l], q, ctx.dt)
-                };
-                let a = &mut acc[jl];
-                a.0 -= cf.f;
-                a.1 += cf.fs;
-                cf
+                pairs[k].fs = fs;
+                sf += cf.f;
+                st += cf.fs;
+                k += 1;
+                continue;
+            }
+            let jl = j - lo;
+            let kin = Kin {
+                pos,
+                vel,
+                omega,
+                radius,
             };
+            // two inner pairs of disc d side by side when the lanes apply
+            #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+            if single && k + 1 < end && (pairs[k + 1].j as usize) < hi {
+                let j2 = pairs[k + 1].j as usize - lo;
+                let (q1, q2) = (pairs[k], pairs[k + 1]);
+                if let Some((cf, fs)) = lanes::pair_contacts(
+                    kin,
+                    [d, d],
+                    [jl, j2],
+                    [q1.fs, q2.fs],
+                    [q1.sqrt_m_eff, q2.sqrt_m_eff],
+                    &law0,
+                    &dash0,
+                    ctx.dt,
+                ) {
+                    pairs[k].fs = fs[0];
+                    pairs[k + 1].fs = fs[1];
+                    for (jx, c) in [(jl, cf[0]), (j2, cf[1])] {
+                        let a = &mut acc[jx];
+                        a.0 -= c.f;
+                        a.1 += c.fs;
+                        sf += c.f;
+                        st += c.fs;
+                    }
+                    k += 2;
+                    continue;
+                }
+            }
+            let q = &mut pairs[k];
+            let cf = if single {
+                pair_contact(kin, d, jl, &law0, &dash0, q, ctx.dt)
+            } else {
+                let l = material[d] as usize * ctx.n_mat + material[jl] as usize;
+                pair_contact(kin, d, jl, &ctx.laws[l], &ctx.dash[l], q, ctx.dt)
+            };
+            let a = &mut acc[jl];
+            a.0 -= cf.f;
+            a.1 += cf.fs;
             sf += cf.f;
             st += cf.fs;
+            k += 1;
         }
         pk = end;
         while wk < walls.len() && walls[wk].disc as usize == lo + d {
@@ -545,4 +577,207 @@ fn wall_contact(
         fs,
         dt,
     )
+}
+
+/// Two disc–disc contacts in the two lanes of SSE2 registers (baseline on
+/// x86-64). Every lane performs exactly the IEEE operations of
+/// [`pair_contact`] and [`contact::evaluate`], in the same order (no fused
+/// multiply–add), so the results are bitwise those of the scalar code.
+///
+/// The intrinsics are `unsafe` only because they require SSE2, which the
+/// `cfg` guarantees is enabled for the whole build.
+#[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+mod lanes {
+    use super::{ContactForce, ContactLaw, Kin};
+    use crate::geom::Vec2;
+    use std::arch::x86_64::*;
+
+    #[inline(always)]
+    fn set(a: f64, b: f64) -> __m128d {
+        // SAFETY: SSE2 is enabled (module cfg).
+        unsafe { _mm_set_pd(b, a) }
+    }
+
+    #[inline(always)]
+    fn get(v: __m128d) -> [f64; 2] {
+        // SAFETY: SSE2 is enabled (module cfg).
+        unsafe { [_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v))] }
+    }
+
+    /// The contacts of the inner pairs `(ix[l], jx[l])` with shear
+    /// histories `fs` and cached `√m_eff` `sm`: forces and new histories,
+    /// or `None` if a pair has coincident centres (left to the scalar path).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn pair_contacts(
+        p: Kin,
+        ix: [usize; 2],
+        jx: [usize; 2],
+        fs: [f64; 2],
+        sm: [f64; 2],
+        law: &ContactLaw,
+        dash: &[f64; 4],
+        dt: f64,
+    ) -> Option<([ContactForce; 2], [f64; 2])> {
+        // SAFETY: SSE2 is enabled (module cfg); no memory is accessed
+        // through pointers.
+        let (fx, fy, fs_tot, fs_new) = unsafe {
+            let [i1, i2] = ix;
+            let [j1, j2] = jx;
+            let (pi1, pi2, pj1, pj2) = (p.pos[i1], p.pos[i2], p.pos[j1], p.pos[j2]);
+            let (vi1, vi2, vj1, vj2) = (p.vel[i1], p.vel[i2], p.vel[j1], p.vel[j2]);
+            let ri = set(p.radius[i1], p.radius[i2]);
+            let rj = set(p.radius[j1], p.radius[j2]);
+            let rsum = _mm_add_pd(ri, rj);
+            // d = pj − pi, d² = dx dx + dy dy
+            let dx = _mm_sub_pd(set(pj1.x, pj2.x), set(pi1.x, pi2.x));
+            let dy = _mm_sub_pd(set(pj1.y, pj2.y), set(pi1.y, pi2.y));
+            let d2 = _mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy));
+            let touch = _mm_cmplt_pd(d2, _mm_mul_pd(rsum, rsum));
+            if _mm_movemask_pd(_mm_cmpeq_pd(d2, _mm_setzero_pd())) != 0 {
+                return None;
+            }
+            let dist = _mm_sqrt_pd(d2);
+            let inv = _mm_div_pd(_mm_set1_pd(1.0), dist);
+            let nx = _mm_mul_pd(dx, inv);
+            let ny = _mm_mul_pd(dy, inv);
+            let delta = _mm_sub_pd(rsum, dist);
+            let sm = set(sm[0], sm[1]);
+            let cn = _mm_add_pd(_mm_set1_pd(dash[0]), _mm_mul_pd(_mm_set1_pd(dash[1]), sm));
+            let cs = _mm_add_pd(_mm_set1_pd(dash[2]), _mm_mul_pd(_mm_set1_pd(dash[3]), sm));
+            // t = perp(n) = (−ny, nx); dv = vi − vj
+            let zero = _mm_setzero_pd();
+            // negation flips the sign bit (as `-x` does; 0 − x would turn −0 into +0)
+            let sign = _mm_set1_pd(-0.0);
+            let tx = _mm_xor_pd(ny, sign);
+            let dvx = _mm_sub_pd(set(vi1.x, vi2.x), set(vj1.x, vj2.x));
+            let dvy = _mm_sub_pd(set(vi1.y, vi2.y), set(vj1.y, vj2.y));
+            let vn = _mm_add_pd(_mm_mul_pd(dvx, nx), _mm_mul_pd(dvy, ny));
+            let wi = set(p.omega[i1], p.omega[i2]);
+            let wj = set(p.omega[j1], p.omega[j2]);
+            let vt = _mm_add_pd(
+                _mm_add_pd(
+                    _mm_add_pd(_mm_mul_pd(dvx, tx), _mm_mul_pd(dvy, nx)),
+                    _mm_mul_pd(wi, ri),
+                ),
+                _mm_mul_pd(wj, rj),
+            );
+            let fn_el = _mm_mul_pd(_mm_set1_pd(law.kn), delta);
+            let mut fn_tot = _mm_add_pd(fn_el, _mm_mul_pd(cn, vn));
+            if law.no_tension {
+                fn_tot = _mm_andnot_pd(_mm_cmplt_pd(fn_tot, zero), fn_tot);
+            }
+            let fs0 = set(fs[0], fs[1]);
+            let trial = _mm_sub_pd(
+                fs0,
+                _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(law.ks), vt), _mm_set1_pd(dt)),
+            );
+            let cap = _mm_add_pd(
+                _mm_mul_pd(_mm_set1_pd(law.mu), fn_el),
+                _mm_set1_pd(law.cohesion),
+            );
+            // if trial > cap { cap } else { trial }, then if < −cap { −cap }
+            let capped = _mm_min_pd(cap, trial);
+            let capped = _mm_max_pd(_mm_xor_pd(cap, sign), capped);
+            let damp = _mm_and_pd(_mm_cmpeq_pd(capped, trial), _mm_mul_pd(cs, vt));
+            let fs_tot = _mm_sub_pd(capped, damp);
+            // f = n (−F_n) + t F_s
+            let neg_fn = _mm_xor_pd(fn_tot, sign);
+            let fx = _mm_add_pd(_mm_mul_pd(nx, neg_fn), _mm_mul_pd(tx, fs_tot));
+            let fy = _mm_add_pd(_mm_mul_pd(ny, neg_fn), _mm_mul_pd(nx, fs_tot));
+            let (fx, fy) = (get(_mm_and_pd(touch, fx)), get(_mm_and_pd(touch, fy)));
+            let fs_tot = get(_mm_and_pd(touch, fs_tot));
+            let fs_new = get(_mm_and_pd(touch, capped));
+            (fx, fy, fs_tot, fs_new)
+        };
+        Some((
+            [
+                ContactForce {
+                    f: Vec2::new(fx[0], fy[0]),
+                    fs: fs_tot[0],
+                },
+                ContactForce {
+                    f: Vec2::new(fx[1], fy[1]),
+                    fs: fs_tot[1],
+                },
+            ],
+            fs_new,
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The two-lane kernel gives bitwise the scalar kernel's forces and
+    /// shear histories: touching and separated pairs, sticking and sliding,
+    /// with and without cohesion, dashpots and the no-tension clamp.
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    #[test]
+    fn two_lanes_equal_the_scalar_contact_bitwise() {
+        let mut rng = oorandom::Rand64::new(7);
+        let mut u = |a: f64, b: f64| a + (b - a) * rng.rand_float();
+        let mut cases = 0;
+        for case in 0..4000 {
+            let n = 4;
+            let pos: Vec<Vec2> = (0..n)
+                .map(|_| Vec2::new(u(0.0, 2.5), u(0.0, 2.5)))
+                .collect();
+            let vel: Vec<Vec2> = (0..n)
+                .map(|_| Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)))
+                .collect();
+            let omega: Vec<f64> = (0..n).map(|_| u(-5.0, 5.0)).collect();
+            let radius: Vec<f64> = (0..n).map(|_| u(0.8, 1.2)).collect();
+            let kin = Kin {
+                pos: &pos,
+                vel: &vel,
+                omega: &omega,
+                radius: &radius,
+            };
+            let law = ContactLaw {
+                kn: 1.0e4,
+                ks: u(0.5e4, 1.0e4),
+                mu: if case % 5 == 0 { 0.0 } else { u(0.1, 0.8) },
+                cohesion: if case % 3 == 0 { u(0.0, 50.0) } else { 0.0 },
+                beta_n: u(0.0, 1e-3),
+                zeta_n: u(0.0, 0.3),
+                zeta_s: if case % 2 == 0 { u(0.0, 0.2) } else { 0.0 },
+                no_tension: case % 4 == 1,
+                ..Default::default()
+            };
+            let dash = law.dashpot_terms();
+            let mk = |i: u32, j: u32, fs: f64| Pair {
+                i,
+                j,
+                fs,
+                sqrt_m_eff: 0.7,
+            };
+            let mut q = [mk(0, 1, u(-300.0, 300.0)), mk(2, 3, u(-300.0, 300.0))];
+            let dt = 1e-3;
+            let lanes = lanes::pair_contacts(
+                kin,
+                [0, 2],
+                [1, 3],
+                [q[0].fs, q[1].fs],
+                [0.7, 0.7],
+                &law,
+                &dash,
+                dt,
+            )
+            .expect("distinct centres");
+            for (l, (i, j)) in [(0, 1), (2, 3)].into_iter().enumerate() {
+                let cf = pair_contact(kin, i, j, &law, &dash, &mut q[l], dt);
+                let bits = |c: &ContactForce| [c.f.x.to_bits(), c.f.y.to_bits(), c.fs.to_bits()];
+                assert_eq!(bits(&cf), bits(&lanes.0[l]), "case {case} lane {l}");
+                assert_eq!(
+                    q[l].fs.to_bits(),
+                    lanes.1[l].to_bits(),
+                    "case {case} lane {l}"
+                );
+                cases += usize::from(cf.f != Vec2::ZERO);
+            }
+        }
+        assert!(cases > 1000, "touching cases: {cases}");
+    }
 }
