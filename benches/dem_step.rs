@@ -105,6 +105,8 @@ pub fn assembly(rows: &[DiscRow], n: usize) -> Granular {
     let mut g = Granular::new(p, vec![l], walls, 1.0);
     g.dt = 0.15 * g.critical_dt();
     g.gravity = Vec2::new(0.0, -9.81);
+    // as `efgdem run` between frames: disc forces are not kept
+    g.store_forces = false;
     g
 }
 

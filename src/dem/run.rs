@@ -209,6 +209,8 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, DemErr
     let t0 = Instant::now();
     let mut last_pb = 0usize;
     for cycle in 1..=steps {
+        // disc forces are only read by the frames
+        gr.store_forces = vtk_every > 0 && cycle % vtk_every == 0;
         gr.step();
         if cycle % 256 == 0 && !gr.is_finite() {
             return Err(DemError::Unstable {

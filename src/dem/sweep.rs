@@ -51,6 +51,8 @@ struct Ctx<'a> {
     gravity: Vec2,
     damping: BodyDamping,
     dt: f64,
+    /// Store each disc's force and moment.
+    store: bool,
 }
 
 /// The discs `lo..lo + pos.len()` with their pairs (as first disc) and
@@ -192,6 +194,7 @@ impl Granular {
             gravity: self.gravity,
             damping: self.damping,
             dt: self.dt,
+            store: !ADVANCE || self.store_forces,
         };
         let p = &mut self.particles;
         let ref_pos: &[Vec2] = if ADVANCE && self.grid.ref_pos.len() == n {
@@ -431,8 +434,10 @@ fn sweep_block_in<const ADVANCE: bool>(
             wk += 1;
         }
         let tq = radius[d] * st;
-        force[d] = sf;
-        torque[d] = tq;
+        if ctx.store {
+            force[d] = sf;
+            torque[d] = tq;
+        }
         if ADVANCE {
             integrate::advance(
                 &mut pos[d],
