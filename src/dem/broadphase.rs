@@ -18,14 +18,14 @@ use super::walls::Wall;
 use crate::geom::Vec2;
 use rayon::prelude::*;
 
-/// A disc–disc pair closer than the skin, `i < j` (slots), and its shear
-/// history `fs` (force along `t = perp(n)`, n from i to j; 0 when open).
-/// `sqrt_m_eff` caches `√(m_i m_j/(m_i + m_j))` for critical-ratio dashpots.
+/// A disc–disc pair closer than the skin, `i < j` (slots). `sqrt_m_eff`
+/// caches `√(m_i m_j/(m_i + m_j))` for critical-ratio dashpots. Its shear
+/// history is kept apart ([`ContactList::shear`]) so that the pair list
+/// is only read during a step (no write-back of 16 bytes per pair).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pair {
     pub i: u32,
     pub j: u32,
-    pub fs: f64,
     pub sqrt_m_eff: f64,
 }
 
@@ -44,6 +44,9 @@ pub struct WallPair {
 pub struct ContactList {
     /// Sorted by `(i, j)`.
     pub pairs: Vec<Pair>,
+    /// Shear history of each pair (force along `t = perp(n)`, n from i to
+    /// j; 0 when open), same index as `pairs`.
+    pub shear: Vec<f64>,
     /// Pairs whose first disc is `k`: `first[k]..first[k + 1]`.
     pub first: Vec<u32>,
     /// Disc–wall pairs, sorted by `(disc, wall)`.
@@ -123,6 +126,7 @@ impl ContactList {
     pub fn heap_bytes(&self) -> usize {
         use std::mem::size_of;
         self.pairs.capacity() * size_of::<Pair>()
+            + self.shear.capacity() * 8
             + (self.first.capacity() + self.cross.capacity() + self.cross_first.capacity()) * 4
             + self.cross_in_start.capacity() * 4
             + self.cross_buf.capacity() * size_of::<(ContactForce, f64)>()
@@ -283,11 +287,18 @@ impl NeighbourGrid {
         if self.reorder_every > 0 && self.rebuilds.is_multiple_of(self.reorder_every) {
             let order = self.strip_order();
             let new_of_old = p.permute(&order);
-            for q in &mut list.pairs {
-                let (a, b) = (new_of_old[q.i as usize], new_of_old[q.j as usize]);
-                (q.i, q.j) = if a < b { (a, b) } else { (b, a) };
-            }
-            list.pairs.sort_unstable_by_key(|q| (q.i, q.j));
+            let mut moved: Vec<(Pair, f64)> = list
+                .pairs
+                .iter()
+                .zip(&list.shear)
+                .map(|(q, &fs)| {
+                    let (a, b) = (new_of_old[q.i as usize], new_of_old[q.j as usize]);
+                    let (i, j) = if a < b { (a, b) } else { (b, a) };
+                    (Pair { i, j, ..*q }, fs)
+                })
+                .collect();
+            moved.sort_unstable_by_key(|(q, _)| (q.i, q.j));
+            (list.pairs, list.shear) = moved.into_iter().unzip();
             for w in &mut list.walls {
                 w.disc = new_of_old[w.disc as usize];
             }
@@ -346,7 +357,9 @@ impl NeighbourGrid {
             .collect();
         let total: usize = chunks.iter().map(|c| c.1.len()).sum();
         let old = std::mem::take(&mut list.pairs);
+        let old_shear = std::mem::take(&mut list.shear);
         let mut pairs = Vec::with_capacity(total + total / 8);
+        let mut shear = Vec::with_capacity(total + total / 8);
         list.first.clear();
         list.first.reserve(n + 1);
         list.first.push(0);
@@ -361,7 +374,7 @@ impl NeighbourGrid {
                         o += 1;
                     }
                     let fs = if o < old.len() && old[o].i == i && old[o].j == j {
-                        old[o].fs
+                        old_shear[o]
                     } else {
                         0.0
                     };
@@ -372,9 +385,9 @@ impl NeighbourGrid {
                     pairs.push(Pair {
                         i,
                         j,
-                        fs,
                         sqrt_m_eff: m_eff.sqrt(),
                     });
+                    shear.push(fs);
                 }
                 at += cnt as usize;
                 list.first.push(pairs.len() as u32);
@@ -382,6 +395,7 @@ impl NeighbourGrid {
             }
         }
         list.pairs = pairs;
+        list.shear = shear;
         list.index_cross(n);
     }
 

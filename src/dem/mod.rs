@@ -332,10 +332,10 @@ impl Granular {
             }
             s
         };
-        for q in &self.contacts.pairs {
+        for (q, &fs) in self.contacts.pairs.iter().zip(&self.contacts.shear) {
             let (i, j) = (q.i as usize, q.j as usize);
             let dist = (p.pos[j] - p.pos[i]).norm();
-            e.spring += spring(self.law(i, j), p.radius[i] + p.radius[j] - dist, q.fs);
+            e.spring += spring(self.law(i, j), p.radius[i] + p.radius[j] - dist, fs);
         }
         let nm = self.materials.len();
         for q in &self.contacts.walls {

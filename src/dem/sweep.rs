@@ -72,7 +72,8 @@ struct Block<'a> {
     material: &'a [u16],
     /// Positions at the last list rebuild (empty: no Verlet check).
     ref_pos: &'a [Vec2],
-    pairs: &'a mut [Pair],
+    pairs: &'a [Pair],
+    shear: &'a mut [f64],
     walls: &'a mut [WallPair],
     wall_buf: &'a mut [ContactForce],
 }
@@ -97,7 +98,9 @@ impl<'a> Block<'a> {
         } else {
             self.ref_pos.split_at(k)
         };
-        let (pairs, pairs2) = self.pairs.split_at_mut(first[at] as usize - pair_lo);
+        let kp = first[at] as usize - pair_lo;
+        let (pairs, pairs2) = self.pairs.split_at(kp);
+        let (shear, shear2) = self.shear.split_at_mut(kp);
         let w = self.walls.partition_point(|q| (q.disc as usize) < at);
         let (walls, walls2) = self.walls.split_at_mut(w);
         let (wall_buf, wall_buf2) = self.wall_buf.split_at_mut(w);
@@ -117,6 +120,7 @@ impl<'a> Block<'a> {
                 material,
                 ref_pos,
                 pairs,
+                shear,
                 walls,
                 wall_buf,
             },
@@ -135,6 +139,7 @@ impl<'a> Block<'a> {
                 material: material2,
                 ref_pos: ref_pos2,
                 pairs: pairs2,
+                shear: shear2,
                 walls: walls2,
                 wall_buf: wall_buf2,
             },
@@ -158,6 +163,7 @@ impl Granular {
         let n = self.particles.len();
         let ContactList {
             pairs,
+            shear,
             first,
             walls: wall_pairs,
             wall_buf,
@@ -175,6 +181,7 @@ impl Granular {
             &self.dash,
             nm,
             pairs,
+            shear,
             cross,
             cross_buf,
             self.dt,
@@ -217,6 +224,7 @@ impl Granular {
             material: &p.material,
             ref_pos,
             pairs,
+            shear,
             walls: wall_pairs,
             wall_buf,
         };
@@ -235,6 +243,7 @@ fn cross_pairs(
     dash: &[[f64; 4]],
     nm: usize,
     pairs: &[Pair],
+    shear: &[f64],
     cross: &[u32],
     cross_buf: &mut [(ContactForce, f64)],
     dt: f64,
@@ -245,11 +254,12 @@ fn cross_pairs(
         .zip(cross_buf.par_iter_mut())
         .with_min_len(256)
         .for_each(|(&k, out)| {
-            let mut q = pairs[k as usize];
+            let q = &pairs[k as usize];
+            let mut fs = shear[k as usize];
             let (i, j) = (q.i as usize, q.j as usize);
             let l = p.material[i] as usize * nm + p.material[j] as usize;
-            let cf = pair_contact(kin, i, j, &laws[l], &dash[l], &mut q, dt);
-            *out = (cf, q.fs);
+            let cf = pair_contact(kin, i, j, &laws[l], &dash[l], q, &mut fs, dt);
+            *out = (cf, fs);
         });
 }
 
@@ -305,6 +315,7 @@ fn sweep_block_in<const ADVANCE: bool>(
         material,
         ref_pos,
         pairs,
+        shear,
         walls,
         wall_buf,
     } = b;
@@ -361,7 +372,7 @@ fn sweep_block_in<const ADVANCE: bool>(
             if j >= hi {
                 let (cf, fs) = ctx.cross_buf[ck];
                 ck += 1;
-                pairs[k].fs = fs;
+                shear[k] = fs;
                 sf += cf.f;
                 st += cf.fs;
                 k += 1;
@@ -378,19 +389,19 @@ fn sweep_block_in<const ADVANCE: bool>(
             #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
             if single && k + 1 < end && (pairs[k + 1].j as usize) < hi {
                 let j2 = pairs[k + 1].j as usize - lo;
-                let (q1, q2) = (pairs[k], pairs[k + 1]);
+                let (q1, q2) = (&pairs[k], &pairs[k + 1]);
                 if let Some((cf, fs)) = lanes::pair_contacts(
                     kin,
                     [d, d],
                     [jl, j2],
-                    [q1.fs, q2.fs],
+                    [shear[k], shear[k + 1]],
                     [q1.sqrt_m_eff, q2.sqrt_m_eff],
                     &law0,
                     &dash0,
                     ctx.dt,
                 ) {
-                    pairs[k].fs = fs[0];
-                    pairs[k + 1].fs = fs[1];
+                    shear[k] = fs[0];
+                    shear[k + 1] = fs[1];
                     for (jx, c) in [(jl, cf[0]), (j2, cf[1])] {
                         let a = &mut acc[jx];
                         a.0 -= c.f;
@@ -402,12 +413,12 @@ fn sweep_block_in<const ADVANCE: bool>(
                     continue;
                 }
             }
-            let q = &mut pairs[k];
+            let (q, fs) = (&pairs[k], &mut shear[k]);
             let cf = if single {
-                pair_contact(kin, d, jl, &law0, &dash0, q, ctx.dt)
+                pair_contact(kin, d, jl, &law0, &dash0, q, fs, ctx.dt)
             } else {
                 let l = material[d] as usize * ctx.n_mat + material[jl] as usize;
-                pair_contact(kin, d, jl, &ctx.laws[l], &ctx.dash[l], q, ctx.dt)
+                pair_contact(kin, d, jl, &ctx.laws[l], &ctx.dash[l], q, fs, ctx.dt)
             };
             let a = &mut acc[jl];
             a.0 -= cf.f;
@@ -483,15 +494,18 @@ impl<'a> Kin<'a> {
     }
 }
 
-/// One disc–disc contact between the discs at `i` and `j` of `p`.
+/// One disc–disc contact between the discs at `i` and `j` of `p`; `fs` is
+/// the pair's shear history.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn pair_contact(
     p: Kin,
     i: usize,
     j: usize,
     law: &ContactLaw,
     dash: &[f64; 4],
-    q: &mut Pair,
+    q: &Pair,
+    fs: &mut f64,
     dt: f64,
 ) -> ContactForce {
     let (pi, pj) = (p.pos[i], p.pos[j]);
@@ -500,7 +514,7 @@ fn pair_contact(
     let d = pj - pi;
     let d2 = d.norm2();
     if d2 >= rsum * rsum {
-        q.fs = 0.0;
+        *fs = 0.0;
         return ContactForce::default();
     }
     let (n, dist) = if d2 > 0.0 {
@@ -529,7 +543,7 @@ fn pair_contact(
             dash[0] + dash[1] * q.sqrt_m_eff,
             dash[2] + dash[3] * q.sqrt_m_eff,
         ),
-        &mut q.fs,
+        fs,
         dt,
     )
 }
@@ -752,31 +766,22 @@ mod tests {
                 ..Default::default()
             };
             let dash = law.dashpot_terms();
-            let mk = |i: u32, j: u32, fs: f64| Pair {
+            let mk = |i: u32, j: u32| Pair {
                 i,
                 j,
-                fs,
                 sqrt_m_eff: 0.7,
             };
-            let mut q = [mk(0, 1, u(-300.0, 300.0)), mk(2, 3, u(-300.0, 300.0))];
+            let q = [mk(0, 1), mk(2, 3)];
+            let mut fs = [u(-300.0, 300.0), u(-300.0, 300.0)];
             let dt = 1e-3;
-            let lanes = lanes::pair_contacts(
-                kin,
-                [0, 2],
-                [1, 3],
-                [q[0].fs, q[1].fs],
-                [0.7, 0.7],
-                &law,
-                &dash,
-                dt,
-            )
-            .expect("distinct centres");
+            let lanes = lanes::pair_contacts(kin, [0, 2], [1, 3], fs, [0.7, 0.7], &law, &dash, dt)
+                .expect("distinct centres");
             for (l, (i, j)) in [(0, 1), (2, 3)].into_iter().enumerate() {
-                let cf = pair_contact(kin, i, j, &law, &dash, &mut q[l], dt);
+                let cf = pair_contact(kin, i, j, &law, &dash, &q[l], &mut fs[l], dt);
                 let bits = |c: &ContactForce| [c.f.x.to_bits(), c.f.y.to_bits(), c.fs.to_bits()];
                 assert_eq!(bits(&cf), bits(&lanes.0[l]), "case {case} lane {l}");
                 assert_eq!(
-                    q[l].fs.to_bits(),
+                    fs[l].to_bits(),
                     lanes.1[l].to_bits(),
                     "case {case} lane {l}"
                 );
