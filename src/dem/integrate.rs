@@ -7,7 +7,7 @@ use super::particles::{FIX_ROT, FIX_X, FIX_Y, Particles};
 use crate::geom::Vec2;
 use rayon::prelude::*;
 
-/// Discs per parallel task (must match the gather in `dem::mod`).
+/// Discs per parallel task of [`central_difference`].
 pub const CHUNK: usize = 2048;
 
 /// Cundall's local damping of one force component: `F − α|F| sign(v)`.

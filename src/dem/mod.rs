@@ -11,8 +11,9 @@
 //! ... add external forces:  add_external_force(slot, f, point)
 //! integrate()               gravity, damping, central difference (Eqs. 50–54), walls move
 //! ```
-//! [`Granular::step`] runs the three in order (with the gather of phase 2
-//! fused into the update of phase 3; bitwise the same result).
+//! [`Granular::step`] runs the three as one [`sweep`] over the discs (each
+//! disc advances as soon as its contacts are summed; bitwise the same
+//! result).
 //!
 //! For the coupling (issue 4): build with [`build::build`] from a scenario
 //! (or [`Granular::new`]), then per step call `prepare_contacts`,
