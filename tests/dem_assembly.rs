@@ -195,9 +195,8 @@ fn shear_history_survives_renumbering() {
     assert_eq!(before, key(&g));
 }
 
-/// `step()` (fused gather + update) equals the three public phases.
-#[test]
-fn fused_step_equals_public_phases() {
+/// 800 frictional discs with a normal dashpot settling under gravity in a box.
+fn settling_gas(seed: u64) -> Granular {
     let law = ContactLaw {
         kn: 1.0e5,
         ks: 1.0e5,
@@ -205,9 +204,16 @@ fn fused_step_equals_public_phases() {
         zeta_n: 0.2,
         ..Default::default()
     };
-    let mut a = gas(800, 80.0, 2.0, law, 8);
-    a.gravity = Vec2::new(0.0, -9.81);
-    a.dt = 0.1 * a.critical_dt();
+    let mut g = gas(800, 80.0, 2.0, law, seed);
+    g.gravity = Vec2::new(0.0, -9.81);
+    g.dt = 0.1 * g.critical_dt();
+    g
+}
+
+/// `step()` (one fused sweep) equals the three public phases.
+#[test]
+fn fused_step_equals_public_phases() {
+    let mut a = settling_gas(8);
     let mut b = a.clone();
     for _ in 0..500 {
         a.step();
@@ -260,16 +266,7 @@ fn phases_rebuild_when_the_list_does_not_match_the_discs() {
 /// between frames) changes nothing but the force arrays.
 #[test]
 fn skipping_the_force_store_leaves_the_motion_bitwise_unchanged() {
-    let law = ContactLaw {
-        kn: 1.0e5,
-        ks: 1.0e5,
-        mu: 0.5,
-        zeta_n: 0.2,
-        ..Default::default()
-    };
-    let mut a = gas(800, 80.0, 2.0, law, 9);
-    a.gravity = Vec2::new(0.0, -9.81);
-    a.dt = 0.1 * a.critical_dt();
+    let mut a = settling_gas(9);
     let mut b = a.clone();
     b.store_forces = false;
     for _ in 0..300 {
