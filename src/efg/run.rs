@@ -9,7 +9,7 @@
 //! `output.vtk_every` steps) or `<body>.vtu` (static).
 //!
 //! Bodies are EFG ([`EfgBody`]) or bilinear FE ([`FemBody`],
-//! `method = "fem-q4"`); both are driven the same way through [`Body`].
+//! `method = "fem-q4"`); both are driven the same way through the private `Body` enum.
 
 use super::assemble::PointShapes;
 use super::body::EfgBody;
