@@ -227,12 +227,7 @@ fn grow(
         }
         gr.step();
     }
-    if !gr.is_finite() {
-        return Err(DemError::Unstable {
-            step: gr.step,
-            dt_crit: gr.critical_dt(),
-        });
-    }
+    gr.check_finite()?;
     let p = &gr.particles;
     Ok((0..count)
         .map(|id| {
@@ -278,12 +273,7 @@ pub fn settle_in_box(
     for _ in 0..steps {
         gr.step();
     }
-    if !gr.is_finite() {
-        return Err(DemError::Unstable {
-            step: gr.step,
-            dt_crit: gr.critical_dt(),
-        });
-    }
+    gr.check_finite()?;
     let p = &gr.particles;
     Ok((0..p.len())
         .map(|id| {

@@ -289,6 +289,19 @@ impl Granular {
             && p.omega.iter().all(|w| w.is_finite())
     }
 
+    /// [`DemError::Unstable`] at the present step unless every disc state
+    /// is finite.
+    pub fn check_finite(&self) -> Result<(), DemError> {
+        if self.is_finite() {
+            Ok(())
+        } else {
+            Err(DemError::Unstable {
+                step: self.step,
+                dt_crit: self.critical_dt(),
+            })
+        }
+    }
+
     /// Slot of scenario disc `id` (0-based).
     pub fn slot(&self, id: usize) -> usize {
         self.particles.slot[id] as usize
