@@ -259,6 +259,18 @@ impl Newmark {
     }
 }
 
+/// The inputs a body's time stepping needs: a positive finite step and a
+/// positive density (body `name`). The message says which is wrong.
+pub fn check_dynamic(dt: f64, density: f64, name: &str) -> Result<(), String> {
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(format!("time step must be > 0 (got {dt})"));
+    }
+    if density <= 0.0 {
+        return Err(format!("body `{name}`: dynamics needs a density > 0"));
+    }
+    Ok(())
+}
+
 /// `Ü` from `M Ü = F − C U̇ − K̄ U` (a temporary Cholesky factor of M; zero
 /// without factoring when the right-hand side vanishes). Call it before
 /// [`Newmark::new`] to keep the two factors from coexisting in memory.

@@ -377,17 +377,8 @@ impl EfgBody {
     /// `α₁M + α₄C + K̄` once and compute the initial acceleration from the
     /// equation of motion under the permanent loads (released loads off).
     pub fn start_dynamic(&mut self, dt: f64) -> Result<(), EfgError> {
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(EfgError::Invalid(format!(
-                "time step must be > 0 (got {dt})"
-            )));
-        }
-        if self.material.density <= 0.0 {
-            return Err(EfgError::Invalid(format!(
-                "body `{}`: dynamics needs a density > 0",
-                self.name
-            )));
-        }
+        crate::newmark::check_dynamic(dt, self.material.density, &self.name)
+            .map_err(EfgError::Invalid)?;
         self.params.dt = dt;
         let m = self.ops.gram.scaled(self.material.density);
         let c = (self.material.damping > 0.0).then(|| self.ops.gram.scaled(self.material.damping));

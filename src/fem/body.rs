@@ -540,17 +540,8 @@ impl FemBody {
     /// `α₁M + α₄C + K` once and compute the initial acceleration under the
     /// permanent loads (released loads off; prescribed DOFs: `ü_c = 0`).
     pub fn start_dynamic(&mut self, dt: f64) -> Result<(), FemError> {
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(FemError::Invalid(format!(
-                "time step must be > 0 (got {dt})"
-            )));
-        }
-        if self.material.density <= 0.0 {
-            return Err(FemError::Invalid(format!(
-                "body `{}`: dynamics needs a density > 0",
-                self.name
-            )));
-        }
+        crate::newmark::check_dynamic(dt, self.material.density, &self.name)
+            .map_err(FemError::Invalid)?;
         self.params.dt = dt;
         let m = self.mass_matrix();
         let c = (self.material.damping > 0.0).then(|| {
