@@ -160,6 +160,17 @@ fn impose(constraints: &[Constraint], u: &mut [f64], step: usize, dt: f64) {
 }
 
 /// Nodes sharing an element with `node` (itself included), ascending.
+/// Nodes of the grid element in column `i`, row `j`, counter-clockwise from
+/// its lower-left corner (the Q4 node order).
+fn element_nodes(nx: usize, i: usize, j: usize) -> [usize; 4] {
+    [
+        j * nx + i,
+        j * nx + i + 1,
+        (j + 1) * nx + i + 1,
+        (j + 1) * nx + i,
+    ]
+}
+
 fn neighbours(nx: usize, ny: usize, node: usize) -> impl Iterator<Item = usize> {
     let (i, j) = (node % nx, node / nx);
     (j.saturating_sub(1)..=(j + 1).min(ny - 1))
@@ -244,12 +255,7 @@ impl FemBody {
         let mut phi_integral = vec![0.0; n];
         for j in 0..ny - 1 {
             for i in 0..nx - 1 {
-                let nodes = [
-                    j * nx + i,
-                    j * nx + i + 1,
-                    (j + 1) * nx + i + 1,
-                    (j + 1) * nx + i,
-                ];
+                let nodes = element_nodes(nx, i, j);
                 let xy = [
                     [xs[i], ys[j]],
                     [xs[i + 1], ys[j]],
@@ -461,12 +467,7 @@ impl FemBody {
         };
         let i = cell(p.x, self.origin.x, self.size.x, nx);
         let j = cell(p.y, self.origin.y, self.size.y, ny);
-        let nodes = [
-            j * nx + i,
-            j * nx + i + 1,
-            (j + 1) * nx + i + 1,
-            (j + 1) * nx + i,
-        ];
+        let nodes = element_nodes(nx, i, j);
         let xy = nodes.map(|k| self.node(k).to_array());
         let (xi, eta) = q4::parent_of_rect(&xy, p.to_array());
         Ok(Located {
@@ -741,12 +742,7 @@ impl FemBody {
         let mut count = vec![0.0; n];
         for j in 0..ny - 1 {
             for i in 0..nx - 1 {
-                let nodes = [
-                    j * nx + i,
-                    j * nx + i + 1,
-                    (j + 1) * nx + i + 1,
-                    (j + 1) * nx + i,
-                ];
+                let nodes = element_nodes(nx, i, j);
                 let xy = nodes.map(|k| self.node(k).to_array());
                 for (a, c) in q4::CORNERS.iter().enumerate() {
                     let loc = Located {
