@@ -159,7 +159,6 @@ fn impose(constraints: &[Constraint], u: &mut [f64], step: usize, dt: f64) {
     }
 }
 
-/// Nodes sharing an element with `node` (itself included), ascending.
 /// Nodes of the grid element in column `i`, row `j`, counter-clockwise from
 /// its lower-left corner (the Q4 node order).
 fn element_nodes(nx: usize, i: usize, j: usize) -> [usize; 4] {
@@ -171,6 +170,7 @@ fn element_nodes(nx: usize, i: usize, j: usize) -> [usize; 4] {
     ]
 }
 
+/// Nodes sharing an element with `node` (itself included), ascending.
 fn neighbours(nx: usize, ny: usize, node: usize) -> impl Iterator<Item = usize> {
     let (i, j) = (node % nx, node / nx);
     (j.saturating_sub(1)..=(j + 1).min(ny - 1))
