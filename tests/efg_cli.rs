@@ -1,37 +1,17 @@
 //! The `efgdem` binary on EFG scenarios: the Timoshenko example end to end,
 //! and bad input reported with file, line and field, exit code 2.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_efgdem"))
-}
-
-fn tmpdir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("efgdem-cli-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::{bin, run, summary, tmpdir};
+use std::path::Path;
 
 #[test]
 fn timoshenko_example_reports_tip_deflection() {
-    let out = tmpdir("tim");
+    let out = tmpdir("cli-tim");
     let ex = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/timoshenko.toml");
-    let st = bin()
-        .args([
-            "run",
-            ex.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .status()
-        .unwrap();
-    assert!(st.success());
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    run(&ex, &out);
+    let s = summary(&out);
     let tip = s["tip_uy"].as_f64().unwrap();
     let exact = s["bodies"][0]["timoshenko"]["tip_uy_exact"]
         .as_f64()
@@ -57,7 +37,7 @@ fn timoshenko_example_reports_tip_deflection() {
 
 #[test]
 fn dynamic_run_writes_frames_and_series() {
-    let out = tmpdir("dyn");
+    let out = tmpdir("cli-dyn");
     let f = out.join("vib.toml");
     std::fs::write(
         &f,
@@ -88,17 +68,7 @@ vtk_every = 5
 "#,
     )
     .unwrap();
-    let st = bin()
-        .args([
-            "run",
-            f.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .status()
-        .unwrap();
-    assert!(st.success());
+    run(&f, &out);
     let pvd = std::fs::read_to_string(out.join("b.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet").count(), 5);
     let frame = std::fs::read_to_string(out.join("frames/b_000020.vtu")).unwrap();
@@ -149,7 +119,7 @@ fn bad(tag: &str, from: &str, to: &str, line: usize, field: &str, words: &str) {
 
 #[test]
 fn good_file_checks() {
-    let d = tmpdir("good");
+    let d = tmpdir("cli-good");
     let f = d.join("good.toml");
     std::fs::write(&f, GOOD).unwrap();
     let o = bin().args(["check", f.to_str().unwrap()]).output().unwrap();

@@ -3,41 +3,14 @@
 //! rejected with file, line and field, and the nine-disc test with an FE
 //! plate (coupled run).
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_efgdem"))
-}
-
-fn tmpdir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("efgdem-femcli-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(file: &Path, out: &Path) {
-    let o = bin()
-        .args([
-            "run",
-            file.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-}
-
-fn summary(out: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
-}
+use common::{bin, run, summary, tmpdir};
+use std::path::Path;
 
 #[test]
 fn fem_timoshenko_example_writes_tip_uy() {
-    let out = tmpdir("tim");
+    let out = tmpdir("femcli-tim");
     let ex = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/timoshenko_fem.toml");
     run(&ex, &out);
     let s = summary(&out);
@@ -93,7 +66,7 @@ vtk_every = 5
 
 #[test]
 fn fem_dynamic_run_writes_frames_and_history() {
-    let out = tmpdir("dyn");
+    let out = tmpdir("femcli-dyn");
     let f = out.join("vib.toml");
     std::fs::write(&f, DYN).unwrap();
     run(&f, &out);
@@ -172,7 +145,7 @@ fn efg_options_on_a_fem_body_are_reported() {
 /// the plate, and the plate's edges where the moving rigid plates put them.
 #[test]
 fn fem_nine_disc_example_runs_coupled() {
-    let out = tmpdir("nine");
+    let out = tmpdir("femcli-nine");
     let ex = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/fem_nine_disc_test1.toml");
     run(&ex, &out);
     let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();

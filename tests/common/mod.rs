@@ -1,0 +1,38 @@
+//! Helpers shared by the CLI tests: the binary, a fresh output directory,
+//! a run that must succeed, and its `summary.json`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The `efgdem` binary built for the tests.
+pub fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_efgdem"))
+}
+
+/// An empty directory `efgdem-{tag}-{pid}` in the system's temp dir.
+pub fn tmpdir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("efgdem-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// `efgdem run FILE -q -o OUT`, which must succeed (stderr shown if not).
+pub fn run(file: &Path, out: &Path) {
+    let o = bin()
+        .args([
+            "run",
+            file.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// The `summary.json` a run wrote to `out`.
+pub fn summary(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
