@@ -3,6 +3,7 @@
 //! time step. Two implementations: the EFG body and (for comparison) the
 //! bilinear FE body, so the coupling never knows which one it talks to.
 
+use crate::compliance::{BoundaryGreen, Compliance, PointRows};
 use crate::geom::Vec2;
 use crate::newmark::{Newmark, State};
 use crate::scenario::body::Edge;
@@ -150,15 +151,16 @@ pub trait Continuum: Send {
     /// First half of an implicit step (contact springs treated implicitly):
     /// solve the step under the accumulated loads, and report, for the
     /// material points `points[k] = (chain, x)`, the free displacement
-    /// `free[k]` at `t + Δt` and the compliance `S` (2m × 2m, row-major,
-    /// index `2k + a`): point forces `f` change the displacements at
-    /// `t + Δt` by `S f`.
+    /// `free[k]` at `t + Δt`; [`compliance`](Self::compliance) then gives
+    /// `S`: point forces `f` change the displacements at `t + Δt` by `S f`.
     fn begin_step(
         &mut self,
         points: &[(usize, Vec2)],
         free: &mut Vec<Vec2>,
-        compliance: &mut Vec<f64>,
     ) -> Result<(), SolveError>;
+    /// The compliance `S = Φ A⁻¹ Φᵀ` at the points of
+    /// [`begin_step`](Self::begin_step).
+    fn compliance(&mut self) -> Compliance<'_>;
     /// Second half: add the point forces `forces[k]` at the points of
     /// [`begin_step`](Self::begin_step), accept the step, clear the loads
     /// and refresh the contact boundary.
@@ -166,7 +168,7 @@ pub trait Continuum: Send {
     /// Advance one time step with the accumulated loads, clear them, and
     /// refresh the contact boundary.
     fn advance(&mut self) -> Result<(), SolveError> {
-        self.begin_step(&[], &mut Vec::new(), &mut Vec::new())?;
+        self.begin_step(&[], &mut Vec::new())?;
         self.finish_step(&[])
     }
     /// Kinetic and strain energy of the present state.
@@ -208,6 +210,21 @@ pub fn add_row_load(force: &mut [f64], row: &[(u32, f64)], f: Vec2) {
     }
 }
 
+/// How a body computes the compliance of the implicit contact step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ComplianceMode {
+    /// Through the boundary Green matrix `G = (A⁻¹)_BB`, built once
+    /// ([`crate::compliance`]): no solve per contact.
+    #[default]
+    Boundary,
+    /// `A⁻¹Φᵀ` by 2 solves per contact and step (the reference).
+    Direct,
+}
+
+/// Largest boundary Green matrix a body keeps (bytes); a body whose
+/// boundary DOFs need more uses [`ComplianceMode::Direct`].
+pub const MAX_GREEN_BYTES: usize = 2 << 30;
+
 /// A body with its contact boundary: chains along its contact edges through
 /// points whose rows are computed once, at their true displaced positions
 /// (E7). The [`Continuum`] the coupling drives, for EFG and FE alike.
@@ -218,6 +235,13 @@ pub struct WithBoundary<B> {
     rows: Vec<Vec<Row>>,
     /// Rows of the points of the current implicit step.
     point_rows: Vec<Row>,
+    pub mode: ComplianceMode,
+    /// `G`, built at the first implicit step with contacts.
+    green: Option<BoundaryGreen>,
+    /// The rows of the step's points on `G`.
+    mapped: PointRows,
+    /// `S` of the step ([`ComplianceMode::Direct`]).
+    dense: Vec<f64>,
 }
 
 impl<B: ContactBody> WithBoundary<B> {
@@ -236,6 +260,10 @@ impl<B: ContactBody> WithBoundary<B> {
             chains,
             rows,
             point_rows: Vec::new(),
+            mode: ComplianceMode::default(),
+            green: None,
+            mapped: PointRows::default(),
+            dense: Vec::new(),
         };
         c.refresh();
         Ok(c)
@@ -257,11 +285,71 @@ impl<B: ContactBody> WithBoundary<B> {
         self.body.row(x).unwrap_or_default()
     }
 
-    fn solve_error(&self, e: B::Error) -> SolveError {
+    fn solve_error(&self, e: impl std::fmt::Display) -> SolveError {
         SolveError {
             body: self.body.name().to_string(),
             message: e.to_string(),
         }
+    }
+
+    /// The nodes any contact point of the chains can load: those of the
+    /// rows at the chain points and at three points inside every segment
+    /// (a support that reaches a segment reaches one of them; a node missed
+    /// here is added when a contact first needs it).
+    fn boundary_nodes(&self) -> Vec<u32> {
+        let mut nodes: Vec<u32> = self.rows.iter().flatten().flatten().map(|e| e.0).collect();
+        for chain in &self.chains {
+            for s in 0..chain.segments() {
+                for t in [0.25, 0.5, 0.75] {
+                    nodes.extend(self.row(chain.material_point(s, t)).iter().map(|e| e.0));
+                }
+            }
+        }
+        nodes.sort_unstable();
+        nodes.dedup();
+        nodes
+    }
+
+    /// The boundary Green matrix, if built (size and memory for reports).
+    pub fn green(&self) -> Option<&BoundaryGreen> {
+        self.green.as_ref()
+    }
+
+    /// Build `G` (first call) and extend it to the nodes of the step's rows
+    /// if a contact reaches one it does not hold yet.
+    fn ensure_green(&mut self) -> Result<(), SolveError> {
+        let seed = if self.green.is_none() {
+            let nodes = self.boundary_nodes();
+            let nb = 2 * nodes.len();
+            if nb * nb * 8 > MAX_GREEN_BYTES {
+                self.mode = ComplianceMode::Direct;
+                return Ok(());
+            }
+            Some(nodes)
+        } else {
+            None
+        };
+        let covered =
+            |g: &BoundaryGreen, rows: &[Row]| rows.iter().all(|r| g.covers(r.iter().map(|e| e.0)));
+        let name = self.body.name().to_string();
+        let err = |e: crate::sparse::SparseError| SolveError {
+            body: name.clone(),
+            message: e.to_string(),
+        };
+        let Some(nm) = self.body.newmark_mut() else {
+            return Ok(());
+        };
+        let green = self
+            .green
+            .get_or_insert_with(|| BoundaryGreen::new(nm.n(), nm.imposed().to_vec()));
+        if let Some(nodes) = seed {
+            green.extend(nodes, nm.factor()).map_err(err)?;
+        }
+        if !covered(green, &self.point_rows) {
+            let extra: Vec<u32> = self.point_rows.iter().flatten().map(|e| e.0).collect();
+            green.extend(extra, nm.factor()).map_err(err)?;
+        }
+        Ok(())
     }
 }
 
@@ -290,23 +378,46 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         &mut self,
         points: &[(usize, Vec2)],
         free: &mut Vec<Vec2>,
-        compliance: &mut Vec<f64>,
     ) -> Result<(), SolveError> {
         let mut rows = std::mem::take(&mut self.point_rows);
         rows.clear();
         rows.extend(points.iter().map(|&(_, x)| self.row(x)));
-        let res = self
-            .body
-            .predict()
-            .map(|nm| nm.point_compliance(&rows, free, compliance));
         self.point_rows = rows;
-        res.map_err(|e| self.solve_error(e))
+        if !points.is_empty() && self.mode == ComplianceMode::Boundary {
+            self.ensure_green()?;
+        }
+        let direct = self.mode == ComplianceMode::Direct;
+        let (rows, dense) = (&self.point_rows, &mut self.dense);
+        let res = self.body.predict().map(|nm| {
+            if direct {
+                nm.point_compliance(rows, free, dense);
+            } else {
+                free.clear();
+                free.extend(rows.iter().map(|r| interpolate(r, nm.solution())));
+            }
+        });
+        res.map_err(|e| self.solve_error(e))?;
+        if let (false, Some(g)) = (direct, &self.green) {
+            self.mapped.set(self.point_rows.iter().map(|r| &r[..]), g);
+        }
+        Ok(())
+    }
+    fn compliance(&mut self) -> Compliance<'_> {
+        match (&self.green, self.mode) {
+            (Some(g), ComplianceMode::Boundary) => Compliance::Boundary(g, &mut self.mapped),
+            _ => Compliance::Dense(&self.dense),
+        }
     }
     /// The forces join the solution through `A⁻¹Φᵀ`, and are booked as the
     /// step's point loads (an FE body's support reactions exclude them).
     fn finish_step(&mut self, forces: &[Vec2]) -> Result<(), SolveError> {
+        let direct = self.mode == ComplianceMode::Direct;
         if let Some(nm) = self.body.newmark_mut() {
-            nm.apply_point_forces(forces);
+            if direct {
+                nm.apply_point_forces(forces);
+            } else {
+                nm.add_point_forces(self.point_rows.iter().map(|r| &r[..]), forces);
+            }
         }
         for (row, f) in self.point_rows.iter().zip(forces) {
             self.body.add_point_load_row(row, *f);

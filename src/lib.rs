@@ -14,6 +14,7 @@
 //! - [`output`]: history CSV, ParaView files, summary JSON.
 //! - [`run`]: runs a scenario end to end (what `efgdem run` does).
 
+pub mod compliance;
 pub mod continuum;
 pub mod coupling;
 pub mod dem;

@@ -160,6 +160,11 @@ impl Newmark {
     }
 
     /// The step's solution `U₊` after [`predict`](Self::predict).
+    pub fn solution(&self) -> &[f64] {
+        &self.rhs
+    }
+
+    /// The step's solution `U₊` after [`predict`](Self::predict), to correct.
     pub fn solution_mut(&mut self) -> &mut [f64] {
         &mut self.rhs
     }
@@ -224,6 +229,46 @@ impl Newmark {
                 for (u, p) in self.rhs.iter_mut().zip(col) {
                     *u += fc * p;
                 }
+            }
+        }
+    }
+
+    /// The factor of `α₁M + α₄C + K̄` (for
+    /// [`BoundaryGreen`](crate::compliance::BoundaryGreen)).
+    pub fn factor(&self) -> &Cholesky {
+        &self.factor
+    }
+
+    /// DOFs whose value the body imposes (empty: none).
+    pub fn imposed(&self) -> &[bool] {
+        &self.imposed
+    }
+
+    /// After [`predict`](Self::predict): `U₊ += A⁻¹ Φᵀ f`, the forces
+    /// `f[k]` at points with rows `rows[k]` (none on imposed DOFs), with one
+    /// solve.
+    pub fn add_point_forces<'r>(
+        &mut self,
+        rows: impl IntoIterator<Item = &'r [(u32, f64)]>,
+        f: &[Vec2],
+    ) {
+        self.tmp.iter_mut().for_each(|x| *x = 0.0);
+        let mut any = false;
+        for (row, fk) in rows.into_iter().zip(f) {
+            for &(j, p) in row {
+                for (a, fa) in [(0, fk.x), (1, fk.y)] {
+                    let dof = 2 * j as usize + a;
+                    if fa != 0.0 && !self.imposed.get(dof).copied().unwrap_or(false) {
+                        self.tmp[dof] += p * fa;
+                        any = true;
+                    }
+                }
+            }
+        }
+        if any {
+            self.factor.solve_in_place(&mut self.tmp);
+            for (u, d) in self.rhs.iter_mut().zip(&self.tmp) {
+                *u += d;
             }
         }
     }

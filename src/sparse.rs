@@ -250,6 +250,25 @@ impl Cholesky {
             MemStack::new(&mut self.solve_mem),
         );
     }
+
+    /// Overwrite the `k` columns of `rhs` (column-major, `n × k`) with
+    /// `A⁻¹ rhs`, sequentially, with a workspace of its own: callable from
+    /// several threads at once (the start-up solves of
+    /// [`BoundaryGreen`](crate::compliance::BoundaryGreen)).
+    pub fn solve_columns(&self, rhs: &mut [f64], k: usize) -> Result<(), SparseError> {
+        let n = self.symbolic.nrows();
+        debug_assert_eq!(rhs.len(), n * k);
+        let mut mem = MemBuffer::try_new(self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq))
+            .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
+        let llt = LltRef::new(&self.symbolic, &self.values);
+        llt.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(rhs, n, k),
+            Par::Seq,
+            MemStack::new(&mut mem),
+        );
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -19,6 +19,7 @@
 //! * the body takes the forces, the discs get their opposite at the next
 //!   step: both sides see the same force at the same time level.
 
+use crate::compliance::Compliance;
 use crate::dem::contact::ContactLaw;
 use crate::geom::Vec2;
 
@@ -125,58 +126,321 @@ impl Linear {
     }
 }
 
-/// Solve `u = u_free + S g(u − u_base)` for the contact forces `g` on the
-/// body (semi-smooth Newton over the piecewise-affine contact laws).
-/// `s` is the 2m × 2m compliance, row-major. Returns the evaluations at the
-/// solution and the number of Newton iterations.
-pub fn solve(
-    contacts: &[Linear],
-    base: &[Vec2],
-    free: &[Vec2],
-    s: &[f64],
-    out: &mut Vec<Eval>,
-) -> usize {
-    let m = contacts.len();
-    let m2 = 2 * m;
-    let mut w = vec![Vec2::ZERO; m];
-    let mut mat = vec![0.0; m2 * m2];
-    let mut rhs = vec![0.0; m2];
-    out.clear();
-    out.extend(contacts.iter().map(|c| c.eval(Vec2::ZERO)));
-    const MAX_ITER: usize = 30;
-    for iter in 1..=MAX_ITER {
-        // residual R = w + base − free − S g, Newton matrix I − S J
-        for i in 0..m2 {
-            let mut sg = 0.0;
-            for (k, e) in out.iter().enumerate() {
-                sg += s[i * m2 + 2 * k] * e.g.x + s[i * m2 + 2 * k + 1] * e.g.y;
+/// Contacts up to which the Newton matrix `I − S J` is formed and factored
+/// densely (`8m³/3` flops); beyond, it is solved by GMRES with products `S x`.
+const DENSE_MAX: usize = 48;
+/// Semi-smooth Newton iterations at most (the regimes settle in 1–3).
+const MAX_NEWTON: usize = 30;
+/// GMRES: Krylov vectors per restart, restarts, relative tolerance.
+const KRYLOV: usize = 40;
+const RESTARTS: usize = 25;
+const GMRES_RTOL: f64 = 1e-13;
+
+/// The contact solve and its scratch (kept between steps).
+#[derive(Default)]
+pub struct Solver {
+    w: Vec<Vec2>,
+    s: Vec<f64>,
+    mat: Vec<f64>,
+    rhs: Vec<f64>,
+    r: Vec<Vec2>,
+    t: Vec<Vec2>,
+    st: Vec<Vec2>,
+    d: Vec<Vec2>,
+    /// Preconditioner blocks `(I − S_kk J_k)⁻¹`, row-major.
+    pre: Vec<[f64; 4]>,
+    /// Diagonal blocks `S_kk`.
+    diag: Vec<[f64; 4]>,
+    basis: Vec<Vec<Vec2>>,
+    hess: Vec<f64>,
+    res: Vec<Vec2>,
+    scratch: Vec<Vec2>,
+    /// Newton iterations and products `S x` of the last solve.
+    pub newton: usize,
+    pub products: usize,
+}
+
+impl Solver {
+    /// Solve `u = u_free + S g(u − u_base)` for the contact forces `g` on
+    /// the body (semi-smooth Newton over the piecewise-affine contact laws;
+    /// exact once the regimes settle). Writes the evaluations at the
+    /// solution; returns the number of Newton iterations.
+    ///
+    /// Up to [`DENSE_MAX`] contacts the Newton matrix `I − S J` is formed
+    /// and factored; above, each Newton step is solved by GMRES on products
+    /// `S x` (right block-Jacobi preconditioner `(I − S_kk J_k)⁻¹`), to a
+    /// relative residual of 1e-13. The contact springs are usually much
+    /// softer than the body, so `I − S J` is close to the identity and a few
+    /// products suffice.
+    pub fn solve(
+        &mut self,
+        contacts: &[Linear],
+        base: &[Vec2],
+        free: &[Vec2],
+        s: &mut Compliance,
+        out: &mut Vec<Eval>,
+    ) -> usize {
+        let m = contacts.len();
+        self.products = 0;
+        out.clear();
+        out.extend(contacts.iter().map(|c| c.eval(Vec2::ZERO)));
+        self.w.clear();
+        self.w.resize(m, Vec2::ZERO);
+        self.newton = if m <= DENSE_MAX {
+            s.dense(&mut self.s);
+            self.dense_newton(contacts, base, free, out)
+        } else {
+            self.krylov_newton(contacts, base, free, s, out)
+        };
+        self.newton
+    }
+
+    fn dense_newton(
+        &mut self,
+        contacts: &[Linear],
+        base: &[Vec2],
+        free: &[Vec2],
+        out: &mut [Eval],
+    ) -> usize {
+        let m2 = 2 * contacts.len();
+        let (s, w) = (&self.s, &mut self.w);
+        self.mat.resize(m2 * m2, 0.0);
+        self.rhs.resize(m2, 0.0);
+        let (mat, rhs) = (&mut self.mat, &mut self.rhs);
+        for iter in 1..=MAX_NEWTON {
+            // residual R = w + base − free − S g, Newton matrix I − S J
+            for i in 0..m2 {
+                let mut sg = 0.0;
+                for (k, e) in out.iter().enumerate() {
+                    sg += s[i * m2 + 2 * k] * e.g.x + s[i * m2 + 2 * k + 1] * e.g.y;
+                }
+                let (wi, bi, fi) = if i % 2 == 0 {
+                    (w[i / 2].x, base[i / 2].x, free[i / 2].x)
+                } else {
+                    (w[i / 2].y, base[i / 2].y, free[i / 2].y)
+                };
+                rhs[i] = -(wi + bi - fi - sg);
+                for (k, e) in out.iter().enumerate() {
+                    let (a, b) = (s[i * m2 + 2 * k], s[i * m2 + 2 * k + 1]);
+                    mat[i * m2 + 2 * k] = -(a * e.jac[0] + b * e.jac[2]);
+                    mat[i * m2 + 2 * k + 1] = -(a * e.jac[1] + b * e.jac[3]);
+                }
+                mat[i * m2 + i] += 1.0;
             }
-            let (wi, bi, fi) = if i % 2 == 0 {
-                (w[i / 2].x, base[i / 2].x, free[i / 2].x)
-            } else {
-                (w[i / 2].y, base[i / 2].y, free[i / 2].y)
-            };
-            rhs[i] = -(wi + bi - fi - sg);
-            for (k, e) in out.iter().enumerate() {
-                let (a, b) = (s[i * m2 + 2 * k], s[i * m2 + 2 * k + 1]);
-                mat[i * m2 + 2 * k] = -(a * e.jac[0] + b * e.jac[2]);
-                mat[i * m2 + 2 * k + 1] = -(a * e.jac[1] + b * e.jac[3]);
+            gauss_solve(mat, rhs, m2);
+            if settle(w, contacts, out, |k| Vec2::new(rhs[2 * k], rhs[2 * k + 1])) {
+                return iter;
             }
-            mat[i * m2 + i] += 1.0;
         }
-        gauss_solve(&mut mat, &mut rhs, m2);
-        let mut settled = true;
-        for (k, c) in contacts.iter().enumerate() {
-            w[k] += Vec2::new(rhs[2 * k], rhs[2 * k + 1]);
-            let e = c.eval(w[k]);
-            settled &= e.regime == out[k].regime;
-            out[k] = e;
+        MAX_NEWTON
+    }
+
+    fn krylov_newton(
+        &mut self,
+        contacts: &[Linear],
+        base: &[Vec2],
+        free: &[Vec2],
+        s: &mut Compliance,
+        out: &mut [Eval],
+    ) -> usize {
+        let m = contacts.len();
+        self.diag.clear();
+        self.diag.extend((0..m).map(|k| s.block(k, k)));
+        for v in [&mut self.r, &mut self.t, &mut self.st, &mut self.d] {
+            v.clear();
+            v.resize(m, Vec2::ZERO);
         }
-        if settled {
-            return iter;
+        for iter in 1..=MAX_NEWTON {
+            // R = w + base − free − S g; the Newton step solves (I − S J) d = −R
+            for (t, e) in self.t.iter_mut().zip(out.iter()) {
+                *t = e.g;
+            }
+            s.mul(&self.t, &mut self.st);
+            self.products += 1;
+            for k in 0..m {
+                self.r[k] = -(self.w[k] + base[k] - free[k] - self.st[k]);
+            }
+            self.pre.clear();
+            self.pre.extend(out.iter().zip(&self.diag).map(|(e, sk)| {
+                let a = mul2(sk, &e.jac);
+                inv2(&[1.0 - a[0], -a[1], -a[2], 1.0 - a[3]])
+            }));
+            self.gmres(s, out);
+            let d = std::mem::take(&mut self.d);
+            let settled = settle(&mut self.w, contacts, out, |k| d[k]);
+            self.d = d;
+            if settled {
+                return iter;
+            }
+        }
+        MAX_NEWTON
+    }
+
+    /// `y ← (I − S J) P x` (P the preconditioner), using `t`, `st`.
+    fn apply(&mut self, s: &mut Compliance, out: &[Eval], x: &[Vec2], y: &mut [Vec2]) {
+        for k in 0..x.len() {
+            let px = apply2(&self.pre[k], x[k]);
+            y[k] = px;
+            self.t[k] = apply2(&out[k].jac, px);
+        }
+        s.mul(&self.t, &mut self.st);
+        self.products += 1;
+        for (yk, sk) in y.iter_mut().zip(&self.st) {
+            *yk -= *sk;
         }
     }
-    MAX_ITER
+
+    /// Restarted GMRES with right preconditioning for `(I − S J) d = r`
+    /// (modified Gram–Schmidt, Givens rotations); the solution in `d`.
+    fn gmres(&mut self, s: &mut Compliance, out: &[Eval]) {
+        let m = self.r.len();
+        let dot = |a: &[Vec2], b: &[Vec2]| a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum::<f64>();
+        self.d.iter_mut().for_each(|v| *v = Vec2::ZERO);
+        let b_norm = dot(&self.r, &self.r).sqrt();
+        if b_norm == 0.0 {
+            return;
+        }
+        let tol = GMRES_RTOL * b_norm;
+        let mut basis = std::mem::take(&mut self.basis);
+        basis.resize_with(KRYLOV + 1, Vec::new);
+        for v in &mut basis {
+            v.resize(m, Vec2::ZERO);
+        }
+        let mut res = std::mem::take(&mut self.res); // residual of the current d
+        res.clear();
+        res.extend_from_slice(&self.r);
+        let mut hess = std::mem::take(&mut self.hess);
+        hess.resize((KRYLOV + 1) * KRYLOV, 0.0);
+        let h = |i: usize, j: usize| i * KRYLOV + j;
+        let mut scratch = std::mem::take(&mut self.scratch);
+        scratch.resize(m, Vec2::ZERO);
+        for _ in 0..RESTARTS {
+            let beta = dot(&res, &res).sqrt();
+            if beta <= tol {
+                break;
+            }
+            for (v, r) in basis[0].iter_mut().zip(&res) {
+                *v = *r * (1.0 / beta);
+            }
+            let mut g = [0.0; KRYLOV + 1];
+            g[0] = beta;
+            let mut rot = [(1.0, 0.0); KRYLOV];
+            let mut k = 0;
+            while k < KRYLOV {
+                let (head, tail) = basis.split_at_mut(k + 1);
+                self.apply(s, out, &head[k], &mut tail[0]);
+                let wv = &mut tail[0];
+                for (i, vi) in head.iter().enumerate() {
+                    let hij = dot(wv, vi);
+                    hess[h(i, k)] = hij;
+                    for (a, b) in wv.iter_mut().zip(vi) {
+                        *a -= *b * hij;
+                    }
+                }
+                let hn = dot(wv, wv).sqrt();
+                hess[h(k + 1, k)] = hn;
+                if hn > 0.0 {
+                    for a in wv.iter_mut() {
+                        *a = *a * (1.0 / hn);
+                    }
+                }
+                for (i, &(c, sn)) in rot.iter().enumerate().take(k) {
+                    let (a, b) = (hess[h(i, k)], hess[h(i + 1, k)]);
+                    hess[h(i, k)] = c * a + sn * b;
+                    hess[h(i + 1, k)] = -sn * a + c * b;
+                }
+                let (a, b) = (hess[h(k, k)], hess[h(k + 1, k)]);
+                let r = a.hypot(b);
+                let (c, sn) = if r > 0.0 { (a / r, b / r) } else { (1.0, 0.0) };
+                rot[k] = (c, sn);
+                hess[h(k, k)] = r;
+                hess[h(k + 1, k)] = 0.0;
+                g[k + 1] = -sn * g[k];
+                g[k] *= c;
+                k += 1;
+                if g[k].abs() <= tol || hn == 0.0 {
+                    break;
+                }
+            }
+            // y = H⁻¹ g (upper triangular), d += P Σ y_i v_i
+            let mut y = [0.0; KRYLOV];
+            for i in (0..k).rev() {
+                let mut v = g[i];
+                for j in i + 1..k {
+                    v -= hess[h(i, j)] * y[j];
+                }
+                y[i] = if hess[h(i, i)] != 0.0 {
+                    v / hess[h(i, i)]
+                } else {
+                    0.0
+                };
+            }
+            for (q, sc) in scratch.iter_mut().enumerate() {
+                let mut z = Vec2::ZERO;
+                for (i, yi) in y.iter().enumerate().take(k) {
+                    z += basis[i][q] * *yi;
+                }
+                *sc = apply2(&self.pre[q], z);
+            }
+            for (dk, z) in self.d.iter_mut().zip(&scratch) {
+                *dk += *z;
+            }
+            // true residual r − (I − S J) d for the next restart
+            for (t, (dk, e)) in self.t.iter_mut().zip(self.d.iter().zip(out)) {
+                *t = apply2(&e.jac, *dk);
+            }
+            s.mul(&self.t, &mut self.st);
+            self.products += 1;
+            for q in 0..m {
+                res[q] = self.r[q] - (self.d[q] - self.st[q]);
+            }
+        }
+        self.res = res;
+        self.scratch = scratch;
+        self.basis = basis;
+        self.hess = hess;
+    }
+}
+/// `w += d`, re-evaluate; true when no contact changed regime.
+fn settle(
+    w: &mut [Vec2],
+    contacts: &[Linear],
+    out: &mut [Eval],
+    d: impl Fn(usize) -> Vec2,
+) -> bool {
+    let mut settled = true;
+    for (k, c) in contacts.iter().enumerate() {
+        w[k] += d(k);
+        let e = c.eval(w[k]);
+        settled &= e.regime == out[k].regime;
+        out[k] = e;
+    }
+    settled
+}
+
+/// `a b` of 2 × 2 row-major matrices.
+fn mul2(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] + a[1] * b[2],
+        a[0] * b[1] + a[1] * b[3],
+        a[2] * b[0] + a[3] * b[2],
+        a[2] * b[1] + a[3] * b[3],
+    ]
+}
+
+/// Inverse of a 2 × 2 row-major matrix (identity if singular).
+fn inv2(a: &[f64; 4]) -> [f64; 4] {
+    let det = a[0] * a[3] - a[1] * a[2];
+    if det == 0.0 || !det.is_finite() {
+        return [1.0, 0.0, 0.0, 1.0];
+    }
+    [a[3] / det, -a[1] / det, -a[2] / det, a[0] / det]
+}
+
+/// `a x` for a 2 × 2 row-major matrix.
+#[inline]
+fn apply2(a: &[f64; 4], x: Vec2) -> Vec2 {
+    Vec2::new(a[0] * x.x + a[1] * x.y, a[2] * x.x + a[3] * x.y)
 }
 
 /// Solve `a x = b` in place (`b ← x`), Gaussian elimination with partial
@@ -324,7 +588,7 @@ mod tests {
         let base = [Vec2::new(0.01, 0.02)];
         let free = [Vec2::new(0.0101, 0.0199)];
         let mut out = Vec::new();
-        let it = solve(&[c], &base, &free, &s, &mut out);
+        let it = Solver::default().solve(&[c], &base, &free, &mut Compliance::Dense(&s), &mut out);
         assert!(it < 10);
         let g = out[0].g;
         let u = base[0]

@@ -1,7 +1,7 @@
 //! Driver for coupled scenarios (bodies and discs): `efgdem run` / `check`.
 
 use super::{CoupledModel, CouplingError};
-use crate::continuum::Continuum;
+use crate::continuum::{ComplianceMode, Continuum};
 use crate::dem::{Granular, build as dem_build};
 use crate::efg::body::EfgBody;
 use crate::efg::boundary::EfgContinuum;
@@ -37,6 +37,10 @@ pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
     let body_dt = dt * substeps as f64;
     let mut bodies: Vec<Box<dyn Continuum>> = Vec::new();
     let mut mats = Vec::new();
+    let mode = match sc.simulation.contact_solve {
+        crate::scenario::ContactSolve::Boundary => ComplianceMode::Boundary,
+        crate::scenario::ContactSolve::Direct => ComplianceMode::Direct,
+    };
     for spec in &sc.body {
         let (g, edges, refine) = (
             sc.simulation.gravity,
@@ -47,12 +51,16 @@ pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
             Method::Efg => {
                 let mut body = EfgBody::from_spec(spec, g)?;
                 body.start_dynamic(body_dt)?;
-                Box::new(EfgContinuum::new(body, edges, refine)?)
+                let mut c = EfgContinuum::new(body, edges, refine)?;
+                c.mode = mode;
+                Box::new(c)
             }
             Method::FemQ4 => {
                 let mut body = FemBody::from_spec(spec, g)?;
                 body.start_dynamic(body_dt)?;
-                Box::new(FemContinuum::new(body, edges, refine)?)
+                let mut c = FemContinuum::new(body, edges, refine)?;
+                c.mode = mode;
+                Box::new(c)
             }
         });
         mats.push(
@@ -425,6 +433,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
             "split_seconds": {
                 "dem": model.timing.dem,
                 "transfer": model.timing.transfer,
+                "contact_solve": model.timing.contact_solve,
                 "body_solve": model.timing.body,
             },
         },

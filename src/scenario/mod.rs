@@ -67,6 +67,22 @@ pub struct Simulation {
     /// Coupled runs: how disc–body contact forces reach the bodies.
     #[serde(default)]
     pub coupling: CouplingScheme,
+    /// Coupled runs: how a body gives the compliance of the implicit contact
+    /// step.
+    #[serde(default)]
+    pub contact_solve: ContactSolve,
+}
+
+/// `[simulation] contact_solve`: `"boundary"` (default: the body's
+/// boundary Green matrix, computed once at the first contact; no solve per
+/// contact) or `"direct"` (two solves per contact and step: the reference,
+/// for checking).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactSolve {
+    #[default]
+    Boundary,
+    Direct,
 }
 
 /// `[simulation] coupling`: `"implicit"` (default: contact springs solved
@@ -92,6 +108,7 @@ impl Default for Simulation {
             threads: 0,
             substeps: 1,
             coupling: CouplingScheme::Implicit,
+            contact_solve: ContactSolve::Boundary,
         }
     }
 }

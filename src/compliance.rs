@@ -1,0 +1,386 @@
+//! The response of a body's Newmark step to point forces on its contact
+//! boundary: the compliance `S = Φ A⁻¹ Φᵀ` of the implicit contact step
+//! (Eq. 49 with point loads through the rows `φ_J(x_H)`, Eq. 46 / E7).
+//!
+//! Each step solves `A U₊ = F + Φᵀ g` with the constant
+//! `A = α₁M + α₄C + K̄`. The contact forces `g` act only at material points
+//! of the contact boundary, and the rows of such points only touch a fixed
+//! set `B` of DOFs (the nodes whose support reaches the boundary). So the
+//! block `G = (A⁻¹)_BB` is computed once, by `|B|` solves in parallel
+//! blocks of right-hand sides, and kept dense ([`BoundaryGreen`]). Then,
+//! for any set of `m` contact points ([`PointRows`]):
+//!
+//! * one 2 × 2 block `S_kl` costs `|row_k| · |row_l|` products of 2 × 2
+//!   entries of `G` (no solve);
+//! * a product `S x` costs a scatter through the rows, a dense product over
+//!   the `n_act` DOFs that the rows touch (`n_act²`), and a gather;
+//! * the step's solution takes the forces with one solve, `A⁻¹ Φᵀ g`.
+//!
+//! The cost of the contact solve then depends on the contacts and the DOFs
+//! they touch, not on the size of the body (the body still pays its two
+//! solves per step: the free step and the contact forces).
+
+use crate::geom::Vec2;
+use crate::sparse::{Cholesky, SparseError};
+use rayon::prelude::*;
+
+/// No position (a DOF outside `B`, or an imposed DOF).
+pub const NONE: u32 = u32::MAX;
+
+/// Right-hand sides per start-up solve (a fixed block size: the result does
+/// not depend on the number of threads).
+const BLOCK: usize = 16;
+
+/// `G = (A⁻¹)_BB`, the inverse of the Newmark matrix restricted to the DOFs
+/// `B` that boundary rows touch: dense, column-major `|B| × |B|`.
+#[derive(Debug, Default)]
+pub struct BoundaryGreen {
+    /// The DOFs of `B`, in the order of `G`'s rows and columns.
+    dofs: Vec<u32>,
+    /// Position in `B` of every DOF of the body ([`NONE`] if not in `B`).
+    index: Vec<u32>,
+    /// Column-major entries.
+    g: Vec<f64>,
+    /// DOFs never put in `B` (imposed DOFs take no load and do not move).
+    excluded: Vec<bool>,
+}
+
+impl BoundaryGreen {
+    /// An empty `G` for a body of `n` DOFs; `excluded[i]` marks DOFs that
+    /// never enter `B` (imposed values, see
+    /// [`Newmark::set_imposed`](crate::newmark::Newmark::set_imposed)).
+    pub fn new(n: usize, excluded: Vec<bool>) -> Self {
+        BoundaryGreen {
+            dofs: Vec::new(),
+            index: vec![NONE; n],
+            g: Vec::new(),
+            excluded,
+        }
+    }
+
+    /// Number of DOFs in `B`.
+    pub fn len(&self) -> usize {
+        self.dofs.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.dofs.is_empty()
+    }
+
+    /// Bytes held by the dense block.
+    pub fn bytes(&self) -> usize {
+        self.g.len() * 8
+    }
+
+    /// Position of DOF `i` in `B`, or [`NONE`].
+    #[inline]
+    pub fn position(&self, i: usize) -> u32 {
+        self.index[i]
+    }
+
+    /// Entry `G(a, b)` for positions `a`, `b` in `B`.
+    #[inline]
+    pub fn get(&self, a: u32, b: u32) -> f64 {
+        self.g[a as usize + b as usize * self.dofs.len()]
+    }
+
+    /// Does `B` hold every DOF of the nodes `nodes` (or are they excluded)?
+    pub fn covers(&self, nodes: impl IntoIterator<Item = u32>) -> bool {
+        nodes.into_iter().all(|j| {
+            (0..2).all(|a| {
+                let i = 2 * j as usize + a;
+                self.index[i] != NONE || self.excluded.get(i).copied().unwrap_or(false)
+            })
+        })
+    }
+
+    /// Add both DOFs of `nodes` to `B` (those not there yet and not
+    /// excluded): one solve `A⁻¹ e_i` per new DOF, in parallel blocks of
+    /// right-hand sides; the new rows follow from the symmetry of `A`.
+    pub fn extend(
+        &mut self,
+        nodes: impl IntoIterator<Item = u32>,
+        factor: &Cholesky,
+    ) -> Result<(), SparseError> {
+        let n = self.index.len();
+        let mut new: Vec<u32> = Vec::new();
+        for j in nodes {
+            for a in 0..2 {
+                let i = 2 * j as usize + a;
+                if i < n && self.index[i] == NONE && !self.excluded.get(i).copied().unwrap_or(false)
+                {
+                    self.index[i] = 0; // mark; set below
+                    new.push(i as u32);
+                }
+            }
+        }
+        if new.is_empty() {
+            return Ok(());
+        }
+        new.sort_unstable();
+        let old = self.dofs.len();
+        let total = old + new.len();
+        self.dofs.extend_from_slice(&new);
+        for (p, &i) in self.dofs.iter().enumerate() {
+            self.index[i as usize] = p as u32;
+        }
+        // the new columns, A⁻¹ e_i restricted to B, in blocks of BLOCK solves
+        let dofs = &self.dofs;
+        let cols: Vec<Vec<f64>> = new
+            .par_chunks(BLOCK)
+            .map(|chunk| -> Result<Vec<f64>, SparseError> {
+                let k = chunk.len();
+                let mut rhs = vec![0.0; n * k];
+                for (c, &i) in chunk.iter().enumerate() {
+                    rhs[c * n + i as usize] = 1.0;
+                }
+                factor.solve_columns(&mut rhs, k)?;
+                let mut out = Vec::with_capacity(k * total);
+                for c in 0..k {
+                    let col = &rhs[c * n..(c + 1) * n];
+                    out.extend(dofs.iter().map(|&d| col[d as usize]));
+                }
+                Ok(out)
+            })
+            .collect::<Result<_, _>>()?;
+        let mut g = vec![0.0; total * total];
+        for c in 0..old {
+            g[c * total..c * total + old].copy_from_slice(&self.g[c * old..(c + 1) * old]);
+        }
+        for (c, col) in cols.iter().flat_map(|b| b.chunks_exact(total)).enumerate() {
+            let c = old + c;
+            g[c * total..(c + 1) * total].copy_from_slice(col);
+            // symmetry: row c of the old columns
+            for r in 0..old {
+                g[r * total + c] = col[r];
+            }
+        }
+        self.g = g;
+        Ok(())
+    }
+}
+
+/// The rows `φ_J(x_k)` of the contact points of one step, mapped onto the
+/// DOFs of `B` they touch (`act`, local numbering), so that blocks and
+/// products of `S = Φ G Φᵀ` need no solve.
+#[derive(Debug, Default)]
+pub struct PointRows {
+    /// Per point, its entries `start[k]..start[k + 1]`.
+    start: Vec<u32>,
+    /// Per entry: local positions (in `act`) of the x and y DOF of the node
+    /// ([`NONE`]: imposed), and `φ`.
+    entries: Vec<(u32, u32, f64)>,
+    /// Positions in `B` of the touched DOFs, ascending.
+    act: Vec<u32>,
+    /// Scratch of the products: nodal forces and displacements on `act`.
+    q: Vec<f64>,
+    z: Vec<f64>,
+}
+
+impl PointRows {
+    /// Map the rows `rows[k] = [(node, φ)]` onto `green` (which must cover
+    /// their nodes, [`BoundaryGreen::covers`]).
+    pub fn set<'r>(
+        &mut self,
+        rows: impl IntoIterator<Item = &'r [(u32, f64)]>,
+        green: &BoundaryGreen,
+    ) {
+        self.start.clear();
+        self.entries.clear();
+        self.act.clear();
+        self.start.push(0);
+        for row in rows {
+            for &(j, phi) in row {
+                let bx = green.position(2 * j as usize);
+                let by = green.position(2 * j as usize + 1);
+                self.entries.push((bx, by, phi));
+                self.act.extend([bx, by].into_iter().filter(|&b| b != NONE));
+            }
+            self.start.push(self.entries.len() as u32);
+        }
+        self.act.sort_unstable();
+        self.act.dedup();
+        let act = &self.act;
+        let local = |b: u32| {
+            if b == NONE {
+                NONE
+            } else {
+                act.binary_search(&b).map_or(NONE, |p| p as u32)
+            }
+        };
+        for e in &mut self.entries {
+            *e = (local(e.0), local(e.1), e.2);
+        }
+        self.q.resize(act.len(), 0.0);
+        self.z.resize(act.len(), 0.0);
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.start.len().saturating_sub(1)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Number of DOFs the rows touch.
+    pub fn active_dofs(&self) -> usize {
+        self.act.len()
+    }
+
+    fn row(&self, k: usize) -> &[(u32, u32, f64)] {
+        &self.entries[self.start[k] as usize..self.start[k + 1] as usize]
+    }
+
+    /// The 2 × 2 block `S_kl = φ_k G φ_lᵀ`, row-major.
+    pub fn block(&self, green: &BoundaryGreen, k: usize, l: usize) -> [f64; 4] {
+        let g = |a: u32, b: u32| {
+            if a == NONE || b == NONE {
+                0.0
+            } else {
+                green.get(self.act[a as usize], self.act[b as usize])
+            }
+        };
+        let mut s = [0.0; 4];
+        for &(kx, ky, pk) in self.row(k) {
+            for &(lx, ly, pl) in self.row(l) {
+                let w = pk * pl;
+                s[0] += w * g(kx, lx);
+                s[1] += w * g(kx, ly);
+                s[2] += w * g(ky, lx);
+                s[3] += w * g(ky, ly);
+            }
+        }
+        s
+    }
+
+    /// The whole `S` (2m × 2m, row-major, index `2k + a`).
+    pub fn dense(&self, green: &BoundaryGreen, s: &mut Vec<f64>) {
+        let m = self.len();
+        let m2 = 2 * m;
+        s.clear();
+        s.resize(m2 * m2, 0.0);
+        for k in 0..m {
+            for l in 0..m {
+                let b = self.block(green, k, l);
+                s[2 * k * m2 + 2 * l] = b[0];
+                s[2 * k * m2 + 2 * l + 1] = b[1];
+                s[(2 * k + 1) * m2 + 2 * l] = b[2];
+                s[(2 * k + 1) * m2 + 2 * l + 1] = b[3];
+            }
+        }
+    }
+
+    /// `y = S x` for forces `x[k]` at the points: `Φ G (Φᵀ x)` over the
+    /// touched DOFs. Each output entry is one dot product in a fixed order
+    /// (bitwise independent of the thread count).
+    pub fn mul(&mut self, green: &BoundaryGreen, x: &[Vec2], y: &mut [Vec2]) {
+        let m = self.len();
+        self.q.iter_mut().for_each(|v| *v = 0.0);
+        for k in 0..m {
+            let (s, e) = (self.start[k] as usize, self.start[k + 1] as usize);
+            for &(lx, ly, phi) in &self.entries[s..e] {
+                if lx != NONE {
+                    self.q[lx as usize] += phi * x[k].x;
+                }
+                if ly != NONE {
+                    self.q[ly as usize] += phi * x[k].y;
+                }
+            }
+        }
+        let (act, q) = (&self.act, &self.q);
+        let nb = green.len();
+        // G is symmetric: row a of G is column act[a], contiguous
+        let dot = |a: usize| -> f64 {
+            let col = &green.g[act[a] as usize * nb..(act[a] as usize + 1) * nb];
+            act.iter()
+                .zip(q)
+                .map(|(&b, &qb)| col[b as usize] * qb)
+                .sum()
+        };
+        if act.len() >= 256 {
+            self.z
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(64)
+                .for_each(|(a, z)| *z = dot(a));
+        } else {
+            for a in 0..act.len() {
+                self.z[a] = dot(a);
+            }
+        }
+        for (k, yk) in y.iter_mut().enumerate().take(m) {
+            let mut u = Vec2::ZERO;
+            for &(lx, ly, phi) in self.row(k) {
+                if lx != NONE {
+                    u.x += phi * self.z[lx as usize];
+                }
+                if ly != NONE {
+                    u.y += phi * self.z[ly as usize];
+                }
+            }
+            *yk = u;
+        }
+    }
+}
+
+/// The compliance of one implicit step at its contact points, as the body
+/// hands it to the contact solve: dense (computed by `2m` solves, the
+/// reference) or through the boundary Green matrix.
+pub enum Compliance<'a> {
+    /// `S` itself, 2m × 2m row-major.
+    Dense(&'a [f64]),
+    /// `S = Φ G Φᵀ`.
+    Boundary(&'a BoundaryGreen, &'a mut PointRows),
+}
+
+impl Compliance<'_> {
+    /// The 2 × 2 block `S_kl`.
+    pub fn block(&self, k: usize, l: usize) -> [f64; 4] {
+        match self {
+            Compliance::Dense(s) => {
+                let m2 = (s.len() as f64).sqrt() as usize;
+                let at = |r: usize, c: usize| s[r * m2 + c];
+                [
+                    at(2 * k, 2 * l),
+                    at(2 * k, 2 * l + 1),
+                    at(2 * k + 1, 2 * l),
+                    at(2 * k + 1, 2 * l + 1),
+                ]
+            }
+            Compliance::Boundary(g, rows) => rows.block(g, k, l),
+        }
+    }
+
+    /// The whole `S`, row-major.
+    pub fn dense(&self, out: &mut Vec<f64>) {
+        match self {
+            Compliance::Dense(s) => {
+                out.clear();
+                out.extend_from_slice(s);
+            }
+            Compliance::Boundary(g, rows) => rows.dense(g, out),
+        }
+    }
+
+    /// `y = S x`.
+    pub fn mul(&mut self, x: &[Vec2], y: &mut [Vec2]) {
+        match self {
+            Compliance::Dense(s) => {
+                let m2 = 2 * x.len();
+                for (k, yk) in y.iter_mut().enumerate() {
+                    let mut u = [0.0; 2];
+                    for (a, ua) in u.iter_mut().enumerate() {
+                        let row = &s[(2 * k + a) * m2..(2 * k + a + 1) * m2];
+                        for (l, xl) in x.iter().enumerate() {
+                            *ua += row[2 * l] * xl.x + row[2 * l + 1] * xl.y;
+                        }
+                    }
+                    *yk = Vec2::new(u[0], u[1]);
+                }
+            }
+            Compliance::Boundary(g, rows) => rows.mul(g, x, y),
+        }
+    }
+}
