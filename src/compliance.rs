@@ -43,7 +43,19 @@ pub struct BoundaryGreen {
     g: Vec<f64>,
     /// DOFs never put in `B` (imposed DOFs take no load and do not move).
     excluded: Vec<bool>,
+    /// Per column `b`, the rows `a` with `|G_ab| > ε √(G_aa G_bb)`
+    /// ([`SIGNIFICANT`]), ascending: `sig[sig_start[b]..sig_start[b + 1]]`.
+    sig_start: Vec<u32>,
+    sig: Vec<u32>,
 }
+
+/// Entries of `G` below `ε √(G_aa G_bb)` are left out of the products `S x`.
+/// `A⁻¹` of the Newmark matrix `α₁M + K̄` decays exponentially with distance
+/// (over about `c √β Δt`, the distance a wave runs in a step), so on a body
+/// many such lengths long most of `G` is below the round-off of the solves
+/// that computed it (cond(A) · 1e-16); on a small or stiff body nothing is
+/// left out.
+pub const SIGNIFICANT: f64 = 1e-14;
 
 impl BoundaryGreen {
     /// An empty `G` for a body of `n` DOFs; `excluded[i]` marks DOFs that
@@ -55,6 +67,8 @@ impl BoundaryGreen {
             index: vec![NONE; n],
             g: Vec::new(),
             excluded,
+            sig_start: Vec::new(),
+            sig: Vec::new(),
         }
     }
 
@@ -156,7 +170,32 @@ impl BoundaryGreen {
             }
         }
         self.g = g;
+        self.find_significant();
         Ok(())
+    }
+
+    /// The significant entries of every column ([`SIGNIFICANT`]).
+    fn find_significant(&mut self) {
+        let nb = self.dofs.len();
+        let diag: Vec<f64> = (0..nb).map(|a| self.g[a * nb + a].abs()).collect();
+        self.sig_start.clear();
+        self.sig.clear();
+        self.sig_start.push(0);
+        for b in 0..nb {
+            let col = &self.g[b * nb..(b + 1) * nb];
+            let tol = SIGNIFICANT * diag[b].sqrt();
+            self.sig.extend(
+                (0..nb)
+                    .filter(|&a| col[a].abs() > tol * diag[a].sqrt())
+                    .map(|a| a as u32),
+            );
+            self.sig_start.push(self.sig.len() as u32);
+        }
+    }
+
+    /// Fraction of `G`'s entries that the products use.
+    pub fn significant_fraction(&self) -> f64 {
+        self.sig.len() as f64 / (self.dofs.len() as f64).powi(2).max(1.0)
     }
 }
 
@@ -175,7 +214,21 @@ pub struct PointRows {
     /// Scratch of the products: nodal forces and displacements on `act`.
     q: Vec<f64>,
     z: Vec<f64>,
+    /// The significant entries of `G` on the touched DOFs (rows in local
+    /// numbering, CSR), gathered at the first product of a step.
+    ga_start: Vec<u32>,
+    ga_col: Vec<u32>,
+    ga_val: Vec<f64>,
+    /// Local position of every DOF of `B` ([`NONE`] if not touched).
+    map: Vec<u32>,
+    /// `S` itself (2m × 2m, row-major) when forming it is cheaper than the
+    /// products over `G` ([`PointRows::set`]); empty otherwise.
+    s: Vec<f64>,
 }
+
+/// Products `S x` a contact solve typically needs (for the choice of
+/// [`PointRows::set`]).
+const PRODUCTS: f64 = 10.0;
 
 impl PointRows {
     /// Map the rows `rows[k] = [(node, φ)]` onto `green` (which must cover
@@ -213,6 +266,56 @@ impl PointRows {
         }
         self.q.resize(act.len(), 0.0);
         self.z.resize(act.len(), 0.0);
+        self.ga_start.clear();
+        // S by columns costs 2m·r·(n_act + 2m), then 4m² a product; the
+        // products over G cost nnz(G_act) each
+        let (m, na) = (self.len() as f64, self.act.len() as f64);
+        let r = self.entries.len() as f64 / m.max(1.0);
+        let form = 2.0 * m * r * (na + 2.0 * m) + PRODUCTS * 4.0 * m * m;
+        let over_g = PRODUCTS * na * na * green.significant_fraction();
+        self.s.clear();
+        if form < over_g {
+            self.form(green);
+        }
+    }
+
+    /// `S = Φ (G Φᵀ)` column by column: for each point and component, the
+    /// combination of `G`'s columns on the touched DOFs, then its rows.
+    fn form(&mut self, green: &BoundaryGreen) {
+        let (m, na, nb) = (self.len(), self.act.len(), green.len());
+        let m2 = 2 * m;
+        self.s.resize(m2 * m2, 0.0);
+        let mut t = vec![0.0; na];
+        for k in 0..m {
+            for a in 0..2 {
+                t.iter_mut().for_each(|v| *v = 0.0);
+                for &(lx, ly, phi) in self.row(k) {
+                    let l = if a == 0 { lx } else { ly };
+                    if l == NONE {
+                        continue;
+                    }
+                    let b = self.act[l as usize] as usize;
+                    let col = &green.g[b * nb..(b + 1) * nb];
+                    for (tv, &i) in t.iter_mut().zip(&self.act) {
+                        *tv += phi * col[i as usize];
+                    }
+                }
+                let c = 2 * k + a;
+                for l in 0..m {
+                    let mut u = [0.0; 2];
+                    for &(lx, ly, phi) in self.row(l) {
+                        if lx != NONE {
+                            u[0] += phi * t[lx as usize];
+                        }
+                        if ly != NONE {
+                            u[1] += phi * t[ly as usize];
+                        }
+                    }
+                    self.s[2 * l * m2 + c] = u[0];
+                    self.s[(2 * l + 1) * m2 + c] = u[1];
+                }
+            }
+        }
     }
 
     /// Number of points.
@@ -235,6 +338,16 @@ impl PointRows {
 
     /// The 2 × 2 block `S_kl = φ_k G φ_lᵀ`, row-major.
     pub fn block(&self, green: &BoundaryGreen, k: usize, l: usize) -> [f64; 4] {
+        if !self.s.is_empty() {
+            let m2 = 2 * self.len();
+            let at = |r: usize, c: usize| self.s[r * m2 + c];
+            return [
+                at(2 * k, 2 * l),
+                at(2 * k, 2 * l + 1),
+                at(2 * k + 1, 2 * l),
+                at(2 * k + 1, 2 * l + 1),
+            ];
+        }
         let g = |a: u32, b: u32| {
             if a == NONE || b == NONE {
                 0.0
@@ -257,6 +370,11 @@ impl PointRows {
 
     /// The whole `S` (2m × 2m, row-major, index `2k + a`).
     pub fn dense(&self, green: &BoundaryGreen, s: &mut Vec<f64>) {
+        if !self.s.is_empty() {
+            s.clear();
+            s.extend_from_slice(&self.s);
+            return;
+        }
         let m = self.len();
         let m2 = 2 * m;
         s.clear();
@@ -272,11 +390,50 @@ impl PointRows {
         }
     }
 
+    /// Gather the significant entries of `G` between the touched DOFs.
+    fn gather(&mut self, green: &BoundaryGreen) {
+        self.map.clear();
+        self.map.resize(green.len(), NONE);
+        for (l, &b) in self.act.iter().enumerate() {
+            self.map[b as usize] = l as u32;
+        }
+        self.ga_start.clear();
+        self.ga_col.clear();
+        self.ga_val.clear();
+        self.ga_start.push(0);
+        let nb = green.len();
+        for &b in &self.act {
+            let (s, e) = (
+                green.sig_start[b as usize] as usize,
+                green.sig_start[b as usize + 1] as usize,
+            );
+            let col = &green.g[b as usize * nb..(b as usize + 1) * nb];
+            for &a in &green.sig[s..e] {
+                let l = self.map[a as usize];
+                if l != NONE {
+                    self.ga_col.push(l);
+                    self.ga_val.push(col[a as usize]);
+                }
+            }
+            self.ga_start.push(self.ga_col.len() as u32);
+        }
+    }
+
     /// `y = S x` for forces `x[k]` at the points: `Φ G (Φᵀ x)` over the
-    /// touched DOFs. Each output entry is one dot product in a fixed order
-    /// (bitwise independent of the thread count).
+    /// touched DOFs. The first product of a step gathers the significant
+    /// entries of `G` on the touched DOFs (once); each output entry is then
+    /// one sparse dot product in a fixed order (bitwise independent of the
+    /// thread count).
     pub fn mul(&mut self, green: &BoundaryGreen, x: &[Vec2], y: &mut [Vec2]) {
         let m = self.len();
+        if !self.s.is_empty() {
+            dense_mul(&self.s, x, y);
+            return;
+        }
+        let na = self.act.len();
+        if self.ga_start.is_empty() {
+            self.gather(green);
+        }
         self.q.iter_mut().for_each(|v| *v = 0.0);
         for k in 0..m {
             let (s, e) = (self.start[k] as usize, self.start[k + 1] as usize);
@@ -289,25 +446,24 @@ impl PointRows {
                 }
             }
         }
-        let (act, q) = (&self.act, &self.q);
-        let nb = green.len();
-        // G is symmetric: row a of G is column act[a], contiguous
-        let dot = |a: usize| -> f64 {
-            let col = &green.g[act[a] as usize * nb..(act[a] as usize + 1) * nb];
-            act.iter()
-                .zip(q)
-                .map(|(&b, &qb)| col[b as usize] * qb)
-                .sum()
+        let (st, col, val, q) = (&self.ga_start, &self.ga_col, &self.ga_val, &self.q);
+        let row = |a: usize| -> f64 {
+            let (s, e) = (st[a] as usize, st[a + 1] as usize);
+            let mut acc = 0.0;
+            for (c, v) in col[s..e].iter().zip(&val[s..e]) {
+                acc += v * q[*c as usize];
+            }
+            acc
         };
-        if act.len() >= 256 {
+        if val.len() >= 1 << 16 {
             self.z
                 .par_iter_mut()
                 .enumerate()
-                .with_min_len(64)
-                .for_each(|(a, z)| *z = dot(a));
+                .with_min_len(32)
+                .for_each(|(a, z)| *z = row(a));
         } else {
-            for a in 0..act.len() {
-                self.z[a] = dot(a);
+            for a in 0..na {
+                self.z[a] = row(a);
             }
         }
         for (k, yk) in y.iter_mut().enumerate().take(m) {
@@ -367,20 +523,36 @@ impl Compliance<'_> {
     /// `y = S x`.
     pub fn mul(&mut self, x: &[Vec2], y: &mut [Vec2]) {
         match self {
-            Compliance::Dense(s) => {
-                let m2 = 2 * x.len();
-                for (k, yk) in y.iter_mut().enumerate() {
-                    let mut u = [0.0; 2];
-                    for (a, ua) in u.iter_mut().enumerate() {
-                        let row = &s[(2 * k + a) * m2..(2 * k + a + 1) * m2];
-                        for (l, xl) in x.iter().enumerate() {
-                            *ua += row[2 * l] * xl.x + row[2 * l + 1] * xl.y;
-                        }
-                    }
-                    *yk = Vec2::new(u[0], u[1]);
-                }
-            }
+            Compliance::Dense(s) => dense_mul(s, x, y),
             Compliance::Boundary(g, rows) => rows.mul(g, x, y),
         }
+    }
+}
+
+/// `y = S x` for a dense row-major `S` (2m × 2m); rows with four partial
+/// sums (vectorisable, fixed order).
+fn dense_mul(s: &[f64], x: &[Vec2], y: &mut [Vec2]) {
+    let m2 = 2 * x.len();
+    let xs: Vec<f64> = x.iter().flat_map(|v| [v.x, v.y]).collect();
+    let dot = |row: &[f64]| {
+        let mut acc = [0.0; 4];
+        let (ca, cb) = (row.chunks_exact(4), xs.chunks_exact(4));
+        let (ra, rb) = (ca.remainder(), cb.remainder());
+        for (a, b) in ca.zip(cb) {
+            for i in 0..4 {
+                acc[i] += a[i] * b[i];
+            }
+        }
+        let mut t = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+        for (a, b) in ra.iter().zip(rb) {
+            t += a * b;
+        }
+        t
+    };
+    for (k, yk) in y.iter_mut().enumerate() {
+        *yk = Vec2::new(
+            dot(&s[2 * k * m2..(2 * k + 1) * m2]),
+            dot(&s[(2 * k + 1) * m2..(2 * k + 2) * m2]),
+        );
     }
 }

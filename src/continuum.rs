@@ -150,12 +150,14 @@ pub trait Continuum: Send {
     fn boundary_displacement(&self, chain: usize, x: Vec2) -> Vec2;
     /// First half of an implicit step (contact springs treated implicitly):
     /// solve the step under the accumulated loads, and report, for the
-    /// material points `points[k] = (chain, x)`, the free displacement
-    /// `free[k]` at `t + Δt`; [`compliance`](Self::compliance) then gives
-    /// `S`: point forces `f` change the displacements at `t + Δt` by `S f`.
+    /// material points `points[k] = (chain, x)`, the displacement `base[k]`
+    /// at `t` and the free displacement `free[k]` at `t + Δt`;
+    /// [`compliance`](Self::compliance) then gives `S`: point forces `f`
+    /// change the displacements at `t + Δt` by `S f`.
     fn begin_step(
         &mut self,
         points: &[(usize, Vec2)],
+        base: &mut Vec<Vec2>,
         free: &mut Vec<Vec2>,
     ) -> Result<(), SolveError>;
     /// The compliance `S = Φ A⁻¹ Φᵀ` at the points of
@@ -168,11 +170,16 @@ pub trait Continuum: Send {
     /// Advance one time step with the accumulated loads, clear them, and
     /// refresh the contact boundary.
     fn advance(&mut self) -> Result<(), SolveError> {
-        self.begin_step(&[], &mut Vec::new())?;
+        self.begin_step(&[], &mut Vec::new(), &mut Vec::new())?;
         self.finish_step(&[])
     }
     /// Kinetic and strain energy of the present state.
     fn energies(&self) -> BodyEnergies;
+    /// DOFs and bytes of the boundary Green matrix, once built
+    /// ([`crate::compliance`]); `(0, 0)` if none.
+    fn green_size(&self) -> (usize, usize) {
+        (0, 0)
+    }
     /// The concrete body (for outputs that need more than the trait).
     fn as_any(&self) -> &dyn std::any::Any;
 }
@@ -377,12 +384,16 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     fn begin_step(
         &mut self,
         points: &[(usize, Vec2)],
+        base: &mut Vec<Vec2>,
         free: &mut Vec<Vec2>,
     ) -> Result<(), SolveError> {
         let mut rows = std::mem::take(&mut self.point_rows);
         rows.clear();
         rows.extend(points.iter().map(|&(_, x)| self.row(x)));
         self.point_rows = rows;
+        base.clear();
+        let u = &self.body.state().u;
+        base.extend(self.point_rows.iter().map(|r| interpolate(r, u)));
         if !points.is_empty() && self.mode == ComplianceMode::Boundary {
             self.ensure_green()?;
         }
@@ -428,6 +439,9 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     }
     fn energies(&self) -> BodyEnergies {
         self.body.energies()
+    }
+    fn green_size(&self) -> (usize, usize) {
+        self.green.as_ref().map_or((0, 0), |g| (g.len(), g.bytes()))
     }
     fn as_any(&self) -> &dyn std::any::Any {
         self

@@ -41,8 +41,11 @@ impl Continuum for Fixed {
     fn begin_step(
         &mut self,
         points: &[(usize, Vec2)],
+        base: &mut Vec<Vec2>,
         free: &mut Vec<Vec2>,
     ) -> Result<(), SolveError> {
+        base.clear();
+        base.resize(points.len(), Vec2::ZERO);
         free.clear();
         free.resize(points.len(), Vec2::ZERO);
         self.zero.clear();

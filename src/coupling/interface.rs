@@ -62,12 +62,24 @@ pub fn outward_normal(a: Vec2, b: Vec2) -> Vec2 {
 /// Cost: linear in the number of segments; the caller prunes with a
 /// bounding-box test when chains are long.
 pub fn detect(chain: &BoundaryChain, c: Vec2, r: f64) -> Option<Touch> {
+    detect_near(chain, c, r, 0..chain.segments())
+}
+
+/// [`detect`] over the segments `near` (ascending) only: the same result
+/// when they include every segment within `2r` of `c` (e.g. from a
+/// [`SegmentGrid`](super::segments::SegmentGrid)).
+pub fn detect_near(
+    chain: &BoundaryChain,
+    c: Vec2,
+    r: f64,
+    near: impl IntoIterator<Item = usize>,
+) -> Option<Touch> {
     let pts = &chain.current;
     let nseg = chain.segments();
     // Closest point over the whole chain; on a tie the first segment wins,
     // which makes a point contact at a shared vertex unique.
     let mut best: Option<(usize, f64, Vec2, f64)> = None;
-    for i in 0..nseg {
+    for i in near {
         let (s, q) = closest_on_segment(c, pts[i], pts[i + 1]);
         let d2 = (c - q).norm2();
         if best.is_none_or(|b| d2 < b.3) {

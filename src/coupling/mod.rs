@@ -24,6 +24,7 @@
 pub mod implicit;
 pub mod interface;
 pub mod run;
+pub mod segments;
 pub mod study;
 
 use crate::continuum::{BoundaryChain, Continuum};
@@ -31,6 +32,7 @@ use crate::dem::Granular;
 use crate::dem::contact::{self, ContactLaw, Side, effective_mass};
 use crate::dem::particles::Particles;
 use crate::geom::Vec2;
+use segments::SegmentGrid;
 use std::time::Instant;
 
 /// Shear history and last state of one disc–body contact, keyed by
@@ -80,6 +82,8 @@ pub struct CoupledModel {
     pub staggered: bool,
     /// Live disc–body contacts, sorted by key.
     pub contacts: Vec<BodyContact>,
+    /// Per body, per chain: its segments binned for detection.
+    grids: Vec<Vec<SegmentGrid>>,
     scratch: Vec<BodyContact>,
     loads: Vec<Load>,
     sub: usize,
@@ -88,6 +92,8 @@ pub struct CoupledModel {
     work: Work,
     /// Newton iterations of the last implicit contact solve (diagnostics).
     pub newton_iterations: usize,
+    /// Products `S x` of all implicit contact solves so far (diagnostics).
+    pub compliance_products: usize,
     /// Wall time spent so far in each part of the step.
     pub timing: StepTiming,
 }
@@ -184,12 +190,14 @@ impl CoupledModel {
             substeps: substeps.max(1),
             staggered: substeps > 1,
             contacts: Vec::new(),
+            grids: Vec::new(),
             scratch: Vec::new(),
             loads: Vec::new(),
             sub: 0,
             primed: false,
             work: Work::default(),
             newton_iterations: 0,
+            compliance_products: 0,
             timing: StepTiming::default(),
         }
     }
@@ -197,40 +205,45 @@ impl CoupledModel {
     /// One DEM step, and a body step every `substeps` of them.
     pub fn step(&mut self) -> Result<(), CouplingError> {
         let t0 = Instant::now();
-        self.granular.prepare_contacts();
-        self.granular.compute_contact_forces();
-        let t1 = Instant::now();
         let implicit = self.substeps == 1 && !self.staggered;
+        self.granular.prepare_contacts();
         if implicit {
+            // the disc–body forces of the present state are known: they go
+            // into the DEM's fused step as external forces
             if !self.primed {
                 self.implicit_contacts(false)?;
                 self.primed = true;
             }
-            for q in &self.contacts {
-                let slot = self.granular.slot(q.disc as usize);
-                let arm = self.granular.particles.pos[slot]
-                    + q.normal * self.granular.particles.radius[slot];
-                self.granular.add_external_force(slot, q.force, arm);
-            }
-        } else {
-            self.body_contact_forces();
+            let g = &self.granular;
+            let ext: Vec<_> = self
+                .contacts
+                .iter()
+                .map(|q| {
+                    let slot = g.slot(q.disc as usize);
+                    let arm = g.particles.pos[slot] + q.normal * g.particles.radius[slot];
+                    (slot, q.force, arm)
+                })
+                .collect();
+            self.granular.set_external(ext);
+            let t1 = Instant::now();
+            self.granular.step();
+            let t2 = Instant::now();
+            self.timing.transfer += (t1 - t0).as_secs_f64();
+            self.timing.dem += (t2 - t1).as_secs_f64();
+            self.check_finite()?;
+            let r = self.implicit_contacts(true);
+            self.timing.transfer += t2.elapsed().as_secs_f64();
+            return r;
         }
+        self.granular.compute_contact_forces();
+        let t1 = Instant::now();
+        self.body_contact_forces();
         let t2 = Instant::now();
         self.granular.integrate();
         let t3 = Instant::now();
         self.timing.dem += (t1 - t0).as_secs_f64() + (t3 - t2).as_secs_f64();
         self.timing.transfer += (t2 - t1).as_secs_f64();
-        if !self.granular.is_finite() {
-            return Err(CouplingError::Unstable {
-                step: self.granular.step,
-                dt_crit: self.granular.critical_dt(),
-            });
-        }
-        if implicit {
-            let r = self.implicit_contacts(true);
-            self.timing.transfer += t3.elapsed().as_secs_f64();
-            return r;
-        }
+        self.check_finite()?;
         self.sub += 1;
         if self.sub == self.substeps {
             self.sub = 0;
@@ -240,6 +253,17 @@ impl CoupledModel {
         }
         self.timing.body += t3.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    fn check_finite(&self) -> Result<(), CouplingError> {
+        if self.granular.is_finite() {
+            Ok(())
+        } else {
+            Err(CouplingError::Unstable {
+                step: self.granular.step,
+                dt_crit: self.granular.critical_dt(),
+            })
+        }
     }
 
     /// The implicit scheme's body step ([`implicit`]): contacts of the discs
@@ -254,6 +278,7 @@ impl CoupledModel {
         let nm = self.granular.materials.len();
         let mut next = std::mem::take(&mut self.scratch);
         next.clear();
+        self.rebuild_grids(CANDIDATE_MARGIN);
         let w = &mut self.work;
         let p = &self.granular.particles;
         let mut body_time = 0.0;
@@ -269,7 +294,7 @@ impl CoupledModel {
                 }
                 // candidates within a margin: contacts that close during
                 // the step are part of the implicit solve
-                for (d, t) in touching(chain, p, CANDIDATE_MARGIN) {
+                for (d, t) in touching(chain, &self.grids[b][c], p, CANDIDATE_MARGIN) {
                     let r = p.radius[d];
                     let fs_old = shear_history(&self.contacts, (p.id[d], b as u16, c as u16));
                     let law = self.body_laws[b * nm + p.material[d] as usize];
@@ -293,19 +318,19 @@ impl CoupledModel {
                         dt,
                     });
                     w.points.push((c, t.material));
-                    w.base.push(body.boundary_displacement(c, t.material));
                     w.meta.push((d, b, c, t.point, t.feature));
                 }
             }
             if advance {
                 let tb = Instant::now();
-                body.begin_step(&w.points, &mut w.free)?;
+                body.begin_step(&w.points, &mut w.base, &mut w.free)?;
                 let tc = Instant::now();
                 body_time += (tc - tb).as_secs_f64();
                 let mut s = body.compliance();
                 self.newton_iterations =
                     w.solver
                         .solve(&w.lin, &w.base, &w.free, &mut s, &mut w.evals);
+                self.compliance_products += w.solver.products;
                 solve_time += tc.elapsed().as_secs_f64();
             } else {
                 w.evals.clear();
@@ -357,13 +382,14 @@ impl CoupledModel {
         let mut next = std::mem::take(&mut self.scratch);
         next.clear();
         self.loads.clear();
+        self.rebuild_grids(0.0);
         let p = &self.granular.particles;
         for (b, body) in self.bodies.iter().enumerate() {
             for (c, chain) in body.contact_boundary().iter().enumerate() {
                 if chain.segments() == 0 {
                     continue;
                 }
-                for (d, t) in touching(chain, p, 0.0) {
+                for (d, t) in touching(chain, &self.grids[b][c], p, 0.0) {
                     let (x, r) = (p.pos[d], p.radius[d]);
                     let key = (p.id[d], b as u16, c as u16);
                     let mut fs = shear_history(&self.contacts, key);
@@ -422,6 +448,21 @@ impl CoupledModel {
         self.scratch = std::mem::replace(&mut self.contacts, next);
     }
 
+    /// Bin every chain's current segments; a segment within twice the
+    /// largest (margin-grown) radius of a centre is in that centre's cell,
+    /// so the grid gives the closest feature [`interface::detect`] gives.
+    fn rebuild_grids(&mut self, margin: f64) {
+        let reach = 2.0 * self.granular.particles.max_radius() * (1.0 + margin);
+        self.grids.resize_with(self.bodies.len(), Vec::new);
+        for (body, grids) in self.bodies.iter().zip(&mut self.grids) {
+            let chains = body.contact_boundary();
+            grids.resize_with(chains.len(), SegmentGrid::default);
+            for (chain, g) in chains.iter().zip(grids.iter_mut()) {
+                g.rebuild(chain, reach);
+            }
+        }
+    }
+
     /// Contact spring energy of the disc–body contacts, `½k_nδ² + F_s²/(2k_s)`.
     pub fn body_contact_energy(&self) -> f64 {
         let nm = self.granular.materials.len();
@@ -446,9 +487,11 @@ impl CoupledModel {
 const CANDIDATE_MARGIN: f64 = 0.1;
 
 /// Discs touching `chain` with their radius enlarged by `margin × r`
-/// (bounding-box pruned): slot and contact (its overlap includes the margin).
+/// (bounding-box pruned, then the segments near the disc from `grid`):
+/// slot and contact (its overlap includes the margin).
 fn touching<'a>(
     chain: &'a BoundaryChain,
+    grid: &'a SegmentGrid,
     p: &'a Particles,
     margin: f64,
 ) -> impl Iterator<Item = (usize, interface::Touch)> + 'a {
@@ -458,7 +501,8 @@ fn touching<'a>(
         if x.x + rm < lo.x || x.x - rm > hi.x || x.y + rm < lo.y || x.y - rm > hi.y {
             return None;
         }
-        interface::detect(chain, x, rm).map(|t| (d, t))
+        interface::detect_near(chain, x, rm, grid.near(x).iter().map(|&i| i as usize))
+            .map(|t| (d, t))
     })
 }
 

@@ -119,6 +119,9 @@ pub struct Granular {
     /// of a large run; `efgdem run` sets it only before the steps whose
     /// frames are written. The phased path always stores them.
     pub store_forces: bool,
+    /// External forces of the next [`step`](Self::step): `(slot, force,
+    /// moment)`, sorted by slot ([`set_external`](Self::set_external)).
+    external: Vec<(u32, Vec2, f64)>,
 }
 
 impl Granular {
@@ -148,6 +151,7 @@ impl Granular {
             grid: NeighbourGrid::new(skin),
             max_disp: 0.0,
             store_forces: true,
+            external: Vec::new(),
         };
         g.update_laws();
         g
@@ -200,8 +204,8 @@ impl Granular {
         }
     }
 
-    /// One full time step: the three phases in order, with no external
-    /// force, fused into one [`sweep`] over the discs (each disc advances
+    /// One full time step: the three phases in order, with the external
+    /// forces of [`set_external`](Self::set_external) if any, fused into one [`sweep`] over the discs (each disc advances
     /// as soon as its contacts are summed); bitwise the same result as
     /// calling [`prepare_contacts`](Self::prepare_contacts),
     /// [`compute_contact_forces`](Self::compute_contact_forces) and
@@ -209,8 +213,29 @@ impl Granular {
     pub fn step(&mut self) {
         self.prepare_contacts();
         self.max_disp = self.sweep::<true>();
+        self.external.clear();
         self.wall_totals();
         self.move_walls();
+    }
+
+    /// External forces for the next [`step`](Self::step) (e.g. the
+    /// disc–body contacts of the coupling): `f` acting at `point` on the
+    /// disc in `slot`, i.e. the force plus the moment `(point − x) × f`
+    /// (ERRATA E12), summed after the disc's contacts in the order given
+    /// (the same sums as [`add_external_force`](Self::add_external_force)
+    /// on the phased path). Call after
+    /// [`prepare_contacts`](Self::prepare_contacts), which may renumber the
+    /// slots; cleared by the step.
+    pub fn set_external(&mut self, forces: impl IntoIterator<Item = (usize, Vec2, Vec2)>) {
+        let p = &self.particles;
+        self.external.clear();
+        self.external.extend(
+            forces
+                .into_iter()
+                .map(|(slot, f, point)| (slot as u32, f, (point - p.pos[slot]).cross(f))),
+        );
+        // stable: several forces on one disc keep their order
+        self.external.sort_by_key(|e| e.0);
     }
 
     /// Phase 1: rebuild the neighbour list when the Verlet criterion says

@@ -53,6 +53,8 @@ struct Ctx<'a> {
     dt: f64,
     /// Store each disc's force and moment.
     store: bool,
+    /// External forces and moments `(slot, f, moment)`, sorted by slot.
+    external: &'a [(u32, Vec2, f64)],
 }
 
 /// The discs `lo..lo + pos.len()` with their pairs (as first disc) and
@@ -202,6 +204,7 @@ impl Granular {
             damping: self.damping,
             dt: self.dt,
             store: !ADVANCE || self.store_forces,
+            external: &self.external,
         };
         let p = &mut self.particles;
         let ref_pos: &[Vec2] = if ADVANCE && self.grid.ref_pos.len() == n {
@@ -356,6 +359,7 @@ fn sweep_block_in<const ADVANCE: bool>(
     let pair_lo = ctx.first[lo] as usize;
     let mut pk = 0usize;
     let mut wk = 0usize;
+    let mut ek = ctx.external.partition_point(|e| (e.0 as usize) < lo);
     let mut m2 = 0.0f64;
     let single = ctx.n_mat == 1;
     // the single-material law, looked up once
@@ -444,7 +448,12 @@ fn sweep_block_in<const ADVANCE: bool>(
             st += cf.fs;
             wk += 1;
         }
-        let tq = radius[d] * st;
+        let mut tq = radius[d] * st;
+        while ek < ctx.external.len() && ctx.external[ek].0 as usize == lo + d {
+            sf += ctx.external[ek].1;
+            tq += ctx.external[ek].2;
+            ek += 1;
+        }
         if ctx.store {
             force[d] = sf;
             torque[d] = tq;
