@@ -556,3 +556,100 @@ fn dense_mul(s: &[f64], x: &[Vec2], y: &mut [Vec2]) {
         );
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sparse::tests::lap;
+
+    /// `G`, its extension, blocks, `S` and products against a dense
+    /// inverse of the same matrix.
+    #[test]
+    fn boundary_green_and_point_compliance_match_the_dense_inverse() {
+        let n = 80;
+        let a = lap(n);
+        let mut f = Cholesky::factor(&a).unwrap();
+        let inv: Vec<Vec<f64>> = (0..n)
+            .map(|j| {
+                let mut e = vec![0.0; n];
+                e[j] = 1.0;
+                f.solve_in_place(&mut e);
+                e
+            })
+            .collect();
+        let mut excluded = vec![false; n];
+        excluded[13] = true; // node 6, y: an imposed DOF
+        let mut g = BoundaryGreen::new(n, excluded);
+        g.extend([0, 1, 2, 3, 20, 21], &f).unwrap();
+        let rows: Vec<Vec<(u32, f64)>> = vec![
+            vec![(1, 0.3), (2, 0.7)],
+            vec![(2, 0.5), (6, 0.25), (20, 0.25)],
+            vec![(21, 1.0)],
+        ];
+        assert!(!g.covers(rows[1].iter().map(|e| e.0)));
+        g.extend(rows.iter().flatten().map(|e| e.0), &f).unwrap();
+        assert!(rows.iter().all(|r| g.covers(r.iter().map(|e| e.0))));
+        assert_eq!(g.position(13), NONE);
+        for i in [0, 3, 12, 40, 43] {
+            for j in [0, 3, 12, 40, 43] {
+                let (pi, pj) = (g.position(i), g.position(j));
+                assert!((g.get(pi, pj) - inv[j][i]).abs() < 1e-15, "{i} {j}");
+            }
+        }
+        // S = Φ A⁻¹ Φᵀ with no load on (and no response at) the imposed DOF
+        let dof = |j: u32, c: usize| 2 * j as usize + c;
+        let mut want = vec![0.0; 36];
+        for (k, rk) in rows.iter().enumerate() {
+            for (l, rl) in rows.iter().enumerate() {
+                for a in 0..2 {
+                    for b in 0..2 {
+                        let mut v = 0.0;
+                        for &(i, pi) in rk {
+                            for &(j, pj) in rl {
+                                let (di, dj) = (dof(i, a), dof(j, b));
+                                if di != 13 && dj != 13 {
+                                    v += pi * pj * inv[dj][di];
+                                }
+                            }
+                        }
+                        want[(2 * k + a) * 6 + 2 * l + b] = v;
+                    }
+                }
+            }
+        }
+        let mut pr = PointRows::default();
+        pr.set(rows.iter().map(|r| &r[..]), &g);
+        let mut s = Vec::new();
+        pr.dense(&g, &mut s);
+        for (x, y) in s.iter().zip(&want) {
+            assert!((x - y).abs() < 1e-15);
+        }
+        let b = pr.block(&g, 1, 2);
+        assert!((b[1] - want[2 * 6 + 5]).abs() < 1e-15);
+        // products, over G and over a formed S
+        let x = [
+            Vec2::new(1.0, -2.0),
+            Vec2::new(0.5, 3.0),
+            Vec2::new(-1.0, 0.25),
+        ];
+        let mut y = [Vec2::ZERO; 3];
+        for formed in [false, true] {
+            if formed {
+                pr.form(&g);
+            }
+            pr.mul(&g, &x, &mut y);
+            for k in 0..3 {
+                for a in 0..2 {
+                    let v: f64 = (0..6)
+                        .map(|c| {
+                            want[(2 * k + a) * 6 + c]
+                                * if c % 2 == 0 { x[c / 2].x } else { x[c / 2].y }
+                        })
+                        .sum();
+                    let got = if a == 0 { y[k].x } else { y[k].y };
+                    assert!((got - v).abs() < 1e-14, "{formed} {k} {a}");
+                }
+            }
+        }
+    }
+}

@@ -272,11 +272,11 @@ impl Cholesky {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// 1D Laplacian + identity on n points, lower triangle.
-    fn lap(n: usize) -> SymCsc {
+    pub(crate) fn lap(n: usize) -> SymCsc {
         let mut col_ptr = vec![0];
         let mut row_idx = vec![];
         let mut values = vec![];
