@@ -183,10 +183,14 @@ fn value(m: &CoupledModel, b: &Bound) -> f64 {
 pub struct EnergyAccount {
     pub kin_dem: f64,
     pub kin_body: f64,
+    /// Elastic strain energy of the bodies, `Σ ½UᵀKU`.
     pub strain: f64,
+    /// Energy of the bodies' penalty springs (EFG prescribed edges), from
+    /// their gap to the prescribed displacement.
+    pub penalty: f64,
     pub contact: f64,
-    /// Work of gravity on the discs, of the bodies' permanent loads and of
-    /// the walls since t = 0.
+    /// Work of gravity on the discs, of the bodies' permanent loads and
+    /// moving edges, and of the walls since t = 0.
     pub w_ext: f64,
     /// `W_ext − (stored − stored at t = 0)`: friction, dashpots and
     /// numerical dissipation.
@@ -194,9 +198,10 @@ pub struct EnergyAccount {
 }
 
 impl EnergyAccount {
-    /// Energy stored: kinetic (discs, bodies), strain and contact springs.
+    /// Energy stored: kinetic (discs, bodies), strain, penalty and contact
+    /// springs.
     pub fn stored(&self) -> f64 {
-        self.kin_dem + self.kin_body + self.strain + self.contact
+        self.kin_dem + self.kin_body + self.strain + self.penalty + self.contact
     }
 }
 
@@ -234,24 +239,28 @@ impl WorkMeter {
         for k in 0..p.len() {
             w_grav += p.mass[k] * g.gravity.dot(p.pos[k] - self.x0[k]);
         }
-        let (mut kin_body, mut strain, mut w_body) = (0.0, 0.0, 0.0);
+        let (mut kin_body, mut strain, mut penalty, mut w_body) = (0.0, 0.0, 0.0, 0.0);
         for b in &m.bodies {
             let en = b.energies();
             kin_body += en.kinetic;
             strain += en.strain;
+            penalty += en.penalty;
             w_body += en.work;
         }
         let contact = e.spring + m.body_contact_energy();
         let w_ext = w_grav + w_body + self.wall_work;
         let kin_dem = e.kinetic + e.rotational;
-        EnergyAccount {
+        let mut e = EnergyAccount {
             kin_dem,
             kin_body,
             strain,
+            penalty,
             contact,
             w_ext,
-            diss: w_ext - (kin_dem + kin_body + strain + contact - self.stored0),
-        }
+            diss: 0.0,
+        };
+        e.diss = w_ext - (e.stored() - self.stored0);
+        e
     }
 }
 
@@ -303,6 +312,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         "E_kin_dem",
         "E_kin_body",
         "E_strain",
+        "E_penalty",
         "E_contact",
         "W_ext",
         "E_diss",
@@ -380,7 +390,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
             row.push(t);
             row.extend(probes.iter().map(|(_, b)| value(&model, b)));
             row.extend([
-                fn_sum, e.kin_dem, e.kin_body, e.strain, e.contact, e.w_ext, e.diss,
+                fn_sum, e.kin_dem, e.kin_body, e.strain, e.penalty, e.contact, e.w_ext, e.diss,
             ]);
             hist.row(&row)?;
         }
@@ -416,7 +426,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         "contact_lost_time": lost_contact,
         "energy": {
             "E_kin_dem": e.kin_dem, "E_kin_body": e.kin_body, "E_strain": e.strain,
-            "E_contact": e.contact, "W_ext": e.w_ext, "E_diss": e.diss,
+            "E_penalty": e.penalty, "E_contact": e.contact, "W_ext": e.w_ext, "E_diss": e.diss,
         },
         "timing": {
             "build_seconds": t_build,
