@@ -41,7 +41,7 @@ impl BoundaryChain {
 }
 
 /// Edges in counter-clockwise order around a rectangle (body on the left).
-const CCW: [Edge; 4] = [Edge::Bottom, Edge::Right, Edge::Top, Edge::Left];
+const CCW: [Edge; 4] = Edge::ALL;
 
 /// Reference points along `edge` of the rectangle `origin`, `size` with a
 /// `grid = [nx, ny]` of nodes, counter-clockwise, `refine` points per node

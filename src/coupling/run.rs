@@ -12,7 +12,7 @@ use crate::output::csv::HistoryWriter;
 use crate::output::vtk::PvdSeries;
 use crate::output::{progress, write_json};
 use crate::run::RunOptions;
-use crate::scenario::body::{Method, is_body_probe};
+use crate::scenario::body::{Edge, Method, is_body_probe};
 use crate::scenario::{Probe, Scenario};
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -264,6 +264,114 @@ impl WorkMeter {
     }
 }
 
+/// Watches for discs whose centre enters a body through an edge that is
+/// not one of its contact edges: the body does not see such a disc from
+/// outside, and its contact chains may see it from inside (forces up to
+/// 2 k_n r). Each disc is reported once, as a warning on stderr.
+struct EntryWatch {
+    bodies: Vec<Watched>,
+    /// By disc id: already reported.
+    reported: Vec<bool>,
+}
+
+/// A body with at least one edge that is not a contact edge.
+struct Watched {
+    body: usize,
+    /// Corners counter-clockwise from the lower left: reference position
+    /// and where to sample their displacement.
+    corners: [(Vec2, At); 4],
+    /// Edge k, from corner k to corner k + 1 ([`Edge::ALL`] order), is not
+    /// a contact edge.
+    open: [bool; 4],
+}
+
+impl EntryWatch {
+    fn new(sc: &Scenario, m: &CoupledModel) -> Result<Self, CouplingError> {
+        let mut bodies = Vec::new();
+        for (i, spec) in sc.body.iter().enumerate() {
+            let open = Edge::ALL.map(|e| !spec.contact_edges.contains(&e));
+            if !open.contains(&true) {
+                continue;
+            }
+            let (o, s) = (
+                Vec2::from(spec.rectangle.origin),
+                Vec2::from(spec.rectangle.size),
+            );
+            let corners = [o, o + Vec2::new(s.x, 0.0), o + s, o + Vec2::new(0.0, s.y)];
+            let b = body(m, i);
+            let corners = [0, 1, 2, 3].map(|k| b.bind(corners[k]).map(|at| (corners[k], at)));
+            let [c0, c1, c2, c3] = corners;
+            bodies.push(Watched {
+                body: i,
+                corners: [c0?, c1?, c2?, c3?],
+                open,
+            });
+        }
+        Ok(EntryWatch {
+            bodies,
+            reported: vec![false; m.granular.particles.len()],
+        })
+    }
+
+    /// Report the discs that entered a body through a non-contact edge since
+    /// the last call; returns how many.
+    fn check(&mut self, m: &CoupledModel, names: &[String]) -> usize {
+        let p = &m.granular.particles;
+        let mut new = 0;
+        for w in &self.bodies {
+            let b = body(m, w.body);
+            let quad = w.corners.each_ref().map(|(x, at)| *x + b.sample_at(at).u);
+            let lo = quad
+                .iter()
+                .fold(quad[0], |a, c| Vec2::new(a.x.min(c.x), a.y.min(c.y)));
+            let hi = quad
+                .iter()
+                .fold(quad[0], |a, c| Vec2::new(a.x.max(c.x), a.y.max(c.y)));
+            for d in 0..p.len() {
+                let x = p.pos[d];
+                if x.x <= lo.x || x.x >= hi.x || x.y <= lo.y || x.y >= hi.y {
+                    continue;
+                }
+                let id = p.id[d] as usize;
+                if let Some(k) = entered_edge(&quad, x)
+                    && w.open[k]
+                    && !self.reported[id]
+                {
+                    self.reported[id] = true;
+                    new += 1;
+                    eprintln!(
+                        "warning: disc {} entered body `{}` through a non-contact edge ({}) at t = {:.6} s (step {}); list the edge in `contact_edges` (default: all four)",
+                        id + 1,
+                        names[w.body],
+                        Edge::ALL[k].name(),
+                        m.granular.time,
+                        m.granular.step
+                    );
+                }
+            }
+        }
+        new
+    }
+}
+
+/// If `x` lies strictly inside the convex quadrilateral `quad`
+/// (counter-clockwise), the edge `quad[k] → quad[k + 1]` nearest to it.
+fn entered_edge(quad: &[Vec2; 4], x: Vec2) -> Option<usize> {
+    let mut best: Option<(usize, f64)> = None;
+    for k in 0..4 {
+        let (a, b) = (quad[k], quad[(k + 1) % 4]);
+        // distance inside the edge (positive: on the body's side)
+        let h = (b - a).cross(x - a) / (b - a).norm();
+        if h <= 0.0 {
+            return None;
+        }
+        if best.is_none_or(|(_, hb)| h < hb) {
+            best = Some((k, h));
+        }
+    }
+    best.map(|(k, _)| k)
+}
+
 /// Reference points of each body's contact chains where the chain turns
 /// (the rectangle's corners) or ends.
 fn chain_corners(m: &CoupledModel) -> Vec<Vec<Vec<Vec2>>> {
@@ -319,6 +427,8 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
     ]);
     let mut hist = HistoryWriter::create(&dir.join("history.csv"), &cols)?;
     let mut meter = WorkMeter::new(&model);
+    let mut watch = EntryWatch::new(sc, &model)?;
+    let mut entered = 0;
     let vtk_every = sc.output.vtk_every;
     let mut pvd_discs = PvdSeries::new(&dir.join("discs.pvd"));
     let mut pvd_bodies: Vec<PvdSeries> = body_names
@@ -355,6 +465,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
             meter.after_step(&model.granular);
             pb.inc(1);
         }
+        entered += watch.check(&model, &body_names);
         let t = model.granular.time;
         let fn_sum: f64 = model.contacts.iter().map(|c| c.fn_elastic).sum();
         if fn_sum > peak.0 {
@@ -424,6 +535,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         "fall_off_time": fall_off,
         "force_below_weight_time": below_weight,
         "contact_lost_time": lost_contact,
+        "discs_entered_through_non_contact_edges": entered,
         "energy": {
             "E_kin_dem": e.kin_dem, "E_kin_body": e.kin_body, "E_strain": e.strain,
             "E_penalty": e.penalty, "E_contact": e.contact, "W_ext": e.w_ext, "E_diss": e.diss,
@@ -481,4 +593,27 @@ pub fn check(sc: &Scenario) -> Result<String, CouplingError> {
         s += &format!("warning: {w}\n");
     }
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_point_inside_is_attributed_to_the_nearest_edge() {
+        // a slightly sheared rectangle [0, 2] × [0, 1], counter-clockwise
+        let q = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(2.0, 0.0),
+            Vec2::new(2.1, 1.0),
+            Vec2::new(0.1, 1.0),
+        ];
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, 0.01)), Some(0)); // bottom
+        assert_eq!(entered_edge(&q, Vec2::new(2.02, 0.5)), Some(1)); // right
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, 0.98)), Some(2)); // top
+        assert_eq!(entered_edge(&q, Vec2::new(0.1, 0.5)), Some(3)); // left
+        assert_eq!(entered_edge(&q, Vec2::new(0.02, 0.5)), None); // outside, left of the sheared edge
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, 1.0)), None); // on the boundary
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, -0.1)), None);
+    }
 }
