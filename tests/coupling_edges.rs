@@ -121,3 +121,22 @@ fn default_edges_stop_a_disc_and_a_non_contact_edge_is_reported_once() {
         "{err}"
     );
 }
+
+/// The default is one closed chain around the body; `[]` is none; a list
+/// restricts it.
+#[test]
+fn contact_edges_default_to_one_closed_chain_and_can_be_empty() {
+    let chains = |edges: &str| {
+        let sc = efgdem::scenario::parse(&scenario(edges), "s.toml").unwrap();
+        let m = efgdem::coupling::run::build(&sc).unwrap().model;
+        m.bodies[0]
+            .contact_boundary()
+            .iter()
+            .map(|c| (c.segments(), c.reference.first() == c.reference.last()))
+            .collect::<Vec<_>>()
+    };
+    // 11 × 6 nodes, 4 boundary points per node spacing: 4 · (2·10 + 2·5)
+    assert_eq!(chains(""), vec![(120, true)]);
+    assert_eq!(chains("contact_edges = []"), vec![]);
+    assert_eq!(chains(r#"contact_edges = ["bottom"]"#), vec![(40, false)]);
+}
