@@ -314,13 +314,16 @@ impl EntryWatch {
     }
 
     /// Report the discs that entered a body through a non-contact edge since
-    /// the last call; returns how many.
+    /// the last call (at output steps: one pass over the discs, like the
+    /// energy account's); returns how many.
     fn check(&mut self, m: &CoupledModel, names: &[String]) -> usize {
         let p = &m.granular.particles;
         let mut new = 0;
         for w in &self.bodies {
             let b = body(m, w.body);
-            let quad = w.corners.each_ref().map(|(x, at)| *x + b.sample_at(at).u);
+            let at = w.corners.each_ref().map(|(x, at)| (*x, b.sample_at(at)));
+            let quad = at.map(|(x, smp)| x + smp.u);
+            let v_body = at.iter().fold(Vec2::ZERO, |s, (_, smp)| s + smp.v) * 0.25;
             let lo = quad
                 .iter()
                 .fold(quad[0], |a, c| Vec2::new(a.x.min(c.x), a.y.min(c.y)));
@@ -333,7 +336,7 @@ impl EntryWatch {
                     continue;
                 }
                 let id = p.id[d] as usize;
-                if let Some(k) = entered_edge(&quad, x)
+                if let Some(k) = entered_edge(&quad, x, p.vel[d] - v_body)
                     && w.open[k]
                     && !self.reported[id]
                 {
@@ -355,21 +358,30 @@ impl EntryWatch {
 }
 
 /// If `x` lies strictly inside the convex quadrilateral `quad`
-/// (counter-clockwise), the edge `quad[k] → quad[k + 1]` nearest to it.
-fn entered_edge(quad: &[Vec2; 4], x: Vec2) -> Option<usize> {
-    let mut best: Option<(usize, f64)> = None;
+/// (counter-clockwise), the edge `quad[k] → quad[k + 1]` it came in
+/// through, moving with velocity `v` relative to the quadrilateral: the
+/// first edge hit when going back along `−v`; the nearest edge if `v` does
+/// not point into the quadrilateral through any edge (e.g. at rest).
+fn entered_edge(quad: &[Vec2; 4], x: Vec2, v: Vec2) -> Option<usize> {
+    let mut nearest: Option<(usize, f64)> = None;
+    let mut crossed: Option<(usize, f64)> = None;
     for k in 0..4 {
         let (a, b) = (quad[k], quad[(k + 1) % 4]);
-        // distance inside the edge (positive: on the body's side)
-        let h = (b - a).cross(x - a) / (b - a).norm();
+        let n = (b - a).perp() * (1.0 / (b - a).norm()); // inward unit normal
+        let h = n.dot(x - a); // distance inside the edge
         if h <= 0.0 {
             return None;
         }
-        if best.is_none_or(|(_, hb)| h < hb) {
-            best = Some((k, h));
+        if nearest.is_none_or(|(_, m)| h < m) {
+            nearest = Some((k, h));
+        }
+        // inward motion through this edge: it was on it h / (v·n) ago
+        let vn = v.dot(n);
+        if vn > 0.0 && crossed.is_none_or(|(_, s)| h / vn < s) {
+            crossed = Some((k, h / vn));
         }
     }
-    best.map(|(k, _)| k)
+    crossed.or(nearest).map(|(k, _)| k)
 }
 
 /// Reference points of each body's contact chains where the chain turns
@@ -465,7 +477,6 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
             meter.after_step(&model.granular);
             pb.inc(1);
         }
-        entered += watch.check(&model, &body_names);
         let t = model.granular.time;
         let fn_sum: f64 = model.contacts.iter().map(|c| c.fn_elastic).sum();
         if fn_sum > peak.0 {
@@ -495,6 +506,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
             lost_contact = Some(t);
         }
         if step % sc.output.every == 0 || step == steps {
+            entered += watch.check(&model, &body_names);
             let e = meter.account(&model);
             row.clear();
             row.push(step as f64);
@@ -600,7 +612,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_point_inside_is_attributed_to_the_nearest_edge() {
+    fn a_disc_inside_is_attributed_to_the_edge_it_came_through() {
         // a slightly sheared rectangle [0, 2] × [0, 1], counter-clockwise
         let q = [
             Vec2::new(0.0, 0.0),
@@ -608,12 +620,22 @@ mod tests {
             Vec2::new(2.1, 1.0),
             Vec2::new(0.1, 1.0),
         ];
-        assert_eq!(entered_edge(&q, Vec2::new(1.0, 0.01)), Some(0)); // bottom
-        assert_eq!(entered_edge(&q, Vec2::new(2.02, 0.5)), Some(1)); // right
-        assert_eq!(entered_edge(&q, Vec2::new(1.0, 0.98)), Some(2)); // top
-        assert_eq!(entered_edge(&q, Vec2::new(0.1, 0.5)), Some(3)); // left
-        assert_eq!(entered_edge(&q, Vec2::new(0.02, 0.5)), None); // outside, left of the sheared edge
-        assert_eq!(entered_edge(&q, Vec2::new(1.0, 1.0)), None); // on the boundary
-        assert_eq!(entered_edge(&q, Vec2::new(1.0, -0.1)), None);
+        let rest = Vec2::ZERO;
+        // at rest: the nearest edge
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, 0.01), rest), Some(0)); // bottom
+        assert_eq!(entered_edge(&q, Vec2::new(2.02, 0.5), rest), Some(1)); // right
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, 0.98), rest), Some(2)); // top
+        assert_eq!(entered_edge(&q, Vec2::new(0.1, 0.5), rest), Some(3)); // left
+        // outside (left of the sheared edge) or on the boundary: none
+        assert_eq!(entered_edge(&q, Vec2::new(0.02, 0.5), rest), None);
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, 1.0), rest), None);
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, -0.1), rest), None);
+        // moving: the edge behind it, even if another one is nearer
+        let x = Vec2::new(1.2, 0.9);
+        assert_eq!(entered_edge(&q, x, Vec2::new(1.0, 0.0)), Some(3)); // from the left
+        assert_eq!(entered_edge(&q, x, Vec2::new(-1.0, 0.0)), Some(1)); // from the right
+        assert_eq!(entered_edge(&q, x, Vec2::new(0.0, 1.0)), Some(0)); // from below
+        assert_eq!(entered_edge(&q, x, Vec2::new(1.0, 1.0)), Some(0)); // corner: bottom first
+        assert_eq!(entered_edge(&q, x, Vec2::new(0.1, -1.0)), Some(2)); // from above
     }
 }
