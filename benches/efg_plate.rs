@@ -45,12 +45,12 @@ fn bench(c: &mut Criterion) {
     };
     let a = p.alphas();
     let m = ops.gram.scaled(7800.0);
-    let eff = ops.kbar.combine(1.0, &m, a[0]).unwrap();
+    let eff = ops.kbar().combine(1.0, &m, a[0]).unwrap();
     g.bench_function("cholesky_newmark_matrix", |b| {
         b.iter(|| black_box(Cholesky::factor(&eff).unwrap().nnz_l()))
     });
     drop(eff);
-    let mut nm = Newmark::new(m, None, ops.kbar.clone(), p).unwrap();
+    let mut nm = Newmark::new(m, None, ops.kbar(), p).unwrap();
     let n = 2 * s.len();
     let mut st = State::zeros(n);
     let f: Vec<f64> = (0..n)

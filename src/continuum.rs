@@ -42,7 +42,7 @@ impl BoundaryChain {
 }
 
 /// Edges in counter-clockwise order around a rectangle (body on the left).
-const CCW: [Edge; 4] = [Edge::Bottom, Edge::Right, Edge::Top, Edge::Left];
+const CCW: [Edge; 4] = Edge::ALL;
 
 /// Reference points along `edge` of the rectangle `origin`, `size` with a
 /// `grid = [nx, ny]` of nodes, counter-clockwise, `refine` points per node
@@ -116,9 +116,13 @@ pub fn interpolate(row: &[(u32, f64)], a: &[f64]) -> Vec2 {
 pub struct BodyEnergies {
     /// `½ U̇ᵀ M U̇`.
     pub kinetic: f64,
-    /// `½ Uᵀ K̄ U` (elastic plus penalty springs, moving springs measured
-    /// from their current position).
+    /// Elastic strain energy `½ Uᵀ K U` (without penalty springs).
     pub strain: f64,
+    /// Energy of the penalty springs of prescribed edges (EFG, ERRATA E4),
+    /// from their gap to the prescribed displacement (moving edges at their
+    /// present position): `½ Σ_g (u(x_g) − ū_g)ᵀ W_g (u(x_g) − ū_g)`.
+    /// Zero for FE bodies (prescribed DOFs eliminated exactly).
+    pub penalty: f64,
     /// Work done on the body since t = 0 by its own loads (permanent loads,
     /// moving edges) — not by the contacts.
     pub work: f64,

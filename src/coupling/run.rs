@@ -12,7 +12,7 @@ use crate::output::csv::HistoryWriter;
 use crate::output::vtk::PvdSeries;
 use crate::output::{progress, write_json};
 use crate::run::RunOptions;
-use crate::scenario::body::{Method, is_body_probe};
+use crate::scenario::body::{Edge, Method, is_body_probe};
 use crate::scenario::{Probe, Scenario};
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -191,10 +191,14 @@ fn value(m: &CoupledModel, b: &Bound) -> f64 {
 pub struct EnergyAccount {
     pub kin_dem: f64,
     pub kin_body: f64,
+    /// Elastic strain energy of the bodies, `Σ ½UᵀKU`.
     pub strain: f64,
+    /// Energy of the bodies' penalty springs (EFG prescribed edges), from
+    /// their gap to the prescribed displacement.
+    pub penalty: f64,
     pub contact: f64,
-    /// Work of gravity on the discs, of the bodies' permanent loads and of
-    /// the walls since t = 0.
+    /// Work of gravity on the discs, of the bodies' permanent loads and
+    /// moving edges, and of the walls since t = 0.
     pub w_ext: f64,
     /// `W_ext − (stored − stored at t = 0)`: friction, dashpots and
     /// numerical dissipation.
@@ -202,9 +206,10 @@ pub struct EnergyAccount {
 }
 
 impl EnergyAccount {
-    /// Energy stored: kinetic (discs, bodies), strain and contact springs.
+    /// Energy stored: kinetic (discs, bodies), strain, penalty and contact
+    /// springs.
     pub fn stored(&self) -> f64 {
-        self.kin_dem + self.kin_body + self.strain + self.contact
+        self.kin_dem + self.kin_body + self.strain + self.penalty + self.contact
     }
 }
 
@@ -242,25 +247,149 @@ impl WorkMeter {
         for k in 0..p.len() {
             w_grav += p.mass[k] * g.gravity.dot(p.pos[k] - self.x0[k]);
         }
-        let (mut kin_body, mut strain, mut w_body) = (0.0, 0.0, 0.0);
+        let (mut kin_body, mut strain, mut penalty, mut w_body) = (0.0, 0.0, 0.0, 0.0);
         for b in &m.bodies {
             let en = b.energies();
             kin_body += en.kinetic;
             strain += en.strain;
+            penalty += en.penalty;
             w_body += en.work;
         }
         let contact = e.spring + m.body_contact_energy();
         let w_ext = w_grav + w_body + self.wall_work;
         let kin_dem = e.kinetic + e.rotational;
-        EnergyAccount {
+        let mut e = EnergyAccount {
             kin_dem,
             kin_body,
             strain,
+            penalty,
             contact,
             w_ext,
-            diss: w_ext - (kin_dem + kin_body + strain + contact - self.stored0),
+            diss: 0.0,
+        };
+        e.diss = w_ext - (e.stored() - self.stored0);
+        e
+    }
+}
+
+/// Watches for discs whose centre enters a body through an edge that is
+/// not one of its contact edges: the body does not see such a disc from
+/// outside, and its contact chains may see it from inside (forces up to
+/// 2 k_n r). Each disc is reported once, as a warning on stderr.
+struct EntryWatch {
+    bodies: Vec<Watched>,
+    /// By disc id: already reported.
+    reported: Vec<bool>,
+}
+
+/// A body with at least one edge that is not a contact edge.
+struct Watched {
+    body: usize,
+    /// Corners counter-clockwise from the lower left: reference position
+    /// and where to sample their displacement.
+    corners: [(Vec2, At); 4],
+    /// Edge k, from corner k to corner k + 1 ([`Edge::ALL`] order), is not
+    /// a contact edge.
+    open: [bool; 4],
+}
+
+impl EntryWatch {
+    fn new(sc: &Scenario, m: &CoupledModel) -> Result<Self, CouplingError> {
+        let mut bodies = Vec::new();
+        for (i, spec) in sc.body.iter().enumerate() {
+            let open = Edge::ALL.map(|e| !spec.contact_edges.contains(&e));
+            if !open.contains(&true) {
+                continue;
+            }
+            let (o, s) = (
+                Vec2::from(spec.rectangle.origin),
+                Vec2::from(spec.rectangle.size),
+            );
+            let corners = [o, o + Vec2::new(s.x, 0.0), o + s, o + Vec2::new(0.0, s.y)];
+            let b = body(m, i);
+            let corners = [0, 1, 2, 3].map(|k| b.bind(corners[k]).map(|at| (corners[k], at)));
+            let [c0, c1, c2, c3] = corners;
+            bodies.push(Watched {
+                body: i,
+                corners: [c0?, c1?, c2?, c3?],
+                open,
+            });
+        }
+        Ok(EntryWatch {
+            bodies,
+            reported: vec![false; m.granular.particles.len()],
+        })
+    }
+
+    /// Report the discs that entered a body through a non-contact edge since
+    /// the last call (at output steps: one pass over the discs, like the
+    /// energy account's); returns how many.
+    fn check(&mut self, m: &CoupledModel, names: &[String]) -> usize {
+        let p = &m.granular.particles;
+        let mut new = 0;
+        for w in &self.bodies {
+            let b = body(m, w.body);
+            let at = w.corners.each_ref().map(|(x, at)| (*x, b.sample_at(at)));
+            let quad = at.map(|(x, smp)| x + smp.u);
+            let v_body = at.iter().fold(Vec2::ZERO, |s, (_, smp)| s + smp.v) * 0.25;
+            let lo = quad
+                .iter()
+                .fold(quad[0], |a, c| Vec2::new(a.x.min(c.x), a.y.min(c.y)));
+            let hi = quad
+                .iter()
+                .fold(quad[0], |a, c| Vec2::new(a.x.max(c.x), a.y.max(c.y)));
+            for d in 0..p.len() {
+                let x = p.pos[d];
+                if x.x <= lo.x || x.x >= hi.x || x.y <= lo.y || x.y >= hi.y {
+                    continue;
+                }
+                let id = p.id[d] as usize;
+                if let Some(k) = entered_edge(&quad, x, p.vel[d] - v_body)
+                    && w.open[k]
+                    && !self.reported[id]
+                {
+                    self.reported[id] = true;
+                    new += 1;
+                    eprintln!(
+                        "warning: disc {} entered body `{}` through a non-contact edge ({}) at t = {:.6} s (step {}); list the edge in `contact_edges` (default: all four)",
+                        id + 1,
+                        names[w.body],
+                        Edge::ALL[k].name(),
+                        m.granular.time,
+                        m.granular.step
+                    );
+                }
+            }
+        }
+        new
+    }
+}
+
+/// If `x` lies strictly inside the convex quadrilateral `quad`
+/// (counter-clockwise), the edge `quad[k] → quad[k + 1]` it came in
+/// through, moving with velocity `v` relative to the quadrilateral: the
+/// first edge hit when going back along `−v`; the nearest edge if `v` does
+/// not point into the quadrilateral through any edge (e.g. at rest).
+fn entered_edge(quad: &[Vec2; 4], x: Vec2, v: Vec2) -> Option<usize> {
+    let mut nearest: Option<(usize, f64)> = None;
+    let mut crossed: Option<(usize, f64)> = None;
+    for k in 0..4 {
+        let (a, b) = (quad[k], quad[(k + 1) % 4]);
+        let n = (b - a).perp() * (1.0 / (b - a).norm()); // inward unit normal
+        let h = n.dot(x - a); // distance inside the edge
+        if h <= 0.0 {
+            return None;
+        }
+        if nearest.is_none_or(|(_, m)| h < m) {
+            nearest = Some((k, h));
+        }
+        // inward motion through this edge: it was on it h / (v·n) ago
+        let vn = v.dot(n);
+        if vn > 0.0 && crossed.is_none_or(|(_, s)| h / vn < s) {
+            crossed = Some((k, h / vn));
         }
     }
+    crossed.or(nearest).map(|(k, _)| k)
 }
 
 /// Reference points of each body's contact chains where the chain turns
@@ -311,12 +440,15 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         "E_kin_dem",
         "E_kin_body",
         "E_strain",
+        "E_penalty",
         "E_contact",
         "W_ext",
         "E_diss",
     ]);
     let mut hist = HistoryWriter::create(&dir.join("history.csv"), &cols)?;
     let mut meter = WorkMeter::new(&model);
+    let mut watch = EntryWatch::new(sc, &model)?;
+    let mut entered = 0;
     let vtk_every = sc.output.vtk_every;
     let mut pvd_discs = PvdSeries::new(&dir.join("discs.pvd"));
     let mut pvd_bodies: Vec<PvdSeries> = body_names
@@ -382,13 +514,14 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
             lost_contact = Some(t);
         }
         if step % sc.output.every == 0 || step == steps {
+            entered += watch.check(&model, &body_names);
             let e = meter.account(&model);
             row.clear();
             row.push(step as f64);
             row.push(t);
             row.extend(probes.iter().map(|(_, b)| value(&model, b)));
             row.extend([
-                fn_sum, e.kin_dem, e.kin_body, e.strain, e.contact, e.w_ext, e.diss,
+                fn_sum, e.kin_dem, e.kin_body, e.strain, e.penalty, e.contact, e.w_ext, e.diss,
             ]);
             hist.row(&row)?;
         }
@@ -422,9 +555,10 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         "fall_off_time": fall_off,
         "force_below_weight_time": below_weight,
         "contact_lost_time": lost_contact,
+        "discs_entered_through_non_contact_edges": entered,
         "energy": {
             "E_kin_dem": e.kin_dem, "E_kin_body": e.kin_body, "E_strain": e.strain,
-            "E_contact": e.contact, "W_ext": e.w_ext, "E_diss": e.diss,
+            "E_penalty": e.penalty, "E_contact": e.contact, "W_ext": e.w_ext, "E_diss": e.diss,
         },
         "timing": {
             "build_seconds": t_build,
@@ -480,4 +614,37 @@ pub fn check(sc: &Scenario) -> Result<String, CouplingError> {
         s += &format!("warning: {w}\n");
     }
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_disc_inside_is_attributed_to_the_edge_it_came_through() {
+        // a slightly sheared rectangle [0, 2] × [0, 1], counter-clockwise
+        let q = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(2.0, 0.0),
+            Vec2::new(2.1, 1.0),
+            Vec2::new(0.1, 1.0),
+        ];
+        let rest = Vec2::ZERO;
+        // at rest: the nearest edge
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, 0.01), rest), Some(0)); // bottom
+        assert_eq!(entered_edge(&q, Vec2::new(2.02, 0.5), rest), Some(1)); // right
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, 0.98), rest), Some(2)); // top
+        assert_eq!(entered_edge(&q, Vec2::new(0.1, 0.5), rest), Some(3)); // left
+        // outside (left of the sheared edge) or on the boundary: none
+        assert_eq!(entered_edge(&q, Vec2::new(0.02, 0.5), rest), None);
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, 1.0), rest), None);
+        assert_eq!(entered_edge(&q, Vec2::new(1.0, -0.1), rest), None);
+        // moving: the edge behind it, even if another one is nearer
+        let x = Vec2::new(1.2, 0.9);
+        assert_eq!(entered_edge(&q, x, Vec2::new(1.0, 0.0)), Some(3)); // from the left
+        assert_eq!(entered_edge(&q, x, Vec2::new(-1.0, 0.0)), Some(1)); // from the right
+        assert_eq!(entered_edge(&q, x, Vec2::new(0.0, 1.0)), Some(0)); // from below
+        assert_eq!(entered_edge(&q, x, Vec2::new(1.0, 1.0)), Some(0)); // corner: bottom first
+        assert_eq!(entered_edge(&q, x, Vec2::new(0.1, -1.0)), Some(2)); // from above
+    }
 }

@@ -1,7 +1,8 @@
 //! Assembly of the EFG operators (Eqs. 21–32): stiffness K (Eq. 25, B per
 //! ERRATA E5), the Gram matrix `∫ΦᵀΦ t dΩ` from which the consistent mass
 //! (Eq. 23) and the mass-proportional damping (Eq. 24) follow, and the
-//! penalty matrix as a boundary integral (ERRATA E4).
+//! penalty points of the boundary integral (ERRATA E4), kept apart
+//! ([`Penalty`]: `K̄ = K + K^α` on demand, the penalty energy from the gap).
 //!
 //! Determinism: shape functions are computed per quadrature point (in
 //! parallel, each point independently); the matrices are then *gathered*
@@ -10,6 +11,7 @@
 //! `2I, 2I+1` of the lower triangle. Every entry is therefore summed in one
 //! fixed order, and the result is bitwise identical for any thread count.
 
+use super::penalty::Penalty;
 use super::shape::{CoverageError, ShapeRow, shape_functions};
 use super::support::Support;
 use crate::geom::Vec2;
@@ -124,23 +126,37 @@ pub fn elasticity(e: f64, nu: f64, plane_strain: bool) -> [f64; 4] {
 pub enum PointRole {
     /// Domain point with weight `w·t`: stiffness and Gram matrix.
     Domain(f64),
-    /// Boundary point on Γu: penalty weights `α_x·w·t`, `α_y·w·t` (E4).
+    /// Boundary point on Γu: penalty weights `α_x·w·t`, `α_y·w·t` (E4),
+    /// kept in [`Operators::penalty`].
     Penalty(f64, f64),
 }
 
 /// The assembled operators of one body, lower triangles on one pattern.
 #[derive(Debug, Clone)]
 pub struct Operators {
-    /// `K̄ = K + K^α` (Eq. 25 with B per E5, plus the boundary penalty of E4).
-    pub kbar: SymCsc,
+    /// The elastic stiffness K (Eq. 25 with B per E5), on a pattern that
+    /// also holds the couplings of the penalty points.
+    pub k: SymCsc,
+    /// The penalty points (E4), in point order; their prescribed values are
+    /// zero until the body sets them.
+    pub penalty: Penalty,
     /// `G = ∫ ΦᵀΦ t dΩ`: consistent mass `M = ρG` (Eq. 23), damping `C = cG` (Eq. 24).
     pub gram: SymCsc,
     /// `∫ φ_I t dΩ` per node (body force per unit density and acceleration, Eq. 27).
     pub phi_integral: Vec<f64>,
 }
 
-/// Assemble `K̄`, `G` and `∫φ t` from precomputed point shapes. `roles[g]`
-/// says how point `g` contributes; `d` is the elasticity matrix.
+impl Operators {
+    /// `K̄ = K + K^α` (Eq. 25 plus the boundary penalty of E4), bitwise
+    /// what one assembly pass over all points would give.
+    pub fn kbar(&self) -> SymCsc {
+        self.penalty.stiffen(&self.k)
+    }
+}
+
+/// Assemble `K`, `G`, `∫φ t` and the penalty points from precomputed point
+/// shapes. `roles[g]` says how point `g` contributes; `d` is the
+/// elasticity matrix.
 pub fn assemble(
     n_nodes: usize,
     shapes: &PointShapes,
@@ -248,42 +264,31 @@ pub fn assemble(
                     let s = shapes.ptr[g] + a as usize;
                     let e = shapes.ptr[g + 1];
                     let vi = shapes.val[s];
-                    match roles[g] {
-                        PointRole::Domain(w) => {
-                            let (fx, fy, fm) = (w * vi[1], w * vi[2], w * vi[0]);
-                            let (ax, ay) = (d11 * fx, d22 * fy);
-                            let (bx, by) = (d12 * fx, d12 * fy);
-                            let (cx, cy) = (d33 * fx, d33 * fy);
-                            for t in s..e {
-                                let j = shapes.idx[t] as usize;
-                                let k = slot[j] as usize;
-                                let vj = shapes.val[t];
-                                let kxx = vj[1] * ax + vj[2] * cy;
-                                let kyx = vj[2] * bx + vj[1] * cy;
-                                let kxy = vj[1] * by + vj[2] * cx;
-                                let kyy = vj[2] * ay + vj[1] * cx;
-                                let m = vj[0] * fm;
-                                k0[2 * k] += kxx;
-                                k0[2 * k + 1] += kyx;
-                                g0[2 * k] += m;
-                                if k == 0 {
-                                    k1[0] += kyy;
-                                    g1[0] += m;
-                                } else {
-                                    k1[2 * k - 1] += kxy;
-                                    k1[2 * k] += kyy;
-                                    g1[2 * k] += m;
-                                }
-                            }
-                        }
-                        PointRole::Penalty(px, py) => {
-                            let (fx, fy) = (px * vi[0], py * vi[0]);
-                            for t in s..e {
-                                let j = shapes.idx[t] as usize;
-                                let k = slot[j] as usize;
-                                let pj = shapes.val[t][0];
-                                k0[2 * k] += pj * fx;
-                                k1[2 * k] += pj * fy;
+                    // penalty points: pattern only (K^α: Operators::kbar)
+                    if let PointRole::Domain(w) = roles[g] {
+                        let (fx, fy, fm) = (w * vi[1], w * vi[2], w * vi[0]);
+                        let (ax, ay) = (d11 * fx, d22 * fy);
+                        let (bx, by) = (d12 * fx, d12 * fy);
+                        let (cx, cy) = (d33 * fx, d33 * fy);
+                        for t in s..e {
+                            let j = shapes.idx[t] as usize;
+                            let k = slot[j] as usize;
+                            let vj = shapes.val[t];
+                            let kxx = vj[1] * ax + vj[2] * cy;
+                            let kyx = vj[2] * bx + vj[1] * cy;
+                            let kxy = vj[1] * by + vj[2] * cx;
+                            let kyy = vj[2] * ay + vj[1] * cx;
+                            let m = vj[0] * fm;
+                            k0[2 * k] += kxx;
+                            k0[2 * k + 1] += kyx;
+                            g0[2 * k] += m;
+                            if k == 0 {
+                                k1[0] += kyy;
+                                g1[0] += m;
+                            } else {
+                                k1[2 * k - 1] += kxy;
+                                k1[2 * k] += kyy;
+                                g1[2 * k] += m;
                             }
                         }
                     }
@@ -304,13 +309,21 @@ pub fn assemble(
             }
         }
     }
+    let mut penalty = Penalty::new();
+    for (g, role) in roles.iter().enumerate() {
+        if let PointRole::Penalty(px, py) = *role {
+            let r = shapes.ptr[g]..shapes.ptr[g + 1];
+            let phi = shapes.val[r.clone()].iter().map(|v| v[0]);
+            penalty.push(shapes.idx[r].iter().copied().zip(phi), [px, py]);
+        }
+    }
     let pattern = Arc::new(Pattern {
         n: ndof,
         col_ptr,
         row_idx,
     });
     Operators {
-        kbar: SymCsc {
+        k: SymCsc {
             pattern: pattern.clone(),
             values: kvals,
         },
@@ -319,5 +332,6 @@ pub fn assemble(
             values: gvals,
         },
         phi_integral,
+        penalty,
     }
 }

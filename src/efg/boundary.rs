@@ -45,8 +45,10 @@ impl ContactBody for EfgBody {
     fn energies(&self) -> BodyEnergies {
         BodyEnergies {
             kinetic: self.kinetic_energy(),
-            strain: self.strain_energy(),
-            // constant loads from U = 0, plus the work of the moving edges
+            strain: self.elastic_energy(),
+            penalty: self.penalty_energy(),
+            // constant loads from U = 0 (the penalty load is in `penalty`),
+            // plus the work of the moving edges
             work: self.motion_work
                 + self
                     .f_permanent

@@ -5,6 +5,7 @@
 //! - [`shape`]: MLS shape functions and exact derivatives (ERRATA E3).
 //! - [`quadrature`]: background cells and boundary Gauss points.
 //! - [`assemble`]: K, M (via the Gram matrix), C, penalty (E4, E5), in parallel.
+//! - [`penalty`]: the penalty points: `K^α`, `F^α(t)`, the springs' energy and force.
 //! - [`body`]: [`EfgBody`], built from a scenario `[[body]]`.
 //! - [`exact`]: closed-form solutions (Timoshenko cantilever).
 //! - [`run`]: the continuum-only driver (`efgdem run` / `check`).
@@ -13,6 +14,7 @@ pub mod assemble;
 pub mod body;
 pub mod boundary;
 pub mod exact;
+pub mod penalty;
 pub mod quadrature;
 pub mod run;
 pub mod shape;

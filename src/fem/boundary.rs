@@ -47,6 +47,7 @@ impl ContactBody for FemBody {
         BodyEnergies {
             kinetic: self.kinetic_energy(),
             strain: self.strain_energy(),
+            penalty: 0.0,
             work: self.work(),
         }
     }

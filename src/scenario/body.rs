@@ -65,9 +65,10 @@ pub struct BodySpec {
     pub bc: Vec<BcSpec>,
     /// Initial state of a dynamic run (default: at rest, undeformed).
     pub initial: Option<InitialSpec>,
-    /// Edges that discs can touch (coupled runs), e.g. `["top", "right"]`.
-    /// Adjacent edges are joined around their common corner.
-    #[serde(default)]
+    /// Edges that discs can touch (coupled runs), e.g. `["top", "right"]`;
+    /// default: all four (one closed chain). Adjacent edges are joined
+    /// around their common corner; `[]` gives a body no contact boundary.
+    #[serde(default = "all_edges")]
     pub contact_edges: Vec<Edge>,
     /// Contact material (a `[[material]]` name) of the body's boundary;
     /// default: the disc's own material, as for walls.
@@ -85,6 +86,10 @@ pub struct BodySpec {
 
 fn yes() -> bool {
     true
+}
+
+fn all_edges() -> Vec<Edge> {
+    Edge::ALL.to_vec()
 }
 
 fn default_contact_refine() -> usize {
@@ -181,6 +186,21 @@ pub enum Edge {
     Right,
     Top,
     Bottom,
+}
+
+impl Edge {
+    /// The four edges, counter-clockwise from the bottom.
+    pub const ALL: [Edge; 4] = [Edge::Bottom, Edge::Right, Edge::Top, Edge::Left];
+
+    /// The edge's name in scenario files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Edge::Left => "left",
+            Edge::Right => "right",
+            Edge::Top => "top",
+            Edge::Bottom => "bottom",
+        }
+    }
 }
 
 /// One boundary condition on one edge: exactly one of `fixed`, `ux`/`uy`,
