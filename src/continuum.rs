@@ -208,6 +208,15 @@ pub trait ContactBody: Send + 'static {
     fn predict(&mut self) -> Result<&mut Newmark, Self::Error>;
     /// The integrator between `predict` and `commit`.
     fn newmark_mut(&mut self) -> Option<&mut Newmark>;
+    /// After [`predict`](Self::predict): `U₊ += A⁻¹ Φᵀ f` for the point
+    /// forces `f[k]` with rows `rows[k]`, one solve (a body may fold pending
+    /// corrections of its own into the same solve).
+    fn add_point_forces(&mut self, rows: &[Row], f: &[Vec2]) -> Result<(), Self::Error> {
+        if let Some(nm) = self.newmark_mut() {
+            nm.add_point_forces(rows.iter().map(|r| &r[..]), f, &[]);
+        }
+        Ok(())
+    }
     /// Accept the step, clear the point loads.
     fn commit(&mut self) -> Result<(), Self::Error>;
     fn energies(&self) -> BodyEnergies;
@@ -435,13 +444,15 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     /// The forces join the solution through `A⁻¹Φᵀ`, and are booked as the
     /// step's point loads (an FE body's support reactions exclude them).
     fn finish_step(&mut self, forces: &[Vec2]) -> Result<(), SolveError> {
-        let direct = self.mode == ComplianceMode::Direct;
-        if let Some(nm) = self.body.newmark_mut() {
-            if direct {
+        if self.mode == ComplianceMode::Direct {
+            if let Some(nm) = self.body.newmark_mut() {
                 nm.apply_point_forces(forces);
-            } else {
-                nm.add_point_forces(self.point_rows.iter().map(|r| &r[..]), forces);
             }
+        } else if !forces.is_empty() {
+            let rows = std::mem::take(&mut self.point_rows);
+            let r = self.body.add_point_forces(&rows, forces);
+            self.point_rows = rows;
+            r.map_err(|e| self.solve_error(e))?;
         }
         for (row, f) in self.point_rows.iter().zip(forces) {
             self.body.add_point_load_row(row, *f);

@@ -244,16 +244,20 @@ impl Newmark {
         &self.imposed
     }
 
-    /// After [`predict`](Self::predict): `U₊ += A⁻¹ Φᵀ f`, the forces
-    /// `f[k]` at points with rows `rows[k]` (none on imposed DOFs), with one
-    /// solve.
+    /// After [`predict`](Self::predict): `U₊ += A⁻¹ (Φᵀ f + extra)`, the
+    /// forces `f[k]` at points with rows `rows[k]` (none on imposed DOFs)
+    /// and a load `extra` (empty: none), with one solve.
     pub fn add_point_forces<'r>(
         &mut self,
         rows: impl IntoIterator<Item = &'r [(u32, f64)]>,
         f: &[Vec2],
+        extra: &[f64],
     ) {
         self.tmp.iter_mut().for_each(|x| *x = 0.0);
-        let mut any = false;
+        let mut any = !extra.is_empty();
+        for (t, e) in self.tmp.iter_mut().zip(extra) {
+            *t = *e;
+        }
         for (row, fk) in rows.into_iter().zip(f) {
             for &(j, p) in row {
                 for (a, fa) in [(0, fk.x), (1, fk.y)] {

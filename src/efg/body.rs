@@ -126,9 +126,12 @@ pub struct EfgBody {
     pub f_released: Vec<f64>,
     /// Point loads accumulated for the next step (Eq. 46), cleared by `advance`.
     pub f_point: Vec<f64>,
-    /// Scratch of [`refine`](Self::refine): loads without `F^α`, `U₊`, a
+    /// Scratch of [`refine_residual`](Self::refine_residual): loads without `F^α`, `U₊`, a
     /// work vector.
     refine_work: [Vec<f64>; 3],
+    /// The refinement residual of the present step awaits its solve (at
+    /// [`commit`](Self::commit), or folded into the contact forces' solve).
+    refine_pending: bool,
     /// Work done on the body by the moving edges since t = 0.
     pub motion_work: f64,
     /// Nodal parameters (not nodal displacements: no Kronecker-delta property).
@@ -300,6 +303,7 @@ impl EfgBody {
             f_released,
             f_point: vec![0.0; ndof],
             refine_work: Default::default(),
+            refine_pending: false,
             motion_work: 0.0,
             state: State::zeros(ndof),
             time: 0.0,
@@ -400,9 +404,28 @@ impl EfgBody {
             .add_load(&mut self.f_point, self.step + 1, self.params.dt);
         nm.predict(&self.state, &self.f_point);
         if refine {
-            self.refine()?;
+            self.refine_residual()?;
         }
         self.newmark.as_mut().ok_or(EfgError::NotStarted)
+    }
+
+    /// After [`predict`](Self::predict): `U₊ += A⁻¹ (Φᵀ f + r)`, the point
+    /// forces `f[k]` (rows `rows[k]`) and the pending refinement residual
+    /// `r` in one solve (the coupling's implicit contact forces).
+    pub fn add_point_forces<'r>(
+        &mut self,
+        rows: impl IntoIterator<Item = &'r [(u32, f64)]>,
+        f: &[Vec2],
+    ) -> Result<(), EfgError> {
+        let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;
+        let r: &[f64] = if self.refine_pending {
+            &self.refine_work[0]
+        } else {
+            &[]
+        };
+        nm.add_point_forces(rows, f, r);
+        self.refine_pending = false;
+        Ok(())
     }
 
     /// One step of iterative refinement of the predicted `U₊`, for bodies
@@ -415,7 +438,7 @@ impl EfgBody {
     /// with d and does work ∝ d² that no energy term holds (a steel footing
     /// driven 0.2 m with α = 10⁵E: 5·10⁻⁶ of the work; refined: 4·10⁻⁸). The
     /// gap-form residual has no such term. Cost: one more solve per step.
-    fn refine(&mut self) -> Result<(), EfgError> {
+    fn refine_residual(&mut self) -> Result<(), EfgError> {
         let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;
         let (step, dt, s) = (self.step + 1, self.params.dt, &self.state);
         let [r, u1, tmp] = &mut self.refine_work;
@@ -435,10 +458,7 @@ impl EfgBody {
         tmp.iter_mut().zip(u1.iter()).for_each(|(t, u)| *t = -u);
         self.ops.k.mul_add(tmp, r);
         self.ops.penalty.add_spring_force(u1, step, dt, r);
-        nm.solve_in_place(r);
-        for (u, d) in nm.solution_mut().iter_mut().zip(r.iter()) {
-            *u += d;
-        }
+        self.refine_pending = true;
         Ok(())
     }
 
@@ -446,6 +466,15 @@ impl EfgBody {
     /// clear the point loads, advance the clock.
     pub fn commit(&mut self) -> Result<(), EfgError> {
         let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;
+        if self.refine_pending {
+            // the refinement not folded into a contact solve
+            let r = &mut self.refine_work[0];
+            nm.solve_in_place(r);
+            for (u, d) in nm.solution_mut().iter_mut().zip(r.iter()) {
+                *u += d;
+            }
+            self.refine_pending = false;
+        }
         // work of the moving edges over the step, trapezoidal in time
         let (pen, step, dt) = (&self.ops.penalty, self.step, self.params.dt);
         let mut work = pen.half_step_work(&self.state.u, step, step, dt);

@@ -39,6 +39,9 @@ impl ContactBody for EfgBody {
     fn newmark_mut(&mut self) -> Option<&mut Newmark> {
         EfgBody::newmark_mut(self)
     }
+    fn add_point_forces(&mut self, rows: &[Row], f: &[Vec2]) -> Result<(), EfgError> {
+        EfgBody::add_point_forces(self, rows.iter().map(|r| &r[..]), f)
+    }
     fn commit(&mut self) -> Result<(), EfgError> {
         EfgBody::commit(self)
     }
