@@ -435,14 +435,14 @@ impl PointRows {
             self.gather(green);
         }
         self.q.iter_mut().for_each(|v| *v = 0.0);
-        for k in 0..m {
+        for (k, xk) in x.iter().enumerate().take(m) {
             let (s, e) = (self.start[k] as usize, self.start[k + 1] as usize);
             for &(lx, ly, phi) in &self.entries[s..e] {
                 if lx != NONE {
-                    self.q[lx as usize] += phi * x[k].x;
+                    self.q[lx as usize] += phi * xk.x;
                 }
                 if ly != NONE {
-                    self.q[ly as usize] += phi * x[k].y;
+                    self.q[ly as usize] += phi * xk.y;
                 }
             }
         }

@@ -364,15 +364,6 @@ impl<B: ContactBody> WithBoundary<B> {
             .get_or_insert_with(|| BoundaryGreen::new(nm.n(), nm.imposed().to_vec()));
         if let Some(nodes) = seed {
             green.extend(nodes, nm.factor()).map_err(err)?;
-            if std::env::var("EFGDEM_DEBUG").is_ok() {
-                eprintln!(
-                    "G: |B| {} of n {}, nnz(L) {}, significant {:.3}",
-                    green.len(),
-                    nm.n(),
-                    nm.factor_nnz(),
-                    green.significant_fraction()
-                );
-            }
         }
         if !covered(green, &self.point_rows) {
             let extra: Vec<u32> = self.point_rows.iter().flatten().map(|e| e.0).collect();

@@ -391,8 +391,8 @@ impl Solver {
             }
             s.mul(&self.t, &mut self.st);
             self.products += 1;
-            for q in 0..m {
-                res[q] = self.r[q] - (self.d[q] - self.st[q]);
+            for (q, rq) in res.iter_mut().enumerate() {
+                *rq = self.r[q] - (self.d[q] - self.st[q]);
             }
         }
         self.res = res;

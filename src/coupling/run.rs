@@ -85,10 +85,34 @@ pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
 
 /// A probe bound to the model.
 enum Bound {
-    BodyPoint { body: usize, at: At, q: String },
-    Disc { id: usize, q: String, x0: Vec2 },
-    Contact { a: usize, b: usize, total: bool },
-    Wall { w: usize, q: String },
+    BodyPoint {
+        body: usize,
+        at: At,
+        q: String,
+    },
+    /// An assembly-wide quantity (`contacts` counts disc–body contacts too).
+    Global {
+        q: String,
+    },
+    /// Total force of the discs on the body, x or y.
+    BodyForce {
+        body: usize,
+        y: bool,
+    },
+    Disc {
+        id: usize,
+        q: String,
+        x0: Vec2,
+    },
+    Contact {
+        a: usize,
+        b: usize,
+        total: bool,
+    },
+    Wall {
+        w: usize,
+        q: String,
+    },
 }
 
 fn bind(
@@ -119,6 +143,15 @@ fn bind(
                     None => Some(0),
                 }
                 .ok_or_else(|| input(format!("probe `{}`: no such body", pr.name)))?;
+                if crate::scenario::body::CONTACT_FORCE_QUANTITIES.contains(&q.as_str()) {
+                    return Ok((
+                        pr.name.clone(),
+                        Bound::BodyForce {
+                            body: bi,
+                            y: q == "contact_fy",
+                        },
+                    ));
+                }
                 if !crate::scenario::body::POINT_QUANTITIES.contains(&q.as_str()) {
                     return Err(input(format!(
                         "probe `{}`: `{q}` is not recorded in coupled runs; body probes take a `point` and one of {}",
@@ -144,6 +177,8 @@ fn bind(
                     .position(|x| &x.name == w)
                     .ok_or_else(|| input(format!("probe `{}`: no wall `{w}`", pr.name)))?;
                 Bound::Wall { w, q }
+            } else if crate::scenario::granular::GLOBAL_QUANTITIES.contains(&q.as_str()) {
+                Bound::Global { q }
             } else {
                 let id = disc(pr.disc.unwrap_or(0), pr)?;
                 let x0 = g.particles.pos[g.slot(id)];
@@ -172,6 +207,20 @@ fn value(m: &CoupledModel, b: &Bound) -> f64 {
         Bound::BodyPoint { body: b, at, q } => {
             body(m, *b).sample_at(at).field(q).unwrap_or(f64::NAN)
         }
+        Bound::Global { q } => {
+            let v = crate::dem::run::global_quantity(g, q);
+            if q == "contacts" {
+                v + m.contacts.len() as f64
+            } else {
+                v
+            }
+        }
+        Bound::BodyForce { body, y } => m
+            .contacts
+            .iter()
+            .filter(|c| c.body as usize == *body)
+            .map(|c| if *y { -c.force.y } else { -c.force.x })
+            .sum(),
         Bound::Disc { id, q, x0 } => match q.as_str() {
             // displacement since t = 0: only coupled runs record it
             "ux" => g.particles.pos[g.slot(*id)].x - x0.x,
@@ -215,6 +264,7 @@ impl EnergyAccount {
 
 /// Tracks the external work between steps.
 pub(crate) struct WorkMeter {
+    /// Initial disc positions by disc id (the DEM renumbers its slots).
     x0: Vec<Vec2>,
     wall_work: f64,
     /// Energy stored at t = 0 (initial velocities, overlaps, deformation)
@@ -224,8 +274,13 @@ pub(crate) struct WorkMeter {
 
 impl WorkMeter {
     pub(crate) fn new(m: &CoupledModel) -> Self {
+        let p = &m.granular.particles;
+        let mut x0 = vec![Vec2::ZERO; p.len()];
+        for k in 0..p.len() {
+            x0[p.id[k] as usize] = p.pos[k];
+        }
         let mut w = WorkMeter {
-            x0: m.granular.particles.pos.clone(),
+            x0,
             wall_work: 0.0,
             stored0: 0.0,
         };
@@ -245,7 +300,7 @@ impl WorkMeter {
         let e = g.energies();
         let mut w_grav = 0.0;
         for k in 0..p.len() {
-            w_grav += p.mass[k] * g.gravity.dot(p.pos[k] - self.x0[k]);
+            w_grav += p.mass[k] * g.gravity.dot(p.pos[k] - self.x0[p.id[k] as usize]);
         }
         let (mut kin_body, mut strain, mut penalty, mut w_body) = (0.0, 0.0, 0.0, 0.0);
         for b in &m.bodies {

@@ -113,20 +113,24 @@ fn sample(gr: &Granular, s: &Sample) -> f64 {
         }
         Sample::Wall { w, q } => wall_quantity(&gr.walls[w], q),
         Sample::Disc { id, q } => disc_quantity(gr, id, q),
-        Sample::Global(q) => {
-            if q == "contacts" {
-                let (a, b) = gr.touching();
-                return (a + b) as f64;
-            }
-            let e = gr.energies();
-            match q {
-                "kinetic" => e.kinetic,
-                "rotational" => e.rotational,
-                "spring" => e.spring,
-                "gravity_energy" => e.gravity,
-                _ => e.total(),
-            }
-        }
+        Sample::Global(q) => global_quantity(gr, q),
+    }
+}
+
+/// An assembly-wide probe quantity
+/// ([`GLOBAL_QUANTITIES`](crate::scenario::granular::GLOBAL_QUANTITIES)).
+pub(crate) fn global_quantity(gr: &Granular, q: &str) -> f64 {
+    if q == "contacts" {
+        let (a, b) = gr.touching();
+        return (a + b) as f64;
+    }
+    let e = gr.energies();
+    match q {
+        "kinetic" => e.kinetic,
+        "rotational" => e.rotational,
+        "spring" => e.spring,
+        "gravity_energy" => e.gravity,
+        _ => e.total(),
     }
 }
 

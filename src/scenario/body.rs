@@ -310,6 +310,9 @@ pub const POINT_QUANTITIES: &[&str] = &[
 ];
 /// Body-wide quantities (no `point`).
 pub const BODY_QUANTITIES: &[&str] = &["kinetic_energy", "strain_energy", "total_energy"];
+/// Coupled runs: the total force of the discs on a body (no `point`), e.g.
+/// a footing's reaction.
+pub const CONTACT_FORCE_QUANTITIES: &[&str] = &["contact_fx", "contact_fy"];
 
 /// Is `pr` a probe of a body? In a continuum-only run every point quantity
 /// is; in a coupled run a probe belongs to a body when it has a `point` or
@@ -317,6 +320,7 @@ pub const BODY_QUANTITIES: &[&str] = &["kinetic_energy", "strain_energy", "total
 pub fn is_body_probe(pr: &crate::scenario::Probe, continuum_only: bool) -> bool {
     let q = pr.quantity.as_str();
     BODY_QUANTITIES.contains(&q)
+        || (!continuum_only && CONTACT_FORCE_QUANTITIES.contains(&q))
         || (POINT_QUANTITIES.contains(&q) && (continuum_only || pr.point.is_some()))
 }
 
