@@ -154,6 +154,67 @@ impl SymCsc {
     }
 }
 
+/// Some rows of the symmetric matrices on one [`Pattern`] (both triangles
+/// gathered), for products `(A x)_i` on those rows only.
+#[derive(Debug, Clone)]
+pub struct RowSelection {
+    pub rows: Vec<usize>,
+    /// Per selected row `start[r]..start[r + 1]`: columns and the positions
+    /// of their values in the lower-triangle storage.
+    start: Vec<usize>,
+    col: Vec<usize>,
+    at: Vec<usize>,
+}
+
+impl RowSelection {
+    /// Select `rows` (ascending, distinct) of matrices on `p`.
+    pub fn new(p: &Pattern, rows: Vec<usize>) -> Self {
+        let mut sel = vec![usize::MAX; p.n];
+        for (r, &i) in rows.iter().enumerate() {
+            sel[i] = r;
+        }
+        let mut lists: Vec<Vec<(usize, usize)>> = vec![Vec::new(); rows.len()];
+        for j in 0..p.n {
+            for k in p.col_ptr[j]..p.col_ptr[j + 1] {
+                let i = p.row_idx[k];
+                if sel[i] != usize::MAX {
+                    lists[sel[i]].push((j, k));
+                }
+                if i != j && sel[j] != usize::MAX {
+                    lists[sel[j]].push((i, k));
+                }
+            }
+        }
+        let mut start = vec![0];
+        let (mut col, mut at) = (Vec::new(), Vec::new());
+        for l in lists {
+            for (j, k) in l {
+                col.push(j);
+                at.push(k);
+            }
+            start.push(col.len());
+        }
+        RowSelection {
+            rows,
+            start,
+            col,
+            at,
+        }
+    }
+
+    /// `y_i += (A x)_i` on the selected rows of `a` (a matrix on the
+    /// pattern the selection was made for).
+    pub fn mul_add(&self, a: &SymCsc, x: &[f64], y: &mut [f64]) {
+        for (r, &i) in self.rows.iter().enumerate() {
+            let mut acc = 0.0;
+            for q in self.start[r]..self.start[r + 1] {
+                acc += a.values[self.at[q]] * x[self.col[q]];
+            }
+            y[i] += acc;
+        }
+    }
+}
+
 /// Sparse Cholesky `A = LLᵀ` (AMD fill-reducing ordering, faer's supernodal
 /// or simplicial kernel as it sees fit). The solve workspace is allocated
 /// once, so [`Cholesky::solve_in_place`] does not allocate.
@@ -297,6 +358,22 @@ pub(crate) mod tests {
             }),
             values,
         }
+    }
+
+    /// Products on selected rows equal those rows of the full product.
+    #[test]
+    fn row_selection_matches_the_full_product() {
+        let a = lap(9);
+        let x: Vec<f64> = (0..9).map(|i| (i as f64 * 0.7).sin()).collect();
+        let mut full = vec![0.0; 9];
+        a.mul_add(&x, &mut full);
+        let sel = RowSelection::new(&a.pattern, vec![0, 4, 8]);
+        let mut part = vec![0.0; 9];
+        sel.mul_add(&a, &x, &mut part);
+        for i in [0, 4, 8] {
+            assert!((part[i] - full[i]).abs() < 1e-15);
+        }
+        assert_eq!(part[3], 0.0);
     }
 
     #[test]

@@ -13,7 +13,7 @@ use super::support::Support;
 use crate::geom::Vec2;
 use crate::newmark::{Newmark, NewmarkParams, State};
 use crate::scenario::body::{BcSpec, BodySpec, Edge, Plane, Prescribed};
-use crate::sparse::Cholesky;
+use crate::sparse::{Cholesky, RowSelection};
 use std::time::Instant;
 
 /// Material data of a body.
@@ -132,6 +132,8 @@ pub struct EfgBody {
     /// The refinement residual of the present step awaits its solve (at
     /// [`commit`](Self::commit), or folded into the contact forces' solve).
     refine_pending: bool,
+    /// The penalty rows the refinement computes its residual on.
+    refine_rows: Option<RowSelection>,
     /// Work done on the body by the moving edges since t = 0.
     pub motion_work: f64,
     /// Nodal parameters (not nodal displacements: no Kronecker-delta property).
@@ -304,6 +306,7 @@ impl EfgBody {
             f_point: vec![0.0; ndof],
             refine_work: Default::default(),
             refine_pending: false,
+            refine_rows: None,
             motion_work: 0.0,
             state: State::zeros(ndof),
             time: 0.0,
@@ -441,23 +444,42 @@ impl EfgBody {
     fn refine_residual(&mut self) -> Result<(), EfgError> {
         let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;
         let (step, dt, s) = (self.step + 1, self.params.dt, &self.state);
+        let pen = &self.ops.penalty;
+        // the residual matters on the penalty rows only (elsewhere it is
+        // the round-off of ordinary terms): products on those rows
+        let sel = self.refine_rows.get_or_insert_with(|| {
+            let mut dofs: Vec<usize> = (0..pen.len())
+                .flat_map(|g| pen.row(g))
+                .flat_map(|(j, _)| [2 * j as usize, 2 * j as usize + 1])
+                .collect();
+            dofs.sort_unstable();
+            dofs.dedup();
+            RowSelection::new(&nm.mass.pattern, dofs)
+        });
+        debug_assert!(*nm.mass.pattern == *self.ops.k.pattern);
         let [r, u1, tmp] = &mut self.refine_work;
         u1.clear();
         u1.extend_from_slice(nm.solution_mut());
-        // r = F − M Ü₊ − C U̇₊ − K U₊ + springs (r holds F without F^α)
+        // r = F − M Ü₊ − C U̇₊ − K U₊ + springs on those rows (r holds F
+        // without F^α on entry)
+        for (i, ri) in r.iter_mut().enumerate() {
+            if sel.rows.binary_search(&i).is_err() {
+                *ri = 0.0;
+            }
+        }
         let rates = |i: usize| nm.rates(s.u[i], s.v[i], s.a[i], u1[i]);
         tmp.clear();
         tmp.extend((0..u1.len()).map(|i| -rates(i).1));
-        nm.mass.mul_add(tmp, r);
+        sel.mul_add(&nm.mass, tmp, r);
         if let Some(c) = &nm.damping {
             tmp.iter_mut()
                 .enumerate()
                 .for_each(|(i, t)| *t = -rates(i).0);
-            c.mul_add(tmp, r);
+            sel.mul_add(c, tmp, r);
         }
         tmp.iter_mut().zip(u1.iter()).for_each(|(t, u)| *t = -u);
-        self.ops.k.mul_add(tmp, r);
-        self.ops.penalty.add_spring_force(u1, step, dt, r);
+        sel.mul_add(&self.ops.k, tmp, r);
+        pen.add_spring_force(u1, step, dt, r);
         self.refine_pending = true;
         Ok(())
     }
