@@ -228,7 +228,7 @@ pub struct PointRows {
 
 /// Products `S x` a contact solve typically needs (for the choice of
 /// [`PointRows::set`]).
-const PRODUCTS: f64 = 10.0;
+const PRODUCTS: f64 = 8.0;
 
 impl PointRows {
     /// Map the rows `rows[k] = [(node, φ)]` onto `green` (which must cover
@@ -267,23 +267,32 @@ impl PointRows {
         self.q.resize(act.len(), 0.0);
         self.z.resize(act.len(), 0.0);
         self.ga_start.clear();
-        // S by columns costs 2m·r·(n_act + 2m), then 4m² a product; the
-        // products over G cost nnz(G_act) each
+        // S by columns costs a gather of n_act² and 2m·r·(n_act + 2m)
+        // multiply-adds, then 4m² a product; the products over G cost a
+        // gather and nnz(G_act) each
         let (m, na) = (self.len() as f64, self.act.len() as f64);
         let r = self.entries.len() as f64 / m.max(1.0);
-        let form = 2.0 * m * r * (na + 2.0 * m) + PRODUCTS * 4.0 * m * m;
-        let over_g = PRODUCTS * na * na * green.significant_fraction();
+        let form = na * na + 2.0 * m * r * (na + 2.0 * m) + PRODUCTS * 4.0 * m * m;
+        let over_g = (PRODUCTS + 1.0) * na * na * green.significant_fraction();
         self.s.clear();
         if form < over_g {
             self.form(green);
         }
     }
 
-    /// `S = Φ (G Φᵀ)` column by column: for each point and component, the
-    /// combination of `G`'s columns on the touched DOFs, then its rows.
+    /// `S = Φ (G Φᵀ)` column by column: `G` on the touched DOFs gathered
+    /// once (contiguous columns), then for each point and component the
+    /// combination of its columns, then its rows.
     fn form(&mut self, green: &BoundaryGreen) {
         let (m, na, nb) = (self.len(), self.act.len(), green.len());
         let m2 = 2 * m;
+        let mut ga = vec![0.0; na * na];
+        for (c, &b) in self.act.iter().enumerate() {
+            let col = &green.g[b as usize * nb..(b as usize + 1) * nb];
+            for (v, &i) in ga[c * na..(c + 1) * na].iter_mut().zip(&self.act) {
+                *v = col[i as usize];
+            }
+        }
         self.s.resize(m2 * m2, 0.0);
         let mut t = vec![0.0; na];
         for k in 0..m {
@@ -294,10 +303,9 @@ impl PointRows {
                     if l == NONE {
                         continue;
                     }
-                    let b = self.act[l as usize] as usize;
-                    let col = &green.g[b * nb..(b + 1) * nb];
-                    for (tv, &i) in t.iter_mut().zip(&self.act) {
-                        *tv += phi * col[i as usize];
+                    let col = &ga[l as usize * na..(l as usize + 1) * na];
+                    for (tv, g) in t.iter_mut().zip(col) {
+                        *tv += phi * g;
                     }
                 }
                 let c = 2 * k + a;
