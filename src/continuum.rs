@@ -7,6 +7,7 @@ use crate::compliance::{BoundaryGreen, Compliance, PointRows};
 use crate::geom::Vec2;
 use crate::newmark::{Newmark, State};
 use crate::scenario::body::Edge;
+use rayon::prelude::*;
 
 /// A polyline on the body's contact boundary, oriented with the body on its
 /// left (counter-clockwise around the body), so the outward normal of a
@@ -192,7 +193,7 @@ pub trait Continuum: Send {
 /// [`WithBoundary`]: EFG ([`EfgBody`](crate::efg::EfgBody)) or FE
 /// ([`FemBody`](crate::fem::FemBody)). Its rows `φ_J(x)` interpolate
 /// displacement and velocity and distribute point loads (E7).
-pub trait ContactBody: Send + 'static {
+pub trait ContactBody: Send + Sync + 'static {
     type Error: std::fmt::Display;
     fn name(&self) -> &str;
     /// Origin and size of the rectangle, node grid `[nx, ny]`.
@@ -401,8 +402,13 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         free: &mut Vec<Vec2>,
     ) -> Result<(), SolveError> {
         let mut rows = std::mem::take(&mut self.point_rows);
-        rows.clear();
-        rows.extend(points.iter().map(|&(_, x)| self.row(x)));
+        // one shape-function evaluation per contact, in parallel (each row
+        // on its own: the same for any number of threads)
+        points
+            .par_iter()
+            .with_min_len(64)
+            .map(|&(_, x)| self.row(x))
+            .collect_into_vec(&mut rows);
         self.point_rows = rows;
         base.clear();
         let u = &self.body.state().u;
