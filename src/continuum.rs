@@ -4,7 +4,7 @@
 //! bilinear FE body, so the coupling never knows which one it talks to.
 
 use crate::geom::Vec2;
-use crate::newmark::{Newmark, State};
+use crate::newmark::{Newmark, State, StepStiffness};
 use crate::scenario::body::Edge;
 
 /// A polyline on the body's contact boundary, oriented with the body on its
@@ -110,6 +110,20 @@ pub fn interpolate(row: &[(u32, f64)], a: &[f64]) -> Vec2 {
     s
 }
 
+/// A stiffness on the motion of a few points of a contact chain during one
+/// implicit step: energy `½ Σ_kl c[k][l] ψ_k ψ_l`, where
+/// `ψ_k = Σ_(i, a) a · ΔP_i` over the pairs `(i, a)` of `psi[k]` and `ΔP_i`
+/// is the increment of chain point `i` over the step. This is how a
+/// contact's geometric stiffness (its normal turning with the boundary,
+/// [`crate::coupling::interface::Touch::geometric_stiffness`]) joins the
+/// body's Newmark step implicitly.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChainStiffness {
+    pub chain: usize,
+    pub psi: [[(usize, Vec2); 2]; 2],
+    pub c: [[f64; 2]; 2],
+}
+
 /// Energies of a body (for the coupled energy account).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BodyEnergies {
@@ -159,6 +173,19 @@ pub trait Continuum: Send {
         free: &mut Vec<Vec2>,
         compliance: &mut Vec<f64>,
     ) -> Result<(), SolveError>;
+    /// [`begin_step`](Self::begin_step) with the step's matrix stiffened by
+    /// `stiffness` (implicit geometric stiffness of the contacts). Default:
+    /// a body that cannot take it ignores it.
+    fn begin_step_stiffened(
+        &mut self,
+        points: &[(usize, Vec2)],
+        stiffness: &[ChainStiffness],
+        free: &mut Vec<Vec2>,
+        compliance: &mut Vec<f64>,
+    ) -> Result<(), SolveError> {
+        let _ = stiffness;
+        self.begin_step(points, free, compliance)
+    }
     /// Second half: add the point forces `forces[k]` at the points of
     /// [`begin_step`](Self::begin_step), accept the step, clear the loads
     /// and refresh the contact boundary.
@@ -218,6 +245,11 @@ pub struct WithBoundary<B> {
     rows: Vec<Vec<Row>>,
     /// Rows of the points of the current implicit step.
     point_rows: Vec<Row>,
+    /// Scratch of [`Continuum::begin_step_stiffened`]: functionals on DOFs,
+    /// their q × q matrix, `U` at the start of the step.
+    stiff_v: Vec<Vec<(usize, f64)>>,
+    stiff_c: Vec<f64>,
+    stiff_u: Vec<f64>,
 }
 
 impl<B: ContactBody> WithBoundary<B> {
@@ -236,6 +268,9 @@ impl<B: ContactBody> WithBoundary<B> {
             chains,
             rows,
             point_rows: Vec::new(),
+            stiff_v: Vec::new(),
+            stiff_c: Vec::new(),
+            stiff_u: Vec::new(),
         };
         c.refresh();
         Ok(c)
@@ -292,13 +327,52 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         free: &mut Vec<Vec2>,
         compliance: &mut Vec<f64>,
     ) -> Result<(), SolveError> {
+        self.begin_step_stiffened(points, &[], free, compliance)
+    }
+    /// The chain points' rows turn each `ψ_k` into a functional on the
+    /// nodal parameters, `Σ_(i, a) Σ_J φ_J(X_i) a · ΔU_J`.
+    fn begin_step_stiffened(
+        &mut self,
+        points: &[(usize, Vec2)],
+        stiffness: &[ChainStiffness],
+        free: &mut Vec<Vec2>,
+        compliance: &mut Vec<f64>,
+    ) -> Result<(), SolveError> {
         let mut rows = std::mem::take(&mut self.point_rows);
         rows.clear();
         rows.extend(points.iter().map(|&(_, x)| self.row(x)));
+        let q = 2 * stiffness.len();
+        self.stiff_v.resize_with(q, Vec::new);
+        self.stiff_c.clear();
+        self.stiff_c.resize(q * q, 0.0);
+        for (b, k) in stiffness.iter().enumerate() {
+            for (a, psi) in k.psi.iter().enumerate() {
+                let v = &mut self.stiff_v[2 * b + a];
+                v.clear();
+                for &(i, c) in psi {
+                    for &(j, phi) in &self.rows[k.chain][i] {
+                        v.push((2 * j as usize, phi * c.x));
+                        v.push((2 * j as usize + 1, phi * c.y));
+                    }
+                }
+                for (e, &c) in k.c[a].iter().enumerate() {
+                    self.stiff_c[(2 * b + a) * q + 2 * b + e] = c;
+                }
+            }
+        }
+        self.stiff_u.clear();
+        if q > 0 {
+            self.stiff_u.extend_from_slice(&self.body.state().u);
+        }
+        let extra = (q > 0).then_some(StepStiffness {
+            v: &self.stiff_v[..q],
+            c: &self.stiff_c,
+            u: &self.stiff_u,
+        });
         let res = self
             .body
             .predict()
-            .map(|nm| nm.point_compliance(&rows, free, compliance));
+            .map(|nm| nm.point_compliance(&rows, extra, free, compliance));
         self.point_rows = rows;
         res.map_err(|e| self.solve_error(e))
     }

@@ -56,6 +56,21 @@ impl State {
     }
 }
 
+/// An extra stiffness of one step on a few functionals of the increment
+/// (for example the geometric stiffness of contacts, treated implicitly):
+/// energy `½ Σ_kl c_kl ψ_k ψ_l` with `ψ_k = v_k · (U₊ − U)`, i.e. the
+/// step's matrix becomes `A + V C Vᵀ` and its right-hand side gains
+/// `V C Vᵀ U`.
+#[derive(Debug, Clone, Copy)]
+pub struct StepStiffness<'a> {
+    /// The functionals `v_k`, sparse: `(DOF, coefficient)`.
+    pub v: &'a [Vec<(usize, f64)>],
+    /// `C`, q × q row-major, symmetric.
+    pub c: &'a [f64],
+    /// `U` at the start of the step.
+    pub u: &'a [f64],
+}
+
 /// A Newmark integrator with its factored effective matrix.
 #[derive(Debug)]
 pub struct Newmark {
@@ -171,13 +186,16 @@ impl Newmark {
 
     /// After [`predict`](Self::predict): the response of the step to point
     /// forces at `m` points with shape rows `rows[k] = [(node, φ)]`
-    /// (`u_k = Σ φ U_{2·node+a}`; no load on [imposed](Self::set_imposed) DOFs). Writes the free displacements `u_k` of the
-    /// predicted `U₊` and the compliance `S = Φ A⁻¹ Φᵀ` (2m × 2m, row-major,
-    /// index `2k + a`), and keeps `A⁻¹Φᵀ` for
-    /// [`apply_point_forces`](Self::apply_point_forces). Cost: 2m solves.
+    /// (`u_k = Σ φ U_{2·node+a}`; no load on [imposed](Self::set_imposed)
+    /// DOFs), with the step's matrix stiffened by `extra` if given. Writes
+    /// the free displacements `u_k` of the predicted `U₊` and the compliance
+    /// `S = Φ A⁻¹ Φᵀ` (2m × 2m, row-major, index `2k + a`), and keeps
+    /// `A⁻¹Φᵀ` for [`apply_point_forces`](Self::apply_point_forces).
+    /// Cost: 2m solves (plus q for `extra`).
     pub fn point_compliance(
         &mut self,
         rows: &[Vec<(u32, f64)>],
+        extra: Option<StepStiffness<'_>>,
         free: &mut Vec<Vec2>,
         s: &mut Vec<f64>,
     ) {
@@ -186,23 +204,23 @@ impl Newmark {
         let dot = |x: &[f64], row: &[(u32, f64)], a: usize| -> f64 {
             row.iter().map(|&(j, p)| p * x[2 * j as usize + a]).sum()
         };
-        free.clear();
-        free.extend(
-            rows.iter()
-                .map(|r| Vec2::new(dot(&self.rhs, r, 0), dot(&self.rhs, r, 1))),
-        );
         let mut cols = std::mem::take(&mut self.cols);
         cols.clear();
         cols.resize(m2 * n, 0.0);
         for (c, col) in cols.chunks_exact_mut(n).enumerate() {
             for &(j, p) in &rows[c / 2] {
-                let dof = 2 * j as usize + c % 2;
-                if !self.imposed.get(dof).copied().unwrap_or(false) {
-                    col[dof] += p;
-                }
+                self.add_load(col, 2 * j as usize + c % 2, p);
             }
             self.factor.solve_in_place(col);
         }
+        if let Some(k) = extra {
+            self.stiffen(&k, &mut cols);
+        }
+        free.clear();
+        free.extend(
+            rows.iter()
+                .map(|r| Vec2::new(dot(&self.rhs, r, 0), dot(&self.rhs, r, 1))),
+        );
         s.clear();
         s.resize(m2 * m2, 0.0);
         for (c, col) in cols.chunks_exact(n).enumerate() {
@@ -212,6 +230,72 @@ impl Newmark {
             }
         }
         self.cols = cols;
+    }
+
+    /// `x[dof] += p` unless the DOF is [imposed](Self::set_imposed) (a load
+    /// there is a support reaction).
+    fn add_load(&self, x: &mut [f64], dof: usize, p: f64) {
+        if !self.imposed.get(dof).copied().unwrap_or(false) {
+            x[dof] += p;
+        }
+    }
+
+    /// Replace the step's matrix `A` by `A + V C Vᵀ` (the stiffness `k`) in
+    /// the predicted `U₊` (right-hand side plus `V C Vᵀ U`, so the extra
+    /// forces act on the increment `U₊ − U`) and in the columns `A⁻¹Φᵀ`,
+    /// by the Woodbury identity:
+    /// `(A + V C Vᵀ)⁻¹ = A⁻¹ − Y (I + C G)⁻¹ C Yᵀ`, `Y = A⁻¹V`, `G = VᵀY`,
+    /// so `x ← x − Y (I + C G)⁻¹ C Vᵀ x` for `x = U₊ − U` and for each column.
+    /// Cost: q solves and dense q × q work.
+    fn stiffen(&mut self, k: &StepStiffness<'_>, cols: &mut [f64]) {
+        let (n, q) = (self.n(), k.v.len());
+        if q == 0 {
+            return;
+        }
+        let mut y = vec![0.0; q * n];
+        for (col, v) in y.chunks_exact_mut(n).zip(k.v) {
+            for &(dof, a) in v {
+                self.add_load(col, dof, a);
+            }
+            self.factor.solve_in_place(col);
+        }
+        let apply =
+            |v: &[(usize, f64)], x: &[f64]| -> f64 { v.iter().map(|&(i, a)| a * x[i]).sum() };
+        // B = I + C G, then M = B⁻¹ C
+        let mut g = vec![0.0; q * q];
+        for (l, yl) in y.chunks_exact(n).enumerate() {
+            for (kk, v) in k.v.iter().enumerate() {
+                g[kk * q + l] = apply(v, yl);
+            }
+        }
+        let mut b = vec![0.0; q * q];
+        for i in 0..q {
+            for j in 0..q {
+                b[i * q + j] = (0..q).map(|l| k.c[i * q + l] * g[l * q + j]).sum::<f64>()
+                    + if i == j { 1.0 } else { 0.0 };
+            }
+        }
+        let mut m = k.c.to_vec();
+        dense_solve(&mut b, &mut m, q, q);
+        // x ← x − Y M Vᵀ x
+        let correct = |x: &mut [f64], x0: Option<&[f64]>| {
+            let r: Vec<f64> =
+                k.v.iter()
+                    .map(|v| apply(v, x) - x0.map_or(0.0, |u| apply(v, u)))
+                    .collect();
+            for (l, yl) in y.chunks_exact(n).enumerate() {
+                let z: f64 = (0..q).map(|j| m[l * q + j] * r[j]).sum();
+                if z != 0.0 {
+                    for (xi, yi) in x.iter_mut().zip(yl) {
+                        *xi -= z * yi;
+                    }
+                }
+            }
+        };
+        correct(&mut self.rhs, Some(k.u));
+        for col in cols.chunks_exact_mut(n) {
+            correct(col, None);
+        }
     }
 
     /// `U₊ += A⁻¹Φᵀ f`: the forces `f[k]` at the points of the last
@@ -298,6 +382,49 @@ pub fn consistent_acceleration(
     mf.solve_in_place(&mut r);
     state.a = r;
     Ok(())
+}
+
+/// Solve `a x = b` for `nrhs` right-hand sides in place (`b ← x`, `b` is
+/// n × nrhs row-major): Gaussian elimination with partial pivoting, `a`
+/// (n × n row-major) is destroyed. A zero pivot leaves that unknown 0.
+fn dense_solve(a: &mut [f64], b: &mut [f64], n: usize, nrhs: usize) {
+    for col in 0..n {
+        let piv = (col..n)
+            .max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs()))
+            .unwrap_or(col);
+        if a[piv * n + col] == 0.0 {
+            continue;
+        }
+        if piv != col {
+            for k in 0..n {
+                a.swap(piv * n + k, col * n + k);
+            }
+            for k in 0..nrhs {
+                b.swap(piv * nrhs + k, col * nrhs + k);
+            }
+        }
+        for i in col + 1..n {
+            let f = a[i * n + col] / a[col * n + col];
+            if f != 0.0 {
+                for k in col..n {
+                    a[i * n + k] -= f * a[col * n + k];
+                }
+                for k in 0..nrhs {
+                    b[i * nrhs + k] -= f * b[col * nrhs + k];
+                }
+            }
+        }
+    }
+    for col in (0..n).rev() {
+        let d = a[col * n + col];
+        for k in 0..nrhs {
+            let mut x = b[col * nrhs + k];
+            for j in col + 1..n {
+                x -= a[col * n + j] * b[j * nrhs + k];
+            }
+            b[col * nrhs + k] = if d != 0.0 { x / d } else { 0.0 };
+        }
+    }
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@
 //! contact is keyed by `(disc, chain)`, so a disc sliding from one segment
 //! to the next keeps its shear history.
 
-use crate::continuum::BoundaryChain;
+use crate::continuum::{BoundaryChain, ChainStiffness};
 use crate::geom::{Vec2, closest_on_segment};
 
 /// Which primitive of the boundary the disc touches (Fig. 5).
@@ -43,6 +43,60 @@ pub struct Touch {
     /// body's shape functions are evaluated for the velocity of `H` and for
     /// distributing the reaction (Eqs. 41, 46, ERRATA E7).
     pub material: Vec2,
+}
+
+impl Touch {
+    /// The geometric stiffness of a segment contact carrying the normal
+    /// force `force` (elastic, ≥ 0) from a disc centred at `centre`, for the
+    /// body's implicit step ([`ChainStiffness`] on chain `index`).
+    ///
+    /// Why: the overlap `δ = r − g`, `g = (O − A)·ν`, depends on the turn of
+    /// the segment `A → B` as well as on the motion of `H`. Over a step with
+    /// the disc fixed, for increments `ΔA`, `ΔB` of the segment ends,
+    /// `φ = ν·(ΔB − ΔA)/L` (the segment's turn) and `τ = t·((1 − s)ΔA + sΔB)`
+    /// (the tangential motion of `H`), the second variation of the contact
+    /// energy `½ k_n δ²` is `k_n (Δg)² + F_n (g φ² − 2 τ φ)`. The first term
+    /// is the normal spring of [`super::implicit::Linear`] (normal fixed over
+    /// the step); the second is this stiffness. Left out, it acts one step
+    /// late — the next step's detection turns the normal and moves `H` along
+    /// the boundary by `g φ` — and a stiffness that acts late is a negative
+    /// dashpot of about `F_n g Δt` on the boundary's rotation: energy grows
+    /// in the fast local rotations of a refined body, at a free corner
+    /// first, where they are softest. Taken into the step (the body solves
+    /// with `A + V C Vᵀ`), the turn of the normal is implicit like the
+    /// overlap, whatever the body's resolution.
+    ///
+    /// A point contact (Fig. 5b) has `g = |O − X_j|` and the radial normal:
+    /// its geometric stiffness `−F_n/g` on the vertex's tangential motion is
+    /// negative and, acting late, only dissipates (at most `F_n Δt/g` per unit
+    /// tangential velocity, ~1e-8 of the normal spring's `k_n`); `None`.
+    /// Also `None` without force or with the centre inside the body.
+    pub fn geometric_stiffness(
+        &self,
+        chain: &BoundaryChain,
+        index: usize,
+        centre: Vec2,
+        force: f64,
+    ) -> Option<ChainStiffness> {
+        let Feature::Segment(i) = self.feature else {
+            return None;
+        };
+        let gap = (centre - self.point).dot(self.normal);
+        let (a, b) = (chain.current[i], chain.current[i + 1]);
+        let l = (b - a).norm();
+        if !(force > 0.0 && gap > 0.0 && l > 0.0) {
+            return None;
+        }
+        let (t, nu, s) = ((b - a) * (1.0 / l), self.normal, self.s);
+        Some(ChainStiffness {
+            chain: index,
+            psi: [
+                [(i, nu * (-1.0 / l)), (i + 1, nu * (1.0 / l))],
+                [(i, t * (1.0 - s)), (i + 1, t * s)],
+            ],
+            c: [[force * gap, -force], [-force, 0.0]],
+        })
+    }
 }
 
 /// Outward unit normal of the segment `a → b` of a chain that has the body

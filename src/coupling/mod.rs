@@ -111,6 +111,8 @@ struct Work {
     base: Vec<Vec2>,
     free: Vec<Vec2>,
     compliance: Vec<f64>,
+    /// Geometric stiffness of the candidates ([`interface::Touch::geometric_stiffness`]).
+    stiffness: Vec<crate::continuum::ChainStiffness>,
     evals: Vec<implicit::Eval>,
     forces: Vec<Vec2>,
     /// Per candidate: (disc slot, body, chain, contact point, feature).
@@ -260,6 +262,7 @@ impl CoupledModel {
             w.points.clear();
             w.base.clear();
             w.meta.clear();
+            w.stiffness.clear();
             for (c, chain) in body.contact_boundary().iter().enumerate() {
                 if chain.segments() == 0 {
                     continue;
@@ -292,11 +295,14 @@ impl CoupledModel {
                     w.points.push((c, t.material));
                     w.base.push(body.boundary_displacement(c, t.material));
                     w.meta.push((d, b, c, t.point, t.feature));
+                    let fn0 = law.kn * (t.overlap - CANDIDATE_MARGIN * r);
+                    w.stiffness
+                        .extend(t.geometric_stiffness(chain, c, p.pos[d], fn0));
                 }
             }
             if advance {
                 let tb = Instant::now();
-                body.begin_step(&w.points, &mut w.free, &mut w.compliance)?;
+                body.begin_step_stiffened(&w.points, &w.stiffness, &mut w.free, &mut w.compliance)?;
                 body_time += tb.elapsed().as_secs_f64();
                 self.newton_iterations =
                     implicit::solve(&w.lin, &w.base, &w.free, &w.compliance, &mut w.evals);
