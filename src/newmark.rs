@@ -444,6 +444,102 @@ mod tests {
         }
     }
 
+    /// A full symmetric n × n matrix as a [`SymCsc`].
+    fn dense(n: usize, f: impl Fn(usize, usize) -> f64) -> SymCsc {
+        let mut col_ptr = vec![0];
+        let mut row_idx = Vec::new();
+        let mut values = Vec::new();
+        for j in 0..n {
+            for i in j..n {
+                row_idx.push(i);
+                values.push(f(i, j));
+            }
+            col_ptr.push(row_idx.len());
+        }
+        SymCsc {
+            pattern: Arc::new(Pattern {
+                n,
+                col_ptr,
+                row_idx,
+            }),
+            values,
+        }
+    }
+
+    /// The step stiffened by `V C Vᵀ` (Woodbury) is the step of the body
+    /// whose stiffness has `V C Vᵀ` added and whose load has `V C Vᵀ U`
+    /// added: free displacements, compliance and the committed state, with
+    /// an indefinite `C` like a contact's geometric stiffness.
+    #[test]
+    fn stiffened_step_is_the_step_with_the_stiffness_added() {
+        let n = 6;
+        let p = NewmarkParams {
+            dt: 0.1,
+            gamma: 0.5,
+            beta: 0.25,
+        };
+        let mass = dense(n, |i, j| if i == j { 2.0 } else { 0.1 });
+        let stiff = dense(n, |i, j| match i - j {
+            0 => 30.0,
+            1 => -10.0,
+            _ => 0.0,
+        });
+        let v = vec![
+            vec![(0, 1.0), (3, -0.5), (4, 0.25)],
+            vec![(1, 0.4), (2, 0.8)],
+        ];
+        let c = [40.0, -7.0, -7.0, 0.0];
+        let vcv = |i: usize, j: usize| -> f64 {
+            let at =
+                |k: usize, d: usize| v[k].iter().filter(|e| e.0 == d).map(|e| e.1).sum::<f64>();
+            (0..2)
+                .flat_map(|k| (0..2).map(move |l| (k, l)))
+                .map(|(k, l)| c[2 * k + l] * at(k, i) * at(l, j))
+                .sum()
+        };
+        let state = State {
+            u: (0..n).map(|i| 0.01 * i as f64 - 0.02).collect(),
+            v: (0..n).map(|i| 0.3 - 0.1 * i as f64).collect(),
+            a: (0..n).map(|i| (i as f64).sin()).collect(),
+        };
+        let f: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).cos()).collect();
+        let mut f2 = f.clone();
+        for (i, fi) in f2.iter_mut().enumerate() {
+            *fi += (0..n).map(|j| vcv(i, j) * state.u[j]).sum::<f64>();
+        }
+        let rows = vec![vec![(0, 0.3), (1, 0.7)], vec![(1, 0.5), (2, 0.5)]];
+        let forces = [Vec2::new(1.0, -2.0), Vec2::new(0.5, 0.25)];
+        let mut a = Newmark::new(mass.clone(), None, stiff.clone(), p).unwrap();
+        let mut b =
+            Newmark::new(mass, None, dense(n, |i, j| stiff.get(i, j) + vcv(i, j)), p).unwrap();
+        let (mut sa, mut sb) = (state.clone(), state.clone());
+        let (mut free_a, mut s_a, mut free_b, mut s_b) = (vec![], vec![], vec![], vec![]);
+        a.predict(&sa, &f);
+        let extra = StepStiffness {
+            v: &v,
+            c: &c,
+            u: &state.u,
+        };
+        a.point_compliance(&rows, Some(extra), &mut free_a, &mut s_a);
+        b.predict(&sb, &f2);
+        b.point_compliance(&rows, None, &mut free_b, &mut s_b);
+        for (x, y) in free_a.iter().zip(&free_b) {
+            assert!((*x - *y).norm() < 1e-13, "{x:?} {y:?}");
+        }
+        for (x, y) in s_a.iter().zip(&s_b) {
+            assert!((x - y).abs() < 1e-13, "{x} {y}");
+        }
+        a.apply_point_forces(&forces);
+        b.apply_point_forces(&forces);
+        a.commit(&mut sa);
+        b.commit(&mut sb);
+        for (x, y) in [(&sa.u, &sb.u), (&sa.v, &sb.v), (&sa.a, &sb.a)] {
+            for (p, q) in x.iter().zip(y) {
+                assert!((p - q).abs() < 1e-10 * q.abs().max(1.0), "{p} {q}");
+            }
+        }
+    }
+
     /// Single oscillator ω = 1: average acceleration keeps the energy and has
     /// the textbook period elongation.
     #[test]

@@ -250,6 +250,57 @@ mod tests {
         assert!((t.overlap - 0.05).abs() < 1e-14);
     }
 
+    /// The geometric stiffness plus the normal spring is the second
+    /// variation of the contact energy `½ k_n δ²` in the motion of the
+    /// segment's ends (central differences of the exact overlap, a tilted
+    /// segment, the contact point off its middle).
+    #[test]
+    fn geometric_stiffness_is_the_rest_of_the_energy_hessian() {
+        let (a, b) = (Vec2::new(1.0, 0.2), Vec2::new(-0.5, 0.5));
+        let ch = BoundaryChain::new(vec![a, b, Vec2::new(-1.5, 0.4)]);
+        let (o, r, kn) = (Vec2::new(0.62, 0.81), 0.6, 1e3);
+        let t = detect(&ch, o, r).unwrap();
+        assert_eq!(t.feature, Feature::Segment(0));
+        let force = kn * t.overlap;
+        let k = t.geometric_stiffness(&ch, 7, o, force).unwrap();
+        assert_eq!(k.chain, 7);
+        // exact overlap with the ends moved by (da, db)
+        let energy = |da: Vec2, db: Vec2| {
+            let (a1, b1) = (a + da, b + db);
+            let gap = (o - a1).dot(outward_normal(a1, b1));
+            0.5 * kn * (r - gap).powi(2)
+        };
+        for dir in [
+            [Vec2::new(1.0, 0.0), Vec2::ZERO],
+            [Vec2::new(0.3, -0.7), Vec2::new(-0.2, 0.9)],
+            [Vec2::new(0.0, 1.0), Vec2::new(0.0, -1.0)],
+            [Vec2::new(-0.6, 0.1), Vec2::new(0.4, 0.5)],
+        ] {
+            let h = 1e-4;
+            let fd = (energy(dir[0] * h, dir[1] * h) - 2.0 * energy(Vec2::ZERO, Vec2::ZERO)
+                + energy(dir[0] * -h, dir[1] * -h))
+                / (h * h);
+            let dg = -t.normal.dot(dir[0] * (1.0 - t.s) + dir[1] * t.s);
+            let psi = k
+                .psi
+                .map(|p| p.iter().map(|&(i, c)| c.dot(dir[i])).sum::<f64>());
+            let mut quad = kn * dg * dg;
+            for (x, row) in k.c.iter().enumerate() {
+                for (y, c) in row.iter().enumerate() {
+                    quad += c * psi[x] * psi[y];
+                }
+            }
+            assert!((fd - quad).abs() < 1e-5 * kn, "{dir:?}: {fd} vs {quad}");
+        }
+        // point contacts, no force, the centre inside: none
+        let corner =
+            BoundaryChain::new(vec![Vec2::new(1.0, -1.0), Vec2::new(1.0, 0.0), Vec2::ZERO]);
+        let c = Vec2::new(1.3, 0.4);
+        let tp = detect(&corner, c, 0.6).unwrap();
+        assert!(tp.geometric_stiffness(&corner, 0, c, 1.0).is_none());
+        assert!(t.geometric_stiffness(&ch, 0, o, 0.0).is_none());
+    }
+
     #[test]
     fn centre_through_the_boundary_has_overlap_beyond_the_radius() {
         let ch = top_edge(5);
