@@ -119,8 +119,11 @@ pub fn interpolate(row: &[(u32, f64)], a: &[f64]) -> Vec2 {
 /// body's Newmark step implicitly.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChainStiffness {
+    /// Index of the chain in [`Continuum::contact_boundary`].
     pub chain: usize,
+    /// The two functionals: `(chain point, coefficient)` pairs.
     pub psi: [[(usize, Vec2); 2]; 2],
+    /// Their symmetric 2 × 2 matrix.
     pub c: [[f64; 2]; 2],
 }
 

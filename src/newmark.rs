@@ -85,6 +85,8 @@ pub struct Newmark {
     /// `A⁻¹Φᵀ` of the points of the last [`point_compliance`](Self::point_compliance),
     /// column `2k + a` for point k, component a.
     cols: Vec<f64>,
+    /// `A⁻¹V` of the last [`StepStiffness`] (scratch of `stiffen`).
+    stiff_y: Vec<f64>,
     /// DOFs whose value the body imposes after every solve (FE elimination,
     /// see [`set_imposed`](Self::set_imposed)); empty: none.
     imposed: Vec<bool>,
@@ -116,6 +118,7 @@ impl Newmark {
             rhs: vec![0.0; n],
             tmp: vec![0.0; n],
             cols: Vec::new(),
+            stiff_y: Vec::new(),
             imposed: Vec::new(),
         })
     }
@@ -252,7 +255,9 @@ impl Newmark {
         if q == 0 {
             return;
         }
-        let mut y = vec![0.0; q * n];
+        let mut y = std::mem::take(&mut self.stiff_y);
+        y.clear();
+        y.resize(q * n, 0.0);
         for (col, v) in y.chunks_exact_mut(n).zip(k.v) {
             for &(dof, a) in v {
                 self.add_load(col, dof, a);
@@ -296,6 +301,7 @@ impl Newmark {
         for col in cols.chunks_exact_mut(n) {
             correct(col, None);
         }
+        self.stiff_y = y;
     }
 
     /// `U₊ += A⁻¹Φᵀ f`: the forces `f[k]` at the points of the last
