@@ -199,16 +199,19 @@ impl BoundaryGreen {
     }
 }
 
-/// The rows `φ_J(x_k)` of the contact points of one step, mapped onto the
+/// The linear functionals of one step's contact unknowns, mapped onto the
 /// DOFs of `B` they touch (`act`, local numbering), so that blocks and
-/// products of `S = Φ G Φᵀ` need no solve.
+/// products of `S = Φ G Φᵀ` need no solve. They come in pairs, one pair per
+/// unknown: a contact point's `x` and `y` rows `[(2J, φ_J(x_H))]`,
+/// `[(2J + 1, φ_J(x_H))]` (E7), or the two functionals of a contact's
+/// geometric stiffness ([`crate::continuum::ChainStiffness`]).
 #[derive(Debug, Default)]
 pub struct PointRows {
-    /// Per point, its entries `start[k]..start[k + 1]`.
+    /// Per functional, its entries `start[c]..start[c + 1]`.
     start: Vec<u32>,
-    /// Per entry: local positions (in `act`) of the x and y DOF of the node
-    /// ([`NONE`]: imposed), and `φ`.
-    entries: Vec<(u32, u32, f64)>,
+    /// Per entry: local position (in `act`) of the DOF ([`NONE`]: imposed)
+    /// and the coefficient.
+    entries: Vec<(u32, f64)>,
     /// Positions in `B` of the touched DOFs, ascending.
     act: Vec<u32>,
     /// Scratch of the products: nodal forces and displacements on `act`.
@@ -231,38 +234,30 @@ pub struct PointRows {
 const PRODUCTS: f64 = 8.0;
 
 impl PointRows {
-    /// Map the rows `rows[k] = [(node, φ)]` onto `green` (which must cover
-    /// their nodes, [`BoundaryGreen::covers`]).
-    pub fn set<'r>(
-        &mut self,
-        rows: impl IntoIterator<Item = &'r [(u32, f64)]>,
-        green: &BoundaryGreen,
-    ) {
+    /// Map the functionals `rows[c] = [(DOF, coefficient)]` (pairs) onto
+    /// `green` (which must cover their DOFs, [`BoundaryGreen::covers`]).
+    pub fn set(&mut self, rows: &[Vec<(usize, f64)>], green: &BoundaryGreen) {
         self.start.clear();
         self.entries.clear();
         self.act.clear();
         self.start.push(0);
         for row in rows {
-            for &(j, phi) in row {
-                let bx = green.position(2 * j as usize);
-                let by = green.position(2 * j as usize + 1);
-                self.entries.push((bx, by, phi));
-                self.act.extend([bx, by].into_iter().filter(|&b| b != NONE));
+            for &(i, c) in row {
+                let b = green.position(i);
+                self.entries.push((b, c));
+                if b != NONE {
+                    self.act.push(b);
+                }
             }
             self.start.push(self.entries.len() as u32);
         }
         self.act.sort_unstable();
         self.act.dedup();
         let act = &self.act;
-        let local = |b: u32| {
-            if b == NONE {
-                NONE
-            } else {
-                act.binary_search(&b).map_or(NONE, |p| p as u32)
-            }
-        };
         for e in &mut self.entries {
-            *e = (local(e.0), local(e.1), e.2);
+            if e.0 != NONE {
+                e.0 = act.binary_search(&e.0).map_or(NONE, |p| p as u32);
+            }
         }
         self.q.resize(act.len(), 0.0);
         self.z.resize(act.len(), 0.0);
@@ -270,9 +265,9 @@ impl PointRows {
         // S by columns costs a gather of n_act² and 2m·r·(n_act + 2m)
         // multiply-adds, then 4m² a product; the products over G cost a
         // gather and nnz(G_act) each
-        let (m, na) = (self.len() as f64, self.act.len() as f64);
-        let r = self.entries.len() as f64 / m.max(1.0);
-        let form = na * na + 2.0 * m * r * (na + 2.0 * m) + PRODUCTS * 4.0 * m * m;
+        let (m2, na) = (rows.len() as f64, self.act.len() as f64);
+        let r = self.entries.len() as f64 / m2.max(1.0);
+        let form = na * na + m2 * r * (na + m2) + PRODUCTS * m2 * m2;
         let over_g = (PRODUCTS + 1.0) * na * na * green.significant_fraction();
         self.s.clear();
         if form < over_g {
@@ -281,11 +276,10 @@ impl PointRows {
     }
 
     /// `S = Φ (G Φᵀ)` column by column: `G` on the touched DOFs gathered
-    /// once (contiguous columns), then for each point and component the
-    /// combination of its columns, then its rows.
+    /// once (contiguous columns), then for each functional the combination
+    /// of its columns, then the functionals of that.
     fn form(&mut self, green: &BoundaryGreen) {
-        let (m, na, nb) = (self.len(), self.act.len(), green.len());
-        let m2 = 2 * m;
+        let (m2, na, nb) = (self.start.len() - 1, self.act.len(), green.len());
         let mut ga = vec![0.0; na * na];
         for (c, &b) in self.act.iter().enumerate() {
             let col = &green.g[b as usize * nb..(b as usize + 1) * nb];
@@ -295,56 +289,64 @@ impl PointRows {
         }
         self.s.resize(m2 * m2, 0.0);
         let mut t = vec![0.0; na];
-        for k in 0..m {
-            for a in 0..2 {
-                t.iter_mut().for_each(|v| *v = 0.0);
-                for &(lx, ly, phi) in self.row(k) {
-                    let l = if a == 0 { lx } else { ly };
-                    if l == NONE {
-                        continue;
-                    }
-                    let col = &ga[l as usize * na..(l as usize + 1) * na];
-                    for (tv, g) in t.iter_mut().zip(col) {
-                        *tv += phi * g;
+        for c in 0..m2 {
+            t.iter_mut().for_each(|v| *v = 0.0);
+            for &(l, coef) in self.row(c) {
+                if l == NONE {
+                    continue;
+                }
+                let col = &ga[l as usize * na..(l as usize + 1) * na];
+                for (tv, g) in t.iter_mut().zip(col) {
+                    *tv += coef * g;
+                }
+            }
+            for r in 0..m2 {
+                let mut u = 0.0;
+                for &(l, coef) in self.row(r) {
+                    if l != NONE {
+                        u += coef * t[l as usize];
                     }
                 }
-                let c = 2 * k + a;
-                for l in 0..m {
-                    let mut u = [0.0; 2];
-                    for &(lx, ly, phi) in self.row(l) {
-                        if lx != NONE {
-                            u[0] += phi * t[lx as usize];
-                        }
-                        if ly != NONE {
-                            u[1] += phi * t[ly as usize];
-                        }
-                    }
-                    self.s[2 * l * m2 + c] = u[0];
-                    self.s[(2 * l + 1) * m2 + c] = u[1];
-                }
+                self.s[r * m2 + c] = u;
             }
         }
     }
 
-    /// Number of points.
+    /// Number of unknowns (functional pairs).
     pub fn len(&self) -> usize {
-        self.start.len().saturating_sub(1)
+        self.start.len().saturating_sub(1) / 2
     }
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
-    /// Number of DOFs the rows touch.
+    /// Number of DOFs the functionals touch.
     pub fn active_dofs(&self) -> usize {
         self.act.len()
     }
 
-    fn row(&self, k: usize) -> &[(u32, u32, f64)] {
-        &self.entries[self.start[k] as usize..self.start[k + 1] as usize]
+    fn row(&self, c: usize) -> &[(u32, f64)] {
+        &self.entries[self.start[c] as usize..self.start[c + 1] as usize]
     }
 
-    /// The 2 × 2 block `S_kl = φ_k G φ_lᵀ`, row-major.
+    /// `Σ_e Σ_f c_e c_f G(e, f)` over the entries of functionals `r`, `c`.
+    fn entry(&self, green: &BoundaryGreen, r: usize, c: usize) -> f64 {
+        let mut v = 0.0;
+        for &(a, ca) in self.row(r) {
+            if a == NONE {
+                continue;
+            }
+            for &(b, cb) in self.row(c) {
+                if b != NONE {
+                    v += ca * cb * green.get(self.act[a as usize], self.act[b as usize]);
+                }
+            }
+        }
+        v
+    }
+
+    /// The 2 × 2 block `S_kl`, row-major.
     pub fn block(&self, green: &BoundaryGreen, k: usize, l: usize) -> [f64; 4] {
         if !self.s.is_empty() {
             let m2 = 2 * self.len();
@@ -356,44 +358,27 @@ impl PointRows {
                 at(2 * k + 1, 2 * l + 1),
             ];
         }
-        let g = |a: u32, b: u32| {
-            if a == NONE || b == NONE {
-                0.0
-            } else {
-                green.get(self.act[a as usize], self.act[b as usize])
-            }
-        };
-        let mut s = [0.0; 4];
-        for &(kx, ky, pk) in self.row(k) {
-            for &(lx, ly, pl) in self.row(l) {
-                let w = pk * pl;
-                s[0] += w * g(kx, lx);
-                s[1] += w * g(kx, ly);
-                s[2] += w * g(ky, lx);
-                s[3] += w * g(ky, ly);
-            }
-        }
-        s
+        [
+            self.entry(green, 2 * k, 2 * l),
+            self.entry(green, 2 * k, 2 * l + 1),
+            self.entry(green, 2 * k + 1, 2 * l),
+            self.entry(green, 2 * k + 1, 2 * l + 1),
+        ]
     }
 
-    /// The whole `S` (2m × 2m, row-major, index `2k + a`).
+    /// The whole `S` (2m × 2m, row-major).
     pub fn dense(&self, green: &BoundaryGreen, s: &mut Vec<f64>) {
         if !self.s.is_empty() {
             s.clear();
             s.extend_from_slice(&self.s);
             return;
         }
-        let m = self.len();
-        let m2 = 2 * m;
+        let m2 = 2 * self.len();
         s.clear();
         s.resize(m2 * m2, 0.0);
-        for k in 0..m {
-            for l in 0..m {
-                let b = self.block(green, k, l);
-                s[2 * k * m2 + 2 * l] = b[0];
-                s[2 * k * m2 + 2 * l + 1] = b[1];
-                s[(2 * k + 1) * m2 + 2 * l] = b[2];
-                s[(2 * k + 1) * m2 + 2 * l + 1] = b[3];
+        for r in 0..m2 {
+            for c in 0..m2 {
+                s[r * m2 + c] = self.entry(green, r, c);
             }
         }
     }
@@ -427,13 +412,12 @@ impl PointRows {
         }
     }
 
-    /// `y = S x` for forces `x[k]` at the points: `Φ G (Φᵀ x)` over the
-    /// touched DOFs. The first product of a step gathers the significant
-    /// entries of `G` on the touched DOFs (once); each output entry is then
-    /// one sparse dot product in a fixed order (bitwise independent of the
-    /// thread count).
+    /// `y = S x` for generalised forces `x[k]` on the unknowns:
+    /// `Φ G (Φᵀ x)` over the touched DOFs. The first product of a step
+    /// gathers the significant entries of `G` on the touched DOFs (once);
+    /// each output entry is then one sparse dot product in a fixed order
+    /// (bitwise independent of the thread count).
     pub fn mul(&mut self, green: &BoundaryGreen, x: &[Vec2], y: &mut [Vec2]) {
-        let m = self.len();
         if !self.s.is_empty() {
             dense_mul(&self.s, x, y);
             return;
@@ -443,14 +427,13 @@ impl PointRows {
             self.gather(green);
         }
         self.q.iter_mut().for_each(|v| *v = 0.0);
-        for (k, xk) in x.iter().enumerate().take(m) {
-            let (s, e) = (self.start[k] as usize, self.start[k + 1] as usize);
-            for &(lx, ly, phi) in &self.entries[s..e] {
-                if lx != NONE {
-                    self.q[lx as usize] += phi * xk.x;
-                }
-                if ly != NONE {
-                    self.q[ly as usize] += phi * xk.y;
+        for (k, xk) in x.iter().enumerate() {
+            for (c, xa) in [(2 * k, xk.x), (2 * k + 1, xk.y)] {
+                let (s, e) = (self.start[c] as usize, self.start[c + 1] as usize);
+                for &(l, coef) in &self.entries[s..e] {
+                    if l != NONE {
+                        self.q[l as usize] += coef * xa;
+                    }
                 }
             }
         }
@@ -474,17 +457,17 @@ impl PointRows {
                 self.z[a] = row(a);
             }
         }
-        for (k, yk) in y.iter_mut().enumerate().take(m) {
-            let mut u = Vec2::ZERO;
-            for &(lx, ly, phi) in self.row(k) {
-                if lx != NONE {
-                    u.x += phi * self.z[lx as usize];
-                }
-                if ly != NONE {
-                    u.y += phi * self.z[ly as usize];
+        let dotz = |c: usize| -> f64 {
+            let mut u = 0.0;
+            for &(l, coef) in self.row(c) {
+                if l != NONE {
+                    u += coef * self.z[l as usize];
                 }
             }
-            *yk = u;
+            u
+        };
+        for (k, yk) in y.iter_mut().enumerate() {
+            *yk = Vec2::new(dotz(2 * k), dotz(2 * k + 1));
         }
     }
 }
@@ -625,8 +608,12 @@ mod tests {
                 }
             }
         }
+        let scalar: Vec<Vec<(usize, f64)>> = rows
+            .iter()
+            .flat_map(|r| [0, 1].map(|a| r.iter().map(|&(j, p)| (2 * j as usize + a, p)).collect()))
+            .collect();
         let mut pr = PointRows::default();
-        pr.set(rows.iter().map(|r| &r[..]), &g);
+        pr.set(&scalar, &g);
         let mut s = Vec::new();
         pr.dense(&g, &mut s);
         for (x, y) in s.iter().zip(&want) {

@@ -112,6 +112,24 @@ pub fn interpolate(row: &[(u32, f64)], a: &[f64]) -> Vec2 {
     s
 }
 
+/// A stiffness on the motion of a few points of a contact chain during one
+/// implicit step: energy `½ Σ_kl c[k][l] ψ_k ψ_l`, where
+/// `ψ_k = Σ_(i, a) a · ΔP_i` over the pairs `(i, a)` of `psi[k]` and `ΔP_i`
+/// is the increment of chain point `i` over the step. This is how a
+/// contact's geometric stiffness (its normal turning with the boundary,
+/// [`crate::coupling::interface::Touch::geometric_stiffness`]) joins the
+/// body's Newmark step implicitly: the pair `(ψ_0, ψ_1)` is one more
+/// unknown of the contact solve, with the linear law `g = −C ψ`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChainStiffness {
+    /// Index of the chain in [`Continuum::contact_boundary`].
+    pub chain: usize,
+    /// The two functionals: `(chain point, coefficient)` pairs.
+    pub psi: [[(usize, Vec2); 2]; 2],
+    /// Their symmetric 2 × 2 matrix.
+    pub c: [[f64; 2]; 2],
+}
+
 /// Energies of a body (for the coupled energy account).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BodyEnergies {
@@ -154,28 +172,31 @@ pub trait Continuum: Send {
     /// Displacement `Σ_J φ_J(x) u_J` of the boundary material point `x`.
     fn boundary_displacement(&self, chain: usize, x: Vec2) -> Vec2;
     /// First half of an implicit step (contact springs treated implicitly):
-    /// solve the step under the accumulated loads, and report, for the
-    /// material points `points[k] = (chain, x)`, the displacement `base[k]`
-    /// at `t` and the free displacement `free[k]` at `t + Δt`;
-    /// [`compliance`](Self::compliance) then gives `S`: point forces `f`
-    /// change the displacements at `t + Δt` by `S f`.
+    /// solve the step under the accumulated loads, and report the values at
+    /// `t` (`base`) and the free values at `t + Δt` (`free`) of the step's
+    /// unknowns: first the displacements of the material points
+    /// `points[k] = (chain, x)`, then the functional pairs of the
+    /// `stiffness` terms (their increments are measured from `base`);
+    /// [`compliance`](Self::compliance) then gives `S`: generalised forces
+    /// `f` on the unknowns change their values at `t + Δt` by `S f`.
     fn begin_step(
         &mut self,
         points: &[(usize, Vec2)],
+        stiffness: &[ChainStiffness],
         base: &mut Vec<Vec2>,
         free: &mut Vec<Vec2>,
     ) -> Result<(), SolveError>;
-    /// The compliance `S = Φ A⁻¹ Φᵀ` at the points of
+    /// The compliance `S = Φ A⁻¹ Φᵀ` of the unknowns of
     /// [`begin_step`](Self::begin_step).
     fn compliance(&mut self) -> Compliance<'_>;
-    /// Second half: add the point forces `forces[k]` at the points of
-    /// [`begin_step`](Self::begin_step), accept the step, clear the loads
-    /// and refresh the contact boundary.
+    /// Second half: add the generalised forces `forces[k]` on the unknowns
+    /// of [`begin_step`](Self::begin_step), accept the step, clear the
+    /// loads and refresh the contact boundary.
     fn finish_step(&mut self, forces: &[Vec2]) -> Result<(), SolveError>;
     /// Advance one time step with the accumulated loads, clear them, and
     /// refresh the contact boundary.
     fn advance(&mut self) -> Result<(), SolveError> {
-        self.begin_step(&[], &mut Vec::new(), &mut Vec::new())?;
+        self.begin_step(&[], &[], &mut Vec::new(), &mut Vec::new())?;
         self.finish_step(&[])
     }
     /// Kinetic and strain energy of the present state.
@@ -209,15 +230,23 @@ pub trait ContactBody: Send + Sync + 'static {
     fn predict(&mut self) -> Result<&mut Newmark, Self::Error>;
     /// The integrator between `predict` and `commit`.
     fn newmark_mut(&mut self) -> Option<&mut Newmark>;
-    /// After [`predict`](Self::predict): `U₊ += A⁻¹ Φᵀ f` for the point
-    /// forces `f[k]` with rows `rows[k]`, one solve (a body may fold pending
-    /// corrections of its own into the same solve).
-    fn add_point_forces(&mut self, rows: &[Row], f: &[Vec2]) -> Result<(), Self::Error> {
+    /// After [`predict`](Self::predict): `U₊ += A⁻¹ Φᵀ f` for the
+    /// generalised forces `f[k]` on the functional pairs `rows[2k]`,
+    /// `rows[2k + 1]` ([`Newmark::point_compliance`]), one solve (a body may
+    /// fold pending corrections of its own into the same solve).
+    fn add_point_forces(
+        &mut self,
+        rows: &[Vec<(usize, f64)>],
+        f: &[Vec2],
+    ) -> Result<(), Self::Error> {
         if let Some(nm) = self.newmark_mut() {
-            nm.add_point_forces(rows.iter().map(|r| &r[..]), f, &[]);
+            nm.add_point_forces(rows, f, &[]);
         }
         Ok(())
     }
+    /// `F[i] += c · g` over `row = [(DOF, c)]` for the next step (a
+    /// generalised force booked as a load).
+    fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64);
     /// Accept the step, clear the point loads.
     fn commit(&mut self) -> Result<(), Self::Error>;
     fn energies(&self) -> BodyEnergies;
@@ -256,6 +285,9 @@ pub struct WithBoundary<B> {
     rows: Vec<Vec<Row>>,
     /// Rows of the points of the current implicit step.
     point_rows: Vec<Row>,
+    /// The step's functionals: per point its `x` and `y` rows, then per
+    /// stiffness term its two functionals (`[(DOF, coefficient)]`).
+    functionals: Vec<Vec<(usize, f64)>>,
     pub mode: ComplianceMode,
     /// `G`, built at the first implicit step with contacts.
     green: Option<BoundaryGreen>,
@@ -281,6 +313,7 @@ impl<B: ContactBody> WithBoundary<B> {
             chains,
             rows,
             point_rows: Vec::new(),
+            functionals: Vec::new(),
             mode: ComplianceMode::default(),
             green: None,
             mapped: PointRows::default(),
@@ -350,8 +383,10 @@ impl<B: ContactBody> WithBoundary<B> {
         } else {
             None
         };
-        let covered =
-            |g: &BoundaryGreen, rows: &[Row]| rows.iter().all(|r| g.covers(r.iter().map(|e| e.0)));
+        let covered = |g: &BoundaryGreen, rows: &[Vec<(usize, f64)>]| {
+            rows.iter()
+                .all(|r| g.covers(r.iter().map(|e| (e.0 / 2) as u32)))
+        };
         let name = self.body.name().to_string();
         let err = |e: crate::sparse::SparseError| SolveError {
             body: name.clone(),
@@ -366,8 +401,13 @@ impl<B: ContactBody> WithBoundary<B> {
         if let Some(nodes) = seed {
             green.extend(nodes, nm.factor()).map_err(err)?;
         }
-        if !covered(green, &self.point_rows) {
-            let extra: Vec<u32> = self.point_rows.iter().flatten().map(|e| e.0).collect();
+        if !covered(green, &self.functionals) {
+            let extra: Vec<u32> = self
+                .functionals
+                .iter()
+                .flatten()
+                .map(|e| (e.0 / 2) as u32)
+                .collect();
             green.extend(extra, nm.factor()).map_err(err)?;
         }
         Ok(())
@@ -394,10 +434,12 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         self.body.add_point_load_row(&row, f);
     }
     /// Eqs. (46) and (49): the points' rows `φ_J(x_H)` (E7) give both the
-    /// free displacements and the compliance `Φ A⁻¹ Φᵀ`.
+    /// free displacements and the compliance `Φ A⁻¹ Φᵀ`; a stiffness term's
+    /// functionals go through the rows of its chain points.
     fn begin_step(
         &mut self,
         points: &[(usize, Vec2)],
+        stiffness: &[ChainStiffness],
         base: &mut Vec<Vec2>,
         free: &mut Vec<Vec2>,
     ) -> Result<(), SolveError> {
@@ -410,25 +452,52 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             .map(|&(_, x)| self.row(x))
             .collect_into_vec(&mut rows);
         self.point_rows = rows;
+        let mut fs = std::mem::take(&mut self.functionals);
+        fs.resize_with(2 * (points.len() + stiffness.len()), Vec::new);
+        for (k, row) in self.point_rows.iter().enumerate() {
+            for a in 0..2 {
+                let f = &mut fs[2 * k + a];
+                f.clear();
+                f.extend(row.iter().map(|&(j, phi)| (2 * j as usize + a, phi)));
+            }
+        }
+        let off = 2 * points.len();
+        for (b, k) in stiffness.iter().enumerate() {
+            for (a, psi) in k.psi.iter().enumerate() {
+                let f = &mut fs[off + 2 * b + a];
+                f.clear();
+                for &(i, c) in psi {
+                    for &(j, phi) in &self.rows[k.chain][i] {
+                        f.push((2 * j as usize, phi * c.x));
+                        f.push((2 * j as usize + 1, phi * c.y));
+                    }
+                }
+            }
+        }
+        self.functionals = fs;
+        let value = |f: &[Vec<(usize, f64)>], x: &[f64]| -> Vec2 {
+            let dot = |r: &[(usize, f64)]| r.iter().map(|&(i, c)| c * x[i]).sum::<f64>();
+            Vec2::new(dot(&f[0]), dot(&f[1]))
+        };
         base.clear();
         let u = &self.body.state().u;
-        base.extend(self.point_rows.iter().map(|r| interpolate(r, u)));
+        base.extend(self.functionals.chunks_exact(2).map(|f| value(f, u)));
         if !points.is_empty() && self.mode == ComplianceMode::Boundary {
             self.ensure_green()?;
         }
         let direct = self.mode == ComplianceMode::Direct;
-        let (rows, dense) = (&self.point_rows, &mut self.dense);
+        let (fs, dense) = (&self.functionals, &mut self.dense);
         let res = self.body.predict().map(|nm| {
             if direct {
-                nm.point_compliance(rows, free, dense);
+                nm.point_compliance(fs, free, dense);
             } else {
                 free.clear();
-                free.extend(rows.iter().map(|r| interpolate(r, nm.solution())));
+                free.extend(fs.chunks_exact(2).map(|f| value(f, nm.solution())));
             }
         });
         res.map_err(|e| self.solve_error(e))?;
         if let (false, Some(g)) = (direct, &self.green) {
-            self.mapped.set(self.point_rows.iter().map(|r| &r[..]), g);
+            self.mapped.set(&self.functionals, g);
         }
         Ok(())
     }
@@ -439,20 +508,25 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         }
     }
     /// The forces join the solution through `A⁻¹Φᵀ`, and are booked as the
-    /// step's point loads (an FE body's support reactions exclude them).
+    /// step's loads (an FE body's support reactions exclude them).
     fn finish_step(&mut self, forces: &[Vec2]) -> Result<(), SolveError> {
         if self.mode == ComplianceMode::Direct {
             if let Some(nm) = self.body.newmark_mut() {
                 nm.apply_point_forces(forces);
             }
         } else if !forces.is_empty() {
-            let rows = std::mem::take(&mut self.point_rows);
-            let r = self.body.add_point_forces(&rows, forces);
-            self.point_rows = rows;
+            let fs = std::mem::take(&mut self.functionals);
+            let r = self.body.add_point_forces(&fs, forces);
+            self.functionals = fs;
             r.map_err(|e| self.solve_error(e))?;
         }
+        let m = self.point_rows.len();
         for (row, f) in self.point_rows.iter().zip(forces) {
             self.body.add_point_load_row(row, *f);
+        }
+        for (pair, f) in self.functionals.chunks_exact(2).zip(forces).skip(m) {
+            self.body.add_dof_loads(&pair[0], f.x);
+            self.body.add_dof_loads(&pair[1], f.y);
         }
         self.body.commit().map_err(|e| self.solve_error(e))?;
         self.refresh();

@@ -174,46 +174,45 @@ impl Newmark {
         self.factor.solve_in_place(x);
     }
 
-    /// After [`predict`](Self::predict): the response of the step to point
-    /// forces at `m` points with shape rows `rows[k] = [(node, φ)]`
-    /// (`u_k = Σ φ U_{2·node+a}`; no load on [imposed](Self::set_imposed) DOFs). Writes the free displacements `u_k` of the
-    /// predicted `U₊` and the compliance `S = Φ A⁻¹ Φᵀ` (2m × 2m, row-major,
-    /// index `2k + a`), and keeps `A⁻¹Φᵀ` for
+    /// After [`predict`](Self::predict): the response of the step to
+    /// generalised forces on `2m` linear functionals of the nodal values,
+    /// `rows[c] = [(DOF, coefficient)]`, taken in pairs as `m` points (a
+    /// point's `x` and `y` rows are `[(2J, φ_J)]`, `[(2J + 1, φ_J)]`; no load
+    /// on [imposed](Self::set_imposed) DOFs). Writes the free values of the
+    /// predicted `U₊` and the compliance `S = Φ A⁻¹ Φᵀ` (2m × 2m,
+    /// row-major), and keeps `A⁻¹Φᵀ` for
     /// [`apply_point_forces`](Self::apply_point_forces). Cost: 2m solves.
     pub fn point_compliance(
         &mut self,
-        rows: &[Vec<(u32, f64)>],
+        rows: &[Vec<(usize, f64)>],
         free: &mut Vec<Vec2>,
         s: &mut Vec<f64>,
     ) {
         let n = self.n();
-        let m2 = 2 * rows.len();
-        let dot = |x: &[f64], row: &[(u32, f64)], a: usize| -> f64 {
-            row.iter().map(|&(j, p)| p * x[2 * j as usize + a]).sum()
-        };
-        free.clear();
-        free.extend(
-            rows.iter()
-                .map(|r| Vec2::new(dot(&self.rhs, r, 0), dot(&self.rhs, r, 1))),
-        );
+        let m2 = rows.len();
+        let dot =
+            |x: &[f64], row: &[(usize, f64)]| -> f64 { row.iter().map(|&(i, c)| c * x[i]).sum() };
         let mut cols = std::mem::take(&mut self.cols);
         cols.clear();
         cols.resize(m2 * n, 0.0);
-        for (c, col) in cols.chunks_exact_mut(n).enumerate() {
-            for &(j, p) in &rows[c / 2] {
-                let dof = 2 * j as usize + c % 2;
-                if !self.imposed.get(dof).copied().unwrap_or(false) {
-                    col[dof] += p;
+        for (col, row) in cols.chunks_exact_mut(n).zip(rows) {
+            for &(i, c) in row {
+                if !self.imposed.get(i).copied().unwrap_or(false) {
+                    col[i] += c;
                 }
             }
             self.factor.solve_in_place(col);
         }
+        free.clear();
+        free.extend(
+            rows.chunks_exact(2)
+                .map(|r| Vec2::new(dot(&self.rhs, &r[0]), dot(&self.rhs, &r[1]))),
+        );
         s.clear();
         s.resize(m2 * m2, 0.0);
         for (c, col) in cols.chunks_exact(n).enumerate() {
             for (r, row) in rows.iter().enumerate() {
-                s[(2 * r) * m2 + c] = dot(col, row, 0);
-                s[(2 * r + 1) * m2 + c] = dot(col, row, 1);
+                s[r * m2 + c] = dot(col, row);
             }
         }
         self.cols = cols;
@@ -245,25 +244,20 @@ impl Newmark {
     }
 
     /// After [`predict`](Self::predict): `U₊ += A⁻¹ (Φᵀ f + extra)`, the
-    /// forces `f[k]` at points with rows `rows[k]` (none on imposed DOFs)
-    /// and a load `extra` (empty: none), with one solve.
-    pub fn add_point_forces<'r>(
-        &mut self,
-        rows: impl IntoIterator<Item = &'r [(u32, f64)]>,
-        f: &[Vec2],
-        extra: &[f64],
-    ) {
+    /// generalised forces `f[k]` on the functional pairs `rows[2k]`,
+    /// `rows[2k + 1]` (as in [`point_compliance`](Self::point_compliance);
+    /// none on imposed DOFs) and a load `extra` (empty: none), one solve.
+    pub fn add_point_forces(&mut self, rows: &[Vec<(usize, f64)>], f: &[Vec2], extra: &[f64]) {
         self.tmp.iter_mut().for_each(|x| *x = 0.0);
         let mut any = !extra.is_empty();
         for (t, e) in self.tmp.iter_mut().zip(extra) {
             *t = *e;
         }
-        for (row, fk) in rows.into_iter().zip(f) {
-            for &(j, p) in row {
-                for (a, fa) in [(0, fk.x), (1, fk.y)] {
-                    let dof = 2 * j as usize + a;
-                    if fa != 0.0 && !self.imposed.get(dof).copied().unwrap_or(false) {
-                        self.tmp[dof] += p * fa;
+        for (pair, fk) in rows.chunks_exact(2).zip(f) {
+            for (row, fa) in pair.iter().zip([fk.x, fk.y]) {
+                for &(i, c) in row {
+                    if fa != 0.0 && !self.imposed.get(i).copied().unwrap_or(false) {
+                        self.tmp[i] += c * fa;
                         any = true;
                     }
                 }

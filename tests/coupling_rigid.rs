@@ -5,7 +5,7 @@
 
 use efgdem::Vec2;
 use efgdem::compliance::Compliance;
-use efgdem::continuum::{BodyEnergies, BoundaryChain, Continuum, SolveError};
+use efgdem::continuum::{BodyEnergies, BoundaryChain, ChainStiffness, Continuum, SolveError};
 use efgdem::coupling::CoupledModel;
 use efgdem::dem::Granular;
 use efgdem::dem::contact::ContactLaw;
@@ -41,15 +41,17 @@ impl Continuum for Fixed {
     fn begin_step(
         &mut self,
         points: &[(usize, Vec2)],
+        stiffness: &[ChainStiffness],
         base: &mut Vec<Vec2>,
         free: &mut Vec<Vec2>,
     ) -> Result<(), SolveError> {
+        let m = points.len() + stiffness.len();
         base.clear();
-        base.resize(points.len(), Vec2::ZERO);
+        base.resize(m, Vec2::ZERO);
         free.clear();
-        free.resize(points.len(), Vec2::ZERO);
+        free.resize(m, Vec2::ZERO);
         self.zero.clear();
-        self.zero.resize(4 * points.len() * points.len(), 0.0);
+        self.zero.resize(4 * m * m, 0.0);
         Ok(())
     }
     fn compliance(&mut self) -> Compliance<'_> {

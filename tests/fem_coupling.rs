@@ -161,7 +161,8 @@ fn implicit_step_equals_a_step_with_point_loads() {
             Vec2::new(-1.0, 4.0),
         ];
         let (mut free, mut s) = (Vec::new(), Vec::new());
-        a.begin_step(&points, &mut Vec::new(), &mut free).unwrap();
+        a.begin_step(&points, &[], &mut Vec::new(), &mut free)
+            .unwrap();
         a.compliance().dense(&mut s);
         let m2 = 2 * points.len();
         // S symmetric; no response at the prescribed DOFs of the edge node

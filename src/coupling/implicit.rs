@@ -41,6 +41,10 @@ pub struct Linear {
     /// Shear force history at the start of the step.
     pub fs_old: f64,
     pub dt: f64,
+    /// Not a contact but a contact's geometric stiffness `C` (row-major) on
+    /// the increment `w` of its functional pair
+    /// ([`ChainStiffness`](crate::continuum::ChainStiffness)): `g = −C w`.
+    pub spring: Option<[f64; 4]>,
 }
 
 /// The contact law at one increment `w`: force on the body, its Jacobian
@@ -63,8 +67,38 @@ pub struct Eval {
 }
 
 impl Linear {
-    /// Eqs. (35)–(37) (E6, E12) at the increment `w` of the body point.
+    /// The unknown of a geometric stiffness `c` ([`Linear::spring`]).
+    pub fn spring(c: [[f64; 2]; 2], dt: f64) -> Linear {
+        Linear {
+            law: ContactLaw::default(),
+            cn: 0.0,
+            cs: 0.0,
+            n: Vec2::ZERO,
+            delta0: 0.0,
+            vn0: 0.0,
+            vt0: 0.0,
+            fs_old: 0.0,
+            dt,
+            spring: Some([c[0][0], c[0][1], c[1][0], c[1][1]]),
+        }
+    }
+
+    /// Eqs. (35)–(37) (E6, E12) at the increment `w` of the body point (a
+    /// geometric stiffness: `g = −C w`).
     pub fn eval(&self, w: Vec2) -> Eval {
+        if let Some(c) = self.spring {
+            let jac = [-c[0], -c[1], -c[2], -c[3]];
+            return Eval {
+                w,
+                g: apply2(&jac, w),
+                jac,
+                fs: 0.0,
+                overlap: 0.0,
+                fn_elastic: 0.0,
+                fn_total: 0.0,
+                regime: 1,
+            };
+        }
         let (n, law, dt) = (self.n, &self.law, self.dt);
         let t = n.perp();
         let delta = self.delta0 - n.dot(w);
@@ -518,6 +552,7 @@ mod tests {
                 vt0,
                 fs_old,
                 dt,
+                spring: None,
             };
             let e = c.eval(w);
             // the same contact through dem::contact::evaluate: disc i at
@@ -583,6 +618,7 @@ mod tests {
             vt0: 2.0,
             fs_old: 0.0,
             dt,
+            spring: None,
         };
         let s = [2e-6, 0.5e-6, 0.5e-6, 1e-6];
         let base = [Vec2::new(0.01, 0.02)];

@@ -12,7 +12,7 @@
 //! contact is keyed by `(disc, chain)`, so a disc sliding from one segment
 //! to the next keeps its shear history.
 
-use crate::continuum::BoundaryChain;
+use crate::continuum::{BoundaryChain, ChainStiffness};
 use crate::geom::{Vec2, closest_on_segment};
 
 /// Which primitive of the boundary the disc touches (Fig. 5).
@@ -43,6 +43,60 @@ pub struct Touch {
     /// body's shape functions are evaluated for the velocity of `H` and for
     /// distributing the reaction (Eqs. 41, 46, ERRATA E7).
     pub material: Vec2,
+}
+
+impl Touch {
+    /// The geometric stiffness of a segment contact carrying the normal
+    /// force `force` (elastic, ≥ 0) from a disc centred at `centre`, for the
+    /// body's implicit step ([`ChainStiffness`] on chain `index`).
+    ///
+    /// Why: the overlap `δ = r − g`, `g = (O − A)·ν`, depends on the turn of
+    /// the segment `A → B` as well as on the motion of `H`. Over a step with
+    /// the disc fixed, for increments `ΔA`, `ΔB` of the segment ends,
+    /// `φ = ν·(ΔB − ΔA)/L` (the segment's turn) and `τ = t·((1 − s)ΔA + sΔB)`
+    /// (the tangential motion of `H`), the second variation of the contact
+    /// energy `½ k_n δ²` is `k_n (Δg)² + F_n (g φ² − 2 τ φ)`. The first term
+    /// is the normal spring of [`super::implicit::Linear`] (normal fixed over
+    /// the step); the second is this stiffness. Left out, it acts one step
+    /// late — the next step's detection turns the normal and moves `H` along
+    /// the boundary by `g φ` — and a stiffness that acts late is a negative
+    /// dashpot of about `F_n g Δt` on the boundary's rotation: energy grows
+    /// in the fast local rotations of a refined body, at a free corner
+    /// first, where they are softest. Taken into the step (the body solves
+    /// with `A + V C Vᵀ`), the turn of the normal is implicit like the
+    /// overlap, whatever the body's resolution.
+    ///
+    /// A point contact (Fig. 5b) has `g = |O − X_j|` and the radial normal:
+    /// its geometric stiffness `−F_n/g` on the vertex's tangential motion is
+    /// negative and, acting late, only dissipates (at most `F_n Δt/g` per unit
+    /// tangential velocity, ~1e-8 of the normal spring's `k_n`); `None`.
+    /// Also `None` without force or with the centre inside the body.
+    pub fn geometric_stiffness(
+        &self,
+        chain: &BoundaryChain,
+        index: usize,
+        centre: Vec2,
+        force: f64,
+    ) -> Option<ChainStiffness> {
+        let Feature::Segment(i) = self.feature else {
+            return None;
+        };
+        let gap = (centre - self.point).dot(self.normal);
+        let (a, b) = (chain.current[i], chain.current[i + 1]);
+        let l = (b - a).norm();
+        if !(force > 0.0 && gap > 0.0 && l > 0.0) {
+            return None;
+        }
+        let (t, nu, s) = ((b - a) * (1.0 / l), self.normal, self.s);
+        Some(ChainStiffness {
+            chain: index,
+            psi: [
+                [(i, nu * (-1.0 / l)), (i + 1, nu * (1.0 / l))],
+                [(i, t * (1.0 - s)), (i + 1, t * s)],
+            ],
+            c: [[force * gap, -force], [-force, 0.0]],
+        })
+    }
 }
 
 /// Outward unit normal of the segment `a → b` of a chain that has the body
@@ -206,6 +260,57 @@ mod tests {
         let t = detect(&ch, Vec2::new(1.0 - 1e-6, 0.05), 0.1).unwrap();
         assert_eq!(t.feature, Feature::Segment(1));
         assert!((t.overlap - 0.05).abs() < 1e-14);
+    }
+
+    /// The geometric stiffness plus the normal spring is the second
+    /// variation of the contact energy `½ k_n δ²` in the motion of the
+    /// segment's ends (central differences of the exact overlap, a tilted
+    /// segment, the contact point off its middle).
+    #[test]
+    fn geometric_stiffness_is_the_rest_of_the_energy_hessian() {
+        let (a, b) = (Vec2::new(1.0, 0.2), Vec2::new(-0.5, 0.5));
+        let ch = BoundaryChain::new(vec![a, b, Vec2::new(-1.5, 0.4)]);
+        let (o, r, kn) = (Vec2::new(0.62, 0.81), 0.6, 1e3);
+        let t = detect(&ch, o, r).unwrap();
+        assert_eq!(t.feature, Feature::Segment(0));
+        let force = kn * t.overlap;
+        let k = t.geometric_stiffness(&ch, 7, o, force).unwrap();
+        assert_eq!(k.chain, 7);
+        // exact overlap with the ends moved by (da, db)
+        let energy = |da: Vec2, db: Vec2| {
+            let (a1, b1) = (a + da, b + db);
+            let gap = (o - a1).dot(outward_normal(a1, b1));
+            0.5 * kn * (r - gap).powi(2)
+        };
+        for dir in [
+            [Vec2::new(1.0, 0.0), Vec2::ZERO],
+            [Vec2::new(0.3, -0.7), Vec2::new(-0.2, 0.9)],
+            [Vec2::new(0.0, 1.0), Vec2::new(0.0, -1.0)],
+            [Vec2::new(-0.6, 0.1), Vec2::new(0.4, 0.5)],
+        ] {
+            let h = 1e-4;
+            let fd = (energy(dir[0] * h, dir[1] * h) - 2.0 * energy(Vec2::ZERO, Vec2::ZERO)
+                + energy(dir[0] * -h, dir[1] * -h))
+                / (h * h);
+            let dg = -t.normal.dot(dir[0] * (1.0 - t.s) + dir[1] * t.s);
+            let psi = k
+                .psi
+                .map(|p| p.iter().map(|&(i, c)| c.dot(dir[i])).sum::<f64>());
+            let mut quad = kn * dg * dg;
+            for (x, row) in k.c.iter().enumerate() {
+                for (y, c) in row.iter().enumerate() {
+                    quad += c * psi[x] * psi[y];
+                }
+            }
+            assert!((fd - quad).abs() < 1e-5 * kn, "{dir:?}: {fd} vs {quad}");
+        }
+        // point contacts, no force, the centre inside: none
+        let corner =
+            BoundaryChain::new(vec![Vec2::new(1.0, -1.0), Vec2::new(1.0, 0.0), Vec2::ZERO]);
+        let c = Vec2::new(1.3, 0.4);
+        let tp = detect(&corner, c, 0.6).unwrap();
+        assert!(tp.geometric_stiffness(&corner, 0, c, 1.0).is_none());
+        assert!(t.geometric_stiffness(&ch, 0, o, 0.0).is_none());
     }
 
     #[test]

@@ -119,6 +119,9 @@ struct Work {
     base: Vec<Vec2>,
     free: Vec<Vec2>,
     solver: implicit::Solver,
+    /// Geometric stiffness of the candidates
+    /// ([`interface::Touch::geometric_stiffness`]).
+    stiffness: Vec<crate::continuum::ChainStiffness>,
     evals: Vec<implicit::Eval>,
     forces: Vec<Vec2>,
     /// Per candidate: (disc slot, body, chain, contact point, feature).
@@ -288,6 +291,7 @@ impl CoupledModel {
             w.points.clear();
             w.base.clear();
             w.meta.clear();
+            w.stiffness.clear();
             for (c, chain) in body.contact_boundary().iter().enumerate() {
                 if chain.segments() == 0 {
                     continue;
@@ -316,14 +320,24 @@ impl CoupledModel {
                         vt0,
                         fs_old: if advance { fs_old } else { 0.0 },
                         dt,
+                        spring: None,
                     });
                     w.points.push((c, t.material));
                     w.meta.push((d, b, c, t.point, t.feature));
+                    // the turn of the normal with the boundary, implicit too
+                    let fn0 = law.kn * (t.overlap - CANDIDATE_MARGIN * r);
+                    w.stiffness
+                        .extend(t.geometric_stiffness(chain, c, p.pos[d], fn0));
                 }
             }
             if advance {
+                w.lin.extend(
+                    w.stiffness
+                        .iter()
+                        .map(|k| implicit::Linear::spring(k.c, dt)),
+                );
                 let tb = Instant::now();
-                body.begin_step(&w.points, &mut w.base, &mut w.free)?;
+                body.begin_step(&w.points, &w.stiffness, &mut w.base, &mut w.free)?;
                 let tc = Instant::now();
                 body_time += (tc - tb).as_secs_f64();
                 let mut s = body.compliance();
@@ -343,7 +357,8 @@ impl CoupledModel {
                 body.finish_step(&w.forces)?;
                 body_time += tb.elapsed().as_secs_f64();
             }
-            for (k, e) in w.evals.iter().enumerate() {
+            // the contacts (the geometric stiffness unknowns follow them)
+            for (k, e) in w.evals.iter().enumerate().take(w.meta.len()) {
                 if e.regime == 0 {
                     continue;
                 }

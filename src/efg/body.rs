@@ -412,12 +412,13 @@ impl EfgBody {
         self.newmark.as_mut().ok_or(EfgError::NotStarted)
     }
 
-    /// After [`predict`](Self::predict): `U₊ += A⁻¹ (Φᵀ f + r)`, the point
-    /// forces `f[k]` (rows `rows[k]`) and the pending refinement residual
+    /// After [`predict`](Self::predict): `U₊ += A⁻¹ (Φᵀ f + r)`, the
+    /// generalised forces `f[k]` on the functional pairs `rows[2k]`,
+    /// `rows[2k + 1]` and the pending refinement residual
     /// `r` in one solve (the coupling's implicit contact forces).
-    pub fn add_point_forces<'r>(
+    pub fn add_point_forces(
         &mut self,
-        rows: impl IntoIterator<Item = &'r [(u32, f64)]>,
+        rows: &[Vec<(usize, f64)>],
         f: &[Vec2],
     ) -> Result<(), EfgError> {
         let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;

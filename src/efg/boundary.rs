@@ -39,8 +39,13 @@ impl ContactBody for EfgBody {
     fn newmark_mut(&mut self) -> Option<&mut Newmark> {
         EfgBody::newmark_mut(self)
     }
-    fn add_point_forces(&mut self, rows: &[Row], f: &[Vec2]) -> Result<(), EfgError> {
-        EfgBody::add_point_forces(self, rows.iter().map(|r| &r[..]), f)
+    fn add_point_forces(&mut self, rows: &[Vec<(usize, f64)>], f: &[Vec2]) -> Result<(), EfgError> {
+        EfgBody::add_point_forces(self, rows, f)
+    }
+    fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64) {
+        for &(i, c) in row {
+            self.f_point[i] += c * g;
+        }
     }
     fn commit(&mut self) -> Result<(), EfgError> {
         EfgBody::commit(self)

@@ -34,6 +34,11 @@ impl ContactBody for FemBody {
     fn add_point_load_row(&mut self, row: &[(u32, f64)], f: Vec2) {
         FemBody::add_point_load_row(self, row, f);
     }
+    fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64) {
+        for &(i, c) in row {
+            self.f_point[i] += c * g;
+        }
+    }
     fn predict(&mut self) -> Result<&mut Newmark, FemError> {
         FemBody::predict(self)
     }
