@@ -375,7 +375,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         let res = self
             .body
             .predict()
-            .map(|nm| nm.point_compliance(&rows, extra, free, compliance));
+            .map(|nm| nm.point_compliance_stiffened(&rows, extra, free, compliance));
         self.point_rows = rows;
         res.map_err(|e| self.solve_error(e))
     }

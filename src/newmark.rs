@@ -189,13 +189,23 @@ impl Newmark {
 
     /// After [`predict`](Self::predict): the response of the step to point
     /// forces at `m` points with shape rows `rows[k] = [(node, φ)]`
-    /// (`u_k = Σ φ U_{2·node+a}`; no load on [imposed](Self::set_imposed)
-    /// DOFs), with the step's matrix stiffened by `extra` if given. Writes
-    /// the free displacements `u_k` of the predicted `U₊` and the compliance
-    /// `S = Φ A⁻¹ Φᵀ` (2m × 2m, row-major, index `2k + a`), and keeps
-    /// `A⁻¹Φᵀ` for [`apply_point_forces`](Self::apply_point_forces).
-    /// Cost: 2m solves (plus q for `extra`).
+    /// (`u_k = Σ φ U_{2·node+a}`; no load on [imposed](Self::set_imposed) DOFs). Writes the free displacements `u_k` of the
+    /// predicted `U₊` and the compliance `S = Φ A⁻¹ Φᵀ` (2m × 2m, row-major,
+    /// index `2k + a`), and keeps `A⁻¹Φᵀ` for
+    /// [`apply_point_forces`](Self::apply_point_forces). Cost: 2m solves.
     pub fn point_compliance(
+        &mut self,
+        rows: &[Vec<(u32, f64)>],
+        free: &mut Vec<Vec2>,
+        s: &mut Vec<f64>,
+    ) {
+        self.point_compliance_stiffened(rows, None, free, s);
+    }
+
+    /// [`point_compliance`](Self::point_compliance) of the step whose matrix
+    /// is stiffened by `extra` (if given): `A + V C Vᵀ` replaces `A` in `U₊`,
+    /// in `S` and in the kept columns. Cost: 2m + q solves.
+    pub fn point_compliance_stiffened(
         &mut self,
         rows: &[Vec<(u32, f64)>],
         extra: Option<StepStiffness<'_>>,
@@ -526,9 +536,9 @@ mod tests {
             c: &c,
             u: &state.u,
         };
-        a.point_compliance(&rows, Some(extra), &mut free_a, &mut s_a);
+        a.point_compliance_stiffened(&rows, Some(extra), &mut free_a, &mut s_a);
         b.predict(&sb, &f2);
-        b.point_compliance(&rows, None, &mut free_b, &mut s_b);
+        b.point_compliance(&rows, &mut free_b, &mut s_b);
         for (x, y) in free_a.iter().zip(&free_b) {
             assert!((*x - *y).norm() < 1e-13, "{x:?} {y:?}");
         }
