@@ -14,6 +14,9 @@
 //! one with contacts builds the body's boundary Green matrix: timed
 //! apart as start-up) and then `steps` timed steps, coupled and DEM only.
 //!
+//! With `NO_GEOMETRIC_STIFFNESS` set in the environment the contacts'
+//! geometric stiffness stays explicit (`geometric_stiffness = false`).
+//!
 //!     cargo run --release --example footing_sweep -- [threads] [steps] [contacts,...] [nodes,...]
 //!     cargo run --release --example footing_sweep -- 2 100 10,100,1000,5000 1000,10000
 
@@ -137,6 +140,7 @@ fn main() {
                 let src = bed_src.clone() + &footing((width - w) / 2.0, top - 0.01 * R, w, nn);
                 let sc = scenario::parse(&src, "footing.toml").expect("footing scenario");
                 let mut m = build(&sc).expect("coupled model").model;
+                m.geometric_stiffness = std::env::var("NO_GEOMETRIC_STIFFNESS").is_err();
                 let dofs = 2 * sc.body[0].nodes[0] * sc.body[0].nodes[1];
                 let t0 = Instant::now();
                 m.step().expect("first step");

@@ -92,6 +92,9 @@ pub struct CoupledModel {
     work: Work,
     /// Newton iterations of the last implicit contact solve (diagnostics).
     pub newton_iterations: usize,
+    /// The geometric stiffness of segment contacts implicit in the step
+    /// ([`interface::Touch::geometric_stiffness`]); default true.
+    pub geometric_stiffness: bool,
     /// Products `S x` of all implicit contact solves so far (diagnostics).
     pub compliance_products: usize,
     /// Wall time spent so far in each part of the step.
@@ -201,6 +204,7 @@ impl CoupledModel {
             work: Work::default(),
             newton_iterations: 0,
             compliance_products: 0,
+            geometric_stiffness: true,
             timing: StepTiming::default(),
         }
     }
@@ -325,9 +329,11 @@ impl CoupledModel {
                     w.points.push((c, t.material));
                     w.meta.push((d, b, c, t.point, t.feature));
                     // the turn of the normal with the boundary, implicit too
-                    let fn0 = law.kn * (t.overlap - CANDIDATE_MARGIN * r);
-                    w.stiffness
-                        .extend(t.geometric_stiffness(chain, c, p.pos[d], fn0));
+                    if self.geometric_stiffness {
+                        let fn0 = law.kn * (t.overlap - CANDIDATE_MARGIN * r);
+                        w.stiffness
+                            .extend(t.geometric_stiffness(chain, c, p.pos[d], fn0));
+                    }
                 }
             }
             if advance {

@@ -75,6 +75,7 @@ pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
         model: {
             let mut m = CoupledModel::new(granular, bodies, &mats, substeps);
             m.staggered |= sc.simulation.coupling == crate::scenario::CouplingScheme::Staggered;
+            m.geometric_stiffness = sc.simulation.geometric_stiffness;
             m
         },
         body_names: sc.body.iter().map(|b| b.name.clone()).collect(),

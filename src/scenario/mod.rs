@@ -71,6 +71,16 @@ pub struct Simulation {
     /// step.
     #[serde(default)]
     pub contact_solve: ContactSolve,
+    /// Coupled runs: the geometric stiffness of segment contacts (the
+    /// normal turning with the boundary) implicit in the step (default
+    /// true; false saves its unknowns, at the risk of energy created at
+    /// the corners of finely resolved bodies).
+    #[serde(default = "yes")]
+    pub geometric_stiffness: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// `[simulation] contact_solve`: `"boundary"` (default: the body's
@@ -109,6 +119,7 @@ impl Default for Simulation {
             substeps: 1,
             coupling: CouplingScheme::Implicit,
             contact_solve: ContactSolve::Boundary,
+            geometric_stiffness: true,
         }
     }
 }
