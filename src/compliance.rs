@@ -321,11 +321,6 @@ impl PointRows {
         self.len() == 0
     }
 
-    /// Number of DOFs the functionals touch.
-    pub fn active_dofs(&self) -> usize {
-        self.act.len()
-    }
-
     fn row(&self, c: usize) -> &[(u32, f64)] {
         &self.entries[self.start[c] as usize..self.start[c + 1] as usize]
     }
@@ -349,14 +344,7 @@ impl PointRows {
     /// The 2 × 2 block `S_kl`, row-major.
     pub fn block(&self, green: &BoundaryGreen, k: usize, l: usize) -> [f64; 4] {
         if !self.s.is_empty() {
-            let m2 = 2 * self.len();
-            let at = |r: usize, c: usize| self.s[r * m2 + c];
-            return [
-                at(2 * k, 2 * l),
-                at(2 * k, 2 * l + 1),
-                at(2 * k + 1, 2 * l),
-                at(2 * k + 1, 2 * l + 1),
-            ];
+            return dense_block(&self.s, k, l);
         }
         [
             self.entry(green, 2 * k, 2 * l),
@@ -486,16 +474,7 @@ impl Compliance<'_> {
     /// The 2 × 2 block `S_kl`.
     pub fn block(&self, k: usize, l: usize) -> [f64; 4] {
         match self {
-            Compliance::Dense(s) => {
-                let m2 = (s.len() as f64).sqrt() as usize;
-                let at = |r: usize, c: usize| s[r * m2 + c];
-                [
-                    at(2 * k, 2 * l),
-                    at(2 * k, 2 * l + 1),
-                    at(2 * k + 1, 2 * l),
-                    at(2 * k + 1, 2 * l + 1),
-                ]
-            }
+            Compliance::Dense(s) => dense_block(s, k, l),
             Compliance::Boundary(g, rows) => rows.block(g, k, l),
         }
     }
@@ -518,6 +497,18 @@ impl Compliance<'_> {
             Compliance::Boundary(g, rows) => rows.mul(g, x, y),
         }
     }
+}
+
+/// The 2 × 2 block `S_kl` (row-major) of a dense row-major `S` (2m × 2m).
+fn dense_block(s: &[f64], k: usize, l: usize) -> [f64; 4] {
+    let m2 = (s.len() as f64).sqrt().round() as usize;
+    let at = |r: usize, c: usize| s[r * m2 + c];
+    [
+        at(2 * k, 2 * l),
+        at(2 * k, 2 * l + 1),
+        at(2 * k + 1, 2 * l),
+        at(2 * k + 1, 2 * l + 1),
+    ]
 }
 
 /// `y = S x` for a dense row-major `S` (2m × 2m); rows with four partial

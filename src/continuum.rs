@@ -5,7 +5,7 @@
 
 use crate::compliance::{BoundaryGreen, Compliance, PointRows};
 use crate::geom::Vec2;
-use crate::newmark::{Newmark, State};
+use crate::newmark::{Newmark, State, pair_values};
 use crate::scenario::body::Edge;
 use rayon::prelude::*;
 
@@ -260,6 +260,14 @@ pub fn add_row_load(force: &mut [f64], row: &[(u32, f64)], f: Vec2) {
     }
 }
 
+/// `F[i] += c g` over a functional `row = [(i, c)]`: a generalised force
+/// `g` on it booked as a load.
+pub fn add_dof_load(force: &mut [f64], row: &[(usize, f64)], g: f64) {
+    for &(i, c) in row {
+        force[i] += c * g;
+    }
+}
+
 /// How a body computes the compliance of the implicit contact step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ComplianceMode {
@@ -362,11 +370,6 @@ impl<B: ContactBody> WithBoundary<B> {
         nodes.sort_unstable();
         nodes.dedup();
         nodes
-    }
-
-    /// The boundary Green matrix, if built (size and memory for reports).
-    pub fn green(&self) -> Option<&BoundaryGreen> {
-        self.green.as_ref()
     }
 
     /// Build `G` (first call) and extend it to the nodes of the step's rows
@@ -475,13 +478,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             }
         }
         self.functionals = fs;
-        let value = |f: &[Vec<(usize, f64)>], x: &[f64]| -> Vec2 {
-            let dot = |r: &[(usize, f64)]| r.iter().map(|&(i, c)| c * x[i]).sum::<f64>();
-            Vec2::new(dot(&f[0]), dot(&f[1]))
-        };
-        base.clear();
-        let u = &self.body.state().u;
-        base.extend(self.functionals.chunks_exact(2).map(|f| value(f, u)));
+        pair_values(&self.functionals, &self.body.state().u, base);
         if !points.is_empty() && self.mode == ComplianceMode::Boundary {
             self.ensure_green()?;
         }
@@ -491,8 +488,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             if direct {
                 nm.point_compliance(fs, free, dense);
             } else {
-                free.clear();
-                free.extend(fs.chunks_exact(2).map(|f| value(f, nm.solution())));
+                pair_values(fs, nm.solution(), free);
             }
         });
         res.map_err(|e| self.solve_error(e))?;

@@ -190,8 +190,6 @@ impl Newmark {
     ) {
         let n = self.n();
         let m2 = rows.len();
-        let dot =
-            |x: &[f64], row: &[(usize, f64)]| -> f64 { row.iter().map(|&(i, c)| c * x[i]).sum() };
         let mut cols = std::mem::take(&mut self.cols);
         cols.clear();
         cols.resize(m2 * n, 0.0);
@@ -203,16 +201,12 @@ impl Newmark {
             }
             self.factor.solve_in_place(col);
         }
-        free.clear();
-        free.extend(
-            rows.chunks_exact(2)
-                .map(|r| Vec2::new(dot(&self.rhs, &r[0]), dot(&self.rhs, &r[1]))),
-        );
+        pair_values(rows, &self.rhs, free);
         s.clear();
         s.resize(m2 * m2, 0.0);
         for (c, col) in cols.chunks_exact(n).enumerate() {
             for (r, row) in rows.iter().enumerate() {
-                s[r * m2 + c] = dot(col, row);
+                s[r * m2 + c] = functional(row, col);
             }
         }
         self.cols = cols;
@@ -300,6 +294,21 @@ impl Newmark {
     pub fn strain_energy(&self, state: &State) -> f64 {
         0.5 * self.stiffness.quad_form(&state.u)
     }
+}
+
+/// `Σ c x[i]` of a linear functional `row = [(i, c)]` of the nodal values.
+pub fn functional(row: &[(usize, f64)], x: &[f64]) -> f64 {
+    row.iter().map(|&(i, c)| c * x[i]).sum()
+}
+
+/// The values on `x` of functionals taken in pairs (`rows[2k]`,
+/// `rows[2k + 1]` → `out[k]`), as the contact unknowns use them.
+pub fn pair_values(rows: &[Vec<(usize, f64)>], x: &[f64], out: &mut Vec<Vec2>) {
+    out.clear();
+    out.extend(
+        rows.chunks_exact(2)
+            .map(|r| Vec2::new(functional(&r[0], x), functional(&r[1], x))),
+    );
 }
 
 /// The inputs a body's time stepping needs: a positive finite step and a

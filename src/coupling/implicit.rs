@@ -189,8 +189,7 @@ pub struct Solver {
     hess: Vec<f64>,
     res: Vec<Vec2>,
     scratch: Vec<Vec2>,
-    /// Newton iterations and products `S x` of the last solve.
-    pub newton: usize,
+    /// Products `S x` of the last solve.
     pub products: usize,
 }
 
@@ -220,13 +219,12 @@ impl Solver {
         out.extend(contacts.iter().map(|c| c.eval(Vec2::ZERO)));
         self.w.clear();
         self.w.resize(m, Vec2::ZERO);
-        self.newton = if m <= DENSE_MAX {
+        if m <= DENSE_MAX {
             s.dense(&mut self.s);
             self.dense_newton(contacts, base, free, out)
         } else {
             self.krylov_newton(contacts, base, free, s, out)
-        };
-        self.newton
+        }
     }
 
     fn dense_newton(

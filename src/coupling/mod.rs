@@ -516,7 +516,7 @@ fn touching<'a>(
     p: &'a Particles,
     margin: f64,
 ) -> impl Iterator<Item = (usize, interface::Touch)> + 'a {
-    let (lo, hi) = bounds(&chain.current);
+    let (lo, hi) = (grid.chain_lo, grid.chain_hi);
     (0..p.len()).filter_map(move |d| {
         let (x, rm) = (p.pos[d], p.radius[d] * (1.0 + margin));
         if x.x + rm < lo.x || x.x - rm > hi.x || x.y + rm < lo.y || x.y - rm > hi.y {
@@ -532,19 +532,4 @@ fn shear_history(contacts: &[BodyContact], key: (u32, u16, u16)) -> f64 {
     contacts
         .binary_search_by(|q| q.key().cmp(&key))
         .map_or(0.0, |i| contacts[i].fs)
-}
-
-fn bounds(pts: &[Vec2]) -> (Vec2, Vec2) {
-    pts.iter().fold(
-        (
-            Vec2::new(f64::INFINITY, f64::INFINITY),
-            Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
-        ),
-        |(lo, hi), p| {
-            (
-                Vec2::new(lo.x.min(p.x), lo.y.min(p.y)),
-                Vec2::new(hi.x.max(p.x), hi.y.max(p.y)),
-            )
-        },
-    )
 }

@@ -10,6 +10,9 @@ use crate::geom::Vec2;
 /// covers.
 #[derive(Debug, Default)]
 pub struct SegmentGrid {
+    /// Bounding box of the chain's points.
+    pub chain_lo: Vec2,
+    pub chain_hi: Vec2,
     lo: Vec2,
     cell: f64,
     nx: usize,
@@ -37,6 +40,7 @@ impl SegmentGrid {
         } else {
             1.0
         };
+        (self.chain_lo, self.chain_hi) = (lo, hi);
         let ext = hi - lo;
         // cells no smaller than the reach or a segment, and no more than
         // ~16 per segment over the box

@@ -460,14 +460,15 @@ impl EfgBody {
         debug_assert!(*nm.mass.pattern == *self.ops.k.pattern);
         let [r, u1, tmp] = &mut self.refine_work;
         u1.clear();
-        u1.extend_from_slice(nm.solution_mut());
+        u1.extend_from_slice(nm.solution());
         // r = F − M Ü₊ − C U̇₊ − K U₊ + springs on those rows (r holds F
         // without F^α on entry)
-        for (i, ri) in r.iter_mut().enumerate() {
-            if sel.rows.binary_search(&i).is_err() {
-                *ri = 0.0;
-            }
+        tmp.clear();
+        tmp.resize(r.len(), 0.0);
+        for &i in &sel.rows {
+            tmp[i] = r[i];
         }
+        std::mem::swap(r, tmp);
         let rates = |i: usize| nm.rates(s.u[i], s.v[i], s.a[i], u1[i]);
         tmp.clear();
         tmp.extend((0..u1.len()).map(|i| -rates(i).1));

@@ -6,7 +6,7 @@
 use super::EfgError;
 use super::body::EfgBody;
 use super::shape::ShapeRow;
-use crate::continuum::{BodyEnergies, ContactBody, Row, WithBoundary, add_row_load};
+use crate::continuum::{BodyEnergies, ContactBody, Row, WithBoundary, add_dof_load, add_row_load};
 use crate::geom::Vec2;
 use crate::newmark::{Newmark, State};
 
@@ -43,9 +43,7 @@ impl ContactBody for EfgBody {
         EfgBody::add_point_forces(self, rows, f)
     }
     fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64) {
-        for &(i, c) in row {
-            self.f_point[i] += c * g;
-        }
+        add_dof_load(&mut self.f_point, row, g);
     }
     fn commit(&mut self) -> Result<(), EfgError> {
         EfgBody::commit(self)

@@ -9,7 +9,7 @@
 
 use super::FemError;
 use super::body::FemBody;
-use crate::continuum::{BodyEnergies, ContactBody, Row, WithBoundary};
+use crate::continuum::{BodyEnergies, ContactBody, Row, WithBoundary, add_dof_load};
 use crate::geom::Vec2;
 use crate::newmark::{Newmark, State};
 
@@ -35,9 +35,7 @@ impl ContactBody for FemBody {
         FemBody::add_point_load_row(self, row, f);
     }
     fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64) {
-        for &(i, c) in row {
-            self.f_point[i] += c * g;
-        }
+        add_dof_load(&mut self.f_point, row, g);
     }
     fn predict(&mut self) -> Result<&mut Newmark, FemError> {
         FemBody::predict(self)
