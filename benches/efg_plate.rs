@@ -5,10 +5,11 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use efgdem::Vec2;
-use efgdem::efg::assemble::{PointRole, assemble, elasticity, point_shapes};
-use efgdem::efg::quadrature::{domain_points, edge_points};
+use efgdem::continuum::material::elasticity;
+use efgdem::continuum::newmark::{Newmark, NewmarkParams, State};
+use efgdem::continuum::quadrature::{domain_points, edge_points};
+use efgdem::efg::assemble::{PointRole, assemble, point_shapes};
 use efgdem::efg::support::Support;
-use efgdem::newmark::{Newmark, NewmarkParams, State};
 use efgdem::sparse::Cholesky;
 use std::hint::black_box;
 

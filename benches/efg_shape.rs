@@ -2,7 +2,7 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use efgdem::Vec2;
-use efgdem::efg::quadrature::domain_points;
+use efgdem::continuum::quadrature::domain_points;
 use efgdem::efg::shape::{ShapeRow, shape_functions};
 use efgdem::efg::support::Support;
 use std::hint::black_box;

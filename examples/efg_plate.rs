@@ -38,7 +38,7 @@ traction = [0.0, -1.0e6]
     let sc = scenario::parse(&src, "plate.toml").expect("valid scenario");
     println!("threads: {}", rayon::current_num_threads());
     let t = Instant::now();
-    let mut b = EfgBody::from_spec(&sc.body[0], sc.simulation.gravity).expect("build");
+    let mut b = EfgBody::new(&sc.body[0].params(), sc.simulation.gravity).expect("build");
     println!(
         "build: {:.3} s (shape functions {:.3} s, assembly K̄ + M {:.3} s); {} DOFs, {} Gauss points, nnz(lower K̄) = {}",
         t.elapsed().as_secs_f64(),

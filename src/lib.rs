@@ -14,14 +14,12 @@
 //! - [`output`]: history CSV, ParaView files, summary JSON.
 //! - [`run`]: runs a scenario end to end (what `efgdem run` does).
 
-pub mod compliance;
 pub mod continuum;
 pub mod coupling;
 pub mod dem;
 pub mod efg;
 pub mod fem;
 pub mod geom;
-pub mod newmark;
 pub mod output;
 pub mod reproduce;
 pub mod run;

@@ -315,7 +315,7 @@ impl Cholesky {
     /// Overwrite the `k` columns of `rhs` (column-major, `n × k`) with
     /// `A⁻¹ rhs`, sequentially, with a workspace of its own: callable from
     /// several threads at once (the start-up solves of
-    /// [`BoundaryGreen`](crate::compliance::BoundaryGreen)).
+    /// [`BoundaryGreen`](crate::continuum::compliance::BoundaryGreen)).
     pub fn solve_columns(&self, rhs: &mut [f64], k: usize) -> Result<(), SparseError> {
         let n = self.symbolic.nrows();
         debug_assert_eq!(rhs.len(), n * k);

@@ -132,7 +132,7 @@ fn disc_resting_on_an_fe_beam_reaches_its_static_solution() {
     for _ in 0..5 {
         x = on_top(contact.point - beam.body.sample(x).unwrap().u);
     }
-    let mut reference = FemBody::from_spec(&sc.body[0], sc.simulation.gravity).unwrap();
+    let mut reference = FemBody::new(&sc.body[0].params(), sc.simulation.gravity).unwrap();
     reference.add_point_load(x, -contact.force).unwrap();
     reference.solve_static().unwrap();
     let expect = reference.sample(tip_at).unwrap().u.y;

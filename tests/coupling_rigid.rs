@@ -4,7 +4,7 @@
 //! arms), and the body must receive the opposite of the force on the disc.
 
 use efgdem::Vec2;
-use efgdem::compliance::Compliance;
+use efgdem::continuum::compliance::Compliance;
 use efgdem::continuum::{BodyEnergies, BoundaryChain, ChainStiffness, Continuum, SolveError};
 use efgdem::coupling::CoupledModel;
 use efgdem::dem::Granular;

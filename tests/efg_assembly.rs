@@ -31,7 +31,7 @@ fn build(threads: usize) -> EfgBody {
         .num_threads(threads)
         .build()
         .unwrap()
-        .install(|| EfgBody::from_spec(&sc.body[0], sc.simulation.gravity).unwrap())
+        .install(|| EfgBody::new(&sc.body[0].params(), sc.simulation.gravity).unwrap())
 }
 
 #[test]
@@ -73,7 +73,7 @@ fn mass_and_rigid_modes() {
     // a rigid y-translation costs no energy when only ux is prescribed
     let src = SRC.replace("fixed = true", "ux = 0.0");
     let sc = scenario::parse(&src, "t.toml").unwrap();
-    let free = EfgBody::from_spec(&sc.body[0], [0.0, 0.0]).unwrap();
+    let free = EfgBody::new(&sc.body[0].params(), [0.0, 0.0]).unwrap();
     let ty: Vec<f64> = (0..n)
         .map(|i| if i % 2 == 1 { 1e-3 } else { 0.0 })
         .collect();

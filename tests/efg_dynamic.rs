@@ -48,7 +48,7 @@ parabolic_shear = -1.0
         dt = euler_bernoulli_period() / steps_per_period
     );
     let sc = scenario::parse(&src, "vib.toml").unwrap_or_else(|e| panic!("{e}"));
-    let mut b = EfgBody::from_spec(&sc.body[0], sc.simulation.gravity).unwrap();
+    let mut b = EfgBody::new(&sc.body[0].params(), sc.simulation.gravity).unwrap();
     b.solve_static().unwrap();
     let dt = euler_bernoulli_period() / steps_per_period;
     b.start_dynamic(dt).unwrap();

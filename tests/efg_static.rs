@@ -7,7 +7,7 @@ use efgdem::scenario;
 
 fn body(toml: &str) -> EfgBody {
     let sc = scenario::parse(toml, "test.toml").unwrap_or_else(|e| panic!("{e}"));
-    EfgBody::from_spec(&sc.body[0], sc.simulation.gravity).unwrap()
+    EfgBody::new(&sc.body[0].params(), sc.simulation.gravity).unwrap()
 }
 
 /// Patch test; returns the worst relative error inside (displacement and stress).

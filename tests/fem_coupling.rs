@@ -11,7 +11,7 @@ use efgdem::scenario::{self, body::Edge};
 
 fn fem(src: &str) -> FemBody {
     let sc = scenario::parse(src, "test.toml").unwrap_or_else(|e| panic!("{e}"));
-    FemBody::from_spec(&sc.body[0], sc.simulation.gravity).unwrap()
+    FemBody::new(&sc.body[0].params(), sc.simulation.gravity).unwrap()
 }
 
 /// A 2 × 1 plate, 5 × 3 nodes, clamped on the left; the bottom edge slides
@@ -114,7 +114,7 @@ fn chain_follows_the_displacement_and_point_loads_are_work_consistent() {
         assert!((c.body.f_point.iter().step_by(2).sum::<f64>() - f.x).abs() < 1e-14);
     }
     // after real steps (moving bottom edge, traction, gravity, a point load)
-    c.body.state = efgdem::newmark::State::zeros(2 * n);
+    c.body.state = efgdem::continuum::newmark::State::zeros(2 * n);
     c.body.f_point.iter_mut().for_each(|x| *x = 0.0);
     c.body.start_dynamic(0.01).unwrap();
     for _ in 0..5 {

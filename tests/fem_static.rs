@@ -9,7 +9,7 @@ use efgdem::scenario;
 fn body(toml: &str) -> FemBody {
     let sc = scenario::parse(toml, "test.toml").unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(sc.body[0].method, scenario::body::Method::FemQ4);
-    FemBody::from_spec(&sc.body[0], sc.simulation.gravity).unwrap()
+    FemBody::new(&sc.body[0].params(), sc.simulation.gravity).unwrap()
 }
 
 const LIN: &str = r#"ux = { linear = [1e-3, 2e-3, 3e-3] }

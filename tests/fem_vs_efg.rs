@@ -54,7 +54,7 @@ const STEPS: usize = 1600;
 
 /// (static tip u_y, first period) of the EFG body.
 fn efg(nodes: [usize; 2]) -> (f64, f64) {
-    let mut b = EfgBody::from_spec(&spec("efg", nodes, ""), [0.0, 0.0]).unwrap();
+    let mut b = EfgBody::new(&spec("efg", nodes, "").params(), [0.0, 0.0]).unwrap();
     b.add_point_load(TIP, LOAD).unwrap();
     b.solve_static().unwrap();
     let tip = b.sample(TIP).unwrap().u.y;
@@ -71,7 +71,7 @@ fn efg(nodes: [usize; 2]) -> (f64, f64) {
 
 /// (static tip u_y, first period) of the FE body.
 fn fem(nodes: [usize; 2], mass: &str) -> (f64, f64) {
-    let mut b = FemBody::from_spec(&spec("fem-q4", nodes, mass), [0.0, 0.0]).unwrap();
+    let mut b = FemBody::new(&spec("fem-q4", nodes, mass).params(), [0.0, 0.0]).unwrap();
     b.add_point_load(TIP, LOAD).unwrap();
     b.solve_static().unwrap();
     let tip = b.sample(TIP).unwrap().u.y;

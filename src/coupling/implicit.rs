@@ -19,7 +19,7 @@
 //! * the body takes the forces, the discs get their opposite at the next
 //!   step: both sides see the same force at the same time level.
 
-use crate::compliance::Compliance;
+use crate::continuum::compliance::Compliance;
 use crate::dem::contact::ContactLaw;
 use crate::geom::Vec2;
 

@@ -49,14 +49,14 @@ pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
         );
         bodies.push(match spec.method {
             Method::Efg => {
-                let mut body = EfgBody::from_spec(spec, g)?;
+                let mut body = EfgBody::new(&spec.params(), g)?;
                 body.start_dynamic(body_dt)?;
                 let mut c = EfgContinuum::new(body, edges, refine)?;
                 c.mode = mode;
                 Box::new(c)
             }
             Method::FemQ4 => {
-                let mut body = FemBody::from_spec(spec, g)?;
+                let mut body = FemBody::new(&spec.params(), g)?;
                 body.start_dynamic(body_dt)?;
                 let mut c = FemContinuum::new(body, edges, refine)?;
                 c.mode = mode;

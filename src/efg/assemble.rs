@@ -104,23 +104,6 @@ pub fn point_shapes(support: &Support, points: &[Vec2]) -> Result<PointShapes, C
     Ok(PointShapes { ptr, idx, val })
 }
 
-/// Isotropic elasticity matrix `D` (Eq. 31 plane stress, Eq. 32 plane
-/// strain) as `[D11, D12, D22, D33]`.
-pub fn elasticity(e: f64, nu: f64, plane_strain: bool) -> [f64; 4] {
-    if plane_strain {
-        let c = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
-        [
-            c * (1.0 - nu),
-            c * nu,
-            c * (1.0 - nu),
-            c * (1.0 - 2.0 * nu) / 2.0,
-        ]
-    } else {
-        let c = e / (1.0 - nu * nu);
-        [c, c * nu, c, c * (1.0 - nu) / 2.0]
-    }
-}
-
 /// What one quadrature point contributes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PointRole {

@@ -1,89 +1,24 @@
 //! [`EfgBody`]: one EFG continuum on a rectangular node grid, built from a
-//! [`BodySpec`]: nodes, supports, assembled operators, loads, state, and
+//! [`BodyParams`]: nodes, supports, assembled operators, loads, state, and
 //! what the coupling needs (true sampling, shape rows, point loads, Newmark
 //! advance).
 
 use super::EfgError;
 use super::assemble::{self, Operators, PointRole, PointShapes};
-use super::exact::Timoshenko;
 use super::penalty::MovingEdge;
-use super::quadrature::{self, QuadPoint};
 use super::shape::{ShapeRow, shape_functions};
 use super::support::Support;
+use crate::continuum::conditions::{
+    constrained, edge_ends, prescribed, timoshenko_of, traction_at,
+};
+use crate::continuum::material::energy_error_of;
+use crate::continuum::newmark::{Newmark, NewmarkParams, State};
+use crate::continuum::quadrature::{self, QuadPoint};
+use crate::continuum::timoshenko::Timoshenko;
+use crate::continuum::{BodyParams, Edge, Material, Prescribed, Sample};
 use crate::geom::Vec2;
-use crate::newmark::{Newmark, NewmarkParams, State};
-use crate::scenario::body::{BcSpec, BodySpec, Edge, Plane, Prescribed};
 use crate::sparse::{Cholesky, RowSelection};
 use std::time::Instant;
-
-/// Material data of a body.
-#[derive(Debug, Clone, Copy)]
-pub struct Material {
-    pub e: f64,
-    pub nu: f64,
-    pub density: f64,
-    pub thickness: f64,
-    pub plane: Plane,
-    /// Damping coefficient c (Eq. 24).
-    pub damping: f64,
-    /// `[D11, D12, D22, D33]` (Eq. 31 or 32).
-    pub d: [f64; 4],
-}
-
-impl Material {
-    /// The material of a `[[body]]`: `elastic`, `damping`, and `D` of Eq. (31)
-    /// (plane stress) or Eq. (32) (plane strain).
-    pub fn of_spec(spec: &BodySpec) -> Material {
-        let el = spec.elastic;
-        Material {
-            e: el.e,
-            nu: el.nu,
-            density: el.density,
-            thickness: el.thickness,
-            plane: el.plane,
-            damping: spec.damping,
-            d: assemble::elasticity(el.e, el.nu, el.plane == Plane::Strain),
-        }
-    }
-    /// Stress `D ε` from engineering strain `(ε_xx, ε_yy, γ_xy)`.
-    pub fn stress(&self, e: [f64; 3]) -> [f64; 3] {
-        let [d11, d12, d22, d33] = self.d;
-        [d11 * e[0] + d12 * e[1], d12 * e[0] + d22 * e[1], d33 * e[2]]
-    }
-}
-
-/// True (interpolated) fields at a point.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Sample {
-    /// Displacement `u(x) = Σ φ_I(x) u_I` (Eq. 12).
-    pub u: Vec2,
-    /// Velocity `Σ φ_I(x) u̇_I`.
-    pub v: Vec2,
-    /// Engineering strain `(ε_xx, ε_yy, γ_xy) = B u` (E5).
-    pub strain: [f64; 3],
-    /// Stress `(σ_xx, σ_yy, σ_xy) = D ε`.
-    pub stress: [f64; 3],
-}
-
-impl Sample {
-    /// The field named by a point-probe quantity
-    /// ([`POINT_QUANTITIES`](crate::scenario::body::POINT_QUANTITIES)).
-    pub fn field(&self, q: &str) -> Option<f64> {
-        Some(match q {
-            "ux" => self.u.x,
-            "uy" => self.u.y,
-            "vx" => self.v.x,
-            "vy" => self.v.y,
-            "exx" => self.strain[0],
-            "eyy" => self.strain[1],
-            "gxy" => self.strain[2],
-            "sxx" => self.stress[0],
-            "syy" => self.stress[1],
-            "sxy" => self.stress[2],
-            _ => return None,
-        })
-    }
-}
 
 /// Sizes and timings of a build, for `check` and summaries.
 #[derive(Debug, Clone, Default, serde::Serialize)]
@@ -147,24 +82,12 @@ pub struct EfgBody {
     pub info: BuildInfo,
 }
 
-/// End points of an edge of the rectangle `origin`, `size` (counter-clockwise
-/// order is not implied: left/right go bottom → top, bottom/top left → right).
-pub(crate) fn edge_ends(origin: Vec2, size: Vec2, e: Edge) -> (Vec2, Vec2) {
-    let (x0, y0, x1, y1) = (origin.x, origin.y, origin.x + size.x, origin.y + size.y);
-    match e {
-        Edge::Left => (Vec2::new(x0, y0), Vec2::new(x0, y1)),
-        Edge::Right => (Vec2::new(x1, y0), Vec2::new(x1, y1)),
-        Edge::Bottom => (Vec2::new(x0, y0), Vec2::new(x1, y0)),
-        Edge::Top => (Vec2::new(x0, y1), Vec2::new(x1, y1)),
-    }
-}
-
 impl EfgBody {
     /// Build the body: node grid, supports, quadrature, shape functions at
     /// all quadrature points (parallel), operators K̄, G (parallel,
     /// thread-count independent), and load vectors. `gravity` is the
     /// acceleration of `[simulation] gravity`.
-    pub fn from_spec(spec: &BodySpec, gravity: [f64; 2]) -> Result<EfgBody, EfgError> {
+    pub fn new(spec: &BodyParams, gravity: [f64; 2]) -> Result<EfgBody, EfgError> {
         let [nx, ny] = spec.nodes;
         if nx < 2 || ny < 2 {
             return Err(EfgError::Invalid(format!(
@@ -182,7 +105,7 @@ impl EfgBody {
             .collect();
         let support = Support::for_grid(&xs, &ys, spec.d_max);
         let el = spec.elastic;
-        let material = Material::of_spec(spec);
+        let material = Material::of_params(spec);
         let t = el.thickness;
         let alpha = spec.penalty.unwrap_or(1e5 * el.e);
         let cells = spec.cells.unwrap_or([nx - 1, ny - 1]);
@@ -257,7 +180,7 @@ impl EfgBody {
         drop(shapes);
         let mut f_permanent = vec![0.0; ndof];
         let mut f_released = vec![0.0; ndof];
-        let released = |name: &str| is_released(spec, name);
+        let released = |name: &str| spec.is_released(name);
         // loads: tractions (Eq. 27, boundary term)
         let mut row = ShapeRow::new();
         for bc in spec.bc.iter().filter(|b| b.is_load()) {
@@ -313,8 +236,8 @@ impl EfgBody {
             step: 0,
             params: NewmarkParams {
                 dt: 0.0,
-                gamma: spec.newmark.gamma,
-                beta: spec.newmark.beta,
+                gamma: spec.newmark[0],
+                beta: spec.newmark[1],
             },
             newmark: None,
             timoshenko,
@@ -354,7 +277,7 @@ impl EfgBody {
     /// `α₁M + α₄C + K̄` once and compute the initial acceleration from the
     /// equation of motion under the permanent loads (released loads off).
     pub fn start_dynamic(&mut self, dt: f64) -> Result<(), EfgError> {
-        crate::newmark::check_dynamic(dt, self.material.density, &self.name)
+        crate::continuum::newmark::check_dynamic(dt, self.material.density, &self.name)
             .map_err(EfgError::Invalid)?;
         self.params.dt = dt;
         let m = self.ops.gram.scaled(self.material.density);
@@ -364,7 +287,13 @@ impl EfgBody {
             .collect();
         self.ops.penalty.add_load(&mut f, self.step, dt);
         let kbar = self.ops.kbar();
-        crate::newmark::consistent_acceleration(&m, c.as_ref(), &kbar, &mut self.state, &f)?;
+        crate::continuum::newmark::consistent_acceleration(
+            &m,
+            c.as_ref(),
+            &kbar,
+            &mut self.state,
+            &f,
+        )?;
         let nm = Newmark::new(m, c, kbar, self.params)?;
         self.newmark = Some(nm);
         Ok(())
@@ -617,115 +546,4 @@ impl EfgBody {
         assemble::point_shapes(&self.support, &pts)
             .map_err(|e| EfgError::coverage(e, self.d_max, &self.name))
     }
-}
-
-/// Which components a displacement bc constrains.
-pub(crate) fn constrained(bc: &BcSpec) -> (bool, bool) {
-    if bc.fixed || bc.timoshenko.is_some() {
-        (true, true)
-    } else {
-        (bc.ux.is_some(), bc.uy.is_some())
-    }
-}
-
-/// The prescribed displacement `ū` of a bc at `x`.
-pub(crate) fn prescribed(bc: &BcSpec, x: Vec2, tim: Option<&Timoshenko>) -> [f64; 2] {
-    if let (Some(_), Some(t)) = (bc.timoshenko, tim) {
-        return t.displacement(x);
-    }
-    [
-        bc.ux.map_or(0.0, |v| v.at(x.x, x.y)),
-        bc.uy.map_or(0.0, |v| v.at(x.x, x.y)),
-    ]
-}
-
-/// The traction `t̄` of a load bc at the point `x` of its edge `a → b`
-/// (Eq. 27, boundary term): uniform, or the parabolic shear
-/// `τ = 3P/(2D)·(1 − 4s²/D²)` with `s` measured from the edge centre.
-pub(crate) fn traction_at(bc: &BcSpec, a: Vec2, b: Vec2, x: Vec2) -> [f64; 2] {
-    if let Some(tv) = bc.traction {
-        return tv;
-    }
-    let len = (b - a).norm();
-    let mid = (a + b) * 0.5;
-    let p = bc.parabolic_shear.unwrap_or(0.0);
-    let s = (x - mid).norm();
-    let tau = 1.5 * p / len * (1.0 - 4.0 * s * s / (len * len));
-    match bc.edge {
-        Edge::Left | Edge::Right => [0.0, tau],
-        Edge::Top | Edge::Bottom => [tau, 0.0],
-    }
-}
-
-/// Is the load `name` (a bc name or `"gravity"`) listed in
-/// `initial.static_under`, i.e. applied for the initial static state only?
-pub(crate) fn is_released(spec: &BodySpec, name: &str) -> bool {
-    spec.initial
-        .as_ref()
-        .is_some_and(|i| i.static_under.iter().any(|s| s == name))
-}
-
-/// The exact Timoshenko cantilever field of the body if one of its bcs uses
-/// it (clamped at the left edge, centre line at mid-height).
-pub(crate) fn timoshenko_of(spec: &BodySpec) -> Option<Timoshenko> {
-    let (origin, size) = (spec.rectangle.origin, spec.rectangle.size);
-    let el = spec.elastic;
-    spec.bc.iter().find_map(|bc| {
-        bc.timoshenko.map(|ts| {
-            Timoshenko::new(
-                ts.p,
-                size[0],
-                size[1],
-                el.e,
-                el.nu,
-                el.plane == Plane::Strain,
-                origin[0],
-                origin[1] + 0.5 * size[1],
-            )
-        })
-    })
-}
-
-/// Relative energy-norm error `‖ε − ε_ex‖_E / ‖ε_ex‖_E` of the fields given
-/// by `sample` against an exact stress field (exact strain recovered with
-/// `D⁻¹`), integrated with `gauss`² points on `cells` over the rectangle.
-/// Shared by the EFG and FE bodies.
-pub(crate) fn energy_error_of<E>(
-    material: &Material,
-    origin: Vec2,
-    size: Vec2,
-    cells: [usize; 2],
-    gauss: usize,
-    mut sample: impl FnMut(Vec2) -> Result<Sample, E>,
-    exact_stress: impl Fn(Vec2) -> [f64; 3],
-) -> Result<f64, E> {
-    let [d11, d12, _d22, d33] = material.d;
-    // D⁻¹ for the isotropic D
-    let det = d11 * d11 - d12 * d12;
-    let compl = |s: [f64; 3]| {
-        [
-            (d11 * s[0] - d12 * s[1]) / det,
-            (d11 * s[1] - d12 * s[0]) / det,
-            s[2] / d33,
-        ]
-    };
-    let (mut num, mut den) = (0.0, 0.0);
-    for q in quadrature::domain_points(origin, size, cells, gauss) {
-        let s = sample(q.x)?;
-        let se = exact_stress(q.x);
-        let ee = compl(se);
-        let ds = [
-            s.stress[0] - se[0],
-            s.stress[1] - se[1],
-            s.stress[2] - se[2],
-        ];
-        let de = [
-            s.strain[0] - ee[0],
-            s.strain[1] - ee[1],
-            s.strain[2] - ee[2],
-        ];
-        num += q.w * (ds[0] * de[0] + ds[1] * de[1] + ds[2] * de[2]);
-        den += q.w * (se[0] * ee[0] + se[1] * ee[1] + se[2] * ee[2]);
-    }
-    Ok((num / den).sqrt())
 }

@@ -6,9 +6,9 @@
 use super::EfgError;
 use super::body::EfgBody;
 use super::shape::ShapeRow;
+use crate::continuum::newmark::{Newmark, State};
 use crate::continuum::{BodyEnergies, ContactBody, Row, WithBoundary, add_dof_load, add_row_load};
 use crate::geom::Vec2;
-use crate::newmark::{Newmark, State};
 
 /// An [`EfgBody`] with its contact boundary: what the coupling drives.
 pub type EfgContinuum = WithBoundary<EfgBody>;
@@ -69,24 +69,29 @@ impl ContactBody for EfgBody {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::continuum::Continuum;
-    use crate::scenario::body::Edge;
+    use crate::continuum::{BodyParams, Continuum, Edge, EdgeCondition, Elastic, Plane, Rectangle};
 
     fn body() -> EfgBody {
-        let src = r#"
-            [simulation]
-            analysis = "static"
-            [[body]]
-            name = "b"
-            rectangle = { origin = [0.0, 0.0], size = [2.0, 1.0] }
-            nodes = [5, 3]
-            elastic = { E = 1000.0, nu = 0.3, density = 1.0 }
-            [[body.bc]]
-            edge = "left"
-            fixed = true
-        "#;
-        let sc = crate::scenario::parse(src, "t.toml").unwrap();
-        EfgBody::from_spec(&sc.body[0], [0.0, 0.0]).unwrap()
+        let mut p = BodyParams::new(
+            "b",
+            Rectangle {
+                origin: [0.0, 0.0],
+                size: [2.0, 1.0],
+            },
+            [5, 3],
+            Elastic {
+                e: 1000.0,
+                nu: 0.3,
+                density: 1.0,
+                thickness: 1.0,
+                plane: Plane::Stress,
+            },
+        );
+        p.bc.push(EdgeCondition {
+            fixed: true,
+            ..EdgeCondition::on(Edge::Left)
+        });
+        EfgBody::new(&p, [0.0, 0.0]).unwrap()
     }
 
     #[test]

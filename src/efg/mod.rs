@@ -3,25 +3,22 @@
 //! - [`weight`]: cubic spline weight (Eq. 5, ERRATA E1) on rectangular supports (E2).
 //! - [`support`]: support sizes `d_max · c_I` and the neighbour lookup.
 //! - [`shape`]: MLS shape functions and exact derivatives (ERRATA E3).
-//! - [`quadrature`]: background cells and boundary Gauss points.
 //! - [`assemble`]: K, M (via the Gram matrix), C, penalty (E4, E5), in parallel.
 //! - [`penalty`]: the penalty points: `K^α`, `F^α(t)`, the springs' energy and force.
 //! - [`body`]: [`EfgBody`], built from a scenario `[[body]]`.
-//! - [`exact`]: closed-form solutions (Timoshenko cantilever).
 //! - [`run`]: the continuum-only driver (`efgdem run` / `check`).
 
 pub mod assemble;
 pub mod body;
 pub mod boundary;
-pub mod exact;
 pub mod penalty;
-pub mod quadrature;
 pub mod run;
 pub mod shape;
 pub mod support;
 pub mod weight;
 
-pub use body::{EfgBody, Sample};
+pub use crate::continuum::Sample;
+pub use body::EfgBody;
 pub use shape::{CoverageError, ShapeRow};
 
 /// Errors of the EFG continuum.

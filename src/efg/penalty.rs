@@ -12,8 +12,8 @@
 //!   moved);
 //! - the force of a moving edge on the body, `Σ_g w_g,c (ū_c − u_c(x_g))`.
 
+use crate::continuum::MotionField;
 use crate::geom::Vec2;
-use crate::scenario::body::MotionField;
 use crate::sparse::SymCsc;
 use std::ops::Range;
 
@@ -229,31 +229,48 @@ impl Penalty {
 
 #[cfg(test)]
 mod tests {
+    use crate::continuum::{
+        BodyParams, Edge, EdgeCondition, Elastic, LinearField, MotionField, Plane, Prescribed,
+        Rectangle,
+    };
     use crate::efg::EfgBody;
 
     /// A 2 × 1 block, 6 × 4 nodes, with a small penalty α = 2E (so that
     /// `½UᵀK^αU − UᵀF^α + ½ΣūᵀWū` is well conditioned): the bottom edge
     /// moves in y, the left edge has a linear ux.
     fn block() -> EfgBody {
-        let src = r#"
-            [simulation]
-            dt = 0.01
-            steps = 1
-            [[body]]
-            name = "b"
-            rectangle = { origin = [0.0, 0.0], size = [2.0, 1.0] }
-            nodes = [6, 4]
-            elastic = { E = 1000.0, nu = 0.3, density = 1.0, thickness = 0.5 }
-            penalty = 2000.0
-            [[body.bc]]
-            edge = "bottom"
-            uy = { velocity = -0.3, until_step = 5 }
-            [[body.bc]]
-            edge = "left"
-            ux = { linear = [0.01, 0.0, 0.02] }
-        "#;
-        let sc = crate::scenario::parse(src, "t.toml").unwrap();
-        let mut b = EfgBody::from_spec(&sc.body[0], [0.0, 0.0]).unwrap();
+        let mut p = BodyParams::new(
+            "b",
+            Rectangle {
+                origin: [0.0, 0.0],
+                size: [2.0, 1.0],
+            },
+            [6, 4],
+            Elastic {
+                e: 1000.0,
+                nu: 0.3,
+                density: 1.0,
+                thickness: 0.5,
+                plane: Plane::Stress,
+            },
+        );
+        p.penalty = Some(2000.0);
+        let motion = MotionField {
+            velocity: -0.3,
+            until_step: Some(5),
+        };
+        p.bc.push(EdgeCondition {
+            uy: Some(Prescribed::Motion(motion)),
+            ..EdgeCondition::on(Edge::Bottom)
+        });
+        let linear = LinearField {
+            linear: [0.01, 0.0, 0.02],
+        };
+        p.bc.push(EdgeCondition {
+            ux: Some(Prescribed::Linear(linear)),
+            ..EdgeCondition::on(Edge::Left)
+        });
+        let mut b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
         b.params.dt = 0.01;
         // a smooth, non-trivial field of nodal parameters
         for i in 0..b.n_nodes() {

@@ -167,8 +167,8 @@ fn build_bodies(sc: &Scenario) -> Result<Vec<Body>, EfgError> {
     sc.body
         .iter()
         .map(|b| match b.method {
-            Method::Efg => Ok(Body::Efg(Box::new(EfgBody::from_spec(b, g)?))),
-            Method::FemQ4 => Ok(Body::Fem(Box::new(FemBody::from_spec(b, g)?))),
+            Method::Efg => Ok(Body::Efg(Box::new(EfgBody::new(&b.params(), g)?))),
+            Method::FemQ4 => Ok(Body::Fem(Box::new(FemBody::new(&b.params(), g)?))),
         })
         .collect()
 }

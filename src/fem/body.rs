@@ -37,15 +37,16 @@
 
 use super::FemError;
 use super::q4;
-use crate::efg::body::{
-    Material, Sample, constrained, edge_ends, energy_error_of, is_released, prescribed,
-    timoshenko_of, traction_at,
+use crate::continuum::conditions::{
+    constrained, edge_ends, prescribed, timoshenko_of, traction_at,
 };
-use crate::efg::exact::Timoshenko;
-use crate::efg::quadrature::{self, QuadPoint};
+use crate::continuum::material::energy_error_of;
+use crate::continuum::newmark::{Newmark, NewmarkParams, State};
+use crate::continuum::quadrature::{self, QuadPoint};
+use crate::continuum::timoshenko::Timoshenko;
+use crate::continuum::{BodyParams, Edge, MassKind, MotionField, Prescribed};
+use crate::continuum::{Material, Sample};
 use crate::geom::Vec2;
-use crate::newmark::{Newmark, NewmarkParams, State};
-use crate::scenario::body::{BodySpec, Edge, MassKind, MotionField, Prescribed};
 use crate::sparse::{Cholesky, Pattern, SymCsc};
 use std::sync::Arc;
 use std::time::Instant;
@@ -226,7 +227,7 @@ impl FemBody {
     /// Build the body: node grid, element matrices (2 × 2 Gauss), global K
     /// and Gram matrix on one pattern, loads, and the exact elimination of
     /// the prescribed DOFs (module docs).
-    pub fn from_spec(spec: &BodySpec, gravity: [f64; 2]) -> Result<FemBody, FemError> {
+    pub fn new(spec: &BodyParams, gravity: [f64; 2]) -> Result<FemBody, FemError> {
         let [nx, ny] = spec.nodes;
         if nx < 2 || ny < 2 {
             return Err(FemError::Invalid(format!(
@@ -243,7 +244,7 @@ impl FemBody {
         let ys: Vec<f64> = (0..ny)
             .map(|j| origin.y + size.y * j as f64 / (ny - 1) as f64)
             .collect();
-        let material = Material::of_spec(spec);
+        let material = Material::of_params(spec);
         let t = material.thickness;
         let [d11, d12, d22, d33] = material.d;
         let d = [[d11, d12, 0.0], [d12, d22, 0.0], [0.0, 0.0, d33]];
@@ -376,8 +377,8 @@ impl FemBody {
             step: 0,
             params: NewmarkParams {
                 dt: 0.0,
-                gamma: spec.newmark.gamma,
-                beta: spec.newmark.beta,
+                gamma: spec.newmark[0],
+                beta: spec.newmark[1],
             },
             newmark: None,
             timoshenko,
@@ -390,7 +391,7 @@ impl FemBody {
             Edge::Top | Edge::Bottom => nx - 1,
         };
         for bc in spec.bc.iter().filter(|b| b.is_load()) {
-            let target = if bc.name.as_deref().is_some_and(|n| is_released(spec, n)) {
+            let target = if bc.name.as_deref().is_some_and(|n| spec.is_released(n)) {
                 &mut f_released
             } else {
                 &mut f_permanent
@@ -407,7 +408,7 @@ impl FemBody {
         }
         // body force ρ g (Eq. 27, domain term)
         if spec.self_weight && gravity != [0.0, 0.0] && material.density > 0.0 {
-            let target = if is_released(spec, "gravity") {
+            let target = if spec.is_released("gravity") {
                 &mut f_released
             } else {
                 &mut f_permanent
@@ -541,7 +542,7 @@ impl FemBody {
     /// `α₁M + α₄C + K` once and compute the initial acceleration under the
     /// permanent loads (released loads off; prescribed DOFs: `ü_c = 0`).
     pub fn start_dynamic(&mut self, dt: f64) -> Result<(), FemError> {
-        crate::newmark::check_dynamic(dt, self.material.density, &self.name)
+        crate::continuum::newmark::check_dynamic(dt, self.material.density, &self.name)
             .map_err(FemError::Invalid)?;
         self.params.dt = dt;
         let m = self.mass_matrix();
@@ -558,7 +559,13 @@ impl FemBody {
         for c in &self.constraints {
             f[c.dof] = s.u[c.dof]; // the identity row gives ü_c = 0
         }
-        crate::newmark::consistent_acceleration(&m, c.as_ref(), &self.k, &mut self.state, &f)?;
+        crate::continuum::newmark::consistent_acceleration(
+            &m,
+            c.as_ref(),
+            &self.k,
+            &mut self.state,
+            &f,
+        )?;
         for i in 0..self.constraints.len() {
             let c = &self.constraints[i];
             self.state.a[c.dof] = 0.0;

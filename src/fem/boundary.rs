@@ -9,9 +9,9 @@
 
 use super::FemError;
 use super::body::FemBody;
+use crate::continuum::newmark::{Newmark, State};
 use crate::continuum::{BodyEnergies, ContactBody, Row, WithBoundary, add_dof_load};
 use crate::geom::Vec2;
-use crate::newmark::{Newmark, State};
 
 /// A [`FemBody`] with its contact boundary: what the coupling drives.
 pub type FemContinuum = WithBoundary<FemBody>;

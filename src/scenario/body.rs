@@ -23,6 +23,10 @@
 //! Every field is documented in `docs/scenario.md`.
 
 use super::{Analysis, Problems, Scenario};
+pub use crate::continuum::{
+    BodyParams, Edge, EdgeCondition as BcSpec, Elastic, LinearField, MassKind, MotionField, Plane,
+    Prescribed, Rectangle, TimoshenkoSpec,
+};
 use serde::Deserialize;
 
 /// One continuum body.
@@ -102,8 +106,30 @@ fn default_gauss() -> usize {
 fn default_d_max() -> f64 {
     2.0
 }
-fn one() -> f64 {
-    1.0
+
+impl BodySpec {
+    /// The physics' parameters of this body.
+    pub fn params(&self) -> BodyParams {
+        BodyParams {
+            name: self.name.clone(),
+            rectangle: self.rectangle,
+            nodes: self.nodes,
+            cells: self.cells,
+            gauss: self.gauss,
+            d_max: self.d_max,
+            elastic: self.elastic,
+            damping: self.damping,
+            penalty: self.penalty,
+            newmark: [self.newmark.gamma, self.newmark.beta],
+            mass: self.mass,
+            bc: self.bc.clone(),
+            static_under: self
+                .initial
+                .as_ref()
+                .map_or_else(Vec::new, |i| i.static_under.clone()),
+            self_weight: self.self_weight,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
@@ -113,52 +139,6 @@ pub enum Method {
     Efg,
     /// 4-node bilinear finite elements on the node grid.
     FemQ4,
-}
-
-/// Consistent (`∫ρNᵀN`) or lumped (row-sum) mass matrix.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum MassKind {
-    #[default]
-    Consistent,
-    Lumped,
-}
-
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Rectangle {
-    /// Lower-left corner.
-    pub origin: [f64; 2],
-    /// Width and height.
-    pub size: [f64; 2],
-}
-
-/// Linear isotropic elasticity.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Elastic {
-    /// Young's modulus.
-    #[serde(rename = "E")]
-    pub e: f64,
-    /// Poisson's ratio, −1 < ν < 0.5.
-    pub nu: f64,
-    /// Mass density (needed for dynamics and gravity).
-    #[serde(default)]
-    pub density: f64,
-    /// Out-of-plane thickness t.
-    #[serde(default = "one")]
-    pub thickness: f64,
-    #[serde(default)]
-    pub plane: Plane,
-}
-
-/// Plane stress (Eq. 31) or plane strain (Eq. 32).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Plane {
-    #[default]
-    Stress,
-    Strain,
 }
 
 /// Newmark γ and β (ERRATA E9: the paper's β₁ = γ, β₂ = 2β).
@@ -178,116 +158,6 @@ impl Default for NewmarkSpec {
     }
 }
 
-/// An edge of the rectangle.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Edge {
-    Left,
-    Right,
-    Top,
-    Bottom,
-}
-
-impl Edge {
-    /// The four edges, counter-clockwise from the bottom.
-    pub const ALL: [Edge; 4] = [Edge::Bottom, Edge::Right, Edge::Top, Edge::Left];
-
-    /// The edge's name in scenario files.
-    pub fn name(self) -> &'static str {
-        match self {
-            Edge::Left => "left",
-            Edge::Right => "right",
-            Edge::Top => "top",
-            Edge::Bottom => "bottom",
-        }
-    }
-}
-
-/// One boundary condition on one edge: exactly one of `fixed`, `ux`/`uy`,
-/// `timoshenko` (prescribed displacement, penalty), `traction`,
-/// `parabolic_shear` (loads).
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct BcSpec {
-    pub edge: Edge,
-    /// Optional name, used by `initial.static_under`.
-    pub name: Option<String>,
-    /// Both components zero.
-    #[serde(default)]
-    pub fixed: bool,
-    /// Prescribed x displacement (the other component stays free if absent).
-    pub ux: Option<Prescribed>,
-    /// Prescribed y displacement.
-    pub uy: Option<Prescribed>,
-    /// Both components from the exact Timoshenko cantilever field.
-    pub timoshenko: Option<TimoshenkoSpec>,
-    /// Uniform traction `[tx, ty]` (force per unit area of the edge face).
-    pub traction: Option<[f64; 2]>,
-    /// Parabolic shear traction with resultant `P` (force per unit thickness)
-    /// along the edge, `τ = 3P/(2D)·(1 − 4s²/D²)`, s from the edge centre.
-    pub parabolic_shear: Option<f64>,
-}
-
-/// A prescribed displacement component: a number, or `{ linear = [a, b, c] }`
-/// for `a + b x + c y`.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(untagged)]
-pub enum Prescribed {
-    Value(f64),
-    Linear(LinearField),
-    Motion(MotionField),
-}
-
-/// `{ velocity = v, until_step = N }`: the edge moves with velocity `v`
-/// (displacement `v t`) during the first `N` steps (all steps if absent),
-/// then stays where it is — e.g. an edge following a rigid plate.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct MotionField {
-    pub velocity: f64,
-    pub until_step: Option<usize>,
-}
-
-impl MotionField {
-    /// Displacement after `steps` steps of `dt`.
-    pub fn displacement(&self, steps: usize, dt: f64) -> f64 {
-        let n = self.until_step.map_or(steps, |u| steps.min(u));
-        self.velocity * n as f64 * dt
-    }
-}
-
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LinearField {
-    pub linear: [f64; 3],
-}
-
-impl Prescribed {
-    pub fn at(&self, x: f64, y: f64) -> f64 {
-        match *self {
-            Prescribed::Value(v) => v,
-            Prescribed::Linear(LinearField { linear: [a, b, c] }) => a + b * x + c * y,
-            Prescribed::Motion(_) => 0.0,
-        }
-    }
-    fn finite(&self) -> bool {
-        match self {
-            Prescribed::Value(v) => v.is_finite(),
-            Prescribed::Linear(l) => l.linear.iter().all(|v| v.is_finite()),
-            Prescribed::Motion(m) => m.velocity.is_finite(),
-        }
-    }
-}
-
-/// The exact field of a cantilever clamped at the left edge of the body's
-/// rectangle with end shear `P` at the right edge (Timoshenko & Goodier).
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct TimoshenkoSpec {
-    #[serde(rename = "P")]
-    pub p: f64,
-}
-
 /// `initial = { static_under = ["tip"] }`: start a dynamic run from the
 /// static equilibrium under the permanent loads plus the named loads (bc
 /// names, or `"gravity"`), which are then released at t = 0.
@@ -295,13 +165,6 @@ pub struct TimoshenkoSpec {
 #[serde(deny_unknown_fields)]
 pub struct InitialSpec {
     pub static_under: Vec<String>,
-}
-
-impl BcSpec {
-    /// Is this a load (traction) rather than a prescribed displacement?
-    pub fn is_load(&self) -> bool {
-        self.traction.is_some() || self.parabolic_shear.is_some()
-    }
 }
 
 /// Quantities a `[[probe]]` can sample in a body at `point`.

@@ -227,7 +227,7 @@ impl Newmark {
     }
 
     /// The factor of `α₁M + α₄C + K̄` (for
-    /// [`BoundaryGreen`](crate::compliance::BoundaryGreen)).
+    /// [`BoundaryGreen`](crate::continuum::compliance::BoundaryGreen)).
     pub fn factor(&self) -> &Cholesky {
         &self.factor
     }

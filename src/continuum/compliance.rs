@@ -60,7 +60,7 @@ pub const SIGNIFICANT: f64 = 1e-14;
 impl BoundaryGreen {
     /// An empty `G` for a body of `n` DOFs; `excluded[i]` marks DOFs that
     /// never enter `B` (imposed values, see
-    /// [`Newmark::set_imposed`](crate::newmark::Newmark::set_imposed)).
+    /// [`Newmark::set_imposed`](crate::continuum::newmark::Newmark::set_imposed)).
     pub fn new(n: usize, excluded: Vec<bool>) -> Self {
         BoundaryGreen {
             dofs: Vec::new(),

@@ -3,10 +3,21 @@
 //! time step. Two implementations: the EFG body and (for comparison) the
 //! bilinear FE body, so the coupling never knows which one it talks to.
 
-use crate::compliance::{BoundaryGreen, Compliance, PointRows};
+pub mod body_params;
+pub mod compliance;
+pub mod conditions;
+pub mod material;
+pub mod newmark;
+pub mod quadrature;
+pub mod timoshenko;
+
+pub use body_params::{BodyParams, Elastic, MassKind, Plane, Rectangle};
+pub use conditions::{Edge, EdgeCondition, LinearField, MotionField, Prescribed, TimoshenkoSpec};
+pub use material::{Material, Sample};
+
+use crate::continuum::compliance::{BoundaryGreen, Compliance, PointRows};
+use crate::continuum::newmark::{Newmark, State, pair_values};
 use crate::geom::Vec2;
-use crate::newmark::{Newmark, State, pair_values};
-use crate::scenario::body::Edge;
 use rayon::prelude::*;
 
 /// A polyline on the body's contact boundary, oriented with the body on its
@@ -202,7 +213,7 @@ pub trait Continuum: Send {
     /// Kinetic and strain energy of the present state.
     fn energies(&self) -> BodyEnergies;
     /// DOFs and bytes of the boundary Green matrix, once built
-    /// ([`crate::compliance`]); `(0, 0)` if none.
+    /// ([`crate::continuum::compliance`]); `(0, 0)` if none.
     fn green_size(&self) -> (usize, usize) {
         (0, 0)
     }
@@ -272,7 +283,7 @@ pub fn add_dof_load(force: &mut [f64], row: &[(usize, f64)], g: f64) {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ComplianceMode {
     /// Through the boundary Green matrix `G = (A⁻¹)_BB`, built once
-    /// ([`crate::compliance`]): no solve per contact.
+    /// ([`crate::continuum::compliance`]): no solve per contact.
     #[default]
     Boundary,
     /// `A⁻¹Φᵀ` by 2 solves per contact and step (the reference).

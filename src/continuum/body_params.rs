@@ -1,0 +1,128 @@
+//! The parameters of a continuum body on a rectangle, shared by the EFG
+//! and FE methods: geometry, elasticity, boundary conditions, Newmark.
+//! Plain data; the scenario builds them from a `[[body]]` section (the
+//! value types derive serde's `Deserialize` so that the scenario can embed
+//! them, but nothing here knows the file).
+
+use super::conditions::{Edge, EdgeCondition};
+use serde::Deserialize;
+
+fn one() -> f64 {
+    1.0
+}
+
+/// Consistent (`∫ρNᵀN`) or lumped (row-sum) mass matrix.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum MassKind {
+    #[default]
+    Consistent,
+    Lumped,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rectangle {
+    /// Lower-left corner.
+    pub origin: [f64; 2],
+    /// Width and height.
+    pub size: [f64; 2],
+}
+
+/// Linear isotropic elasticity.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Elastic {
+    /// Young's modulus.
+    #[serde(rename = "E")]
+    pub e: f64,
+    /// Poisson's ratio, −1 < ν < 0.5.
+    pub nu: f64,
+    /// Mass density (needed for dynamics and gravity).
+    #[serde(default)]
+    pub density: f64,
+    /// Out-of-plane thickness t.
+    #[serde(default = "one")]
+    pub thickness: f64,
+    #[serde(default)]
+    pub plane: Plane,
+}
+
+/// Plane stress (Eq. 31) or plane strain (Eq. 32).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Plane {
+    #[default]
+    Stress,
+    Strain,
+}
+
+/// Everything needed to build a body (EFG or FE) on a rectangle.
+#[derive(Debug, Clone)]
+pub struct BodyParams {
+    /// Name used in messages and outputs.
+    pub name: String,
+    /// The body's rectangle.
+    pub rectangle: Rectangle,
+    /// Node grid `[nx, ny]` (row-major, x fastest), ≥ 2 each.
+    pub nodes: [usize; 2],
+    /// Background integration cells `[cx, cy]` (EFG); default `nodes − 1`.
+    pub cells: Option<[usize; 2]>,
+    /// Gauss points per cell direction (n × n per cell, n per boundary segment).
+    pub gauss: usize,
+    /// Support size factor: `d_mI = d_max · c_I` (Eqs. 7–8, EFG).
+    pub d_max: f64,
+    pub elastic: Elastic,
+    /// Damping coefficient `c` of Eq. (24): `C = ∫Φᵀ c Φ`.
+    pub damping: f64,
+    /// Penalty factor α of Eq. (21) (ERRATA E4, EFG); default `1e5 · E`.
+    pub penalty: Option<f64>,
+    /// Newmark γ and β (ERRATA E9).
+    pub newmark: [f64; 2],
+    /// Mass matrix of an FE body (EFG bodies always use the consistent one).
+    pub mass: MassKind,
+    /// Boundary conditions on the edges.
+    pub bc: Vec<EdgeCondition>,
+    /// Loads (bc names or `"gravity"`) applied for the initial static state
+    /// only and released at t = 0.
+    pub static_under: Vec<String>,
+    /// Apply gravity to the body's own mass.
+    pub self_weight: bool,
+}
+
+impl BodyParams {
+    /// A body on `rectangle` (origin, size) with `nodes` and `elastic`, and
+    /// the defaults of the scenario format: 4 × 4 Gauss points, `d_max = 2`,
+    /// no damping, average-acceleration Newmark, consistent mass, no
+    /// boundary conditions, self-weight on.
+    pub fn new(name: &str, rectangle: Rectangle, nodes: [usize; 2], elastic: Elastic) -> Self {
+        BodyParams {
+            name: name.to_string(),
+            rectangle,
+            nodes,
+            cells: None,
+            gauss: 4,
+            d_max: 2.0,
+            elastic,
+            damping: 0.0,
+            penalty: None,
+            newmark: [0.5, 0.25],
+            mass: MassKind::Consistent,
+            bc: Vec::new(),
+            static_under: Vec::new(),
+            self_weight: true,
+        }
+    }
+
+    /// Is the load `name` (a bc name or `"gravity"`) applied for the
+    /// initial static state only?
+    pub fn is_released(&self, name: &str) -> bool {
+        self.static_under.iter().any(|s| s == name)
+    }
+
+    /// End points of an edge of the rectangle (left/right bottom → top,
+    /// bottom/top left → right).
+    pub fn edge_ends(&self, e: Edge) -> (crate::geom::Vec2, crate::geom::Vec2) {
+        super::conditions::edge_ends(self.rectangle.origin.into(), self.rectangle.size.into(), e)
+    }
+}

@@ -1,0 +1,211 @@
+//! Boundary conditions on the edges of a rectangular body: prescribed
+//! displacements (fixed, values, linear fields, motions, the Timoshenko
+//! field) and loads (uniform or parabolic-shear tractions).
+
+use super::timoshenko::Timoshenko;
+use crate::geom::Vec2;
+use serde::Deserialize;
+
+/// An edge of the rectangle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Edge {
+    Left,
+    Right,
+    Top,
+    Bottom,
+}
+
+impl Edge {
+    /// The four edges, counter-clockwise from the bottom.
+    pub const ALL: [Edge; 4] = [Edge::Bottom, Edge::Right, Edge::Top, Edge::Left];
+
+    /// The edge's name in scenario files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Edge::Left => "left",
+            Edge::Right => "right",
+            Edge::Top => "top",
+            Edge::Bottom => "bottom",
+        }
+    }
+}
+
+/// One boundary condition on one edge: exactly one of `fixed`, `ux`/`uy`,
+/// `timoshenko` (prescribed displacement, penalty), `traction`,
+/// `parabolic_shear` (loads).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EdgeCondition {
+    pub edge: Edge,
+    /// Optional name, used by `initial.static_under`.
+    pub name: Option<String>,
+    /// Both components zero.
+    #[serde(default)]
+    pub fixed: bool,
+    /// Prescribed x displacement (the other component stays free if absent).
+    pub ux: Option<Prescribed>,
+    /// Prescribed y displacement.
+    pub uy: Option<Prescribed>,
+    /// Both components from the exact Timoshenko cantilever field.
+    pub timoshenko: Option<TimoshenkoSpec>,
+    /// Uniform traction `[tx, ty]` (force per unit area of the edge face).
+    pub traction: Option<[f64; 2]>,
+    /// Parabolic shear traction with resultant `P` (force per unit thickness)
+    /// along the edge, `τ = 3P/(2D)·(1 − 4s²/D²)`, s from the edge centre.
+    pub parabolic_shear: Option<f64>,
+}
+
+/// A prescribed displacement component: a number, or `{ linear = [a, b, c] }`
+/// for `a + b x + c y`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum Prescribed {
+    Value(f64),
+    Linear(LinearField),
+    Motion(MotionField),
+}
+
+/// `{ velocity = v, until_step = N }`: the edge moves with velocity `v`
+/// (displacement `v t`) during the first `N` steps (all steps if absent),
+/// then stays where it is — e.g. an edge following a rigid plate.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotionField {
+    pub velocity: f64,
+    pub until_step: Option<usize>,
+}
+
+impl MotionField {
+    /// Displacement after `steps` steps of `dt`.
+    pub fn displacement(&self, steps: usize, dt: f64) -> f64 {
+        let n = self.until_step.map_or(steps, |u| steps.min(u));
+        self.velocity * n as f64 * dt
+    }
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearField {
+    pub linear: [f64; 3],
+}
+
+impl Prescribed {
+    pub fn at(&self, x: f64, y: f64) -> f64 {
+        match *self {
+            Prescribed::Value(v) => v,
+            Prescribed::Linear(LinearField { linear: [a, b, c] }) => a + b * x + c * y,
+            Prescribed::Motion(_) => 0.0,
+        }
+    }
+    /// All numbers finite.
+    pub fn finite(&self) -> bool {
+        match self {
+            Prescribed::Value(v) => v.is_finite(),
+            Prescribed::Linear(l) => l.linear.iter().all(|v| v.is_finite()),
+            Prescribed::Motion(m) => m.velocity.is_finite(),
+        }
+    }
+}
+
+/// The exact field of a cantilever clamped at the left edge of the body's
+/// rectangle with end shear `P` at the right edge (Timoshenko & Goodier).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimoshenkoSpec {
+    #[serde(rename = "P")]
+    pub p: f64,
+}
+
+impl EdgeCondition {
+    /// A condition on `edge` with nothing prescribed or loaded yet (fill in
+    /// one of the fields with struct-update syntax).
+    pub fn on(edge: Edge) -> Self {
+        EdgeCondition {
+            edge,
+            name: None,
+            fixed: false,
+            ux: None,
+            uy: None,
+            timoshenko: None,
+            traction: None,
+            parabolic_shear: None,
+        }
+    }
+
+    /// Is this a load (traction) rather than a prescribed displacement?
+    pub fn is_load(&self) -> bool {
+        self.traction.is_some() || self.parabolic_shear.is_some()
+    }
+}
+
+/// End points of an edge of the rectangle `origin`, `size` (counter-clockwise
+/// order is not implied: left/right go bottom → top, bottom/top left → right).
+pub fn edge_ends(origin: Vec2, size: Vec2, e: Edge) -> (Vec2, Vec2) {
+    let (x0, y0, x1, y1) = (origin.x, origin.y, origin.x + size.x, origin.y + size.y);
+    match e {
+        Edge::Left => (Vec2::new(x0, y0), Vec2::new(x0, y1)),
+        Edge::Right => (Vec2::new(x1, y0), Vec2::new(x1, y1)),
+        Edge::Bottom => (Vec2::new(x0, y0), Vec2::new(x1, y0)),
+        Edge::Top => (Vec2::new(x0, y1), Vec2::new(x1, y1)),
+    }
+}
+
+/// Which components a displacement bc constrains.
+pub fn constrained(bc: &EdgeCondition) -> (bool, bool) {
+    if bc.fixed || bc.timoshenko.is_some() {
+        (true, true)
+    } else {
+        (bc.ux.is_some(), bc.uy.is_some())
+    }
+}
+
+/// The prescribed displacement `ū` of a bc at `x`.
+pub fn prescribed(bc: &EdgeCondition, x: Vec2, tim: Option<&Timoshenko>) -> [f64; 2] {
+    if let (Some(_), Some(t)) = (bc.timoshenko, tim) {
+        return t.displacement(x);
+    }
+    [
+        bc.ux.map_or(0.0, |v| v.at(x.x, x.y)),
+        bc.uy.map_or(0.0, |v| v.at(x.x, x.y)),
+    ]
+}
+
+/// The traction `t̄` of a load bc at the point `x` of its edge `a → b`
+/// (Eq. 27, boundary term): uniform, or the parabolic shear
+/// `τ = 3P/(2D)·(1 − 4s²/D²)` with `s` measured from the edge centre.
+pub fn traction_at(bc: &EdgeCondition, a: Vec2, b: Vec2, x: Vec2) -> [f64; 2] {
+    if let Some(tv) = bc.traction {
+        return tv;
+    }
+    let len = (b - a).norm();
+    let mid = (a + b) * 0.5;
+    let p = bc.parabolic_shear.unwrap_or(0.0);
+    let s = (x - mid).norm();
+    let tau = 1.5 * p / len * (1.0 - 4.0 * s * s / (len * len));
+    match bc.edge {
+        Edge::Left | Edge::Right => [0.0, tau],
+        Edge::Top | Edge::Bottom => [tau, 0.0],
+    }
+}
+
+/// The exact Timoshenko cantilever field of the body if one of its bcs uses
+/// it (clamped at the left edge, centre line at mid-height).
+pub fn timoshenko_of(spec: &super::BodyParams) -> Option<Timoshenko> {
+    let (origin, size) = (spec.rectangle.origin, spec.rectangle.size);
+    let el = spec.elastic;
+    spec.bc.iter().find_map(|bc| {
+        bc.timoshenko.map(|ts| {
+            Timoshenko::new(
+                ts.p,
+                size[0],
+                size[1],
+                el.e,
+                el.nu,
+                el.plane == super::Plane::Strain,
+                origin[0],
+                origin[1] + 0.5 * size[1],
+            )
+        })
+    })
+}
