@@ -12,11 +12,11 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use efgdem::Vec2;
 use efgdem::dem::Granular;
-use efgdem::dem::build::settle_in_box;
 use efgdem::dem::contact::ContactLaw;
+use efgdem::dem::packing::{DiscRow, Lattice, lattice_packing, settle_in_box};
 use efgdem::dem::particles::Particles;
 use efgdem::dem::walls::{Wall, WallMotion};
-use efgdem::scenario::generate::{DiscRow, Lattice, discs_from_csv, lattice_packing};
+use efgdem::scenario::generate::discs_from_csv;
 use std::path::PathBuf;
 
 const STEPS: usize = 20;

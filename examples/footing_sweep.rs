@@ -20,8 +20,6 @@
 //!     cargo run --release --example footing_sweep -- [threads] [steps] [contacts,...] [nodes,...]
 //!     cargo run --release --example footing_sweep -- 2 100 10,100,1000,5000 1000,10000
 
-use efgdem::coupling::run::build;
-use efgdem::dem::build as dem_build;
 use efgdem::scenario;
 use std::time::Instant;
 
@@ -119,7 +117,7 @@ fn main() {
             let bed_src = bed(width, depth);
             // the bed alone: DEM-only timing, and the height of its top row
             let sc = scenario::parse(&bed_src, "bed.toml").expect("bed scenario");
-            let mut g = dem_build::build(&sc).expect("bed");
+            let mut g = sc.build().expect("bed").into_granular().unwrap();
             let top = g
                 .particles
                 .pos
@@ -139,7 +137,7 @@ fn main() {
             for &nn in &nodes {
                 let src = bed_src.clone() + &footing((width - w) / 2.0, top - 0.01 * R, w, nn);
                 let sc = scenario::parse(&src, "footing.toml").expect("footing scenario");
-                let mut m = build(&sc).expect("coupled model").model;
+                let mut m = sc.build().expect("coupled model").into_coupled().unwrap();
                 m.geometric_stiffness = std::env::var("NO_GEOMETRIC_STIFFNESS").is_err();
                 let dofs = 2 * sc.body[0].nodes[0] * sc.body[0].nodes[1];
                 let t0 = Instant::now();

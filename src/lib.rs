@@ -20,10 +20,12 @@ pub mod dem;
 pub mod efg;
 pub mod fem;
 pub mod geom;
+pub mod model;
 pub mod output;
 pub mod reproduce;
 pub mod run;
 pub mod scenario;
 pub mod sparse;
+pub mod study;
 
 pub use geom::Vec2;

@@ -2,6 +2,7 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
+use efgdem::run::RunError;
 use efgdem::scenario::{self, ScenarioError};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -66,7 +67,13 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             // Bad input is exit code 2; anything else 1.
-            if let Some(se) = e.downcast_ref::<ScenarioError>() {
+            let scenario = e.downcast_ref::<ScenarioError>().or_else(|| {
+                e.chain().find_map(|c| match c.downcast_ref::<RunError>() {
+                    Some(RunError::Scenario(se)) => Some(se),
+                    _ => None,
+                })
+            });
+            if let Some(se) = scenario {
                 eprintln!("error: {se}");
                 return ExitCode::from(2);
             }
@@ -128,7 +135,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         }
         Cmd::StudyDt { file, tol } => {
             let sc = scenario::load(&file)?;
-            if efgdem::run::kind(&sc) != efgdem::run::Kind::Coupled {
+            if scenario::kind(&sc) != scenario::Kind::Coupled {
                 anyhow::bail!(
                     "{}: study-dt needs a coupled scenario ([[body]] and [granular])",
                     file.display()
@@ -139,7 +146,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             }
             println!("{:>12}  {:>8}  {:>8}  reason", "dt", "bounded", "seconds");
             let r = in_pool(0, || {
-                efgdem::coupling::study::study_dt(&sc, tol, |t| {
+                efgdem::study::study_dt(&sc, tol, |t| {
                     println!(
                         "{:>12.5e}  {:>8}  {:>8.2}  {}",
                         t.dt, t.bounded, t.seconds, t.reason

@@ -61,6 +61,16 @@ pub enum ReproduceError {
 
 type Result<T> = std::result::Result<T, ReproduceError>;
 
+/// The coupled model of a built-in coupled scenario.
+fn coupled(sc: &Scenario) -> Result<crate::coupling::CoupledModel> {
+    match sc.build()?.system {
+        crate::model::System::Coupled(m) => Ok(*m),
+        _ => Err(ReproduceError::Data(
+            "a built-in scenario is not coupled".into(),
+        )),
+    }
+}
+
 /// A history file as columns.
 struct History {
     cols: Vec<String>,
@@ -222,11 +232,7 @@ fn example1(job: &mut Job) -> Result<()> {
     for (name, label, edit) in variants {
         let mut sc = base.clone();
         edit(&mut sc);
-        let mass = crate::coupling::run::build(&sc)?
-            .model
-            .granular
-            .particles
-            .mass[0];
+        let mass = coupled(&sc)?.granular.particles.mass[0];
         let done = job.run(name, &sc)?;
         runs.push((name, label, sc, mass, done));
     }
@@ -399,7 +405,7 @@ fn example1(job: &mut Job) -> Result<()> {
 /// acceleration is zero, §4.1.3–4.1.4), against Eqs. (64)–(65) with P the
 /// instantaneous contact force (ERRATA E13: I = t H³/12).
 fn figs_10_11(job: &mut Job, sc: &Scenario, mass: f64) -> Result<()> {
-    let mut m = crate::coupling::run::build(sc)?.model;
+    let mut m = coupled(sc)?;
     let mg = mass * 9.81;
     let mut p = 0.0;
     let mut steps = 0;
@@ -669,7 +675,7 @@ fn fig17(job: &mut Job) -> Result<()> {
         "examples/paper_nine_disc_test1.toml (built in)",
     )?;
     sc.body[0].elastic.e = E_FIG17;
-    let mut m = crate::coupling::run::build(&sc)?.model;
+    let mut m = coupled(&sc)?;
     for _ in 0..40 {
         m.step()?;
     }

@@ -11,10 +11,11 @@
 //! search bisects (in log Δt) between the scenario's Δt and the DEM
 //! critical step `2√(m_min/k_max)`, the upper limit of the explicit side.
 
-use super::CouplingError;
-use super::run::{WorkMeter, build};
+use crate::continuum::Prescribed;
+use crate::coupling::energy::WorkMeter;
+use crate::coupling::{CoupledModel, CouplingError};
+use crate::run::RunError;
 use crate::scenario::Scenario;
-use crate::scenario::body::Prescribed;
 
 /// Unbounded when the stored energy exceeds this factor times the work put in.
 pub const ENERGY_FACTOR: f64 = 10.0;
@@ -66,11 +67,9 @@ pub fn with_dt(sc: &Scenario, dt: f64) -> Scenario {
 
 /// Run `sc` at `dt` and decide whether it stays bounded. `e_ref` is an
 /// energy scale below which growth is not judged (the reference run's).
-pub fn trial(sc: &Scenario, dt: f64, e_ref: f64) -> Result<(Trial, f64), CouplingError> {
+pub fn trial(sc: &Scenario, dt: f64, e_ref: f64) -> Result<(Trial, f64), RunError> {
     let t0 = std::time::Instant::now();
-    let s = with_dt(sc, dt);
-    let built = build(&s)?;
-    let (mut m, steps) = (built.model, built.steps);
+    let (mut m, steps) = coupled(&with_dt(sc, dt))?;
     let mut meter = WorkMeter::new(&m);
     let e0 = meter.account(&m).stored();
     let (mut w_max, mut e_max) = (0.0f64, e0);
@@ -115,8 +114,8 @@ pub fn study_dt(
     sc: &Scenario,
     rel_tol: f64,
     mut progress: impl FnMut(&Trial),
-) -> Result<DtStudy, CouplingError> {
-    let dt_critical = build(sc)?.model.granular.critical_dt();
+) -> Result<DtStudy, RunError> {
+    let dt_critical = coupled(sc)?.0.granular.critical_dt();
     let dt0 = sc.simulation.dt.unwrap_or(0.1 * dt_critical);
     let mut trials = Vec::new();
     let mut record = |t: Trial, trials: &mut Vec<Trial>| {
@@ -164,4 +163,19 @@ pub fn study_dt(
         dt_max: Some(lo),
         trials,
     })
+}
+
+/// The coupled model of `sc` and its number of steps.
+fn coupled(sc: &Scenario) -> Result<(CoupledModel, usize), RunError> {
+    let model = sc.build()?;
+    let steps = model.steps;
+    match model.system {
+        crate::model::System::Coupled(m) => Ok((*m, steps)),
+        _ => Err(RunError::Scenario(sc.located(vec![
+            crate::scenario::Invalid {
+                path: String::new(),
+                message: "study-dt needs a coupled scenario ([[body]] and [granular])".into(),
+            },
+        ]))),
+    }
 }

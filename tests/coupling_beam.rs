@@ -1,6 +1,5 @@
 //! Coupled EFG–DE and FE–DE validation on the beam of the paper's Example 1.
 
-use efgdem::coupling::run::build;
 use efgdem::scenario::parse;
 
 /// Example 1's beam and disc, with the disc at `x` on the top surface and
@@ -51,14 +50,14 @@ fn rest_disc_on_beam(
     method: &str,
 ) -> (
     efgdem::scenario::Scenario,
-    efgdem::coupling::run::Built,
+    efgdem::coupling::CoupledModel,
     f64,
 ) {
     let src = scenario(x, "", r#"{ kind = "local", alpha = 0.7 }"#, 6.4e4)
         .replace("name = \"beam\"\n", &format!("name = \"beam\"\n{method}\n"));
     let sc = parse(&src, "static.toml").unwrap();
-    let mut b = build(&sc).unwrap();
-    let m = &mut b.model;
+    let mut b = sc.build().unwrap().into_coupled().unwrap();
+    let m = &mut b;
     let weight = m.granular.particles.mass[0] * 9.81;
     // A free disc would roll down the tilted beam end ((2/3) g sin θ, which
     // friction cannot stop); lock its rotation so that friction holds it.
@@ -87,7 +86,7 @@ fn rest_disc_on_beam(
 fn disc_resting_on_the_beam_reaches_the_static_solution() {
     let a = 0.95; // load position: the disc lies fully on the beam
     let (_, b, weight) = rest_disc_on_beam(a, "");
-    let m = &b.model;
+    let m = &b;
     // beam theory (bending + shear, κ = 5/6) for a load P at x = a, at x = L
     let (e, nu, t, h, l) = (2.1e8, 0.3, 0.025, 0.2, 1.0);
     let i = t * h * h * h / 12.0;
@@ -121,7 +120,7 @@ fn disc_resting_on_an_fe_beam_reaches_its_static_solution() {
     use efgdem::Vec2;
     use efgdem::fem::{FemBody, FemContinuum};
     let (sc, b, _) = rest_disc_on_beam(0.95, "method = \"fem-q4\"");
-    let m = &b.model;
+    let m = &b;
     let contact = m.contacts[0];
     let beam = m.bodies[0].as_any().downcast_ref::<FemContinuum>().unwrap();
     let tip_at = Vec2::new(1.0, 0.0);

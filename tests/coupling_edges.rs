@@ -128,7 +128,7 @@ fn default_edges_stop_a_disc_and_a_non_contact_edge_is_reported_once() {
 fn contact_edges_default_to_one_closed_chain_and_can_be_empty() {
     let chains = |edges: &str| {
         let sc = efgdem::scenario::parse(&scenario(edges), "s.toml").unwrap();
-        let m = efgdem::coupling::run::build(&sc).unwrap().model;
+        let m = sc.build().unwrap().into_coupled().unwrap();
         m.bodies[0]
             .contact_boundary()
             .iter()

@@ -7,7 +7,6 @@
 //! with ~100 simultaneous contacts.
 
 use efgdem::coupling::CoupledModel;
-use efgdem::coupling::run::build;
 use efgdem::scenario::parse;
 
 fn model(src: &str, direct: bool) -> CoupledModel {
@@ -20,9 +19,12 @@ fn model(src: &str, direct: bool) -> CoupledModel {
     } else {
         src.to_string()
     };
-    build(&parse(&src, "test.toml").expect("scenario"))
+    parse(&src, "test.toml")
+        .expect("scenario")
+        .build()
         .expect("model")
-        .model
+        .into_coupled()
+        .unwrap()
 }
 
 /// Step both models `steps` times; the largest difference of any disc–body
@@ -108,7 +110,12 @@ from = [0.0, 0.0]
 to = [{width}, 0.0]
 "#
     );
-    let g = model(&bed, false).granular;
+    let g = parse(&bed, "bed.toml")
+        .expect("scenario")
+        .build()
+        .expect("bed")
+        .into_granular()
+        .unwrap();
     let top = g
         .particles
         .pos

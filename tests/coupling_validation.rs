@@ -2,7 +2,6 @@
 //! independent references (a DEM rigid wall, energy conservation, the
 //! rigid-plate nine-disc run, and a constant normal force while sliding).
 
-use efgdem::coupling::run::build;
 use efgdem::scenario::parse;
 
 /// A disc (r = 0.05, ρ = 1000, unit thickness, k_n = k_s = 1e6) at `disc`
@@ -88,7 +87,7 @@ fn disc_on_a_stiff_block_rebounds_like_on_a_rigid_wall() {
         );
         let sc = parse(&src, "block.toml").unwrap();
         // coupled
-        let mut m = build(&sc).unwrap().model;
+        let mut m = sc.build().unwrap().into_coupled().unwrap();
         let v_in = m.granular.particles.vel[0].y;
         let mut steps = 0;
         for _ in 0..4000 {
@@ -103,7 +102,7 @@ fn disc_on_a_stiff_block_rebounds_like_on_a_rigid_wall() {
         let wall_src = src.split("[[body]]").next().unwrap().to_string()
             + "[[wall]]\nname = \"top\"\nfrom = [1.0, 0.0]\nto = [0.0, 0.0]\n";
         let wsc = parse(&wall_src, "wall.toml").unwrap();
-        let mut g = efgdem::dem::build::build(&wsc).unwrap();
+        let mut g = wsc.build().unwrap().into_granular().unwrap();
         let mut steps = 0;
         for _ in 0..4000 {
             g.step();
@@ -221,9 +220,12 @@ fn nine_discs_against_a_stiff_plate_match_the_rigid_plates() {
             .unwrap()
         };
         let sc = read(format!("{plate}_nine_disc_test{t}.toml"));
-        let mut m = build(&sc).unwrap().model;
-        let mut rigid =
-            efgdem::dem::build::build(&read(format!("nine_disc_rigid_test{t}.toml"))).unwrap();
+        let mut m = sc.build().unwrap().into_coupled().unwrap();
+        let mut rigid = read(format!("nine_disc_rigid_test{t}.toml"))
+            .build()
+            .unwrap()
+            .into_granular()
+            .unwrap();
         let mut worst: f64 = 0.0;
         for cycle in 1..=150 {
             m.step().unwrap();
@@ -261,7 +263,7 @@ fn sliding_across_nodes_keeps_the_contact_force_continuous() {
         -9.81,
     );
     let sc = parse(&src, "slide.toml").unwrap();
-    let mut model = build(&sc).unwrap().model;
+    let mut model = sc.build().unwrap().into_coupled().unwrap();
     let fixity = &mut model.granular.particles.fixity[0];
     *fixity = efgdem::dem::particles::FIX_ROT;
     let mut prev: Option<(f64, f64)> = None;
@@ -309,7 +311,7 @@ fn tempdir(name: &str) -> std::path::PathBuf {
 /// the DEM critical step (the explicit side bounds it).
 #[test]
 fn dt_study_brackets_the_stability_limit() {
-    use efgdem::coupling::study::{study_dt, trial, with_dt};
+    use efgdem::study::{study_dt, trial, with_dt};
     let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("examples/paper_nine_disc_test1.toml");
     let sc = parse(&std::fs::read_to_string(&p).unwrap(), "t1.toml").unwrap();

@@ -3,10 +3,10 @@
 
 use efgdem::Vec2;
 use efgdem::dem::contact::ContactLaw;
+use efgdem::dem::packing::{Lattice, lattice_packing};
 use efgdem::dem::particles::Particles;
 use efgdem::dem::walls::{Wall, WallMotion};
 use efgdem::dem::{BodyDamping, Granular};
-use efgdem::scenario::generate::{Lattice, lattice_packing};
 
 /// `n` polydisperse discs (r ∈ [0.8, 1.2], ρ = 1) loosely packed in a
 /// closed square box, with random velocities of magnitude ~`v`.

@@ -1,7 +1,7 @@
 //! Cundall & Strack's nine-disc test with rigid plates (issue 3,
 //! validation item 5) and the stability of the shear dashpot.
 
-use efgdem::dem::{Granular, build};
+use efgdem::dem::Granular;
 use efgdem::scenario;
 
 const EX1: &str = include_str!("../examples/nine_disc_rigid_test1.toml");
@@ -23,7 +23,7 @@ fn assembly(src: &str, damping: &str, friction: f64) -> Granular {
         .collect::<Vec<_>>()
         .join("\n");
     let sc = scenario::parse(&src, "nine_disc.toml").expect("valid scenario");
-    build::build(&sc).expect("builds")
+    sc.build().expect("builds").into_granular().unwrap()
 }
 
 /// The middle row (discs 4, 5, 6) as a 1D chain: three masses, four

@@ -1,6 +1,5 @@
 //! Building granular assemblies from scenario text: every disc source.
 
-use efgdem::dem::build;
 use efgdem::scenario;
 
 fn scenario_with(discs: &str, extra: &str) -> String {
@@ -27,7 +26,10 @@ damping = {{ kind = "local", alpha = 0.7 }}
 
 fn build_from(text: &str) -> efgdem::dem::Granular {
     let sc = scenario::parse(text, "t.toml").unwrap_or_else(|e| panic!("{e}"));
-    build::build(&sc).unwrap_or_else(|e| panic!("{e}"))
+    sc.build()
+        .unwrap_or_else(|e| panic!("{e}"))
+        .into_granular()
+        .unwrap()
 }
 
 #[test]
@@ -73,7 +75,7 @@ fn csv_source_and_per_disc_material() {
     let path = dir.join("s.toml");
     std::fs::write(&path, text).unwrap();
     let sc = scenario::load(&path).unwrap();
-    let g = build::build(&sc).unwrap();
+    let g = sc.build().unwrap().into_granular().unwrap();
     assert_eq!(g.particles.len(), 2);
     assert_eq!(g.particles.material, vec![0, 1]);
     // mixed law: stiffness 2 k1 k2 / (k1 + k2), friction the smaller

@@ -21,11 +21,10 @@
 //! `k_n Δt` on the body; it is stable only with a dissipative Newmark
 //! (the paper's γ = 1.5, β = 0.8) or a soft contact.
 
+pub mod energy;
 pub mod implicit;
 pub mod interface;
-pub mod run;
 pub mod segments;
-pub mod study;
 
 use crate::continuum::{BoundaryChain, Continuum};
 use crate::dem::Granular;

@@ -15,8 +15,8 @@
 //! disc advances as soon as its contacts are summed; bitwise the same
 //! result).
 //!
-//! For the coupling (issue 4): build with [`build::build`] from a scenario
-//! (or [`Granular::new`]), then per step call `prepare_contacts`,
+//! For the coupling: build with [`Granular::new`] (the scenario does it
+//! for a `[granular]` section), then per step call `prepare_contacts`,
 //! `compute_contact_forces`, add the disc–body-boundary contact forces
 //! with [`Granular::add_external_force`] (slot, force, contact point: the
 //! moment follows from the point), then `integrate`. Discs live in
@@ -29,15 +29,17 @@
 //! and remapped on renumbering.
 
 pub mod broadphase;
-pub mod build;
 pub mod contact;
 pub mod integrate;
+pub mod packing;
 pub mod particles;
-pub mod run;
 pub mod sweep;
 pub mod walls;
 
 use crate::geom::Vec2;
+
+/// `efgdem check` and `run` warn above this fraction of the critical step (E11).
+pub const DT_WARN: f64 = 0.2;
 use broadphase::{ContactList, NeighbourGrid};
 use contact::{ContactLaw, effective_mass, normal_between};
 use particles::Particles;
@@ -190,6 +192,18 @@ impl Granular {
             .chain(&self.wall_laws)
             .map(|l| l.kn.max(l.ks))
             .fold(0.0, f64::max)
+    }
+
+    /// A warning when Δt exceeds [`DT_WARN`] × the critical step (ERRATA E11).
+    pub fn dt_warning(&self) -> Option<String> {
+        let crit = self.critical_dt();
+        (self.dt > DT_WARN * crit).then(|| {
+        format!(
+            "dt = {:e} is {:.3} × the critical step 2√(m_min/k_max) = {crit:e}; above {DT_WARN} × it the central difference may be unstable (ERRATA E11)",
+            self.dt,
+            self.dt / crit
+        )
+    })
     }
 
     /// Critical time step of the central difference, `2√(m_min/k_max)`

@@ -12,7 +12,6 @@ pub mod assemble;
 pub mod body;
 pub mod boundary;
 pub mod penalty;
-pub mod run;
 pub mod shape;
 pub mod support;
 pub mod weight;

@@ -1,5 +1,6 @@
 //! `history.csv`: one row per recorded step, streamed to disk.
 
+use crate::dem::Granular;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -94,4 +95,18 @@ mod tests {
         assert_eq!(rows, vec![vec![0.0, 1.5], vec![0.1, -2.25e-9]]);
         std::fs::remove_dir_all(dir).unwrap();
     }
+}
+
+/// Write the discs as `x,y,r,vx,vy,omega` in scenario order (readable as a
+/// `discs = { csv = ... }` source: the extra columns are... not accepted,
+/// so only `x,y,r` are written).
+pub fn write_discs_csv(gr: &Granular, path: &std::path::Path) -> std::io::Result<()> {
+    let p = &gr.particles;
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(w, "x,y,r")?;
+    for id in 0..p.len() {
+        let k = p.slot[id] as usize;
+        writeln!(w, "{:e},{:e},{:e}", p.pos[k].x, p.pos[k].y, p.radius[k])?;
+    }
+    w.flush()
 }

@@ -4,6 +4,7 @@
 //! as lines.
 
 use super::vtk::{data_array_f64, data_array_i64};
+use crate::dem::Granular;
 use crate::geom::Vec2;
 use std::io::Write;
 use std::path::Path;
@@ -112,4 +113,32 @@ pub fn write_discs<'a>(path: &Path, frame: &DiscFrame<'a>) -> std::io::Result<()
         w.flush()?;
     }
     std::fs::rename(tmp, path)
+}
+
+/// Write a ParaView frame of the present state.
+pub fn write_granular(gr: &Granular, path: &std::path::Path) -> std::io::Result<()> {
+    let p = &gr.particles;
+    let contacts: Vec<(u32, u32, f64)> = gr
+        .contacts
+        .pairs
+        .iter()
+        .filter_map(|q| {
+            let (el, _) = gr.normal_force(q.i as usize, q.j as usize);
+            (el > 0.0).then_some((q.i, q.j, el))
+        })
+        .collect();
+    let walls: Vec<_> = gr.walls.iter().map(|w| (w.a, w.b)).collect();
+    write_discs(
+        path,
+        &DiscFrame {
+            pos: &p.pos,
+            radius: &p.radius,
+            vel: &p.vel,
+            omega: &p.omega,
+            force: &p.force,
+            id: &p.id,
+            contacts: &contacts,
+            walls: &walls,
+        },
+    )
 }

@@ -2,6 +2,9 @@
 //! mesh (VTK unstructured grid of quads) with point data.
 
 use super::vtk::{data_array_f64, data_array_i64};
+use crate::efg::assemble::PointShapes;
+use crate::efg::{EfgBody, ShapeRow};
+use crate::model::body::BodyRef;
 use std::io::Write;
 use std::path::Path;
 
@@ -90,4 +93,79 @@ mod tests {
         assert!(s.contains("NumberOfCells=\"1\"") && s.contains("0 1 3 2"));
         std::fs::remove_dir_all(dir).unwrap();
     }
+}
+
+/// A `.vtu` frame of a body: true nodal displacement, velocity and stress
+/// (`shapes`: the EFG body's nodal shape rows, from
+/// [`BodyRef::frame_data`]).
+pub fn write_body(body: BodyRef, shapes: Option<&PointShapes>, path: &Path) -> std::io::Result<()> {
+    match (body, shapes) {
+        (BodyRef::Efg(b), Some(s)) => write_frame_efg(b, s, path),
+        (BodyRef::Fem(b), _) => {
+            let (u, v, s) = b.nodal_fields();
+            let pts: Vec<[f64; 2]> = (0..b.n_nodes()).map(|i| b.node(i).to_array()).collect();
+            write_fields(path, b.grid, &pts, &u, &v, &s)
+        }
+        _ => unreachable!("EFG frames need nodal shapes"),
+    }
+}
+
+/// Nodal values: true displacement, velocity and stress at every node.
+fn write_frame_efg(b: &EfgBody, shapes: &PointShapes, path: &Path) -> std::io::Result<()> {
+    let n = b.n_nodes();
+    let (mut u, mut v, mut s) = (vec![0.0; 2 * n], vec![0.0; 2 * n], vec![0.0; 3 * n]);
+    let mut row = ShapeRow::new();
+    for i in 0..n {
+        row.idx.clear();
+        row.phi.clear();
+        row.dx.clear();
+        row.dy.clear();
+        for k in shapes.ptr[i]..shapes.ptr[i + 1] {
+            row.idx.push(shapes.idx[k]);
+            row.phi.push(shapes.val[k][0]);
+            row.dx.push(shapes.val[k][1]);
+            row.dy.push(shapes.val[k][2]);
+        }
+        let smp = b.sample_row(&row);
+        u[2 * i] = smp.u.x;
+        u[2 * i + 1] = smp.u.y;
+        v[2 * i] = smp.v.x;
+        v[2 * i + 1] = smp.v.y;
+        s[3 * i..3 * i + 3].copy_from_slice(&smp.stress);
+    }
+    let pts: Vec<[f64; 2]> = (0..n).map(|i| b.node(i).to_array()).collect();
+    write_fields(path, b.grid, &pts, &u, &v, &s)
+}
+
+fn write_fields(
+    path: &Path,
+    grid: [usize; 2],
+    pts: &[[f64; 2]],
+    u: &[f64],
+    v: &[f64],
+    s: &[f64],
+) -> std::io::Result<()> {
+    write_quad_grid(
+        path,
+        grid[0],
+        grid[1],
+        pts,
+        &[
+            Field {
+                name: "displacement",
+                ncomp: 2,
+                values: u,
+            },
+            Field {
+                name: "velocity",
+                ncomp: 2,
+                values: v,
+            },
+            Field {
+                name: "stress_xx_yy_xy",
+                ncomp: 3,
+                values: s,
+            },
+        ],
+    )
 }

@@ -1,332 +1,23 @@
 //! Driver for coupled scenarios (bodies and discs): `efgdem run` / `check`.
 
-use super::{CoupledModel, CouplingError};
-use crate::continuum::{ComplianceMode, Continuum};
-use crate::dem::{Granular, build as dem_build};
-use crate::efg::body::EfgBody;
-use crate::efg::boundary::EfgContinuum;
-use crate::efg::run::{At, BodyRef};
-use crate::fem::{FemBody, FemContinuum};
+use super::{RunError, RunOptions};
+use crate::continuum::Edge;
+use crate::coupling::CoupledModel;
+use crate::coupling::energy::WorkMeter;
 use crate::geom::Vec2;
+use crate::model::body::At;
+use crate::model::body::BodyRef;
+use crate::model::{Model, Probe, System, coupled_body as body, probe};
 use crate::output::csv::HistoryWriter;
 use crate::output::vtk::PvdSeries;
+use crate::output::vtp::write_granular;
+use crate::output::vtu::write_body;
 use crate::output::{progress, write_json};
-use crate::run::RunOptions;
-use crate::scenario::body::{Edge, Method, is_body_probe};
-use crate::scenario::{Probe, Scenario};
+use crate::scenario::Scenario;
 use serde_json::{Value, json};
 use std::time::Instant;
 
-/// A coupled model built from a scenario, with what the driver needs to
-/// know about it.
-pub struct Built {
-    pub model: CoupledModel,
-    /// The bodies' names, in scenario order (the bodies are `model.bodies`).
-    pub body_names: Vec<String>,
-    pub steps: usize,
-    /// Body time step (`dt × substeps`).
-    pub body_dt: f64,
-}
-
-/// Build discs, walls and bodies (EFG or FE); factor each body's Newmark
-/// matrix.
-pub fn build(sc: &Scenario) -> Result<Built, CouplingError> {
-    let granular = dem_build::build(sc)?;
-    let dt = granular.dt;
-    let substeps = sc.simulation.substeps.max(1);
-    let body_dt = dt * substeps as f64;
-    let mut bodies: Vec<Box<dyn Continuum>> = Vec::new();
-    let mut mats = Vec::new();
-    let mode = match sc.simulation.contact_solve {
-        crate::scenario::ContactSolve::Boundary => ComplianceMode::Boundary,
-        crate::scenario::ContactSolve::Direct => ComplianceMode::Direct,
-    };
-    for spec in &sc.body {
-        let (g, edges, refine) = (
-            sc.simulation.gravity,
-            &spec.contact_edges,
-            spec.contact_refine,
-        );
-        bodies.push(match spec.method {
-            Method::Efg => {
-                let mut body = EfgBody::new(&spec.params(), g)?;
-                body.start_dynamic(body_dt)?;
-                let mut c = EfgContinuum::new(body, edges, refine)?;
-                c.mode = mode;
-                Box::new(c)
-            }
-            Method::FemQ4 => {
-                let mut body = FemBody::new(&spec.params(), g)?;
-                body.start_dynamic(body_dt)?;
-                let mut c = FemContinuum::new(body, edges, refine)?;
-                c.mode = mode;
-                Box::new(c)
-            }
-        });
-        mats.push(
-            spec.contact_material
-                .as_ref()
-                .and_then(|m| sc.material.iter().position(|x| &x.name == m))
-                .map(|i| i as u16),
-        );
-    }
-    let steps = dem_build::steps(sc, dt);
-    Ok(Built {
-        model: {
-            let mut m = CoupledModel::new(granular, bodies, &mats, substeps);
-            m.staggered |= sc.simulation.coupling == crate::scenario::CouplingScheme::Staggered;
-            m.geometric_stiffness = sc.simulation.geometric_stiffness;
-            m
-        },
-        body_names: sc.body.iter().map(|b| b.name.clone()).collect(),
-        steps,
-        body_dt,
-    })
-}
-
-/// A probe bound to the model.
-enum Bound {
-    BodyPoint {
-        body: usize,
-        at: At,
-        q: String,
-    },
-    /// An assembly-wide quantity (`contacts` counts disc–body contacts too).
-    Global {
-        q: String,
-    },
-    /// Total force of the discs on the body, x or y.
-    BodyForce {
-        body: usize,
-        y: bool,
-    },
-    Disc {
-        id: usize,
-        q: String,
-        x0: Vec2,
-    },
-    Contact {
-        a: usize,
-        b: usize,
-        total: bool,
-    },
-    Wall {
-        w: usize,
-        q: String,
-    },
-}
-
-fn bind(
-    sc: &Scenario,
-    m: &CoupledModel,
-    names: &[String],
-) -> Result<Vec<(String, Bound)>, CouplingError> {
-    let input = |s: String| CouplingError::Input(s);
-    let g = &m.granular;
-    let disc = |k: usize, pr: &Probe| {
-        (k >= 1 && k <= g.particles.len())
-            .then(|| k - 1)
-            .ok_or_else(|| {
-                input(format!(
-                    "probe `{}`: disc {k} does not exist ({} discs, numbered from 1)",
-                    pr.name,
-                    g.particles.len()
-                ))
-            })
-    };
-    sc.probe
-        .iter()
-        .map(|pr| {
-            let q = pr.quantity.clone();
-            let b = if is_body_probe(pr, false) {
-                let bi = match &pr.body {
-                    Some(n) => names.iter().position(|x| x == n),
-                    None => Some(0),
-                }
-                .ok_or_else(|| input(format!("probe `{}`: no such body", pr.name)))?;
-                if crate::scenario::body::CONTACT_FORCE_QUANTITIES.contains(&q.as_str()) {
-                    return Ok((
-                        pr.name.clone(),
-                        Bound::BodyForce {
-                            body: bi,
-                            y: q == "contact_fy",
-                        },
-                    ));
-                }
-                if !crate::scenario::body::POINT_QUANTITIES.contains(&q.as_str()) {
-                    return Err(input(format!(
-                        "probe `{}`: `{q}` is not recorded in coupled runs; body probes take a `point` and one of {}",
-                        pr.name,
-                        crate::scenario::body::POINT_QUANTITIES.join(", ")
-                    )));
-                }
-                let p = pr.point.ok_or_else(|| {
-                    input(format!("probe `{}`: body-wide quantities are not recorded in coupled runs; use the energy columns", pr.name))
-                })?;
-                let at = body(m, bi).bind(Vec2::from(p))?;
-                Bound::BodyPoint { body: bi, at, q }
-            } else if let Some([a, b]) = pr.contact {
-                Bound::Contact {
-                    a: disc(a, pr)?,
-                    b: disc(b, pr)?,
-                    total: q == "normal_total",
-                }
-            } else if let Some(w) = &pr.wall {
-                let w = g
-                    .walls
-                    .iter()
-                    .position(|x| &x.name == w)
-                    .ok_or_else(|| input(format!("probe `{}`: no wall `{w}`", pr.name)))?;
-                Bound::Wall { w, q }
-            } else if crate::scenario::granular::GLOBAL_QUANTITIES.contains(&q.as_str()) {
-                Bound::Global { q }
-            } else {
-                let id = disc(pr.disc.unwrap_or(0), pr)?;
-                let x0 = g.particles.pos[g.slot(id)];
-                Bound::Disc { id, q, x0 }
-            };
-            Ok((pr.name.clone(), b))
-        })
-        .collect()
-}
-
-/// The body behind `model.bodies[i]` (built by [`build`]: EFG or FE).
-fn body(m: &CoupledModel, i: usize) -> BodyRef<'_> {
-    let c = m.bodies[i].as_any();
-    if let Some(c) = c.downcast_ref::<EfgContinuum>() {
-        BodyRef::Efg(&c.body)
-    } else if let Some(c) = c.downcast_ref::<FemContinuum>() {
-        BodyRef::Fem(&c.body)
-    } else {
-        unreachable!("coupled bodies are EFG or FE bodies")
-    }
-}
-
-fn value(m: &CoupledModel, b: &Bound) -> f64 {
-    let g = &m.granular;
-    match b {
-        Bound::BodyPoint { body: b, at, q } => {
-            body(m, *b).sample_at(at).field(q).unwrap_or(f64::NAN)
-        }
-        Bound::Global { q } => {
-            let v = crate::dem::run::global_quantity(g, q);
-            if q == "contacts" {
-                v + m.contacts.len() as f64
-            } else {
-                v
-            }
-        }
-        Bound::BodyForce { body, y } => m
-            .contacts
-            .iter()
-            .filter(|c| c.body as usize == *body)
-            .map(|c| if *y { -c.force.y } else { -c.force.x })
-            .sum(),
-        Bound::Disc { id, q, x0 } => match q.as_str() {
-            // displacement since t = 0: only coupled runs record it
-            "ux" => g.particles.pos[g.slot(*id)].x - x0.x,
-            "uy" => g.particles.pos[g.slot(*id)].y - x0.y,
-            q => crate::dem::run::disc_quantity(g, *id, q),
-        },
-        Bound::Contact { a, b, total } => {
-            let (el, tot) = g.normal_force(g.slot(*a), g.slot(*b));
-            if *total { tot } else { el }
-        }
-        Bound::Wall { w, q } => crate::dem::run::wall_quantity(&g.walls[*w], q),
-    }
-}
-
-/// Energy account of the coupled system (all in the scenario's units).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct EnergyAccount {
-    pub kin_dem: f64,
-    pub kin_body: f64,
-    /// Elastic strain energy of the bodies, `Σ ½UᵀKU`.
-    pub strain: f64,
-    /// Energy of the bodies' penalty springs (EFG prescribed edges), from
-    /// their gap to the prescribed displacement.
-    pub penalty: f64,
-    pub contact: f64,
-    /// Work of gravity on the discs, of the bodies' permanent loads and
-    /// moving edges, and of the walls since t = 0.
-    pub w_ext: f64,
-    /// `W_ext − (stored − stored at t = 0)`: friction, dashpots and
-    /// numerical dissipation.
-    pub diss: f64,
-}
-
-impl EnergyAccount {
-    /// Energy stored: kinetic (discs, bodies), strain, penalty and contact
-    /// springs.
-    pub fn stored(&self) -> f64 {
-        self.kin_dem + self.kin_body + self.strain + self.penalty + self.contact
-    }
-}
-
-/// Tracks the external work between steps.
-pub(crate) struct WorkMeter {
-    /// Initial disc positions by disc id (the DEM renumbers its slots).
-    x0: Vec<Vec2>,
-    wall_work: f64,
-    /// Energy stored at t = 0 (initial velocities, overlaps, deformation)
-    /// minus the work the permanent loads count at t = 0.
-    stored0: f64,
-}
-
-impl WorkMeter {
-    pub(crate) fn new(m: &CoupledModel) -> Self {
-        let p = &m.granular.particles;
-        let mut x0 = vec![Vec2::ZERO; p.len()];
-        for k in 0..p.len() {
-            x0[p.id[k] as usize] = p.pos[k];
-        }
-        let mut w = WorkMeter {
-            x0,
-            wall_work: 0.0,
-            stored0: 0.0,
-        };
-        // stored minus external work at t = 0, so that E_diss(0) = 0
-        w.stored0 = -w.account(m).diss;
-        w
-    }
-    /// After a step: work the walls did on the discs during it.
-    pub(crate) fn after_step(&mut self, g: &Granular) {
-        for w in &g.walls {
-            self.wall_work -= w.force.dot(w.vel) * g.dt;
-        }
-    }
-    pub(crate) fn account(&self, m: &CoupledModel) -> EnergyAccount {
-        let g = &m.granular;
-        let p = &g.particles;
-        let e = g.energies();
-        let mut w_grav = 0.0;
-        for k in 0..p.len() {
-            w_grav += p.mass[k] * g.gravity.dot(p.pos[k] - self.x0[p.id[k] as usize]);
-        }
-        let (mut kin_body, mut strain, mut penalty, mut w_body) = (0.0, 0.0, 0.0, 0.0);
-        for b in &m.bodies {
-            let en = b.energies();
-            kin_body += en.kinetic;
-            strain += en.strain;
-            penalty += en.penalty;
-            w_body += en.work;
-        }
-        let contact = e.spring + m.body_contact_energy();
-        let w_ext = w_grav + w_body + self.wall_work;
-        let kin_dem = e.kinetic + e.rotational;
-        let mut e = EnergyAccount {
-            kin_dem,
-            kin_body,
-            strain,
-            penalty,
-            contact,
-            w_ext,
-            diss: 0.0,
-        };
-        e.diss = w_ext - (e.stored() - self.stored0);
-        e
-    }
-}
+pub use crate::coupling::energy::EnergyAccount;
 
 /// Watches for discs whose centre enters a body through an edge that is
 /// not one of its contact edges: the body does not see such a disc from
@@ -350,7 +41,7 @@ struct Watched {
 }
 
 impl EntryWatch {
-    fn new(sc: &Scenario, m: &CoupledModel) -> Result<Self, CouplingError> {
+    fn new(sc: &Scenario, m: &CoupledModel) -> Result<Self, crate::efg::EfgError> {
         let mut bodies = Vec::new();
         for (i, spec) in sc.body.iter().enumerate() {
             let open = Edge::ALL.map(|e| !spec.contact_edges.contains(&e));
@@ -474,21 +165,24 @@ fn chain_corners(m: &CoupledModel) -> Vec<Vec<Vec<Vec2>>> {
 }
 
 /// Run a coupled scenario.
-pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
-    let t0 = Instant::now();
+pub(super) fn run(
+    sc: &Scenario,
+    full: Model,
+    probes: Vec<(String, Probe)>,
+    t_build: f64,
+    opts: &RunOptions,
+) -> Result<Value, RunError> {
     let dir = &opts.out_dir;
-    std::fs::create_dir_all(dir)?;
-    let Built {
-        mut model,
-        body_names,
-        steps,
-        body_dt,
-    } = build(sc)?;
-    let t_build = t0.elapsed().as_secs_f64();
-    if let Some(w) = dem_build::dt_warning(&model.granular) {
+    let body_names = super::body_names(&full);
+    let steps = full.steps;
+    let System::Coupled(model) = full.system else {
+        unreachable!("a coupled model")
+    };
+    let mut model = *model;
+    let body_dt = model.granular.dt * model.substeps as f64;
+    if let Some(w) = model.granular.dt_warning() {
         eprintln!("warning: {w}");
     }
-    let probes = bind(sc, &model, &body_names)?;
     let mut cols: Vec<&str> = vec!["step", "t"];
     cols.extend(probes.iter().map(|p| p.0.as_str()));
     cols.extend([
@@ -575,7 +269,9 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
             row.clear();
             row.push(step as f64);
             row.push(t);
-            row.extend(probes.iter().map(|(_, b)| value(&model, b)));
+            row.extend(probes.iter().map(|(_, p)| {
+                probe::value(p, Some(&model.granular), Some(&model), |i| body(&model, i))
+            }));
             row.extend([
                 fn_sum, e.kin_dem, e.kin_body, e.strain, e.penalty, e.contact, e.w_ext, e.diss,
             ]);
@@ -583,11 +279,11 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
         }
         if vtk_every > 0 && (step % vtk_every == 0 || step == steps) {
             let f = format!("frames/discs_{step:07}.vtp");
-            crate::dem::run::write_frame(&model.granular, &dir.join(&f))?;
+            write_granular(&model.granular, &dir.join(&f))?;
             pvd_discs.add(t, &f)?;
             for (i, n) in body_names.iter().enumerate() {
                 let f = format!("frames/{n}_{step:07}.vtu");
-                body(&model, i).write_frame(nodal[i].as_ref(), &dir.join(&f))?;
+                write_body(body(&model, i), nodal[i].as_ref(), &dir.join(&f))?;
                 pvd_bodies[i].add(t, &f)?;
             }
         }
@@ -633,27 +329,29 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, CouplingError> {
 }
 
 /// What `efgdem check` prints for a coupled scenario.
-pub fn check(sc: &Scenario) -> Result<String, CouplingError> {
-    let b = build(sc)?;
-    let g = &b.model.granular;
+pub(super) fn check(full: &Model) -> String {
+    let System::Coupled(model) = &full.system else {
+        unreachable!("a coupled model")
+    };
+    let g = &model.granular;
     let mut s = format!(
         "coupled run: {} discs, {} walls, {} bodies; {} steps of dt = {:e} (bodies: dt = {:e}, {} DEM steps each)\nDEM critical step 2√(m_min/k_max) = {:e} (dt is {:.3} × it)\n",
         g.particles.len(),
         g.walls.len(),
-        b.model.bodies.len(),
-        b.steps,
+        model.bodies.len(),
+        full.steps,
         g.dt,
-        b.body_dt,
-        b.model.substeps,
+        model.granular.dt * model.substeps as f64,
+        model.substeps,
         g.critical_dt(),
         g.dt / g.critical_dt()
     );
-    for (i, c) in b.model.bodies.iter().enumerate() {
-        let n = body(&b.model, i).n_nodes();
+    for (i, c) in model.bodies.iter().enumerate() {
+        let n = body(model, i).n_nodes();
         s += &format!(
             "body `{}` ({}): {} nodes, {} DOFs, {} contact chain(s) with {} segments\n",
             c.name(),
-            match body(&b.model, i) {
+            match body(model, i) {
                 BodyRef::Efg(_) => "EFG",
                 BodyRef::Fem(_) => "FE Q4",
             },
@@ -666,10 +364,10 @@ pub fn check(sc: &Scenario) -> Result<String, CouplingError> {
                 .sum::<usize>()
         );
     }
-    if let Some(w) = dem_build::dt_warning(g) {
+    if let Some(w) = g.dt_warning() {
         s += &format!("warning: {w}\n");
     }
-    Ok(s)
+    s
 }
 
 #[cfg(test)]

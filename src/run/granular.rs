@@ -1,196 +1,34 @@
 //! Driver for granular-only scenarios (discs and walls): `efgdem run` and
 //! `efgdem check`.
 
-use super::build::{self, DT_WARN};
-use super::{DemError, Granular};
-use crate::output::csv::HistoryWriter;
+use super::{RunError, RunOptions};
+use crate::dem::DT_WARN;
+use crate::model::{Model, Probe, System};
+use crate::output::csv::{HistoryWriter, write_discs_csv};
 use crate::output::vtk::PvdSeries;
-use crate::output::vtp::{DiscFrame, write_discs};
+use crate::output::vtp::write_granular;
 use crate::output::{progress, write_json};
-use crate::run::RunOptions;
-use crate::scenario::{Probe, Scenario};
+use crate::scenario::Scenario;
 use serde_json::json;
-use std::io::Write;
 use std::time::Instant;
-
-/// A probe resolved against the built assembly (disc numbers are 0-based
-/// scenario ids; slots are looked up at every sample since discs are
-/// renumbered in memory).
-#[derive(Debug, Clone)]
-enum Sample {
-    Normal { a: usize, b: usize, total: bool },
-    Wall { w: usize, q: &'static str },
-    Disc { id: usize, q: &'static str },
-    Global(&'static str),
-}
-
-fn resolve(sc: &Scenario, gr: &Granular) -> Result<Vec<(String, Sample)>, DemError> {
-    let n = gr.particles.len();
-    let disc = |k: usize, pr: &Probe| {
-        if k >= 1 && k <= n {
-            Ok(k - 1)
-        } else {
-            Err(DemError::Input(format!(
-                "probe `{}`: disc {k} does not exist (the assembly has {n} discs, numbered from 1)",
-                pr.name
-            )))
-        }
-    };
-    let stat = |q: &str, list: &[&'static str]| list.iter().copied().find(|x| *x == q);
-    use crate::scenario::granular::*;
-    sc.probe
-        .iter()
-        .map(|pr| {
-            let q = pr.quantity.as_str();
-            let s = if let Some(&[a, b]) = pr
-                .contact
-                .as_ref()
-                .filter(|_| CONTACT_QUANTITIES.contains(&q))
-            {
-                Sample::Normal {
-                    a: disc(a, pr)?,
-                    b: disc(b, pr)?,
-                    total: q == "normal_total",
-                }
-            } else if let Some(qq) = stat(q, WALL_QUANTITIES) {
-                let name = pr.wall.as_deref().unwrap_or("");
-                let w = gr
-                    .walls
-                    .iter()
-                    .position(|w| w.name == name)
-                    .ok_or_else(|| {
-                        DemError::Input(format!("probe `{}`: no wall named `{name}`", pr.name))
-                    })?;
-                Sample::Wall { w, q: qq }
-            } else if let Some(qq) = stat(q, DISC_QUANTITIES) {
-                Sample::Disc {
-                    id: disc(pr.disc.unwrap_or(0), pr)?,
-                    q: qq,
-                }
-            } else if let Some(qq) = stat(q, GLOBAL_QUANTITIES) {
-                Sample::Global(qq)
-            } else {
-                return Err(DemError::Input(format!(
-                    "probe `{}`: quantity `{q}` is not known to a granular run",
-                    pr.name
-                )));
-            };
-            Ok((pr.name.clone(), s))
-        })
-        .collect()
-}
-
-/// A wall probe quantity ([`WALL_QUANTITIES`](crate::scenario::granular::WALL_QUANTITIES)).
-pub(crate) fn wall_quantity(w: &super::walls::Wall, q: &str) -> f64 {
-    match q {
-        "wall_fx" => w.force.x,
-        "wall_fy" => w.force.y,
-        "wall_x" => w.a.x,
-        _ => w.a.y,
-    }
-}
-
-/// A disc probe quantity of scenario disc `id` (0-based)
-/// ([`DISC_QUANTITIES`](crate::scenario::granular::DISC_QUANTITIES)).
-pub(crate) fn disc_quantity(gr: &Granular, id: usize, q: &str) -> f64 {
-    let k = gr.slot(id);
-    let p = &gr.particles;
-    match q {
-        "x" => p.pos[k].x,
-        "y" => p.pos[k].y,
-        "vx" => p.vel[k].x,
-        "vy" => p.vel[k].y,
-        "theta" => p.theta[k],
-        _ => p.omega[k],
-    }
-}
-
-fn sample(gr: &Granular, s: &Sample) -> f64 {
-    match *s {
-        Sample::Normal { a, b, total } => {
-            let (el, tot) = gr.normal_force(gr.slot(a), gr.slot(b));
-            if total { tot } else { el }
-        }
-        Sample::Wall { w, q } => wall_quantity(&gr.walls[w], q),
-        Sample::Disc { id, q } => disc_quantity(gr, id, q),
-        Sample::Global(q) => global_quantity(gr, q),
-    }
-}
-
-/// An assembly-wide probe quantity
-/// ([`GLOBAL_QUANTITIES`](crate::scenario::granular::GLOBAL_QUANTITIES)).
-pub(crate) fn global_quantity(gr: &Granular, q: &str) -> f64 {
-    if q == "contacts" {
-        let (a, b) = gr.touching();
-        return (a + b) as f64;
-    }
-    let e = gr.energies();
-    match q {
-        "kinetic" => e.kinetic,
-        "rotational" => e.rotational,
-        "spring" => e.spring,
-        "gravity_energy" => e.gravity,
-        _ => e.total(),
-    }
-}
-
-/// Write a ParaView frame of the present state.
-pub fn write_frame(gr: &Granular, path: &std::path::Path) -> std::io::Result<()> {
-    let p = &gr.particles;
-    let contacts: Vec<(u32, u32, f64)> = gr
-        .contacts
-        .pairs
-        .iter()
-        .filter_map(|q| {
-            let (el, _) = gr.normal_force(q.i as usize, q.j as usize);
-            (el > 0.0).then_some((q.i, q.j, el))
-        })
-        .collect();
-    let walls: Vec<_> = gr.walls.iter().map(|w| (w.a, w.b)).collect();
-    write_discs(
-        path,
-        &DiscFrame {
-            pos: &p.pos,
-            radius: &p.radius,
-            vel: &p.vel,
-            omega: &p.omega,
-            force: &p.force,
-            id: &p.id,
-            contacts: &contacts,
-            walls: &walls,
-        },
-    )
-}
-
-/// Write the discs as `x,y,r,vx,vy,omega` in scenario order (readable as a
-/// `discs = { csv = ... }` source: the extra columns are... not accepted,
-/// so only `x,y,r` are written).
-pub fn write_discs_csv(gr: &Granular, path: &std::path::Path) -> std::io::Result<()> {
-    let p = &gr.particles;
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
-    writeln!(w, "x,y,r")?;
-    for id in 0..p.len() {
-        let k = p.slot[id] as usize;
-        writeln!(w, "{:e},{:e},{:e}", p.pos[k].x, p.pos[k].y, p.radius[k])?;
-    }
-    w.flush()
-}
 
 /// Run a granular scenario: `history.csv` (columns `cycle, t` and one per
 /// probe, a row every `output.every` steps after the step),
 /// `frames/discs_NNNNNN.vtp` + `discs.pvd` every `output.vtk_every` steps,
 /// `discs_final.csv` and `summary.json`.
-pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, DemError> {
-    let t_build = Instant::now();
-    let mut gr = build::build(sc)?;
-    let build_s = t_build.elapsed().as_secs_f64();
-    let steps = build::steps(sc, gr.dt);
+pub(super) fn run(
+    sc: &Scenario,
+    mut model: Model,
+    probes: Vec<(String, Probe)>,
+    build_s: f64,
+    opts: &RunOptions,
+) -> Result<serde_json::Value, RunError> {
+    let steps = model.steps;
     let mut warnings = Vec::new();
-    if let Some(w) = build::dt_warning(&gr) {
+    if let Some(w) = model.granular().and_then(|g| g.dt_warning()) {
         eprintln!("warning: {w}");
         warnings.push(w);
     }
-    let probes = resolve(sc, &gr)?;
     let out = &opts.out_dir;
     std::fs::create_dir_all(out)?;
     let mut cols = vec!["cycle", "t"];
@@ -203,8 +41,10 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, DemErr
         std::fs::create_dir_all(out.join("frames"))?;
         let mut s = PvdSeries::new(&out.join("discs.pvd"));
         let f = "frames/discs_000000.vtp";
-        gr.prepare_contacts();
-        write_frame(&gr, &out.join(f))?;
+        if let System::Granular(g) = &mut model.system {
+            g.prepare_contacts();
+        }
+        write_granular(granular(&model), &out.join(f))?;
         s.add(0.0, f)?;
         pvd = Some(s);
     }
@@ -214,16 +54,15 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, DemErr
     let mut last_pb = 0usize;
     for cycle in 1..=steps {
         // disc forces are only read by the frames
-        gr.store_forces = vtk_every > 0 && cycle % vtk_every == 0;
-        gr.step();
-        if cycle % 256 == 0 {
-            gr.check_finite()?;
+        if let System::Granular(g) = &mut model.system {
+            g.store_forces = vtk_every > 0 && cycle % vtk_every == 0;
         }
+        model.step()?;
         if cycle % every == 0 {
             row[0] = cycle as f64;
-            row[1] = gr.time;
+            row[1] = model.time();
             for (k, (_, s)) in probes.iter().enumerate() {
-                row[2 + k] = sample(&gr, s);
+                row[2 + k] = model.probe(s);
             }
             hist.row(&row)?;
         }
@@ -231,8 +70,8 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, DemErr
             && cycle % vtk_every == 0
         {
             let f = format!("frames/discs_{cycle:06}.vtp");
-            write_frame(&gr, &out.join(&f))?;
-            s.add(gr.time, &f)?;
+            write_granular(granular(&model), &out.join(&f))?;
+            s.add(model.time(), &f)?;
         }
         if cycle - last_pb >= 1000 || cycle == steps {
             pb.inc((cycle - last_pb) as u64);
@@ -242,8 +81,9 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, DemErr
     pb.finish_and_clear();
     hist.flush()?;
     let wall_s = t0.elapsed().as_secs_f64();
+    let gr = granular(&model);
     gr.check_finite()?;
-    write_discs_csv(&gr, &out.join("discs_final.csv"))?;
+    write_discs_csv(gr, &out.join("discs_final.csv"))?;
     let n = gr.particles.len();
     let (dd, dw) = gr.touching();
     let e = gr.energies();
@@ -272,9 +112,8 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, DemErr
 }
 
 /// What `efgdem check` prints for a granular scenario.
-pub fn check(sc: &Scenario) -> Result<String, DemError> {
-    let gr = build::build(sc)?;
-    resolve(sc, &gr)?;
+pub(super) fn check(sc: &Scenario, model: &Model) -> String {
+    let gr = granular(model);
     let p = &gr.particles;
     let n = p.len();
     let (rmin, rmax) = p
@@ -282,7 +121,7 @@ pub fn check(sc: &Scenario) -> Result<String, DemError> {
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), &r| (a.min(r), b.max(r)));
     let crit = gr.critical_dt();
-    let steps = build::steps(sc, gr.dt);
+    let steps = model.steps;
     let mut s = format!(
         "granular: {n} discs (radius {rmin:e} … {rmax:e}), {} walls, {} materials\n\
          time step: dt = {:e}, critical 2√(m_min/k_max) = {crit:e} (dt/critical = {:.4}; warn above {DT_WARN})\n\
@@ -296,8 +135,12 @@ pub fn check(sc: &Scenario) -> Result<String, DemError> {
         sc.granular.as_ref().map(|g| g.damping),
         gr.damping,
     );
-    if let Some(w) = build::dt_warning(&gr) {
+    if let Some(w) = gr.dt_warning() {
         s.push_str(&format!("\nwarning: {w}"));
     }
-    Ok(s)
+    s
+}
+
+fn granular(model: &Model) -> &crate::dem::Granular {
+    model.granular().expect("a granular model")
 }

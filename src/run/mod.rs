@@ -1,7 +1,16 @@
-//! Run a scenario end to end: pick the driver from the sections present.
+//! Drivers: run a scenario end to end (what `efgdem run` and `check` do),
+//! writing `history.csv`, `summary.json` and ParaView frames.
 
-use crate::scenario::Scenario;
+mod continuum;
+mod coupled;
+mod granular;
+
+use crate::model::{Model, ModelError, System};
+use crate::scenario::{Scenario, ScenarioError};
 use std::path::PathBuf;
+use std::time::Instant;
+
+pub use coupled::EnergyAccount;
 
 /// Options of `efgdem run` that are not part of the scenario.
 #[derive(Debug, Clone)]
@@ -12,54 +21,64 @@ pub struct RunOptions {
     pub quiet: bool,
 }
 
-/// Why a run failed after the scenario was accepted.
+/// Why a run failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
+    /// The scenario is invalid or cannot be built (exit code 2).
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
     #[error("i/o: {0}")]
     Io(#[from] std::io::Error),
     #[error(transparent)]
-    Efg(#[from] crate::efg::EfgError),
-    #[error(transparent)]
-    Dem(#[from] crate::dem::DemError),
-    #[error(transparent)]
-    Coupling(#[from] crate::coupling::CouplingError),
+    Model(#[from] ModelError),
 }
 
-/// Which kind of run a scenario describes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Kind {
-    /// Continuum bodies only.
-    Continuum,
-    /// Discs (and walls) only.
-    Granular,
-    /// Both: the coupled EFG–DE problem.
-    Coupled,
-}
-
-pub fn kind(sc: &Scenario) -> Kind {
-    match (sc.body.is_empty(), sc.granular.is_some()) {
-        (false, false) => Kind::Continuum,
-        (true, _) => Kind::Granular,
-        (false, true) => Kind::Coupled,
+impl From<crate::efg::EfgError> for RunError {
+    fn from(e: crate::efg::EfgError) -> Self {
+        RunError::Model(e.into())
     }
 }
 
-/// Run `sc`, writing `summary.json`, `history.csv` and frames into
-/// `opts.out_dir`. Returns the summary that was written.
+impl From<crate::dem::DemError> for RunError {
+    fn from(e: crate::dem::DemError) -> Self {
+        RunError::Model(e.into())
+    }
+}
+
+impl From<crate::coupling::CouplingError> for RunError {
+    fn from(e: crate::coupling::CouplingError) -> Self {
+        RunError::Model(e.into())
+    }
+}
+
+/// Build `sc` and run it, writing `summary.json`, `history.csv` and frames
+/// into `opts.out_dir`. Returns the summary that was written.
 pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunError> {
     std::fs::create_dir_all(&opts.out_dir)?;
-    match kind(sc) {
-        Kind::Continuum => Ok(crate::efg::run::run(sc, opts)?),
-        Kind::Granular => Ok(crate::dem::run::run(sc, opts)?),
-        Kind::Coupled => Ok(crate::coupling::run::run(sc, opts)?),
+    let t0 = Instant::now();
+    let model = sc.build()?;
+    let build_s = t0.elapsed().as_secs_f64();
+    let probes = sc.probes(&model)?;
+    match model.system {
+        System::Continuum { .. } => continuum::run(sc, model, probes, build_s, opts),
+        System::Granular(_) => granular::run(sc, model, probes, build_s, opts),
+        System::Coupled(_) => coupled::run(sc, model, probes, build_s, opts),
     }
 }
 
 /// What `efgdem check` prints: sizes, coverage, time-step diagnostics.
 pub fn check(sc: &Scenario) -> Result<String, RunError> {
-    match kind(sc) {
-        Kind::Continuum => Ok(crate::efg::run::check(sc)?),
-        Kind::Granular => Ok(crate::dem::run::check(sc)?),
-        Kind::Coupled => Ok(crate::coupling::run::check(sc)?),
-    }
+    let model = sc.build()?;
+    Ok(match &model.system {
+        System::Continuum { .. } => continuum::check(sc, &model),
+        System::Granular(_) => granular::check(sc, &model),
+        System::Coupled(_) => coupled::check(&model),
+    })
+}
+
+/// The model's bodies' names.
+fn body_names(model: &Model) -> Vec<String> {
+    (0..model.n_bodies())
+        .map(|i| model.body(i).name().to_string())
+        .collect()
 }

@@ -1,24 +1,48 @@
-//! Building a [`Granular`] from a scenario: discs (inline, CSV, generated),
-//! materials with the named damping, walls with their motion.
+//! Build the model a scenario describes, in one pass after validation:
+//! discs (inline, CSV, generated), materials with the named damping, walls
+//! with their motion, bodies (EFG or FE), the coupled model, and the
+//! probes bound to their targets. Every problem found here is an
+//! [`Invalid`] with the path of the field it comes from, so that the
+//! scenario reports it as `file:line: field: message`.
 
-use super::contact::ContactLaw;
-use super::particles::Particles;
-use super::walls::{Wall, WallMotion};
-use super::{BodyDamping, DemError, Granular};
+use super::body::{
+    BODY_QUANTITIES, CONTACT_FORCE_QUANTITIES, Method, POINT_QUANTITIES, is_body_probe,
+};
+use super::generate::discs_from_csv;
+use super::granular::{
+    CONTACT_QUANTITIES, DISC_QUANTITIES, DampingSpec, DiscsSpec, GLOBAL_QUANTITIES, Generator,
+    GranularSpec, Packing, WALL_QUANTITIES,
+};
+use super::{Analysis, ContactSolve, CouplingScheme, Invalid, Scenario};
+use crate::continuum::ComplianceMode;
+use crate::continuum::Continuum;
+use crate::coupling::CoupledModel;
+use crate::dem::contact::ContactLaw;
+use crate::dem::packing::{DiscRow, Lattice, grow_in_box, lattice_packing, settle_in_box};
+use crate::dem::particles::Particles;
+use crate::dem::walls::{Wall, WallMotion};
+use crate::dem::{BodyDamping, Granular};
+use crate::efg::EfgBody;
+use crate::efg::boundary::EfgContinuum;
+use crate::fem::{FemBody, FemContinuum};
 use crate::geom::Vec2;
-use crate::scenario::Scenario;
-use crate::scenario::generate::{DiscRow, Lattice, discs_from_csv, lattice_packing};
-use crate::scenario::granular::{DampingSpec, DiscsSpec, Generator, GranularSpec, Packing};
+use crate::model::body::Body;
+use crate::model::{Model, Probe, System};
 
 /// Default fraction of the critical step when `simulation.dt` is omitted.
 pub const DT_SAFETY: f64 = 0.1;
-/// `efgdem check` and `run` warn above this fraction of the critical step (E11).
-pub const DT_WARN: f64 = 0.2;
 
-fn spec(sc: &Scenario) -> Result<&GranularSpec, DemError> {
+fn bad(path: &str, message: impl std::fmt::Display) -> Invalid {
+    Invalid {
+        path: path.to_string(),
+        message: message.to_string(),
+    }
+}
+
+fn spec(sc: &Scenario) -> Result<&GranularSpec, Invalid> {
     sc.granular
         .as_ref()
-        .ok_or_else(|| DemError::Input("the scenario has no [granular] section".into()))
+        .ok_or_else(|| bad("granular", "the scenario has no [granular] section"))
 }
 
 /// Contact law of every scenario material with the scenario's dashpots, and
@@ -65,16 +89,16 @@ pub fn laws(sc: &Scenario, damping: &DampingSpec) -> (Vec<ContactLaw>, BodyDampi
     (mats, body)
 }
 
-fn material_index(sc: &Scenario, name: &str) -> Result<u16, DemError> {
+fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid> {
     sc.material
         .iter()
         .position(|m| m.name == name)
         .map(|i| i as u16)
-        .ok_or_else(|| DemError::Input(format!("no [[material]] named `{name}`")))
+        .ok_or_else(|| bad(path, format!("no [[material]] named `{name}`")))
 }
 
 /// The discs the scenario describes (generating or reading them).
-pub fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, DemError> {
+pub fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, Invalid> {
     let g = spec(sc)?;
     match &g.discs {
         DiscsSpec::Inline(rows) => Ok(rows
@@ -89,20 +113,23 @@ pub fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, DemError> {
             if let Some(csv) = &t.csv {
                 let path = sc.resolve(csv);
                 let text = std::fs::read_to_string(&path).map_err(|e| {
-                    DemError::Input(format!("cannot read discs file {}: {e}", path.display()))
+                    bad(
+                        "granular.discs.csv",
+                        format!("cannot read discs file {}: {e}", path.display()),
+                    )
                 })?;
                 return discs_from_csv(&text)
-                    .map_err(|e| DemError::Input(format!("{}: {e}", path.display())));
+                    .map_err(|e| bad("granular.discs.csv", format!("{}: {e}", path.display())));
             }
             let kind = t
                 .generate
-                .ok_or_else(|| DemError::Input("granular.discs: nothing to generate".into()))?;
+                .ok_or_else(|| bad("granular.discs", "nothing to generate"))?;
             let [a, b] = t
                 .region
-                .ok_or_else(|| DemError::Input("granular.discs.box is missing".into()))?;
+                .ok_or_else(|| bad("granular.discs", "`box` is missing"))?;
             let radius = t
                 .radius
-                .ok_or_else(|| DemError::Input("granular.discs.radius is missing".into()))?
+                .ok_or_else(|| bad("granular.discs", "`radius` is missing"))?
                 .range();
             let (lat, gap, jitter) = match kind {
                 Generator::Square => (Lattice::Square, 0.0, t.jitter.unwrap_or(0.0)),
@@ -112,13 +139,28 @@ pub fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, DemError> {
             let (lo, hi) = (Vec2::from(a), Vec2::from(b));
             let steps = t.settle_steps.unwrap_or(20_000);
             if kind == Generator::Random && t.method == Packing::Grow {
-                let count = t.count.ok_or_else(|| {
-                    DemError::Input("granular.discs: `method = \"grow\"` needs `count`".into())
-                })?;
-                return grow(sc, lo, hi, radius, count, t.seed, steps);
+                let count = t
+                    .count
+                    .ok_or_else(|| bad("granular.discs", "`method = \"grow\"` needs `count`"))?;
+                let g = spec(sc)?;
+                let mi = material_index(sc, &g.material, "granular.material")? as usize;
+                let (mats, _) = laws(sc, &DampingSpec::None);
+                let density = sc.material[mi].density;
+                return grow_in_box(
+                    lo,
+                    hi,
+                    radius,
+                    count,
+                    t.seed,
+                    steps,
+                    mats[mi],
+                    density,
+                    g.thickness,
+                )
+                .map_err(|e| bad("granular.discs", e));
             }
             let rows = lattice_packing(lat, lo, hi, radius, t.count, gap, jitter, t.seed)
-                .map_err(|e| DemError::Input(format!("granular.discs: {e}")))?;
+                .map_err(|e| bad("granular.discs", e))?;
             if kind == Generator::Random && t.method == Packing::Deposit {
                 return deposit(sc, rows, lo, hi, steps);
             }
@@ -136,9 +178,9 @@ fn deposit(
     lo: Vec2,
     hi: Vec2,
     steps: usize,
-) -> Result<Vec<DiscRow>, DemError> {
+) -> Result<Vec<DiscRow>, Invalid> {
     let g = spec(sc)?;
-    let mi = material_index(sc, &g.material)?;
+    let mi = material_index(sc, &g.material, "granular.material")?;
     let (mats, _) = laws(sc, &DampingSpec::None);
     let grav = Vec2::from(sc.simulation.gravity);
     let grav = if grav.norm2() > 0.0 {
@@ -157,164 +199,36 @@ fn deposit(
         grav,
         steps,
     )
-}
-
-/// Radius growth: `count` centres uniform in the box (seeded), final radii
-/// uniform in `[r_min, r_max]`; the radii start at the scale that gives a
-/// packing fraction of 0.3 and grow linearly to their final size over 70 %
-/// of `steps` DEM steps (no gravity, local damping 0.7, normal dashpot
-/// ζ = 0.3, four fixed walls), then the packing relaxes for the rest.
-fn grow(
-    sc: &Scenario,
-    lo: Vec2,
-    hi: Vec2,
-    (r_min, r_max): (f64, f64),
-    count: usize,
-    seed: u64,
-    steps: usize,
-) -> Result<Vec<DiscRow>, DemError> {
-    let g = spec(sc)?;
-    let mi = material_index(sc, &g.material)?;
-    let (mut mats, _) = laws(sc, &DampingSpec::None);
-    let mut law = mats[mi as usize];
-    law.zeta_n = 0.3;
-    mats = vec![law];
-    let mut rng = oorandom::Rand64::new(seed as u128);
-    let r_final: Vec<f64> = (0..count)
-        .map(|_| r_min + (r_max - r_min) * rng.rand_float())
-        .collect();
-    let area: f64 = r_final.iter().map(|r| std::f64::consts::PI * r * r).sum();
-    let ext = hi - lo;
-    let phi = area / (ext.x * ext.y);
-    if phi > 0.85 {
-        return Err(DemError::Input(format!(
-            "granular.discs: {count} discs of radius {r_min}…{r_max} fill {:.0} % of the box; radius growth reaches at most 85 %",
-            100.0 * phi
-        )));
-    }
-    let s0 = (0.3 / phi).sqrt().min(1.0);
-    let density = sc.material[mi as usize].density;
-    let mut p = Particles::default();
-    for &r in &r_final {
-        let x = lo.x + r_max + (ext.x - 2.0 * r_max).max(0.0) * rng.rand_float();
-        let y = lo.y + r_max + (ext.y - 2.0 * r_max).max(0.0) * rng.rand_float();
-        // mass of the final disc: the critical step stays that of the end state
-        p.push(Vec2::new(x, y), r, density, g.thickness, 0);
-    }
-    for (r, rf) in p.radius.iter_mut().zip(&r_final) {
-        *r = rf * s0;
-    }
-    let corners = [lo, Vec2::new(hi.x, lo.y), hi, Vec2::new(lo.x, hi.y)];
-    let walls = (0..4)
-        .map(|k| Wall::new("box", corners[k], corners[(k + 1) % 4], WallMotion::Fixed))
-        .collect();
-    let mut gr = Granular::new(p, mats, walls, 1.0);
-    gr.dt = 0.15 * gr.critical_dt();
-    gr.damping = BodyDamping::Local { alpha: 0.7 };
-    gr.set_skin(0.1 * r_max);
-    let grow_steps = (0.7 * steps as f64) as usize;
-    for n in 0..steps {
-        if n <= grow_steps {
-            let s = s0 + (1.0 - s0) * (n as f64 / grow_steps.max(1) as f64);
-            let p = &mut gr.particles;
-            for (r, &id) in p.radius.iter_mut().zip(&p.id) {
-                *r = r_final[id as usize] * s;
-            }
-            // radii grow by ≪ skin/2 in 10 steps: rebuild every 10 steps
-            if n % 10 == 0 {
-                gr.grid.stale = true;
-            }
-        }
-        gr.step();
-    }
-    gr.check_finite()?;
-    let p = &gr.particles;
-    Ok((0..count)
-        .map(|id| {
-            let k = p.slot[id] as usize;
-            DiscRow {
-                pos: p.pos[k],
-                r: r_final[id],
-                material: None,
-            }
-        })
-        .collect())
-}
-
-/// Settle `rows` in the box `[lo, hi]` (four fixed walls) under `gravity`
-/// for `steps` steps at 0.15 × the critical step, with local damping 0.3
-/// and a normal dashpot at ζ = 0.3 added to `law`. Returns the settled
-/// discs in the input order.
-#[allow(clippy::too_many_arguments)]
-pub fn settle_in_box(
-    rows: &[DiscRow],
-    lo: Vec2,
-    hi: Vec2,
-    law: ContactLaw,
-    density: f64,
-    thickness: f64,
-    gravity: Vec2,
-    steps: usize,
-) -> Result<Vec<DiscRow>, DemError> {
-    let mut p = Particles::default();
-    for r in rows {
-        p.push(r.pos, r.r, density, thickness, 0);
-    }
-    let corners = [lo, Vec2::new(hi.x, lo.y), hi, Vec2::new(lo.x, hi.y)];
-    let walls = (0..4)
-        .map(|k| Wall::new("box", corners[k], corners[(k + 1) % 4], WallMotion::Fixed))
-        .collect();
-    let mut law = law;
-    law.zeta_n = 0.3;
-    let mut gr = Granular::new(p, vec![law], walls, 1.0);
-    gr.dt = 0.15 * gr.critical_dt();
-    gr.gravity = gravity;
-    gr.damping = BodyDamping::Local { alpha: 0.3 };
-    for _ in 0..steps {
-        gr.step();
-    }
-    gr.check_finite()?;
-    let p = &gr.particles;
-    Ok((0..p.len())
-        .map(|id| {
-            let s = p.slot[id] as usize;
-            DiscRow {
-                pos: p.pos[s],
-                r: p.radius[s],
-                material: rows[id].material.clone(),
-            }
-        })
-        .collect())
+    .map_err(|e| bad("granular.discs", e))
 }
 
 /// Build the assembly described by the scenario. `dt` is the scenario's,
 /// or [`DT_SAFETY`] × the critical step.
-pub fn build(sc: &Scenario) -> Result<Granular, DemError> {
+pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
     let g = spec(sc)?;
     let rows = disc_rows(sc)?;
-    let default_mat = material_index(sc, &g.material)?;
+    let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
     let mut p = Particles::default();
     let v0 = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
     for (k, r) in rows.iter().enumerate() {
         let mi = match &r.material {
-            Some(name) => material_index(sc, name)
-                .map_err(|e| DemError::Input(format!("disc {}: {e}", k + 1)))?,
+            Some(name) => material_index(sc, name, "granular.discs")
+                .map_err(|e| bad("granular.discs", format!("disc {}: {}", k + 1, e.message)))?,
             None => default_mat,
         };
         let m = &sc.material[mi as usize];
         if m.density.is_nan() || m.density <= 0.0 {
-            return Err(DemError::Input(format!(
-                "disc {}: material `{}` needs a density > 0",
-                k + 1,
-                m.name
-            )));
+            return Err(bad(
+                "granular.discs",
+                format!("disc {}: material `{}` needs a density > 0", k + 1, m.name),
+            ));
         }
         p.push(r.pos, r.r, m.density, g.thickness, mi);
         p.vel[k] = v0;
     }
     let mut walls = Vec::new();
-    for w in &sc.wall {
+    for (wi, w) in sc.wall.iter().enumerate() {
         let motion = match (&w.velocity, &w.history) {
             (Some(v), _) => WallMotion::Constant {
                 velocity: Vec2::from(*v),
@@ -327,7 +241,7 @@ pub fn build(sc: &Scenario) -> Result<Granular, DemError> {
         };
         let mut wall = Wall::new(&w.name, Vec2::from(w.from), Vec2::from(w.to), motion);
         if let Some(m) = &w.material {
-            wall.material = Some(material_index(sc, m)?);
+            wall.material = Some(material_index(sc, m, &format!("wall.{wi}.material"))?);
         }
         walls.push(wall);
     }
@@ -336,9 +250,9 @@ pub fn build(sc: &Scenario) -> Result<Granular, DemError> {
     gr.gravity = Vec2::from(sc.simulation.gravity);
     gr.dt = sc.simulation.dt.unwrap_or(DT_SAFETY * gr.critical_dt());
     if !gr.dt.is_finite() || gr.dt <= 0.0 {
-        return Err(DemError::Input(
-            "cannot choose a time step: give simulation.dt (no contact stiffness to derive it from)"
-                .into(),
+        return Err(bad(
+            "simulation.dt",
+            "cannot choose a time step: give simulation.dt (no contact stiffness to derive it from)",
         ));
     }
     if let Some(s) = g.skin {
@@ -356,14 +270,272 @@ pub fn steps(sc: &Scenario, dt: f64) -> usize {
     }
 }
 
-/// A warning when Δt exceeds [`DT_WARN`] × the critical step (ERRATA E11).
-pub fn dt_warning(gr: &Granular) -> Option<String> {
-    let crit = gr.critical_dt();
-    (gr.dt > DT_WARN * crit).then(|| {
-        format!(
-            "dt = {:e} is {:.3} × the critical step 2√(m_min/k_max) = {crit:e}; above {DT_WARN} × it the central difference may be unstable (ERRATA E11)",
-            gr.dt,
-            gr.dt / crit
-        )
-    })
+/// Number of steps: `simulation.steps`, or `end_time / dt` rounded
+/// (granular and coupled runs) or rounded up (continuum runs).
+fn steps_of(sc: &Scenario, dt: f64, round_up: bool) -> usize {
+    match (sc.simulation.steps, sc.simulation.end_time) {
+        (Some(n), _) => n,
+        (None, Some(t)) if round_up => (t / dt).ceil() as usize,
+        (None, Some(t)) => (t / dt).round() as usize,
+        (None, None) => 0,
+    }
+}
+
+/// The continuum bodies of a continuum-only scenario, started for a
+/// dynamic analysis at `dt` (after their initial static state, if any).
+fn bodies(sc: &Scenario, dt: Option<f64>) -> Result<Vec<Body>, Invalid> {
+    let g = sc.simulation.gravity;
+    sc.body
+        .iter()
+        .enumerate()
+        .map(|(i, spec)| {
+            let at = format!("body.{i}");
+            let p = spec.params();
+            let mut b = match spec.method {
+                Method::Efg => Body::Efg(Box::new(EfgBody::new(&p, g).map_err(|e| bad(&at, e))?)),
+                Method::FemQ4 => Body::Fem(Box::new(FemBody::new(&p, g).map_err(|e| bad(&at, e))?)),
+            };
+            if let Some(dt) = dt {
+                if spec.initial.is_some() {
+                    b.solve_static()
+                        .map_err(|e| bad(&format!("{at}.initial"), e))?;
+                }
+                b.start_dynamic(dt).map_err(|e| bad(&at, e))?;
+            }
+            Ok(b)
+        })
+        .collect()
+}
+
+/// The coupled model: discs, walls and bodies (EFG or FE) with each
+/// body's Newmark matrix factored for `dt × substeps`.
+fn coupled(sc: &Scenario) -> Result<CoupledModel, Invalid> {
+    let granular = granular(sc)?;
+    let substeps = sc.simulation.substeps.max(1);
+    let body_dt = granular.dt * substeps as f64;
+    let mode = match sc.simulation.contact_solve {
+        ContactSolve::Boundary => ComplianceMode::Boundary,
+        ContactSolve::Direct => ComplianceMode::Direct,
+    };
+    let mut bodies: Vec<Box<dyn Continuum>> = Vec::new();
+    let mut mats = Vec::new();
+    for (i, spec) in sc.body.iter().enumerate() {
+        let at = format!("body.{i}");
+        let (g, edges, refine) = (
+            sc.simulation.gravity,
+            &spec.contact_edges,
+            spec.contact_refine,
+        );
+        let p = spec.params();
+        bodies.push(match spec.method {
+            Method::Efg => {
+                let mut body = EfgBody::new(&p, g).map_err(|e| bad(&at, e))?;
+                body.start_dynamic(body_dt).map_err(|e| bad(&at, e))?;
+                let mut c = EfgContinuum::new(body, edges, refine)
+                    .map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
+                c.mode = mode;
+                Box::new(c)
+            }
+            Method::FemQ4 => {
+                let mut body = FemBody::new(&p, g).map_err(|e| bad(&at, e))?;
+                body.start_dynamic(body_dt).map_err(|e| bad(&at, e))?;
+                let mut c = FemContinuum::new(body, edges, refine)
+                    .map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
+                c.mode = mode;
+                Box::new(c)
+            }
+        });
+        mats.push(match &spec.contact_material {
+            Some(m) => Some(material_index(sc, m, &format!("{at}.contact_material"))?),
+            None => None,
+        });
+    }
+    let mut m = CoupledModel::new(granular, bodies, &mats, substeps);
+    m.staggered |= sc.simulation.coupling == CouplingScheme::Staggered;
+    m.geometric_stiffness = sc.simulation.geometric_stiffness;
+    Ok(m)
+}
+
+/// Build the model (see [`Scenario::build`]); problems carry field paths.
+pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
+    let dynamic = sc.simulation.analysis == Analysis::Dynamic;
+    let model = match super::kind(sc) {
+        super::Kind::Continuum => {
+            let dt = if dynamic {
+                Some(sc.simulation.dt.ok_or_else(|| {
+                    bad("simulation.dt", "a dynamic analysis needs `simulation.dt`")
+                })?)
+            } else {
+                None
+            };
+            let steps = dt.map_or(0, |dt| steps_of(sc, dt, true));
+            Model {
+                system: System::Continuum {
+                    bodies: bodies(sc, dt)?,
+                    dynamic,
+                },
+                dt: dt.unwrap_or(0.0),
+                steps,
+                step: 0,
+            }
+        }
+        super::Kind::Granular => {
+            let g = granular(sc)?;
+            Model {
+                dt: g.dt,
+                steps: steps_of(sc, g.dt, false),
+                system: System::Granular(Box::new(g)),
+                step: 0,
+            }
+        }
+        super::Kind::Coupled => {
+            let m = coupled(sc)?;
+            Model {
+                dt: m.granular.dt,
+                steps: steps_of(sc, m.granular.dt, false),
+                system: System::Coupled(Box::new(m)),
+                step: 0,
+            }
+        }
+    };
+    probes(sc, &model)?;
+    Ok(model)
+}
+
+/// Bind every `[[probe]]` to its target in `model`, in scenario order.
+pub fn probes(sc: &Scenario, model: &Model) -> Result<Vec<(String, Probe)>, Invalid> {
+    sc.probe
+        .iter()
+        .enumerate()
+        .map(|(k, pr)| {
+            let at = |f: &str| format!("probe.{k}.{f}");
+            let q = pr.quantity.clone();
+            let body_index = || match &pr.body {
+                Some(n) => (0..model.n_bodies())
+                    .find(|&i| body_name(model, i) == n)
+                    .ok_or_else(|| bad(&at("body"), format!("no body named `{n}`"))),
+                None => Ok(0),
+            };
+            let bind = |body: usize, p: [f64; 2]| {
+                model
+                    .body(body)
+                    .bind(Vec2::from(p))
+                    .map_err(|e| bad(&at("point"), e))
+            };
+            let probe = match &model.system {
+                System::Continuum { .. } => {
+                    let body = body_index()?;
+                    match pr.point {
+                        Some(p) if !BODY_QUANTITIES.contains(&q.as_str()) => Probe::BodyPoint {
+                            body,
+                            at: bind(body, p)?,
+                            field: q,
+                        },
+                        _ => Probe::BodyEnergy { body, quantity: q },
+                    }
+                }
+                System::Granular(g) => granular_probe(g, pr, k, false)?,
+                System::Coupled(m) => {
+                    if is_body_probe(pr, false) {
+                        let body = body_index()?;
+                        if CONTACT_FORCE_QUANTITIES.contains(&q.as_str()) {
+                            Probe::BodyForce {
+                                body,
+                                y: q == "contact_fy",
+                            }
+                        } else if !POINT_QUANTITIES.contains(&q.as_str()) {
+                            return Err(bad(
+                                &at("quantity"),
+                                format!(
+                                    "`{q}` is not recorded in coupled runs; body probes take a `point` and one of {}",
+                                    POINT_QUANTITIES.join(", ")
+                                ),
+                            ));
+                        } else {
+                            let p = pr.point.ok_or_else(|| {
+                                bad(
+                                    &at("quantity"),
+                                    "body-wide quantities are not recorded in coupled runs; use the energy columns",
+                                )
+                            })?;
+                            Probe::BodyPoint {
+                                body,
+                                at: bind(body, p)?,
+                                field: q,
+                            }
+                        }
+                    } else {
+                        granular_probe(&m.granular, pr, k, true)?
+                    }
+                }
+            };
+            Ok((pr.name.clone(), probe))
+        })
+        .collect()
+}
+
+fn body_name(model: &Model, i: usize) -> &str {
+    match &model.system {
+        System::Continuum { bodies, .. } => bodies[i].name(),
+        System::Coupled(m) => m.bodies[i].name(),
+        System::Granular(_) => "",
+    }
+}
+
+/// A probe of the granular assembly (`coupled`: disc displacements `ux`,
+/// `uy` are known too).
+fn granular_probe(
+    g: &Granular,
+    pr: &super::Probe,
+    k: usize,
+    coupled: bool,
+) -> Result<Probe, Invalid> {
+    let n = g.particles.len();
+    let disc = |d: usize, field: &str| {
+        (d >= 1 && d <= n).then(|| d - 1).ok_or_else(|| {
+            bad(
+                &format!("probe.{k}.{field}"),
+                format!("disc {d} does not exist (the assembly has {n} discs, numbered from 1)"),
+            )
+        })
+    };
+    let q = pr.quantity.as_str();
+    let has = |list: &[&str]| list.contains(&q);
+    Ok(
+        if let Some(&[a, b]) = pr.contact.as_ref().filter(|_| has(CONTACT_QUANTITIES)) {
+            Probe::Contact {
+                a: disc(a, "contact")?,
+                b: disc(b, "contact")?,
+                total: q == "normal_total",
+            }
+        } else if has(WALL_QUANTITIES) {
+            let name = pr.wall.as_deref().unwrap_or("");
+            let wall = g.walls.iter().position(|w| w.name == name).ok_or_else(|| {
+                bad(
+                    &format!("probe.{k}.wall"),
+                    format!("no wall named `{name}`"),
+                )
+            })?;
+            Probe::Wall {
+                wall,
+                quantity: q.to_string(),
+            }
+        } else if has(GLOBAL_QUANTITIES) {
+            Probe::Global {
+                quantity: q.to_string(),
+            }
+        } else if has(DISC_QUANTITIES) || (coupled && (q == "ux" || q == "uy")) {
+            let id = disc(pr.disc.unwrap_or(0), "disc")?;
+            Probe::Disc {
+                id,
+                quantity: q.to_string(),
+                x0: g.particles.pos[g.slot(id)],
+            }
+        } else {
+            return Err(bad(
+                &format!("probe.{k}.quantity"),
+                format!("`{q}` is not known to a granular run"),
+            ));
+        },
+    )
 }

@@ -8,6 +8,7 @@
 //! Every field and its default is documented in `docs/scenario.md`.
 
 pub mod body;
+pub mod build;
 pub mod generate;
 pub mod granular;
 
@@ -40,6 +41,37 @@ pub struct Scenario {
     /// Directory of the scenario file: relative paths inside it resolve here.
     #[serde(skip)]
     pub base_dir: PathBuf,
+    /// The file name and text it was parsed from (to locate problems).
+    #[serde(skip)]
+    pub source: Option<std::sync::Arc<Source>>,
+}
+
+/// Where a scenario came from.
+#[derive(Debug)]
+pub struct Source {
+    /// File name as given (for messages).
+    pub file: String,
+    pub text: String,
+}
+
+/// Which kind of run a scenario describes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// Continuum bodies only.
+    Continuum,
+    /// Discs (and walls) only.
+    Granular,
+    /// Both: the coupled EFG–DE problem.
+    Coupled,
+}
+
+/// The kind of run: from the sections present.
+pub fn kind(sc: &Scenario) -> Kind {
+    match (sc.body.is_empty(), sc.granular.is_some()) {
+        (false, false) => Kind::Continuum,
+        (true, _) => Kind::Granular,
+        (false, true) => Kind::Coupled,
+    }
 }
 
 /// `[simulation]`: time stepping and global loads.
@@ -314,29 +346,63 @@ pub fn parse(src: &str, file: &str) -> Result<Scenario, ScenarioError> {
             message: e.message().trim().to_string(),
         }],
     })?;
+    let mut sc = sc;
+    sc.source = Some(std::sync::Arc::new(Source {
+        file: file.to_string(),
+        text: src.to_string(),
+    }));
     let problems = sc.validate();
     if problems.is_empty() {
         return Ok(sc);
     }
-    let doc = toml_edit::Document::parse(src.to_string()).ok();
-    let errors = problems
-        .into_iter()
-        .map(|p| Located {
-            line: doc
-                .as_ref()
-                .and_then(|d| locate(d, &p.path))
-                .map(|off| line_of(src, off)),
-            field: display_path(&p.path),
-            message: p.message,
-        })
-        .collect();
-    Err(ScenarioError::Invalid {
-        file: file.to_string(),
-        errors,
-    })
+    Err(sc.located(problems))
 }
 
 impl Scenario {
+    /// Build the model: discs, walls, bodies, the coupling, with every
+    /// body's operators assembled and factored, ready to
+    /// [`step`](crate::model::Model::step). Probes are bound too, so a
+    /// probe naming a missing disc, wall, body or point is reported here.
+    /// Problems are located in the scenario's file when it has one.
+    pub fn build(&self) -> Result<crate::model::Model, ScenarioError> {
+        let problems = self.validate();
+        if !problems.is_empty() {
+            return Err(self.located(problems));
+        }
+        build::model(self).map_err(|p| self.located(vec![p]))
+    }
+
+    /// The `[[probe]]`s bound to their targets in `model` (built from this
+    /// scenario), in file order.
+    pub fn probes(
+        &self,
+        model: &crate::model::Model,
+    ) -> Result<Vec<(String, crate::model::Probe)>, ScenarioError> {
+        build::probes(self, model).map_err(|p| self.located(vec![p]))
+    }
+
+    /// `problems` as a [`ScenarioError`] with the lines of the source file
+    /// (if the scenario has one).
+    pub fn located(&self, problems: Vec<Invalid>) -> ScenarioError {
+        let src = self.source.as_deref();
+        let doc = src.and_then(|s| toml_edit::Document::parse(s.text.clone()).ok());
+        let errors = problems
+            .into_iter()
+            .map(|p| Located {
+                line: doc
+                    .as_ref()
+                    .zip(src)
+                    .and_then(|(d, s)| locate(d, &p.path).map(|off| line_of(&s.text, off))),
+                field: display_path(&p.path),
+                message: p.message,
+            })
+            .collect();
+        ScenarioError::Invalid {
+            file: src.map_or_else(|| "scenario".to_string(), |s| s.file.clone()),
+            errors,
+        }
+    }
+
     /// All semantic problems of the scenario (empty = valid).
     pub fn validate(&self) -> Vec<Invalid> {
         let mut p = Problems::default();

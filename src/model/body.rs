@@ -1,0 +1,136 @@
+//! A continuum body of either method (EFG or bilinear FE), and a borrowed
+//! view of one that samples its true fields.
+
+use crate::continuum::Sample;
+use crate::efg::assemble::PointShapes;
+use crate::efg::{EfgBody, EfgError, ShapeRow};
+use crate::fem::FemBody;
+use crate::fem::body::Located;
+use crate::geom::Vec2;
+
+/// A continuum body of either method, driven the same way.
+pub enum Body {
+    Efg(Box<EfgBody>),
+    Fem(Box<FemBody>),
+}
+
+impl Body {
+    pub fn name(&self) -> &str {
+        match self {
+            Body::Efg(b) => &b.name,
+            Body::Fem(b) => &b.name,
+        }
+    }
+    pub fn time(&self) -> f64 {
+        match self {
+            Body::Efg(b) => b.time,
+            Body::Fem(b) => b.time,
+        }
+    }
+    pub fn solve_static(&mut self) -> Result<(), EfgError> {
+        match self {
+            Body::Efg(b) => b.solve_static(),
+            Body::Fem(b) => Ok(b.solve_static()?),
+        }
+    }
+    pub fn start_dynamic(&mut self, dt: f64) -> Result<(), EfgError> {
+        match self {
+            Body::Efg(b) => b.start_dynamic(dt),
+            Body::Fem(b) => Ok(b.start_dynamic(dt)?),
+        }
+    }
+    pub fn advance(&mut self) -> Result<(), EfgError> {
+        match self {
+            Body::Efg(b) => b.advance(),
+            Body::Fem(b) => Ok(b.advance()?),
+        }
+    }
+    pub fn kinetic_energy(&self) -> f64 {
+        match self {
+            Body::Efg(b) => b.kinetic_energy(),
+            Body::Fem(b) => b.kinetic_energy(),
+        }
+    }
+    pub fn strain_energy(&self) -> f64 {
+        match self {
+            Body::Efg(b) => b.strain_energy(),
+            Body::Fem(b) => b.strain_energy(),
+        }
+    }
+    pub fn view(&self) -> BodyRef<'_> {
+        match self {
+            Body::Efg(b) => BodyRef::Efg(b),
+            Body::Fem(b) => BodyRef::Fem(b),
+        }
+    }
+}
+
+/// A borrowed body of either method: what probes and frames need (the
+/// bodies of a coupled model live inside it as [`Continuum`]s).
+#[derive(Clone, Copy)]
+pub enum BodyRef<'a> {
+    Efg(&'a EfgBody),
+    Fem(&'a FemBody),
+}
+
+impl<'a> BodyRef<'a> {
+    pub fn name(self) -> &'a str {
+        match self {
+            BodyRef::Efg(b) => &b.name,
+            BodyRef::Fem(b) => &b.name,
+        }
+    }
+    /// Kinetic energy `½ U̇ᵀ M U̇`.
+    pub fn kinetic_energy(self) -> f64 {
+        match self {
+            BodyRef::Efg(b) => b.kinetic_energy(),
+            BodyRef::Fem(b) => b.kinetic_energy(),
+        }
+    }
+    /// Strain energy (EFG: including the penalty springs).
+    pub fn strain_energy(self) -> f64 {
+        match self {
+            BodyRef::Efg(b) => b.strain_energy(),
+            BodyRef::Fem(b) => b.strain_energy(),
+        }
+    }
+    /// Number of nodes.
+    pub fn n_nodes(self) -> usize {
+        match self {
+            BodyRef::Efg(b) => b.n_nodes(),
+            BodyRef::Fem(b) => b.n_nodes(),
+        }
+    }
+    /// Bind a sampling point: a shape row (EFG) or an element (FE).
+    pub fn bind(self, p: Vec2) -> Result<At, EfgError> {
+        match self {
+            BodyRef::Efg(b) => {
+                let mut r = ShapeRow::new();
+                b.shape_row(p, &mut r)?;
+                Ok(At::Row(r))
+            }
+            BodyRef::Fem(b) => Ok(At::Element(b.locate(p)?)),
+        }
+    }
+    pub fn sample_at(self, at: &At) -> Sample {
+        match (self, at) {
+            (BodyRef::Efg(b), At::Row(r)) => b.sample_row(r),
+            (BodyRef::Fem(b), At::Element(l)) => b.sample_located(l),
+            _ => unreachable!("a probe is bound by its own body"),
+        }
+    }
+    /// Per-body data for frames: EFG nodal shape rows (FE needs none).
+    pub fn frame_data(self) -> Result<Option<PointShapes>, EfgError> {
+        match self {
+            BodyRef::Efg(b) => Ok(Some(b.nodal_shapes()?)),
+            BodyRef::Fem(_) => Ok(None),
+        }
+    }
+}
+
+/// A sampling point bound to a body.
+#[derive(Debug)]
+pub enum At {
+    Row(ShapeRow),
+    Element(Located),
+}

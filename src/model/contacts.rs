@@ -1,0 +1,116 @@
+//! The contacts of the present state, of every kind, with their forces:
+//! what force-chain plots, ParaView frames and Python users read.
+
+use crate::coupling::CoupledModel;
+use crate::dem::Granular;
+use crate::dem::contact::{effective_mass, normal_between, normal_force};
+use crate::geom::Vec2;
+
+/// What a disc touches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub enum ContactKind {
+    DiscDisc = 0,
+    DiscWall = 1,
+    DiscBody = 2,
+}
+
+/// One closed contact (overlap > 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactView {
+    pub kind: ContactKind,
+    /// Scenario id (0-based) of the disc.
+    pub disc: usize,
+    /// The other side: a disc id, a wall index or a body index.
+    pub other: usize,
+    /// Contact point: on the disc's surface along the normal (disc–disc),
+    /// on the wall or the body's boundary.
+    pub point: Vec2,
+    /// Unit normal from the disc towards the other side.
+    pub normal: Vec2,
+    /// Overlap δ.
+    pub overlap: f64,
+    /// Elastic normal force `k_n δ` (compression positive).
+    pub normal_elastic: f64,
+    /// Total normal force, spring + dashpot (Eq. 35).
+    pub normal_total: f64,
+    /// Shear spring force along `t = perp(n)` (the incremental history of
+    /// Eq. 36, capped by Eq. 37; without the shear dashpot).
+    pub shear: f64,
+}
+
+impl ContactView {
+    /// Force on the disc from its elastic parts: `−F_n n + F_s t`.
+    pub fn force_on_disc(&self) -> Vec2 {
+        self.normal * (-self.normal_elastic) + self.normal.perp() * self.shear
+    }
+}
+
+/// All closed contacts: disc–disc, disc–wall, then disc–body.
+pub fn all(g: Option<&Granular>, m: Option<&CoupledModel>) -> Vec<ContactView> {
+    let mut out = Vec::new();
+    if let Some(g) = g {
+        let p = &g.particles;
+        for (k, q) in g.contacts.pairs.iter().enumerate() {
+            let (i, j) = (q.i as usize, q.j as usize);
+            let (n, dist) = normal_between(p.pos[i], p.pos[j]);
+            let delta = p.radius[i] + p.radius[j] - dist;
+            if delta <= 0.0 {
+                continue;
+            }
+            let (el, tot) = g.normal_force(i, j);
+            out.push(ContactView {
+                kind: ContactKind::DiscDisc,
+                disc: p.id[i] as usize,
+                other: p.id[j] as usize,
+                point: p.pos[i] + n * p.radius[i],
+                normal: n,
+                overlap: delta,
+                normal_elastic: el,
+                normal_total: tot,
+                shear: g.contacts.shear[k],
+            });
+        }
+        for q in &g.contacts.walls {
+            let (d, w) = (q.disc as usize, q.wall as usize);
+            let wall = &g.walls[w];
+            let c = wall.closest(p.pos[d]);
+            let dist = (c - p.pos[d]).norm();
+            let delta = p.radius[d] - dist;
+            if delta <= 0.0 || dist == 0.0 {
+                continue;
+            }
+            let n = (c - p.pos[d]) * (1.0 / dist);
+            let law = &g.wall_laws[w * g.materials.len() + p.material[d] as usize];
+            let vn = (p.vel[d] - wall.vel).dot(n);
+            let (el, tot) = normal_force(law, delta, vn, effective_mass(p.inv_mass[d], 0.0));
+            out.push(ContactView {
+                kind: ContactKind::DiscWall,
+                disc: p.id[d] as usize,
+                other: w,
+                point: c,
+                normal: n,
+                overlap: delta,
+                normal_elastic: el,
+                normal_total: tot,
+                shear: q.fs,
+            });
+        }
+    }
+    if let Some(m) = m {
+        for c in &m.contacts {
+            out.push(ContactView {
+                kind: ContactKind::DiscBody,
+                disc: c.disc as usize,
+                other: c.body as usize,
+                point: c.point,
+                normal: c.normal,
+                overlap: c.overlap,
+                normal_elastic: c.fn_elastic,
+                normal_total: c.fn_total,
+                shear: c.fs,
+            });
+        }
+    }
+    out
+}

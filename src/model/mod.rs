@@ -1,0 +1,194 @@
+//! The model a scenario describes, ready to step: continuum bodies, a
+//! granular assembly, or both coupled. This is the library's state API:
+//! [`Model::step`], [`Model::run_until`], and read-only views of discs,
+//! walls, bodies and contacts. Build one with
+//! [`Scenario::build`](crate::scenario::Scenario::build) (from a file, a
+//! string, or a scenario assembled in code).
+
+pub mod body;
+pub mod contacts;
+pub mod probe;
+
+use crate::coupling::{CoupledModel, CouplingError};
+use crate::dem::{DemError, Granular};
+use crate::efg::EfgError;
+use crate::efg::boundary::EfgContinuum;
+use crate::fem::FemContinuum;
+use body::{Body, BodyRef};
+pub use contacts::{ContactKind, ContactView};
+pub use probe::Probe;
+use std::ops::ControlFlow;
+
+/// Why a step failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    #[error(transparent)]
+    Body(#[from] EfgError),
+    #[error(transparent)]
+    Dem(#[from] DemError),
+    #[error(transparent)]
+    Coupling(#[from] CouplingError),
+    /// A static model has no time steps (call [`Model::solve_static`]).
+    #[error("a static analysis has no time steps; call solve_static()")]
+    Static,
+}
+
+/// What is simulated.
+pub enum System {
+    /// Continuum bodies only; `dynamic` false: a static analysis.
+    Continuum { bodies: Vec<Body>, dynamic: bool },
+    /// Discs and walls.
+    Granular(Box<Granular>),
+    /// Bodies and discs, coupled through disc–boundary contacts.
+    Coupled(Box<CoupledModel>),
+}
+
+/// A model ready to run.
+pub struct Model {
+    pub system: System,
+    /// Time step: the DEM step in granular and coupled runs, the bodies'
+    /// step in continuum runs (0 for a static analysis).
+    pub dt: f64,
+    /// Steps the scenario asks for (`steps`, or `end_time / dt`).
+    pub steps: usize,
+    /// Steps taken so far.
+    pub step: usize,
+}
+
+impl Model {
+    /// Advance one time step.
+    pub fn step(&mut self) -> Result<(), ModelError> {
+        match &mut self.system {
+            System::Continuum { dynamic: false, .. } => return Err(ModelError::Static),
+            System::Continuum { bodies, .. } => {
+                for b in bodies {
+                    b.advance()?;
+                }
+            }
+            System::Granular(g) => {
+                g.step();
+                if g.step % 256 == 0 {
+                    g.check_finite()?;
+                }
+            }
+            System::Coupled(m) => m.step()?,
+        }
+        self.step += 1;
+        Ok(())
+    }
+
+    /// Step until the time reaches `t_end` (within half a step), calling
+    /// `after` after every step; `after` may stop the run early by
+    /// returning [`ControlFlow::Break`]. Returns the number of steps taken.
+    pub fn run_until(
+        &mut self,
+        t_end: f64,
+        mut after: impl FnMut(&Model) -> ControlFlow<()>,
+    ) -> Result<usize, ModelError> {
+        let mut n = 0;
+        while self.time() + 0.5 * self.dt < t_end {
+            self.step()?;
+            n += 1;
+            if after(self).is_break() {
+                break;
+            }
+        }
+        Ok(n)
+    }
+
+    /// Solve the static problem of every body (continuum static analysis).
+    pub fn solve_static(&mut self) -> Result<(), ModelError> {
+        if let System::Continuum { bodies, .. } = &mut self.system {
+            for b in bodies {
+                b.solve_static()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The granular assembly, taken out of a granular model.
+    pub fn into_granular(self) -> Option<Granular> {
+        match self.system {
+            System::Granular(g) => Some(*g),
+            _ => None,
+        }
+    }
+
+    /// The coupled model, taken out of a coupled model.
+    pub fn into_coupled(self) -> Option<CoupledModel> {
+        match self.system {
+            System::Coupled(m) => Some(*m),
+            _ => None,
+        }
+    }
+
+    /// Present time.
+    pub fn time(&self) -> f64 {
+        match &self.system {
+            System::Continuum { bodies, .. } => bodies.first().map_or(0.0, |b| b.time()),
+            System::Granular(g) => g.time,
+            System::Coupled(m) => m.granular.time,
+        }
+    }
+
+    /// The granular assembly (discs, walls, disc–disc and disc–wall
+    /// contacts), if there is one. Discs are stored in *slots* renumbered
+    /// in space-filling order; `particles.id[slot]` is the scenario id and
+    /// [`Granular::slot`] finds the slot of an id.
+    pub fn granular(&self) -> Option<&Granular> {
+        match &self.system {
+            System::Continuum { .. } => None,
+            System::Granular(g) => Some(g),
+            System::Coupled(m) => Some(&m.granular),
+        }
+    }
+
+    /// The coupled model (disc–body contacts, timing), if coupled.
+    pub fn coupled(&self) -> Option<&CoupledModel> {
+        match &self.system {
+            System::Coupled(m) => Some(m),
+            _ => None,
+        }
+    }
+
+    /// Number of continuum bodies.
+    pub fn n_bodies(&self) -> usize {
+        match &self.system {
+            System::Continuum { bodies, .. } => bodies.len(),
+            System::Granular(_) => 0,
+            System::Coupled(m) => m.bodies.len(),
+        }
+    }
+
+    /// Body `i` (scenario order): sample its true fields, nodes, state.
+    pub fn body(&self, i: usize) -> BodyRef<'_> {
+        match &self.system {
+            System::Continuum { bodies, .. } => bodies[i].view(),
+            System::Granular(_) => panic!("a granular model has no bodies"),
+            System::Coupled(m) => coupled_body(m, i),
+        }
+    }
+
+    /// Every contact of the present state (disc–disc, disc–wall, disc–body)
+    /// with its forces.
+    pub fn contacts(&self) -> Vec<ContactView> {
+        contacts::all(self.granular(), self.coupled())
+    }
+
+    /// The value of a bound probe now.
+    pub fn probe(&self, p: &Probe) -> f64 {
+        probe::value(p, self.granular(), self.coupled(), |i| self.body(i))
+    }
+}
+
+/// The body behind `m.bodies[i]` (EFG or FE, as the scenario builds them).
+pub fn coupled_body(m: &CoupledModel, i: usize) -> BodyRef<'_> {
+    let c = m.bodies[i].as_any();
+    if let Some(c) = c.downcast_ref::<EfgContinuum>() {
+        BodyRef::Efg(&c.body)
+    } else if let Some(c) = c.downcast_ref::<FemContinuum>() {
+        BodyRef::Fem(&c.body)
+    } else {
+        unreachable!("coupled bodies are EFG or FE bodies")
+    }
+}

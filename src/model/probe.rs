@@ -1,0 +1,130 @@
+//! Probes: quantities of the state a history records, bound to what they
+//! measure (disc ids, wall and body indices, sampling points). The scenario
+//! binds them by name; [`Model::probe`](super::Model::probe) evaluates one.
+
+use super::body::{At, BodyRef};
+use crate::coupling::CoupledModel;
+use crate::dem::Granular;
+use crate::dem::walls::Wall;
+use crate::geom::Vec2;
+
+/// A quantity of the state, bound to its target.
+#[derive(Debug)]
+pub enum Probe {
+    /// A field (`ux`, `sxx`, …, see [`crate::continuum::Sample::field`]) at
+    /// a bound point of body `body`.
+    BodyPoint { body: usize, at: At, field: String },
+    /// `kinetic_energy`, `strain_energy` or `total_energy` of a body.
+    BodyEnergy { body: usize, quantity: String },
+    /// Total force of the discs on body `body` (`y`: the y component).
+    BodyForce { body: usize, y: bool },
+    /// A disc quantity (`x`, `y`, `vx`, `vy`, `theta`, `omega`; `ux`, `uy`:
+    /// displacement from `x0`) of the disc with scenario id `id` (0-based).
+    Disc {
+        id: usize,
+        quantity: String,
+        x0: Vec2,
+    },
+    /// Normal force between discs `a` and `b` (ids): elastic `k_n δ`, or
+    /// `total` with the dashpot.
+    Contact { a: usize, b: usize, total: bool },
+    /// `wall_fx`, `wall_fy`, `wall_x`, `wall_y` of wall `wall`.
+    Wall { wall: usize, quantity: String },
+    /// An assembly-wide quantity: `kinetic`, `rotational`, `spring`,
+    /// `gravity_energy`, `total`, `contacts` (disc–body contacts included).
+    Global { quantity: String },
+}
+
+/// A wall quantity: `wall_fx`, `wall_fy` (force of the discs on it),
+/// `wall_x`, `wall_y` (its first end point).
+pub fn wall_quantity(w: &Wall, q: &str) -> f64 {
+    match q {
+        "wall_fx" => w.force.x,
+        "wall_fy" => w.force.y,
+        "wall_x" => w.a.x,
+        _ => w.a.y,
+    }
+}
+
+/// A disc quantity of scenario disc `id` (0-based): `x`, `y`, `vx`, `vy`,
+/// `theta`, `omega`.
+pub fn disc_quantity(gr: &Granular, id: usize, q: &str) -> f64 {
+    let k = gr.slot(id);
+    let p = &gr.particles;
+    match q {
+        "x" => p.pos[k].x,
+        "y" => p.pos[k].y,
+        "vx" => p.vel[k].x,
+        "vy" => p.vel[k].y,
+        "theta" => p.theta[k],
+        _ => p.omega[k],
+    }
+}
+
+/// An assembly-wide quantity (disc–disc and disc–wall contacts only for
+/// `contacts`).
+pub fn global_quantity(gr: &Granular, q: &str) -> f64 {
+    if q == "contacts" {
+        let (a, b) = gr.touching();
+        return (a + b) as f64;
+    }
+    let e = gr.energies();
+    match q {
+        "kinetic" => e.kinetic,
+        "rotational" => e.rotational,
+        "spring" => e.spring,
+        "gravity_energy" => e.gravity,
+        _ => e.total(),
+    }
+}
+
+/// The value of `p` in a model with these parts (`body(i)`: body `i`).
+pub fn value<'a>(
+    p: &Probe,
+    granular: Option<&Granular>,
+    coupled: Option<&CoupledModel>,
+    body: impl Fn(usize) -> BodyRef<'a>,
+) -> f64 {
+    let g = || granular.expect("a probe of the discs needs a granular assembly");
+    match p {
+        Probe::BodyPoint { body: b, at, field } => {
+            body(*b).sample_at(at).field(field).unwrap_or(f64::NAN)
+        }
+        Probe::BodyEnergy { body: b, quantity } => {
+            let b = body(*b);
+            match quantity.as_str() {
+                "kinetic_energy" => b.kinetic_energy(),
+                "strain_energy" => b.strain_energy(),
+                _ => b.kinetic_energy() + b.strain_energy(),
+            }
+        }
+        Probe::BodyForce { body: b, y } => coupled.map_or(0.0, |m| {
+            m.contacts
+                .iter()
+                .filter(|c| c.body as usize == *b)
+                .map(|c| if *y { -c.force.y } else { -c.force.x })
+                .sum()
+        }),
+        Probe::Disc { id, quantity, x0 } => {
+            let g = g();
+            match quantity.as_str() {
+                "ux" => g.particles.pos[g.slot(*id)].x - x0.x,
+                "uy" => g.particles.pos[g.slot(*id)].y - x0.y,
+                q => disc_quantity(g, *id, q),
+            }
+        }
+        Probe::Contact { a, b, total } => {
+            let g = g();
+            let (el, tot) = g.normal_force(g.slot(*a), g.slot(*b));
+            if *total { tot } else { el }
+        }
+        Probe::Wall { wall, quantity } => wall_quantity(&g().walls[*wall], quantity),
+        Probe::Global { quantity } => {
+            let v = global_quantity(g(), quantity);
+            match (quantity.as_str(), coupled) {
+                ("contacts", Some(m)) => v + m.contacts.len() as f64,
+                _ => v,
+            }
+        }
+    }
+}
