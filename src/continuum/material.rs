@@ -73,7 +73,7 @@ pub struct Sample {
 
 impl Sample {
     /// The field named by a point-probe quantity
-    /// ([`POINT_QUANTITIES`](crate::scenario::body::POINT_QUANTITIES)).
+    /// (the point quantities of a probe).
     pub fn field(&self, q: &str) -> Option<f64> {
         Some(match q {
             "ux" => self.u.x,

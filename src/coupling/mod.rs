@@ -150,16 +150,7 @@ pub enum CouplingError {
     #[error(transparent)]
     Solve(#[from] crate::continuum::SolveError),
     #[error(transparent)]
-    Efg(#[from] crate::efg::EfgError),
-    #[error(transparent)]
-    Fem(#[from] crate::fem::FemError),
-    #[error(transparent)]
     Dem(#[from] crate::dem::DemError),
-    #[error("i/o: {0}")]
-    Io(#[from] std::io::Error),
-    /// The scenario is valid but cannot be built as a coupled model.
-    #[error("{0}")]
-    Input(String),
     #[error(
         "the discs became unstable at step {step} (non-finite state); reduce dt (DEM critical step {dt_crit:e})"
     )]

@@ -37,11 +37,6 @@ pub enum EfgError {
     NotStarted,
     #[error("{0}")]
     Invalid(String),
-    #[error("i/o: {0}")]
-    Io(#[from] std::io::Error),
-    /// From a `fem-q4` body run by the same driver.
-    #[error(transparent)]
-    Fem(#[from] crate::fem::FemError),
 }
 
 impl EfgError {

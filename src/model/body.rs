@@ -4,8 +4,18 @@
 use crate::continuum::Sample;
 use crate::efg::assemble::PointShapes;
 use crate::efg::{EfgBody, EfgError, ShapeRow};
-use crate::fem::FemBody;
+
+/// An error of a body of either method.
+#[derive(Debug, thiserror::Error)]
+pub enum BodyError {
+    #[error(transparent)]
+    Efg(#[from] EfgError),
+    #[error(transparent)]
+    Fem(#[from] FemError),
+}
+
 use crate::fem::body::Located;
+use crate::fem::{FemBody, FemError};
 use crate::geom::Vec2;
 
 /// A continuum body of either method, driven the same way.
@@ -27,21 +37,21 @@ impl Body {
             Body::Fem(b) => b.time,
         }
     }
-    pub fn solve_static(&mut self) -> Result<(), EfgError> {
+    pub fn solve_static(&mut self) -> Result<(), BodyError> {
         match self {
-            Body::Efg(b) => b.solve_static(),
+            Body::Efg(b) => Ok(b.solve_static()?),
             Body::Fem(b) => Ok(b.solve_static()?),
         }
     }
-    pub fn start_dynamic(&mut self, dt: f64) -> Result<(), EfgError> {
+    pub fn start_dynamic(&mut self, dt: f64) -> Result<(), BodyError> {
         match self {
-            Body::Efg(b) => b.start_dynamic(dt),
+            Body::Efg(b) => Ok(b.start_dynamic(dt)?),
             Body::Fem(b) => Ok(b.start_dynamic(dt)?),
         }
     }
-    pub fn advance(&mut self) -> Result<(), EfgError> {
+    pub fn advance(&mut self) -> Result<(), BodyError> {
         match self {
-            Body::Efg(b) => b.advance(),
+            Body::Efg(b) => Ok(b.advance()?),
             Body::Fem(b) => Ok(b.advance()?),
         }
     }
@@ -102,7 +112,7 @@ impl<'a> BodyRef<'a> {
         }
     }
     /// Bind a sampling point: a shape row (EFG) or an element (FE).
-    pub fn bind(self, p: Vec2) -> Result<At, EfgError> {
+    pub fn bind(self, p: Vec2) -> Result<At, BodyError> {
         match self {
             BodyRef::Efg(b) => {
                 let mut r = ShapeRow::new();
@@ -120,7 +130,7 @@ impl<'a> BodyRef<'a> {
         }
     }
     /// Per-body data for frames: EFG nodal shape rows (FE needs none).
-    pub fn frame_data(self) -> Result<Option<PointShapes>, EfgError> {
+    pub fn frame_data(self) -> Result<Option<PointShapes>, BodyError> {
         match self {
             BodyRef::Efg(b) => Ok(Some(b.nodal_shapes()?)),
             BodyRef::Fem(_) => Ok(None),

@@ -11,7 +11,6 @@ pub mod probe;
 
 use crate::coupling::{CoupledModel, CouplingError};
 use crate::dem::{DemError, Granular};
-use crate::efg::EfgError;
 use crate::efg::boundary::EfgContinuum;
 use crate::fem::FemContinuum;
 use body::{Body, BodyRef};
@@ -23,7 +22,7 @@ use std::ops::ControlFlow;
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
     #[error(transparent)]
-    Body(#[from] EfgError),
+    Body(#[from] body::BodyError),
     #[error(transparent)]
     Dem(#[from] DemError),
     #[error(transparent)]

@@ -13,7 +13,7 @@
 
 use super::{RunError, RunOptions};
 use crate::geom::Vec2;
-use crate::model::body::Body;
+use crate::model::body::{Body, BodyError};
 use crate::model::{Model, Probe, System};
 use crate::output::csv::HistoryWriter;
 use crate::output::vtk::PvdSeries;
@@ -53,7 +53,7 @@ fn record(
     hist.row(&row)
 }
 
-fn body_summary(b: &Body) -> Result<Value, crate::efg::EfgError> {
+fn body_summary(b: &Body) -> Result<Value, BodyError> {
     // Each method's own quadrature for the error norm: EFG 4 × 4 Gauss on
     // a doubled grid, FE 3 × 3 per element half.
     let (method, info, params, tim, grid) = match b {

@@ -41,7 +41,7 @@ struct Watched {
 }
 
 impl EntryWatch {
-    fn new(sc: &Scenario, m: &CoupledModel) -> Result<Self, crate::efg::EfgError> {
+    fn new(sc: &Scenario, m: &CoupledModel) -> Result<Self, crate::model::body::BodyError> {
         let mut bodies = Vec::new();
         for (i, spec) in sc.body.iter().enumerate() {
             let open = Edge::ALL.map(|e| !spec.contact_edges.contains(&e));

@@ -33,8 +33,8 @@ pub enum RunError {
     Model(#[from] ModelError),
 }
 
-impl From<crate::efg::EfgError> for RunError {
-    fn from(e: crate::efg::EfgError) -> Self {
+impl From<crate::model::body::BodyError> for RunError {
+    fn from(e: crate::model::body::BodyError) -> Self {
         RunError::Model(e.into())
     }
 }
