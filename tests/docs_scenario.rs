@@ -10,7 +10,8 @@
 //! - the *example* column of each table passes `efgdem check` once inserted
 //!   into a small scenario of the kind named by the `<!-- examples: … -->`
 //!   comment above the table;
-//! - every tutorial scenario in `docs/tutorial/` passes `efgdem check`.
+//! - every tutorial scenario in `docs/tutorial/` passes `efgdem check`, and
+//!   the TOML excerpts in `docs/tutorial.md` are copied from them.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -857,5 +858,25 @@ fn tutorial_scenarios_pass_check() {
         if let Err(e) = check(f) {
             panic!("{} fails `efgdem check`:\n{e}", f.display());
         }
+    }
+}
+
+#[test]
+fn tutorial_excerpts_are_from_the_tutorial_files() {
+    let dir = root().join("docs/tutorial");
+    let files: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| std::fs::read_to_string(p).unwrap())
+        .collect();
+    let md = std::fs::read_to_string(root().join("docs/tutorial.md")).expect("docs/tutorial.md");
+    let blocks = toml_blocks(&md);
+    assert!(!blocks.is_empty());
+    for (line, text) in blocks {
+        assert!(
+            files.iter().any(|f| f.contains(text.trim())),
+            "docs/tutorial.md:{line}: this excerpt is not (no longer) in any docs/tutorial/*.toml:\n{text}"
+        );
     }
 }
