@@ -275,12 +275,11 @@ fn named_fields(body: &[Tok], rule: Option<&str>) -> Vec<String> {
                 if depth == 0
                     && body.get(i + 1) == Some(&Tok::Punct(':'))
                     && body.get(i + 2) != Some(&Tok::Punct(':'))
-                    && (i == 0 || body[i - 1] != Tok::Punct(':')) =>
+                    && (i == 0 || body[i - 1] != Tok::Punct(':'))
+                    && !serde_flag(&attrs, "skip")
+                    && !serde_flag(&attrs, "flatten") =>
             {
-                if !serde_flag(&attrs, "skip") && !serde_flag(&attrs, "flatten") {
-                    let n = name.strip_prefix("r#").unwrap_or(name);
-                    out.push(serde_str(&attrs, "rename").unwrap_or_else(|| rename_all(n, rule)));
-                }
+                out.push(serde_str(&attrs, "rename").unwrap_or_else(|| rename_all(name, rule)));
             }
             _ => {}
         }
