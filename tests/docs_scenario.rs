@@ -431,16 +431,26 @@ fn scenario_names() -> Names {
 fn code_spans(md: &str) -> Vec<String> {
     let mut out = vec![];
     let mut in_fence = false;
+    // a code span may continue on the next line of its paragraph
+    let mut para = String::new();
     for line in md.lines() {
         if line.trim_start().starts_with("```") {
             in_fence = !in_fence;
+            out.extend(spans_of(&std::mem::take(&mut para)));
             continue;
         }
         if in_fence {
             continue;
         }
-        out.extend(spans_of(line));
+        if line.trim().is_empty() || line.trim_start().starts_with('|') {
+            out.extend(spans_of(&std::mem::take(&mut para)));
+            out.extend(spans_of(line));
+        } else {
+            para.push_str(line);
+            para.push(' ');
+        }
     }
+    out.extend(spans_of(&para));
     out
 }
 
