@@ -59,7 +59,10 @@ pub struct EdgeCondition {
 /// A prescribed displacement component: a number, or `{ linear = [a, b, c] }`
 /// for `a + b x + c y`.
 #[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "a number, { linear = [a, b, c] } (a + b x + c y) or { velocity = v, until_step = N } (no other keys)"
+)]
 pub enum Prescribed {
     Value(f64),
     Linear(LinearField),
