@@ -129,6 +129,18 @@ impl<'a> BodyRef<'a> {
             _ => unreachable!("a probe is bound by its own body"),
         }
     }
+    /// The true fields at reference point `p` (displacement, velocity,
+    /// strain, stress).
+    pub fn sample(self, p: Vec2) -> Result<Sample, BodyError> {
+        Ok(self.sample_at(&self.bind(p)?))
+    }
+    /// Reference position of node `i`.
+    pub fn node(self, i: usize) -> Vec2 {
+        match self {
+            BodyRef::Efg(b) => b.node(i),
+            BodyRef::Fem(b) => b.node(i),
+        }
+    }
     /// Per-body data for frames: EFG nodal shape rows (FE needs none).
     pub fn frame_data(self) -> Result<Option<PointShapes>, BodyError> {
         match self {

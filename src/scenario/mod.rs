@@ -9,6 +9,7 @@
 
 pub mod body;
 pub mod build;
+pub mod builder;
 pub mod generate;
 pub mod granular;
 
