@@ -199,7 +199,7 @@ impl Solver {
     /// exact once the regimes settle). Writes the evaluations at the
     /// solution; returns the number of Newton iterations.
     ///
-    /// Up to [`DENSE_MAX`] contacts the Newton matrix `I − S J` is formed
+    /// Up to `DENSE_MAX` (48) contacts the Newton matrix `I − S J` is formed
     /// and factored; above, each Newton step is solved by GMRES on products
     /// `S x` (right block-Jacobi preconditioner `(I − S_kk J_k)⁻¹`), to a
     /// relative residual of 1e-13. The contact springs are usually much

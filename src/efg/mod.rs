@@ -6,7 +6,6 @@
 //! - [`assemble`]: K, M (via the Gram matrix), C, penalty (E4, E5), in parallel.
 //! - [`penalty`]: the penalty points: `K^α`, `F^α(t)`, the springs' energy and force.
 //! - [`body`]: [`EfgBody`], built from a scenario `[[body]]`.
-//! - [`run`]: the continuum-only driver (`efgdem run` / `check`).
 
 pub mod assemble;
 pub mod body;

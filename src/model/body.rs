@@ -76,7 +76,8 @@ impl Body {
 }
 
 /// A borrowed body of either method: what probes and frames need (the
-/// bodies of a coupled model live inside it as [`Continuum`]s).
+/// bodies of a coupled model live inside it as
+/// [`Continuum`](crate::continuum::Continuum)s).
 #[derive(Clone, Copy)]
 pub enum BodyRef<'a> {
     Efg(&'a EfgBody),
