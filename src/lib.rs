@@ -22,6 +22,7 @@
 //!     .self_weight(false);
 //! let scenario = Scenario::new()
 //!     .dt(1e-4)
+//!     .end_time(0.12)
 //!     .gravity(0.0, -9.81)
 //!     .add_material(Material::new("disc", 1000.0, 1e6, 1e6).friction(0.5))
 //!     .discs("disc", &[[0.9, 0.2, 0.05]])

@@ -104,6 +104,9 @@ friction = 0.5
 material = "grain"
 discs = {{ generate = "hex", box = [[0.0, 0.0], [{width}, {depth}]], radius = {r} }}
 damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+# the footing starts pressed 1 % of a radius into the top row (over 60
+# contacts from the first step)
+allow_overlap = true
 [[wall]]
 name = "floor"
 from = [0.0, 0.0]

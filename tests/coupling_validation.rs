@@ -38,6 +38,8 @@ thickness = 1.0
 discs = [[{x}, {y}, 0.05]]
 velocity = [{vx}, {vy}]
 damping = {damping}
+# discs may start at their static overlap (pre-stressed)
+allow_overlap = true
 
 [[body]]
 name = "block"

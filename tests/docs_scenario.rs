@@ -735,6 +735,14 @@ fn with_example(ctx: &str, lines: &[String]) -> Result<toml::Table, String> {
             sc.insert(path.into(), toml::Value::Table(t));
         }
         "material" | "wall" | "body" => {
+            if path == "body" {
+                // an example rectangle may cover the base's two discs: the
+                // example is about the field, not about the start state
+                sc["granular"]
+                    .as_table_mut()
+                    .unwrap()
+                    .insert("allow_overlap".into(), true.into());
+            }
             let mut t = first(&sc, path);
             merge(&mut t, &ex, &[("velocity", "history")]);
             sc[path].as_array_mut().unwrap()[0] = toml::Value::Table(t);

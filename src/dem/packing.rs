@@ -230,6 +230,29 @@ pub fn grow_in_box(
         .collect())
 }
 
+/// Pairs of discs `(a, b, δ)` (indices into `pos`/`radius`, `a < b`)
+/// overlapping by `δ > tol × min(r_a, r_b)`. Sweep along x: O(n log n)
+/// plus the pairs whose x ranges meet.
+pub fn overlapping_pairs(pos: &[Vec2], radius: &[f64], tol: f64) -> Vec<(usize, usize, f64)> {
+    let r_max = radius.iter().fold(0.0f64, |m, &r| m.max(r));
+    let mut order: Vec<usize> = (0..pos.len()).collect();
+    order.sort_by(|&a, &b| pos[a].x.total_cmp(&pos[b].x));
+    let mut out = Vec::new();
+    for (k, &a) in order.iter().enumerate() {
+        for &b in &order[k + 1..] {
+            if pos[b].x - pos[a].x > radius[a] + r_max {
+                break;
+            }
+            let delta = radius[a] + radius[b] - (pos[b] - pos[a]).norm();
+            if delta > tol * radius[a].min(radius[b]) {
+                out.push((a.min(b), a.max(b), delta));
+            }
+        }
+    }
+    out.sort_by_key(|&(a, b, _)| (a, b));
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -275,5 +298,22 @@ mod tests {
                 assert!((a[i].pos - a[j].pos).norm() > a[i].r + a[j].r);
             }
         }
+    }
+
+    #[test]
+    fn overlapping_pairs_are_found_above_the_tolerance_only() {
+        let pos = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.9995, 0.0), // overlaps disc 0 by 5e-4: below the tolerance
+            Vec2::new(0.0, 1.99),   // overlaps disc 0 by 1e-2
+            Vec2::new(10.0, 0.0),
+            Vec2::new(10.0, 0.0), // same centre as disc 3
+        ];
+        let r = [1.0; 5];
+        let found = overlapping_pairs(&pos, &r, 1e-3);
+        let pairs: Vec<_> = found.iter().map(|&(a, b, _)| (a, b)).collect();
+        assert_eq!(pairs, vec![(0, 2), (3, 4)]);
+        assert!((found[0].2 - 0.01).abs() < 1e-12);
+        assert_eq!(found[1].2, 2.0);
     }
 }

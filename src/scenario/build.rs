@@ -18,7 +18,9 @@ use crate::continuum::ComplianceMode;
 use crate::continuum::Continuum;
 use crate::coupling::CoupledModel;
 use crate::dem::contact::ContactLaw;
-use crate::dem::packing::{DiscRow, Lattice, grow_in_box, lattice_packing, settle_in_box};
+use crate::dem::packing::{
+    DiscRow, Lattice, grow_in_box, lattice_packing, overlapping_pairs, settle_in_box,
+};
 use crate::dem::particles::Particles;
 use crate::dem::walls::{Wall, WallMotion};
 use crate::dem::{BodyDamping, Granular};
@@ -398,8 +400,126 @@ pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
             }
         }
     };
+    if let Some(g) = model.granular() {
+        start_state(sc, g)?;
+    }
     probes(sc, &model)?;
     Ok(model)
+}
+
+/// Overlap accepted at the start, relative to the smaller radius.
+pub const START_OVERLAP_TOL: f64 = 1e-3;
+
+/// Impossible start states: discs overlapping each other, a wall or a body
+/// (reference configuration) by more than [`START_OVERLAP_TOL`] of the
+/// smaller radius (unless `allow_overlap` or a packing efgdem settled), and
+/// a time step above the DEM critical step.
+fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
+    let crit = g.critical_dt();
+    if g.dt > crit {
+        return Err(bad(
+            "simulation.dt",
+            format!(
+                "dt = {:e} is {:.2} × the DEM critical step 2√(m_min/k_max) = {crit:e}: the central difference is unstable; use at most {:e} (0.2 × critical)",
+                g.dt,
+                g.dt / crit,
+                0.2 * crit
+            ),
+        ));
+    }
+    let spec = spec(sc)?;
+    let settled = matches!(&spec.discs, DiscsSpec::Table(t)
+        if t.generate.is_some() && matches!(t.method, Packing::Deposit | Packing::Grow));
+    if spec.allow_overlap || settled {
+        return Ok(());
+    }
+    let p = &g.particles;
+    let tol = START_OVERLAP_TOL;
+    let list = |v: &[(usize, f64)]| {
+        let mut s: Vec<String> = v
+            .iter()
+            .take(5)
+            .map(|(id, d)| format!("disc {} (overlap {d:.3e})", id + 1))
+            .collect();
+        if v.len() > 5 {
+            s.push(format!("and {} more", v.len() - 5));
+        }
+        s.join(", ")
+    };
+    let hint =
+        "move them apart, or set `allow_overlap = true` in [granular] for a pre-stressed packing";
+    let pairs = overlapping_pairs(&p.pos, &p.radius, tol);
+    if !pairs.is_empty() {
+        let shown: Vec<String> = pairs
+            .iter()
+            .take(5)
+            .map(|&(a, b, d)| {
+                format!(
+                    "discs {} and {} (overlap {d:.3e})",
+                    p.id[a] + 1,
+                    p.id[b] + 1
+                )
+            })
+            .collect();
+        return Err(bad(
+            "granular.discs",
+            format!(
+                "{} pair(s) of discs overlap at the start by more than {tol} of the smaller radius: {}{}; {hint}",
+                pairs.len(),
+                shown.join(", "),
+                if pairs.len() > 5 { ", …" } else { "" }
+            ),
+        ));
+    }
+    for (wi, w) in g.walls.iter().enumerate() {
+        let hits: Vec<(usize, f64)> = (0..p.len())
+            .filter_map(|k| {
+                let d = p.radius[k] - (w.closest(p.pos[k]) - p.pos[k]).norm();
+                (d > tol * p.radius[k]).then_some((p.id[k] as usize, d))
+            })
+            .collect();
+        if !hits.is_empty() {
+            return Err(bad(
+                &format!("wall.{wi}"),
+                format!(
+                    "{} disc(s) cross wall `{}` at the start: {}; {hint}",
+                    hits.len(),
+                    w.name,
+                    list(&hits)
+                ),
+            ));
+        }
+    }
+    for (bi, b) in sc.body.iter().enumerate() {
+        let lo = Vec2::from(b.rectangle.origin);
+        let hi = lo + Vec2::from(b.rectangle.size);
+        let hits: Vec<(usize, f64)> = (0..p.len())
+            .filter_map(|k| {
+                let x = p.pos[k];
+                let c = Vec2::new(x.x.clamp(lo.x, hi.x), x.y.clamp(lo.y, hi.y));
+                let inside = c == x;
+                let d = if inside {
+                    // centre inside: overlap = r + distance to the nearest edge
+                    p.radius[k] + (x.x - lo.x).min(hi.x - x.x).min(x.y - lo.y).min(hi.y - x.y)
+                } else {
+                    p.radius[k] - (c - x).norm()
+                };
+                (d > tol * p.radius[k]).then_some((p.id[k] as usize, d))
+            })
+            .collect();
+        if !hits.is_empty() {
+            return Err(bad(
+                &format!("body.{bi}"),
+                format!(
+                    "{} disc(s) overlap body `{}` at the start: {}; {hint}",
+                    hits.len(),
+                    b.name,
+                    list(&hits)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Bind every `[[probe]]` to its target in `model`, in scenario order.

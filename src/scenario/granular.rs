@@ -45,6 +45,13 @@ pub struct GranularSpec {
     pub skin: Option<f64>,
     /// Initial velocity of every disc (default at rest).
     pub velocity: Option<[f64; 2]>,
+    /// Accept discs that overlap each other, a wall or a body at the start
+    /// by more than 1e-3 of the smaller radius (a pre-stressed packing,
+    /// e.g. a settled bed read from CSV). Default false: such a start state
+    /// is an error. Packings generated with `method = "deposit"` or
+    /// `"grow"` are settled by efgdem and always accepted.
+    #[serde(default)]
+    pub allow_overlap: bool,
 }
 
 /// The discs: inline `[x, y, r]` rows or a table (CSV file or generator).

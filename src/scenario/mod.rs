@@ -445,6 +445,23 @@ impl Scenario {
             p.non_negative(m.friction, at("friction"));
             p.non_negative(m.cohesion, at("cohesion"));
         }
+        let dynamic = sim.analysis == Analysis::Dynamic || self.granular.is_some();
+        p.check(
+            !dynamic || sim.steps.is_some() || sim.end_time.is_some(),
+            "simulation",
+            "give `steps` or `end_time`: how long to run",
+        );
+        let mut probe_names = std::collections::HashSet::new();
+        for (i, pr) in self.probe.iter().enumerate() {
+            p.check(
+                probe_names.insert(pr.name.as_str()),
+                format!("probe.{i}.name"),
+                format!(
+                    "probe `{}` is defined twice (one history column each)",
+                    pr.name
+                ),
+            );
+        }
         p.check(
             !self.body.is_empty() || self.granular.is_some(),
             "",

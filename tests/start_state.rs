@@ -1,0 +1,152 @@
+//! Impossible start states are refused by `efgdem check` (and `run`) with
+//! `file:line: field: message` and exit code 2 (issue 12).
+
+use std::process::Command;
+
+const BASE: &str = r#"[simulation]
+dt = 1.0e-5
+steps = 10
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "m"
+density = 1000.0
+kn = 1.0e6
+ks = 1.0e6
+
+[granular]
+material = "m"
+DISCS
+"#;
+
+/// Run `efgdem check` on `text`; (exit code, stderr).
+fn check(name: &str, text: &str) -> (i32, String) {
+    let dir = std::env::temp_dir().join(format!("efgdem-start-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join(format!("{name}.toml"));
+    std::fs::write(&f, text).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_efgdem"))
+        .arg("check")
+        .arg(&f)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn with_discs(discs: &str) -> String {
+    BASE.replace("DISCS", discs)
+}
+
+#[test]
+fn discs_at_the_same_centre_or_overlapping_are_refused() {
+    let (code, err) = check(
+        "same_centre",
+        &with_discs("discs = [[0.0, 0.0, 0.05], [0.5, 0.5, 0.05], [0.0, 0.0, 0.05]]"),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("same_centre.toml:14: granular.discs:"),
+        "{err}"
+    );
+    assert!(err.contains("discs 1 and 3 (overlap 1.000e-1)"), "{err}");
+    // 1 % of a radius overlap: refused; 0.05 % of a radius: accepted
+    let (code, err) = check(
+        "overlap",
+        &with_discs("discs = [[0.0, 0.0, 0.05], [0.0995, 0.0, 0.05]]"),
+    );
+    assert_eq!(code, 2, "{err}");
+    let (code, err) = check(
+        "touching",
+        &with_discs("discs = [[0.0, 0.0, 0.05], [0.099975, 0.0, 0.05]]"),
+    );
+    assert_eq!(code, 0, "{err}");
+    // a pre-stressed packing, said so
+    let (code, err) = check(
+        "allowed",
+        &with_discs("discs = [[0.0, 0.0, 0.05], [0.0995, 0.0, 0.05]]\nallow_overlap = true"),
+    );
+    assert_eq!(code, 0, "{err}");
+}
+
+#[test]
+fn a_disc_inside_a_body_or_across_a_wall_is_refused() {
+    let body = r#"
+[[body]]
+name = "block"
+rectangle = { origin = [0.0, 0.0], size = [1.0, 0.2] }
+nodes = [11, 3]
+elastic = { E = 1.0e8, nu = 0.3, density = 2000.0 }
+[[body.bc]]
+edge = "bottom"
+fixed = true
+"#;
+    let (code, err) = check(
+        "inside",
+        &(with_discs("discs = [[0.5, 0.1, 0.05], [0.5, 0.3, 0.05]]") + body),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("inside.toml:17: body[0]: 1 disc(s) overlap body `block`"),
+        "{err}"
+    );
+    assert!(err.contains("disc 1 (overlap 1.500e-1)"), "{err}");
+    let wall = "\n[[wall]]\nname = \"floor\"\nfrom = [-1.0, 0.0]\nto = [1.0, 0.0]\n";
+    let (code, err) = check(
+        "across",
+        &(with_discs("discs = [[0.0, 0.02, 0.05], [0.5, 0.06, 0.05]]") + wall),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("across.toml:17: wall[0]: 1 disc(s) cross wall `floor`"),
+        "{err}"
+    );
+}
+
+#[test]
+fn missing_duration_duplicate_probes_and_unstable_dt_are_refused() {
+    let one = "discs = [[0.0, 0.0, 0.05]]";
+    let (code, err) = check("no_steps", &with_discs(one).replace("steps = 10\n", ""));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("no_steps.toml:1: simulation: give `steps` or `end_time`"),
+        "{err}"
+    );
+    let probes = "\n[[probe]]\nname = \"ke\"\nquantity = \"kinetic\"\n[[probe]]\nname = \"ke\"\nquantity = \"total_energy\"\n";
+    let (code, err) = check("dup", &(with_discs(one) + probes));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("dup.toml:20: probe[1].name: probe `ke` is defined twice"),
+        "{err}"
+    );
+    // critical step 2√(m/k) = 2√(7.85/1e6) ≈ 5.6e-3: dt = 1e-2 is above it
+    let (code, err) = check(
+        "big_dt",
+        &with_discs(one).replace("dt = 1.0e-5", "dt = 1.0e-2"),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("big_dt.toml:2: simulation.dt: dt = 1e-2 is 1.78 × the DEM critical step"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_probe_naming_a_missing_disc_is_found_by_check() {
+    let probe = "\n[[probe]]\nname = \"x9\"\ndisc = 9\nquantity = \"x\"\n";
+    let (code, err) = check(
+        "missing_disc",
+        &(with_discs(
+            "discs = { generate = \"square\", box = [[0.0, 0.0], [0.4, 0.2]], radius = 0.05 }",
+        ) + probe),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains(
+            "missing_disc.toml:18: probe[0].disc: disc 9 does not exist (the assembly has 8 discs"
+        ),
+        "{err}"
+    );
+}
