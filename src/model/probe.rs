@@ -64,7 +64,8 @@ pub enum Probe {
         quantity: String,
     },
     /// An assembly-wide quantity: `kinetic`, `rotational`, `spring`,
-    /// `gravity_energy`, `total`, `contacts` (disc–body contacts included).
+    /// `gravity_energy`, `total_energy`, `contacts` (disc–body contacts
+    /// included).
     Global {
         /// The quantity's name.
         quantity: String,
