@@ -73,8 +73,8 @@ pub enum Prescribed {
     Value(f64),
     /// `ū = a + b x + c y` at the reference position.
     Linear(LinearField),
-    /// An edge moving at constant velocity; `ū = v t` (see
-    /// [`MotionField::displacement`]), zero at t = 0.
+    /// An edge moving at constant velocity for `until_step` steps: `ū` is
+    /// [`MotionField::displacement`], zero at t = 0.
     Motion(MotionField),
 }
 
