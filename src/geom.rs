@@ -5,17 +5,22 @@ use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 /// A 2D vector or point, `f64` components.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Vec2 {
+    /// x component (horizontal).
     pub x: f64,
+    /// y component (vertical, up; gravity is usually −y).
     pub y: f64,
 }
 
 impl Vec2 {
+    /// The zero vector / origin.
     pub const ZERO: Vec2 = Vec2 { x: 0.0, y: 0.0 };
 
+    /// `(x, y)`.
     #[inline]
     pub const fn new(x: f64, y: f64) -> Self {
         Vec2 { x, y }
     }
+    /// Scalar product `self · o`.
     #[inline]
     pub fn dot(self, o: Vec2) -> f64 {
         self.x * o.x + self.y * o.y
@@ -25,10 +30,12 @@ impl Vec2 {
     pub fn cross(self, o: Vec2) -> f64 {
         self.x * o.y - self.y * o.x
     }
+    /// Squared Euclidean length `|self|²`.
     #[inline]
     pub fn norm2(self) -> f64 {
         self.dot(self)
     }
+    /// Euclidean length `|self|`.
     #[inline]
     pub fn norm(self) -> f64 {
         self.norm2().sqrt()
@@ -38,6 +45,7 @@ impl Vec2 {
     pub fn perp(self) -> Vec2 {
         Vec2::new(-self.y, self.x)
     }
+    /// `[x, y]`.
     #[inline]
     pub fn to_array(self) -> [f64; 2] {
         [self.x, self.y]

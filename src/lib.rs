@@ -67,6 +67,8 @@
 //! 7. [`output`]: history CSV, ParaView files, JSON, plots, progress.
 //! 8. [`run`], then [`study`] and [`reproduce`]: drivers.
 
+#![warn(missing_docs)]
+
 pub mod continuum;
 pub mod coupling;
 pub mod dem;

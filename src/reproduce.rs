@@ -20,16 +20,25 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// The paper's scenarios, built in (also shipped in `examples/`).
+// The paper's scenarios, built in (also shipped in `examples/`).
+
+/// Example 1 (§4.1): a disc dropped on the free end of an EFG cantilever
+/// (`examples/paper_cantilever_disc.toml`).
 pub const EXAMPLE1: &str = include_str!("../examples/paper_cantilever_disc.toml");
+/// Example 2 (§4.2), Tests 1 and 2: the nine discs with the left plate an
+/// EFG strip (`examples/paper_nine_disc_test{1,2}.toml`).
 pub const NINE_DISC_EFG: [&str; 2] = [
     include_str!("../examples/paper_nine_disc_test1.toml"),
     include_str!("../examples/paper_nine_disc_test2.toml"),
 ];
+/// Example 2, Tests 1 and 2, FE–DE version (§4.2.1): the left plate a Q4
+/// strip on the EFG grid (`examples/fem_nine_disc_test{1,2}.toml`).
 pub const NINE_DISC_FEM: [&str; 2] = [
     include_str!("../examples/fem_nine_disc_test1.toml"),
     include_str!("../examples/fem_nine_disc_test2.toml"),
 ];
+/// Cundall & Strack's nine-disc Tests 1 and 2 with four rigid plates
+/// (`examples/nine_disc_rigid_test{1,2}.toml`).
 pub const NINE_DISC_RIGID: [&str; 2] = [
     include_str!("../examples/nine_disc_rigid_test1.toml"),
     include_str!("../examples/nine_disc_rigid_test2.toml"),
@@ -43,18 +52,30 @@ pub const E_FIG17: f64 = 1.0e12;
 /// Why `reproduce` failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ReproduceError {
+    /// A built-in scenario did not parse or build.
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
+    /// One of the runs failed.
     #[error("run `{name}`: {source}")]
-    Run { name: String, source: RunError },
+    Run {
+        /// The run's name (its output directory).
+        name: String,
+        /// Why it failed.
+        source: RunError,
+    },
+    /// A coupled step outside `run` failed.
     #[error(transparent)]
     Coupling(#[from] CouplingError),
+    /// A figure could not be drawn.
     #[error(transparent)]
     Plot(#[from] PlotError),
+    /// An EFG body failed (static solve or sampling).
     #[error(transparent)]
     Efg(#[from] crate::efg::EfgError),
+    /// Writing or reading an output file failed.
     #[error("i/o: {0}")]
     Io(#[from] std::io::Error),
+    /// A result is missing or not what the report expects.
     #[error("{0}")]
     Data(String),
 }

@@ -19,12 +19,16 @@ use std::sync::Arc;
 /// Errors of the sparse linear algebra.
 #[derive(Debug, thiserror::Error)]
 pub enum SparseError {
+    /// Cholesky met a non-positive pivot (its column, in the fill-reducing
+    /// order): the matrix is singular or indefinite.
     #[error(
         "the matrix is not positive definite (pivot {0}); check the boundary conditions (is the body fixed somewhere?) and the material"
     )]
     NotPositiveDefinite(usize),
+    /// Any other failure reported by faer.
     #[error("sparse factorisation failed: {0}")]
     Faer(String),
+    /// [`SymCsc::combine`] of matrices on different patterns.
     #[error("matrices on different sparsity patterns cannot be combined")]
     PatternMismatch,
 }
@@ -34,12 +38,16 @@ pub enum SparseError {
 /// the first one being `j` itself).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pattern {
+    /// Order of the matrix.
     pub n: usize,
+    /// Column starts into `row_idx`, `n + 1` entries.
     pub col_ptr: Vec<usize>,
+    /// Row of each stored entry.
     pub row_idx: Vec<usize>,
 }
 
 impl Pattern {
+    /// Stored entries (lower triangle with the diagonal).
     pub fn nnz(&self) -> usize {
         self.row_idx.len()
     }
@@ -73,15 +81,19 @@ impl Pattern {
 /// A symmetric matrix: lower-triangle values on a shared [`Pattern`].
 #[derive(Debug, Clone)]
 pub struct SymCsc {
+    /// The shared sparsity pattern.
     pub pattern: Arc<Pattern>,
+    /// Value of each stored entry, in pattern order.
     pub values: Vec<f64>,
 }
 
 impl SymCsc {
+    /// The zero matrix on `pattern`.
     pub fn zeros(pattern: Arc<Pattern>) -> Self {
         let values = vec![0.0; pattern.nnz()];
         SymCsc { pattern, values }
     }
+    /// Order of the matrix.
     pub fn n(&self) -> usize {
         self.pattern.n
     }
@@ -158,6 +170,7 @@ impl SymCsc {
 /// gathered), for products `(A x)_i` on those rows only.
 #[derive(Debug, Clone)]
 pub struct RowSelection {
+    /// The selected rows, ascending.
     pub rows: Vec<usize>,
     /// Per selected row `start[r]..start[r + 1]`: columns and the positions
     /// of their values in the lower-triangle storage.

@@ -23,10 +23,13 @@ pub const ENERGY_FACTOR: f64 = 10.0;
 /// One trial run.
 #[derive(Debug, Clone)]
 pub struct Trial {
+    /// The time step tried.
     pub dt: f64,
+    /// Completed with a finite state and bounded stored energy.
     pub bounded: bool,
     /// Why it is not bounded (or "ok").
     pub reason: String,
+    /// Wall time of the trial (s).
     pub seconds: f64,
 }
 
@@ -37,6 +40,7 @@ pub struct DtStudy {
     pub dt_critical: f64,
     /// Largest bounded Δt found (within `rel_tol`), if any.
     pub dt_max: Option<f64>,
+    /// Every trial run, in the order run.
     pub trials: Vec<Trial>,
 }
 

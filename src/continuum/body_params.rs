@@ -15,11 +15,16 @@ fn one() -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum MassKind {
+    /// `M_IJ = ∫_Ω Φ_Iᵀ ρ Φ_J dΩ` (Eq. 23).
     #[default]
     Consistent,
+    /// Diagonal: each row of the consistent matrix summed onto the
+    /// diagonal (FE bodies only).
     Lumped,
 }
 
+/// An axis-aligned rectangle in the reference configuration: the domain Ω
+/// of a body.
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Rectangle {
@@ -44,6 +49,7 @@ pub struct Elastic {
     /// Out-of-plane thickness t.
     #[serde(default = "one")]
     pub thickness: f64,
+    /// Plane stress (default) or plane strain: which `D` (Eq. 31 or 32).
     #[serde(default)]
     pub plane: Plane,
 }
@@ -52,8 +58,10 @@ pub struct Elastic {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Plane {
+    /// Plane stress, `σ_zz = 0` (Eq. 31).
     #[default]
     Stress,
+    /// Plane strain, `ε_zz = 0` (Eq. 32).
     Strain,
 }
 
@@ -72,6 +80,7 @@ pub struct BodyParams {
     pub gauss: usize,
     /// Support size factor: `d_mI = d_max · c_I` (Eqs. 7–8, EFG).
     pub d_max: f64,
+    /// Elastic constants, density, thickness and plane assumption.
     pub elastic: Elastic,
     /// Damping coefficient `c` of Eq. (24): `C = ∫Φᵀ c Φ`.
     pub damping: f64,

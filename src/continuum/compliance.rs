@@ -77,6 +77,7 @@ impl BoundaryGreen {
         self.dofs.len()
     }
 
+    /// No DOF in `B` yet.
     pub fn is_empty(&self) -> bool {
         self.dofs.is_empty()
     }
@@ -317,6 +318,7 @@ impl PointRows {
         self.start.len().saturating_sub(1) / 2
     }
 
+    /// No unknowns.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

@@ -10,9 +10,13 @@ use serde::Deserialize;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Edge {
+    /// `x = x₀` (reference configuration).
     Left,
+    /// `x = x₀ + width`.
     Right,
+    /// `y = y₀ + height`.
     Top,
+    /// `y = y₀`.
     Bottom,
 }
 
@@ -37,6 +41,7 @@ impl Edge {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EdgeCondition {
+    /// The edge the condition acts on (Γu or Γt).
     pub edge: Edge,
     /// Optional name, used by `initial.static_under`.
     pub name: Option<String>,
@@ -64,8 +69,12 @@ pub struct EdgeCondition {
     expecting = "a number, { linear = [a, b, c] } (a + b x + c y) or { velocity = v, until_step = N } (no other keys)"
 )]
 pub enum Prescribed {
+    /// A constant ū.
     Value(f64),
+    /// `ū = a + b x + c y` at the reference position.
     Linear(LinearField),
+    /// An edge moving at constant velocity for `until_step` steps: `ū` is
+    /// [`MotionField::displacement`], zero at t = 0.
     Motion(MotionField),
 }
 
@@ -75,7 +84,10 @@ pub enum Prescribed {
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MotionField {
+    /// Velocity `v` of the prescribed component (length per time; sign
+    /// along +x or +y).
     pub velocity: f64,
+    /// Number of steps after which the edge stops; `None`: never.
     pub until_step: Option<usize>,
 }
 
@@ -87,13 +99,18 @@ impl MotionField {
     }
 }
 
+/// `{ linear = [a, b, c] }`: the field `a + b x + c y`.
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LinearField {
+    /// Coefficients `[a, b, c]` of `a + b x + c y`.
     pub linear: [f64; 3],
 }
 
 impl Prescribed {
+    /// The value at the reference point `(x, y)`: the constant, the linear
+    /// field, or 0 for a motion (the motion's `v t` is added per step by
+    /// the body, see [`MotionField::displacement`]).
     pub fn at(&self, x: f64, y: f64) -> f64 {
         match *self {
             Prescribed::Value(v) => v,
@@ -116,6 +133,7 @@ impl Prescribed {
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TimoshenkoSpec {
+    /// End shear `P` (force per unit thickness; positive along +y).
     #[serde(rename = "P")]
     pub p: f64,
 }

@@ -25,10 +25,16 @@ pub fn elasticity(e: f64, nu: f64, plane_strain: bool) -> [f64; 4] {
 /// Material data of a body.
 #[derive(Debug, Clone, Copy)]
 pub struct Material {
+    /// Young's modulus E.
     pub e: f64,
+    /// Poisson's ratio ν.
     pub nu: f64,
+    /// Mass density ρ (per unit volume; the mass matrix multiplies by the
+    /// thickness).
     pub density: f64,
+    /// Out-of-plane thickness t; stiffness, mass and body force scale with it.
     pub thickness: f64,
+    /// Plane stress or plane strain.
     pub plane: Plane,
     /// Damping coefficient c (Eq. 24).
     pub damping: f64,

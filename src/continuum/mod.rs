@@ -162,7 +162,9 @@ pub struct BodyEnergies {
 #[derive(Debug, thiserror::Error)]
 #[error("body `{body}`: {message}")]
 pub struct SolveError {
+    /// Name of the body.
     pub body: String,
+    /// What went wrong (e.g. the factorisation failed).
     pub message: String,
 }
 
@@ -226,7 +228,9 @@ pub trait Continuum: Send {
 /// ([`FemBody`](crate::fem::FemBody)). Its rows `φ_J(x)` interpolate
 /// displacement and velocity and distribute point loads (E7).
 pub trait ContactBody: Send + Sync + 'static {
+    /// The body's own error (building a row, solving a step).
     type Error: std::fmt::Display;
+    /// Name (for messages and outputs).
     fn name(&self) -> &str;
     /// Origin and size of the rectangle, node grid `[nx, ny]`.
     fn grid(&self) -> (Vec2, Vec2, [usize; 2]);
@@ -260,6 +264,8 @@ pub trait ContactBody: Send + Sync + 'static {
     fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64);
     /// Accept the step, clear the point loads.
     fn commit(&mut self) -> Result<(), Self::Error>;
+    /// Kinetic, strain and penalty energy and load work of the present
+    /// state.
     fn energies(&self) -> BodyEnergies;
 }
 
@@ -298,6 +304,7 @@ pub const MAX_GREEN_BYTES: usize = 2 << 30;
 /// points whose rows are computed once, at their true displaced positions
 /// (E7). The [`Continuum`] the coupling drives, for EFG and FE alike.
 pub struct WithBoundary<B> {
+    /// The wrapped EFG or FE body.
     pub body: B,
     chains: Vec<BoundaryChain>,
     /// Per chain, per point: its row.
@@ -307,6 +314,7 @@ pub struct WithBoundary<B> {
     /// The step's functionals: per point its `x` and `y` rows, then per
     /// stiffness term its two functionals (`[(DOF, coefficient)]`).
     functionals: Vec<Vec<(usize, f64)>>,
+    /// How the compliance `S` of the implicit step is computed.
     pub mode: ComplianceMode,
     /// `G`, built at the first implicit step with contacts.
     green: Option<BoundaryGreen>,

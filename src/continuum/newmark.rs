@@ -18,8 +18,11 @@ use crate::sparse::{Cholesky, SparseError, SymCsc};
 /// Newmark parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NewmarkParams {
+    /// Time step Δt.
     pub dt: f64,
+    /// γ (the paper's β₁, ERRATA E9).
     pub gamma: f64,
+    /// β (the paper's β₂/2, ERRATA E9).
     pub beta: f64,
 }
 
@@ -41,12 +44,17 @@ impl NewmarkParams {
 /// Displacement, velocity and acceleration (nodal parameters).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct State {
+    /// `U`: nodal parameters `u_I` (Eq. 12), interleaved `[u_x, u_y]` per
+    /// node; for EFG not the displacement at the node (no Kronecker delta).
     pub u: Vec<f64>,
+    /// `U̇`, same layout.
     pub v: Vec<f64>,
+    /// `Ü`, same layout.
     pub a: Vec<f64>,
 }
 
 impl State {
+    /// A body at rest: `n` unknowns (2 per node), all zero.
     pub fn zeros(n: usize) -> Self {
         State {
             u: vec![0.0; n],
@@ -59,10 +67,15 @@ impl State {
 /// A Newmark integrator with its factored effective matrix.
 #[derive(Debug)]
 pub struct Newmark {
+    /// Δt, γ, β.
     pub params: NewmarkParams,
     alpha: [f64; 6],
+    /// Mass matrix `M` (Eq. 23).
     pub mass: SymCsc,
+    /// Damping matrix `C` (Eq. 24); `None` if `c = 0`.
     pub damping: Option<SymCsc>,
+    /// Stiffness `K̄ = K + K^α` (Eq. 60, penalty per ERRATA E4; an FE body:
+    /// `K` with the prescribed DOFs decoupled, no penalty).
     pub stiffness: SymCsc,
     factor: Cholesky,
     rhs: Vec<f64>,

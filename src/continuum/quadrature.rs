@@ -6,7 +6,10 @@ use crate::geom::Vec2;
 /// A quadrature point: position and weight (area or length, Jacobian included).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct QuadPoint {
+    /// Position (reference configuration).
     pub x: Vec2,
+    /// Weight: area (domain) or length (edge) it stands for, without the
+    /// thickness.
     pub w: f64,
 }
 

@@ -9,12 +9,20 @@ use crate::geom::Vec2;
 /// `E/(1 − ν²)` and `ν/(1 − ν)` (see [`Timoshenko::new`]).
 #[derive(Debug, Clone, Copy)]
 pub struct Timoshenko {
+    /// End shear `P` (force per unit thickness; positive along +y, so the
+    /// tip deflects upward).
     pub p: f64,
+    /// Length L.
     pub l: f64,
+    /// Depth D (`I = D³/12` per unit thickness).
     pub d: f64,
+    /// Young's modulus (plane-stress equivalent if built for plane strain).
     pub e: f64,
+    /// Poisson's ratio (plane-stress equivalent if built for plane strain).
     pub nu: f64,
+    /// x of the clamped end.
     pub x0: f64,
+    /// y of the centre line.
     pub yc: f64,
 }
 

@@ -9,13 +9,18 @@ use crate::geom::Vec2;
 /// Energy account of the coupled system (all in the scenario's units).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct EnergyAccount {
+    /// Kinetic energy of the discs, translational `½mv²` plus rotational
+    /// `½Iω²`.
     pub kin_dem: f64,
+    /// Kinetic energy of the bodies, `Σ ½U̇ᵀMU̇`.
     pub kin_body: f64,
     /// Elastic strain energy of the bodies, `Σ ½UᵀKU`.
     pub strain: f64,
     /// Energy of the bodies' penalty springs (EFG prescribed edges), from
     /// their gap to the prescribed displacement.
     pub penalty: f64,
+    /// Energy in the contact springs: disc–disc and disc–wall (DEM) and
+    /// disc–body.
     pub contact: f64,
     /// Work of gravity on the discs, of the bodies' permanent loads and
     /// moving edges, and of the walls since t = 0.
@@ -44,6 +49,8 @@ pub struct WorkMeter {
 }
 
 impl WorkMeter {
+    /// Start the account at the present state of `m` (t = 0): its
+    /// dissipated energy is zero there.
     pub fn new(m: &CoupledModel) -> Self {
         let p = &m.granular.particles;
         let mut x0 = vec![Vec2::ZERO; p.len()];
@@ -65,6 +72,7 @@ impl WorkMeter {
             self.wall_work -= w.force.dot(w.vel) * g.dt;
         }
     }
+    /// The energy account of the present state of `m`.
     pub fn account(&self, m: &CoupledModel) -> EnergyAccount {
         let g = &m.granular;
         let p = &g.particles;

@@ -27,10 +27,12 @@ pub enum Feature {
 /// A disc touching a boundary chain.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Touch {
+    /// The segment or chain point touched (Fig. 5).
     pub feature: Feature,
     /// Segment holding the contact point and the parameter `s ∈ [0, 1]` on
     /// it (for a point contact: an adjacent segment, `s` = 0 or 1).
     pub seg: usize,
+    /// Parameter `s ∈ [0, 1]` of `H` on segment `seg`, from its first point.
     pub s: f64,
     /// Contact point `H` on the current boundary.
     pub point: Vec2,

@@ -39,15 +39,21 @@ use std::time::Instant;
 /// next keeps its shear force.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BodyContact {
+    /// Disc id (stable; not the DEM slot, which changes when the DEM
+    /// reorders its discs).
     pub disc: u32,
+    /// Index of the body in [`CoupledModel::bodies`].
     pub body: u16,
+    /// Index of the chain in the body's
+    /// [`contact_boundary`](Continuum::contact_boundary).
     pub chain: u16,
     /// Shear force history along `t = perp(n_disc→body)`.
     pub fs: f64,
     /// Overlap at the last evaluation.
     pub overlap: f64,
-    /// Elastic normal force `k_n δ` and total normal force (with dashpot).
+    /// Elastic normal force `k_n δ` (Eq. 35, E6).
     pub fn_elastic: f64,
+    /// Total normal force `k_n δ + β k_n δ̇` (with dashpot, E6).
     pub fn_total: f64,
     /// Force on the disc.
     pub force: Vec2,
@@ -70,7 +76,9 @@ impl BodyContact {
 
 /// A granular assembly coupled with continuum bodies.
 pub struct CoupledModel {
+    /// The discs, walls and their contacts (DEM).
     pub granular: Granular,
+    /// The continuum bodies (EFG or FE), in scenario order.
     pub bodies: Vec<Box<dyn Continuum>>,
     /// Contact law of body `b` against disc material `a`: `body_laws[b * n_mat + a]`.
     pub body_laws: Vec<ContactLaw>,
@@ -147,14 +155,23 @@ struct Load {
 /// Why a coupled step failed.
 #[derive(Debug, thiserror::Error)]
 pub enum CouplingError {
+    /// A body's Newmark step failed.
     #[error(transparent)]
     Solve(#[from] crate::continuum::SolveError),
+    /// The DEM step failed.
     #[error(transparent)]
     Dem(#[from] crate::dem::DemError),
+    /// A disc's state became non-finite.
     #[error(
         "the discs became unstable at step {step} (non-finite state); reduce dt (DEM critical step {dt_crit:e})"
     )]
-    Unstable { step: usize, dt_crit: f64 },
+    Unstable {
+        /// DEM steps done when it was detected (with sub-cycling, n per
+        /// body step).
+        step: usize,
+        /// The DEM critical time step `2√(m_min/k_max)` (ERRATA E11).
+        dt_crit: f64,
+    },
 }
 
 impl CoupledModel {

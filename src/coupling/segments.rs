@@ -10,8 +10,9 @@ use crate::geom::Vec2;
 /// covers.
 #[derive(Debug, Default)]
 pub struct SegmentGrid {
-    /// Bounding box of the chain's points.
+    /// Lower-left corner of the bounding box of the chain's current points.
     pub chain_lo: Vec2,
+    /// Upper-right corner of the same box.
     pub chain_hi: Vec2,
     lo: Vec2,
     cell: f64,

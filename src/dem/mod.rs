@@ -51,33 +51,50 @@ pub enum DemError {
     /// The scenario is valid TOML but cannot be built (e.g. a bad disc file).
     #[error("{0}")]
     Input(String),
+    /// An i/o error.
     #[error("i/o: {0}")]
     Io(#[from] std::io::Error),
     /// A disc position or velocity became non-finite.
     #[error(
         "the assembly became unstable at step {step} (non-finite disc state); reduce dt (critical step {dt_crit:e})"
     )]
-    Unstable { step: usize, dt_crit: f64 },
+    Unstable {
+        /// Steps done when it was detected.
+        step: usize,
+        /// The critical step `2√(m_min/k_max)` ([`Granular::critical_dt`]).
+        dt_crit: f64,
+    },
 }
 
 /// Damping that acts on each disc's motion rather than in the contacts.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum BodyDamping {
+    /// No damping of the discs' motion (contact dashpots only).
     #[default]
     None,
     /// Cundall's non-viscous local damping: each component of the
     /// out-of-balance force (and the moment) is reduced by `α|F|`, against
     /// the velocity: `F ← F − α|F| sign(v)` (as in PFC and Yade).
-    Local { alpha: f64 },
+    Local {
+        /// Damping ratio α, 0 ≤ α < 1.
+        alpha: f64,
+    },
     /// Global mass damping of Eqs. (33)–(34): `m ü + c u̇ = F`,
     /// `I θ̈ + c* θ̇ = M`, integrated with the central difference.
-    Mass { c: f64, c_rot: f64 },
+    Mass {
+        /// Translational coefficient `c` (force per velocity).
+        c: f64,
+        /// Rotational coefficient `c*` (moment per angular velocity).
+        c_rot: f64,
+    },
 }
 
 /// Kinetic, rotational and contact-spring energies.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct Energies {
+    /// Translational kinetic energy `Σ ½ m v²`.
     pub kinetic: f64,
+    /// Rotational kinetic energy `Σ ½ I ω²`.
     pub rotational: f64,
     /// `½k_nδ² + F_s²/(2k_s)` over all contacts (disc–disc and disc–wall).
     pub spring: f64,
@@ -86,6 +103,7 @@ pub struct Energies {
 }
 
 impl Energies {
+    /// Kinetic + rotational + spring + gravity potential.
     pub fn total(&self) -> f64 {
         self.kinetic + self.rotational + self.spring + self.gravity
     }
@@ -94,7 +112,9 @@ impl Energies {
 /// A granular assembly: discs, walls, contact laws and contact state.
 #[derive(Debug, Clone)]
 pub struct Granular {
+    /// The discs, in slots (see the module doc on slots vs ids).
     pub particles: Particles,
+    /// The rigid walls, in scenario order.
     pub walls: Vec<Wall>,
     /// Per-material contact parameters (own values, dashpots from the damping).
     pub materials: Vec<ContactLaw>,
@@ -104,14 +124,19 @@ pub struct Granular {
     pub wall_laws: Vec<ContactLaw>,
     /// [`ContactLaw::dashpot_terms`] of each entry of `laws`.
     dash: Vec<[f64; 4]>,
+    /// Damping of the discs' motion (local or mass damping).
     pub damping: BodyDamping,
+    /// Gravitational acceleration `g` acting on the discs.
     pub gravity: Vec2,
+    /// Time step Δt of the central difference (ERRATA E11).
     pub dt: f64,
     /// Steps done.
     pub step: usize,
     /// Time reached.
     pub time: f64,
+    /// Listed disc–disc and disc–wall pairs with their shear histories.
     pub contacts: ContactList,
+    /// The contact search grid and its Verlet skin.
     pub grid: NeighbourGrid,
     /// Largest disc displacement since the last rebuild.
     pub max_disp: f64,

@@ -10,15 +10,21 @@ use crate::geom::Vec2;
 /// One disc of a packing: centre, radius and an optional material name.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DiscRow {
+    /// Centre.
     pub pos: Vec2,
+    /// Radius.
     pub r: f64,
+    /// Name of the disc material; `None`: the section's default.
     pub material: Option<String>,
 }
 
 /// Lattice of a generated packing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Lattice {
+    /// Rows `2 r_max (1 + gap)` apart, sites above each other.
     Square,
+    /// Rows `√3 r_max (1 + gap)` apart, every other row shifted by half a
+    /// spacing (triangular lattice).
     Hex,
 }
 

@@ -7,6 +7,9 @@
 //! scenario's numbering is kept in [`Particles::id`] and its inverse
 //! [`Particles::slot`].
 
+// TODO(issue 11): document after the granular-physics merge
+#![allow(missing_docs)]
+
 use crate::geom::Vec2;
 
 /// Fixity flag: the x velocity is prescribed (not changed by forces).

@@ -12,7 +12,9 @@ pub enum WallMotion {
     /// Constant velocity during the first `until_step` steps (all steps if
     /// `None`), then at rest.
     Constant {
+        /// Velocity of the wall.
         velocity: Vec2,
+        /// Number of steps after which the wall stops; `None`: never.
         until_step: Option<usize>,
     },
     /// Velocity piecewise linear in time through `(t, v)` points sorted by
@@ -54,9 +56,13 @@ impl WallMotion {
 /// A rigid wall segment from `a` to `b`, two-sided.
 #[derive(Debug, Clone)]
 pub struct Wall {
+    /// Name (scenario `[[wall]]` name, used in outputs).
     pub name: String,
+    /// First end, current position.
     pub a: Vec2,
+    /// Second end, current position.
     pub b: Vec2,
+    /// Prescribed velocity history.
     pub motion: WallMotion,
     /// Velocity during the current step (set by the integrator).
     pub vel: Vec2,
@@ -68,6 +74,8 @@ pub struct Wall {
 }
 
 impl Wall {
+    /// A wall from `a` to `b` with `motion`, at rest, with the discs'
+    /// material.
     pub fn new(name: &str, a: Vec2, b: Vec2, motion: WallMotion) -> Self {
         Wall {
             name: name.to_string(),

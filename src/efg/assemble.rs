@@ -23,15 +23,20 @@ use std::sync::Arc;
 /// point `g` are `idx[ptr[g]..ptr[g+1]]` with `[φ, φ,x, φ,y]` in `val`.
 #[derive(Debug, Clone, Default)]
 pub struct PointShapes {
+    /// Row starts, one per point plus the end.
     pub ptr: Vec<usize>,
+    /// Covering node of each entry.
     pub idx: Vec<u32>,
+    /// `[φ_I, φ_I,x, φ_I,y]` of each entry (Eqs. 13–14 per E3).
     pub val: Vec<[f64; 3]>,
 }
 
 impl PointShapes {
+    /// Number of points.
     pub fn len(&self) -> usize {
         self.ptr.len().saturating_sub(1)
     }
+    /// No points.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -39,6 +44,7 @@ impl PointShapes {
     pub fn min_cover(&self) -> usize {
         self.ptr.windows(2).map(|w| w[1] - w[0]).min().unwrap_or(0)
     }
+    /// Most nodes covering any point.
     pub fn max_cover(&self) -> usize {
         self.ptr.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0)
     }

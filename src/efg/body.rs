@@ -23,31 +23,46 @@ use std::time::Instant;
 /// Sizes and timings of a build, for `check` and summaries.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct BuildInfo {
+    /// Number of nodes.
     pub nodes: usize,
+    /// Number of unknowns, 2 per node.
     pub dofs: usize,
+    /// Gauss points of the background cells (domain integrals, Eqs. 23–25).
     pub domain_points: usize,
+    /// Gauss points on Γu (penalty integrals, Eqs. 26 and 28 per E4).
     pub boundary_points: usize,
-    /// Fewest / most nodes covering a quadrature point.
+    /// Fewest nodes whose support covers a quadrature point.
     pub min_cover: usize,
+    /// Most nodes whose support covers a quadrature point.
     pub max_cover: usize,
     /// Stored entries of the lower triangle of K̄.
     pub nnz: usize,
+    /// Wall time of the shape functions at all quadrature points (s).
     pub shape_seconds: f64,
+    /// Wall time of the assembly of K̄ and G (s).
     pub assembly_seconds: f64,
 }
 
 /// An element-free Galerkin body.
 #[derive(Debug)]
 pub struct EfgBody {
+    /// Name (for messages and outputs).
     pub name: String,
     /// Node grid `[nx, ny]`; node `(i, j)` is `j·nx + i` at `(xs[i], ys[j])`.
     pub grid: [usize; 2],
+    /// x of the node columns, ascending (reference configuration).
     pub xs: Vec<f64>,
+    /// y of the node rows, ascending (reference configuration).
     pub ys: Vec<f64>,
+    /// Lower-left corner of the rectangle.
     pub origin: Vec2,
+    /// Width and height of the rectangle.
     pub size: Vec2,
+    /// Nodes and their rectangular supports `d_mx`, `d_my` (Eqs. 7–8).
     pub support: Support,
+    /// Elastic constants, density, thickness, damping and `D`.
     pub material: Material,
+    /// Support size factor `d_max` (Eqs. 7–8).
     pub d_max: f64,
     /// K, Gram matrix G (M = ρG, C = cG), ∫φ t, and the penalty points
     /// (`K̄ = K + K^α`, `F^α(t)`, moving edges; E4).
@@ -73,12 +88,16 @@ pub struct EfgBody {
     pub motion_work: f64,
     /// Nodal parameters (not nodal displacements: no Kronecker-delta property).
     pub state: State,
+    /// Time reached, `step · Δt`.
     pub time: f64,
+    /// Steps done.
     pub step: usize,
+    /// Δt (0 until the dynamic start), γ, β.
     pub params: NewmarkParams,
     newmark: Option<Newmark>,
     /// The Timoshenko field if a bc uses it (for error norms and summaries).
     pub timoshenko: Option<Timoshenko>,
+    /// Sizes and timings of the build.
     pub info: BuildInfo,
 }
 
@@ -245,9 +264,11 @@ impl EfgBody {
         })
     }
 
+    /// Number of nodes.
     pub fn n_nodes(&self) -> usize {
         self.support.len()
     }
+    /// Number of unknowns, `2 · n_nodes` (interleaved x, y).
     pub fn n_dofs(&self) -> usize {
         2 * self.support.len()
     }

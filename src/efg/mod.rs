@@ -25,15 +25,22 @@ pub enum EfgError {
     /// A point without enough covering nodes (MLS moment matrix singular).
     #[error("body `{body}`: {source} (d_max = {d_max})")]
     Coverage {
+        /// Name of the body.
         body: String,
+        /// Its support size factor (raise it to cover the point).
         d_max: f64,
+        /// The point and its covering nodes.
         #[source]
         source: CoverageError,
     },
+    /// A sparse factorisation or solve failed (e.g. K̄ singular: the body
+    /// is not supported).
     #[error(transparent)]
     Solve(#[from] crate::sparse::SparseError),
+    /// A step was asked for before [`EfgBody::start_dynamic`].
     #[error("advance() called before start_dynamic()")]
     NotStarted,
+    /// Invalid parameters (node grid, time step, density).
     #[error("{0}")]
     Invalid(String),
 }

@@ -26,6 +26,7 @@ pub struct MovingEdge {
     pub points: Range<usize>,
     /// 0: x, 1: y.
     pub component: usize,
+    /// Velocity `v` and stop step `N`: `d(t) = v · min(n, N) · Δt`.
     pub motion: MotionField,
 }
 
@@ -53,7 +54,8 @@ impl Penalty {
         }
     }
 
-    /// Add a point with its row `(node, φ_J(x_g))`, weights and `ū(x_g, 0)`.
+    /// Add a point with its row `(node, φ_J(x_g))` and weights; its
+    /// `ū(x_g, 0)` is 0 until [`set_value`](Self::set_value).
     pub fn push(&mut self, row: impl IntoIterator<Item = (u32, f64)>, weight: [f64; 2]) {
         for (j, phi) in row {
             self.idx.push(j);
@@ -68,6 +70,7 @@ impl Penalty {
     pub fn len(&self) -> usize {
         self.weight.len()
     }
+    /// No penalty points (no prescribed edge).
     pub fn is_empty(&self) -> bool {
         self.weight.is_empty()
     }

@@ -21,8 +21,11 @@ use crate::geom::Vec2;
     if *covering >= 3 { " that are (nearly) collinear" } else { "" }
 )]
 pub struct CoverageError {
+    /// x of the point.
     pub x: f64,
+    /// y of the point.
     pub y: f64,
+    /// Number of nodes whose support covers it.
     pub covering: usize,
 }
 
@@ -31,18 +34,24 @@ pub struct CoverageError {
 /// no call allocates.
 #[derive(Debug, Clone, Default)]
 pub struct ShapeRow {
+    /// Covering nodes, increasing.
     pub idx: Vec<u32>,
+    /// `φ_I(x)` (Eq. 13 per E3); sums to 1.
     pub phi: Vec<f64>,
+    /// `φ_I,x(x)` (Eq. 14 per E3); sums to 0.
     pub dx: Vec<f64>,
+    /// `φ_I,y(x)`; sums to 0.
     pub dy: Vec<f64>,
     /// Scratch: the shifted, scaled basis `p_I` of each covering node.
     basis: Vec<[f64; 2]>,
 }
 
 impl ShapeRow {
+    /// An empty row with room for 32 covering nodes.
     pub fn new() -> Self {
         Self::with_capacity(32)
     }
+    /// An empty row with room for `n` covering nodes.
     pub fn with_capacity(n: usize) -> Self {
         ShapeRow {
             idx: Vec::with_capacity(n),
@@ -52,9 +61,11 @@ impl ShapeRow {
             basis: Vec::with_capacity(n),
         }
     }
+    /// Number of covering nodes.
     pub fn len(&self) -> usize {
         self.idx.len()
     }
+    /// No covering node (not computed yet).
     pub fn is_empty(&self) -> bool {
         self.idx.is_empty()
     }

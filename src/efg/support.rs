@@ -157,6 +157,7 @@ impl Support {
     pub fn len(&self) -> usize {
         self.node.len()
     }
+    /// No nodes.
     pub fn is_empty(&self) -> bool {
         self.node.is_empty()
     }

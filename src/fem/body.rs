@@ -54,8 +54,11 @@ use std::time::Instant;
 /// Sizes and timings of a build, for `check` and summaries.
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct FemInfo {
+    /// Number of nodes.
     pub nodes: usize,
+    /// Number of DOFs, 2 per node.
     pub dofs: usize,
+    /// Number of Q4 elements, `(nx − 1)(ny − 1)`.
     pub elements: usize,
     /// DOFs with a prescribed value (eliminated).
     pub constrained_dofs: usize,
@@ -63,6 +66,7 @@ pub struct FemInfo {
     pub mass: &'static str,
     /// Stored entries of the lower triangle of K.
     pub nnz: usize,
+    /// Wall time of the build (s).
     pub assembly_seconds: f64,
 }
 
@@ -71,9 +75,13 @@ pub struct FemInfo {
 /// parent coordinates `(ξ, η)` of the point.
 #[derive(Debug, Clone, Copy)]
 pub struct Located {
+    /// The element's node numbers, counter-clockwise from the lower left.
     pub nodes: [usize; 4],
+    /// Their reference coordinates.
     pub xy: [[f64; 2]; 4],
+    /// Parent coordinate ξ ∈ [−1, 1] (along x).
     pub xi: f64,
+    /// Parent coordinate η ∈ [−1, 1] (along y).
     pub eta: f64,
 }
 
@@ -87,14 +95,21 @@ impl Located {
 /// A bilinear (Q4) finite-element body.
 #[derive(Debug)]
 pub struct FemBody {
+    /// Name (for messages and outputs).
     pub name: String,
     /// Node grid `[nx, ny]`; node `(i, j)` is `j·nx + i` at `(xs[i], ys[j])`.
     pub grid: [usize; 2],
+    /// x of the node columns, ascending (reference configuration).
     pub xs: Vec<f64>,
+    /// y of the node rows, ascending (reference configuration).
     pub ys: Vec<f64>,
+    /// Lower-left corner of the rectangle.
     pub origin: Vec2,
+    /// Width and height of the rectangle.
     pub size: Vec2,
+    /// Elastic constants, density, thickness, damping and `D`.
     pub material: Material,
+    /// Consistent or lumped mass.
     pub mass_kind: MassKind,
     /// Unmodified stiffness K (strain energy, prescribed-DOF couplings).
     pub k_full: SymCsc,
@@ -122,11 +137,16 @@ pub struct FemBody {
     motion_work: f64,
     /// Nodal displacements (Kronecker delta: these are the true values).
     pub state: State,
+    /// Time reached, `step · Δt`.
     pub time: f64,
+    /// Steps done.
     pub step: usize,
+    /// Δt (0 until the dynamic start), γ, β.
     pub params: NewmarkParams,
     newmark: Option<Newmark>,
+    /// The Timoshenko field if a bc uses it (for error norms and summaries).
     pub timoshenko: Option<Timoshenko>,
+    /// Sizes and timings of the build.
     pub info: FemInfo,
 }
 
@@ -436,9 +456,11 @@ impl FemBody {
         Ok(body)
     }
 
+    /// Number of nodes, `nx · ny`.
     pub fn n_nodes(&self) -> usize {
         self.grid[0] * self.grid[1]
     }
+    /// Number of DOFs, `2 · n_nodes` (interleaved x, y).
     pub fn n_dofs(&self) -> usize {
         2 * self.n_nodes()
     }

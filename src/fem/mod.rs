@@ -18,12 +18,21 @@ pub use boundary::FemContinuum;
 /// Errors of the FE continuum.
 #[derive(Debug, thiserror::Error)]
 pub enum FemError {
+    /// A point asked for lies in no element.
     #[error("body `{body}`: the point {point:?} is outside the body")]
-    Outside { body: String, point: [f64; 2] },
+    Outside {
+        /// Name of the body.
+        body: String,
+        /// The point (reference coordinates).
+        point: [f64; 2],
+    },
+    /// A sparse factorisation or solve failed.
     #[error(transparent)]
     Solve(#[from] crate::sparse::SparseError),
+    /// A step was asked for before [`FemBody::start_dynamic`].
     #[error("advance() called before start_dynamic()")]
     NotStarted,
+    /// Invalid parameters (node grid, time step, density).
     #[error("{0}")]
     Invalid(String),
 }

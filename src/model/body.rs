@@ -8,8 +8,10 @@ use crate::efg::{EfgBody, EfgError, ShapeRow};
 /// An error of a body of either method.
 #[derive(Debug, thiserror::Error)]
 pub enum BodyError {
+    /// From an EFG body.
     #[error(transparent)]
     Efg(#[from] EfgError),
+    /// From an FE body.
     #[error(transparent)]
     Fem(#[from] FemError),
 }
@@ -20,53 +22,65 @@ use crate::geom::Vec2;
 
 /// A continuum body of either method, driven the same way.
 pub enum Body {
+    /// An element-free Galerkin body.
     Efg(Box<EfgBody>),
+    /// A bilinear (Q4) finite-element body.
     Fem(Box<FemBody>),
 }
 
 impl Body {
+    /// Name (for messages and outputs).
     pub fn name(&self) -> &str {
         match self {
             Body::Efg(b) => &b.name,
             Body::Fem(b) => &b.name,
         }
     }
+    /// Time reached.
     pub fn time(&self) -> f64 {
         match self {
             Body::Efg(b) => b.time,
             Body::Fem(b) => b.time,
         }
     }
+    /// Static solve under the permanent and released loads (and the
+    /// accumulated point loads); the state becomes `(U, 0, 0)`.
     pub fn solve_static(&mut self) -> Result<(), BodyError> {
         match self {
             Body::Efg(b) => Ok(b.solve_static()?),
             Body::Fem(b) => Ok(b.solve_static()?),
         }
     }
+    /// Set Δt, factor the Newmark matrix once and compute the initial
+    /// acceleration (ERRATA E8).
     pub fn start_dynamic(&mut self, dt: f64) -> Result<(), BodyError> {
         match self {
             Body::Efg(b) => Ok(b.start_dynamic(dt)?),
             Body::Fem(b) => Ok(b.start_dynamic(dt)?),
         }
     }
+    /// One Newmark step with the permanent and accumulated point loads.
     pub fn advance(&mut self) -> Result<(), BodyError> {
         match self {
             Body::Efg(b) => Ok(b.advance()?),
             Body::Fem(b) => Ok(b.advance()?),
         }
     }
+    /// Kinetic energy `½ U̇ᵀ M U̇`.
     pub fn kinetic_energy(&self) -> f64 {
         match self {
             Body::Efg(b) => b.kinetic_energy(),
             Body::Fem(b) => b.kinetic_energy(),
         }
     }
+    /// Strain energy (EFG: including the penalty springs).
     pub fn strain_energy(&self) -> f64 {
         match self {
             Body::Efg(b) => b.strain_energy(),
             Body::Fem(b) => b.strain_energy(),
         }
     }
+    /// Borrow as a [`BodyRef`].
     pub fn view(&self) -> BodyRef<'_> {
         match self {
             Body::Efg(b) => BodyRef::Efg(b),
@@ -80,11 +94,14 @@ impl Body {
 /// [`Continuum`](crate::continuum::Continuum)s).
 #[derive(Clone, Copy)]
 pub enum BodyRef<'a> {
+    /// An EFG body.
     Efg(&'a EfgBody),
+    /// An FE body.
     Fem(&'a FemBody),
 }
 
 impl<'a> BodyRef<'a> {
+    /// Name (for messages and outputs).
     pub fn name(self) -> &'a str {
         match self {
             BodyRef::Efg(b) => &b.name,
@@ -123,6 +140,8 @@ impl<'a> BodyRef<'a> {
             BodyRef::Fem(b) => Ok(At::Element(b.locate(p)?)),
         }
     }
+    /// The true fields at a point bound by [`bind`](Self::bind) on this
+    /// same body (panics if bound by a body of the other method).
     pub fn sample_at(self, at: &At) -> Sample {
         match (self, at) {
             (BodyRef::Efg(b), At::Row(r)) => b.sample_row(r),
@@ -154,6 +173,8 @@ impl<'a> BodyRef<'a> {
 /// A sampling point bound to a body.
 #[derive(Debug)]
 pub enum At {
+    /// EFG: the shape functions `φ_J(x)` of the covering nodes.
     Row(ShapeRow),
+    /// FE: the element and parent coordinates of the point.
     Element(Located),
 }

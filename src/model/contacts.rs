@@ -10,14 +10,18 @@ use crate::geom::Vec2;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u8)]
 pub enum ContactKind {
+    /// Another disc (`other`: its id).
     DiscDisc = 0,
+    /// A rigid wall (`other`: the wall index).
     DiscWall = 1,
+    /// A continuum body's boundary (`other`: the body index).
     DiscBody = 2,
 }
 
 /// One closed contact (overlap > 0).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactView {
+    /// What the disc touches.
     pub kind: ContactKind,
     /// Scenario id (0-based) of the disc.
     pub disc: usize,

@@ -21,10 +21,13 @@ use std::ops::ControlFlow;
 /// Why a step failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
+    /// A body's solve or step failed.
     #[error(transparent)]
     Body(#[from] body::BodyError),
+    /// The DEM failed (non-finite discs).
     #[error(transparent)]
     Dem(#[from] DemError),
+    /// A coupled step failed.
     #[error(transparent)]
     Coupling(#[from] CouplingError),
     /// A static model has no time steps (call [`Model::solve_static`]).
@@ -35,7 +38,12 @@ pub enum ModelError {
 /// What is simulated.
 pub enum System {
     /// Continuum bodies only; `dynamic` false: a static analysis.
-    Continuum { bodies: Vec<Body>, dynamic: bool },
+    Continuum {
+        /// The bodies, in scenario order.
+        bodies: Vec<Body>,
+        /// Time-stepped (Newmark) rather than one static solve.
+        dynamic: bool,
+    },
     /// Discs and walls.
     Granular(Box<Granular>),
     /// Bodies and discs, coupled through disc–boundary contacts.
@@ -44,6 +52,7 @@ pub enum System {
 
 /// A model ready to run.
 pub struct Model {
+    /// The bodies and/or discs being simulated.
     pub system: System,
     /// Time step: the DEM step in granular and coupled runs, the bodies'
     /// step in continuum runs (0 for a static analysis).

@@ -13,26 +13,63 @@ use crate::geom::Vec2;
 pub enum Probe {
     /// A field (`ux`, `sxx`, …, see [`crate::continuum::Sample::field`]) at
     /// a bound point of body `body`.
-    BodyPoint { body: usize, at: At, field: String },
+    BodyPoint {
+        /// Body index.
+        body: usize,
+        /// The bound reference point.
+        at: At,
+        /// The field's name.
+        field: String,
+    },
     /// `kinetic_energy`, `strain_energy` or `total_energy` of a body.
-    BodyEnergy { body: usize, quantity: String },
+    BodyEnergy {
+        /// Body index.
+        body: usize,
+        /// The energy's name.
+        quantity: String,
+    },
     /// Total force of the discs on body `body` (`y`: the y component).
-    BodyForce { body: usize, y: bool },
+    BodyForce {
+        /// Body index.
+        body: usize,
+        /// The y component if true, else the x component.
+        y: bool,
+    },
     /// A disc quantity (`x`, `y`, `vx`, `vy`, `theta`, `omega`; `ux`, `uy`:
     /// displacement from `x0`) of the disc with scenario id `id` (0-based).
     Disc {
+        /// Scenario disc id (0-based), not the slot.
         id: usize,
+        /// The quantity's name.
         quantity: String,
+        /// The disc's centre when the probe was bound (at build, t = 0),
+        /// for `ux`, `uy`.
         x0: Vec2,
     },
     /// Normal force between discs `a` and `b` (ids): elastic `k_n δ`, or
     /// `total` with the dashpot.
-    Contact { a: usize, b: usize, total: bool },
+    Contact {
+        /// First disc id.
+        a: usize,
+        /// Second disc id.
+        b: usize,
+        /// With the dashpot (`k_n δ + β k_n δ̇`) if true, else `k_n δ`.
+        total: bool,
+    },
     /// `wall_fx`, `wall_fy`, `wall_x`, `wall_y` of wall `wall`.
-    Wall { wall: usize, quantity: String },
+    Wall {
+        /// Wall index.
+        wall: usize,
+        /// The quantity's name.
+        quantity: String,
+    },
     /// An assembly-wide quantity: `kinetic`, `rotational`, `spring`,
-    /// `gravity_energy`, `total`, `contacts` (disc–body contacts included).
-    Global { quantity: String },
+    /// `gravity_energy`, `total_energy`, `contacts` (disc–body contacts
+    /// included).
+    Global {
+        /// The quantity's name.
+        quantity: String,
+    },
 }
 
 /// A wall quantity: `wall_fx`, `wall_fy` (force of the discs on it),

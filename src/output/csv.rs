@@ -43,6 +43,7 @@ impl HistoryWriter {
         Ok(())
     }
 
+    /// Write the buffered rows to the file now.
     pub fn flush(&mut self) -> std::io::Result<()> {
         self.last_flush = Instant::now();
         self.out.flush()

@@ -30,12 +30,16 @@ pub enum Mark {
 /// One curve.
 #[derive(Debug, Clone)]
 pub struct Series {
+    /// Legend entry.
     pub label: String,
+    /// Data points `(x, y)`, in drawing order.
     pub points: Vec<(f64, f64)>,
+    /// How the curve is drawn.
     pub mark: Mark,
 }
 
 impl Series {
+    /// A curve labelled `label` through `points`, drawn as `mark`.
     pub fn new(label: impl Into<String>, points: Vec<(f64, f64)>, mark: Mark) -> Self {
         Series {
             label: label.into(),
@@ -48,12 +52,17 @@ impl Series {
 /// A 2D line chart.
 #[derive(Debug, Clone, Default)]
 pub struct Chart {
+    /// Title above the plot area.
     pub title: String,
+    /// x axis caption (quantity and unit).
     pub x_label: String,
+    /// y axis caption (quantity and unit).
     pub y_label: String,
+    /// The curves, drawn in order.
     pub series: Vec<Series>,
-    /// Axis ranges; `None` = fitted to the data with a 5 % margin.
+    /// x axis range; `None` = fitted to the data with a 5 % margin.
     pub x_range: Option<(f64, f64)>,
+    /// y axis range; `None` = fitted to the data with a 5 % margin.
     pub y_range: Option<(f64, f64)>,
 }
 
@@ -61,7 +70,9 @@ pub struct Chart {
 #[derive(Debug, thiserror::Error)]
 #[error("plot {path}: {message}")]
 pub struct PlotError {
+    /// The PNG file being drawn.
     pub path: String,
+    /// What plotters reported.
     pub message: String,
 }
 

@@ -13,6 +13,7 @@ pub struct PvdSeries {
 }
 
 impl PvdSeries {
+    /// An empty collection to be written at `path`.
     pub fn new(path: &Path) -> Self {
         PvdSeries {
             path: path.to_path_buf(),

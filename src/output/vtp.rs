@@ -11,12 +11,19 @@ use std::path::Path;
 
 /// What one frame shows.
 pub struct DiscFrame<'a> {
+    /// Disc centres (by slot).
     pub pos: &'a [Vec2],
+    /// Disc radii.
     pub radius: &'a [f64],
+    /// Disc velocities (at the half step, see
+    /// [`Particles::vel`](crate::dem::particles::Particles::vel)).
     pub vel: &'a [Vec2],
+    /// Spins ω, counter-clockwise positive.
     pub omega: &'a [f64],
+    /// Resultant contact (and external) force of the last step, without
+    /// gravity.
     pub force: &'a [Vec2],
-    /// Scenario number (1-based in the file) of each disc.
+    /// Scenario id (0-based) of each disc; written 1-based to the file.
     pub id: &'a [u32],
     /// Touching disc pairs (indices into `pos`) and their normal force.
     pub contacts: &'a [(u32, u32, f64)],

@@ -10,8 +10,11 @@ use std::path::Path;
 
 /// One point-data field: name, number of components, values (interleaved).
 pub struct Field<'a> {
+    /// Array name shown in ParaView.
     pub name: &'a str,
+    /// Components per point (1: scalar, 2: planar vector, 3: e.g. stress).
     pub ncomp: usize,
+    /// `ncomp` values per point, point after point.
     pub values: &'a [f64],
 }
 

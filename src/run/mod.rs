@@ -27,8 +27,10 @@ pub enum RunError {
     /// The scenario is invalid or cannot be built (exit code 2).
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
+    /// Writing an output file failed.
     #[error("i/o: {0}")]
     Io(#[from] std::io::Error),
+    /// A step or solve of the model failed.
     #[error(transparent)]
     Model(#[from] ModelError),
 }

@@ -55,6 +55,7 @@ pub struct BodySpec {
     /// Support size factor: `d_mI = d_max · c_I` (Eqs. 7–8).
     #[serde(default = "default_d_max")]
     pub d_max: f64,
+    /// `elastic = { E, nu, density, thickness, plane }`.
     pub elastic: Elastic,
     /// Damping coefficient `c` of Eq. (24) (force·time/length⁴): `C = ∫Φᵀ c Φ`.
     #[serde(default)]
@@ -132,9 +133,11 @@ impl BodySpec {
     }
 }
 
+/// `method = "…"`: how a body is discretised.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
+    /// Element-free Galerkin (§2.1–2.2), the default.
     #[default]
     Efg,
     /// 4-node bilinear finite elements on the node grid.
@@ -145,7 +148,9 @@ pub enum Method {
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NewmarkSpec {
+    /// γ (default ½); the paper's β₁ = 1.5.
     pub gamma: f64,
+    /// β (default ¼); the paper's β₂ = 1.6 is β = 0.8.
     pub beta: f64,
 }
 
@@ -164,6 +169,8 @@ impl Default for NewmarkSpec {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitialSpec {
+    /// Loads (bc names or `"gravity"`) applied for the initial static
+    /// state only.
     pub static_under: Vec<String>,
 }
 

@@ -61,7 +61,9 @@ pub struct GranularSpec {
     expecting = "a list of [x, y, r] rows, or a table { csv = \"file\" } or { generate = \"square\" | \"hex\" | \"random\", box = [[x0, y0], [x1, y1]], radius = r | [rmin, rmax], count, seed, method = \"loose\" | \"deposit\" | \"grow\", jitter, settle_steps } (no other keys)"
 )]
 pub enum DiscsSpec {
+    /// `[x, y, r]` per disc, disc k (1-based) on row k.
     Inline(Vec<[f64; 3]>),
+    /// A CSV file or a generator.
     Table(DiscsTable),
 }
 
@@ -100,31 +102,44 @@ fn seed1() -> u64 {
     1
 }
 
+/// `generate = "…"`: the kind of generated packing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Generator {
+    /// Square lattice, sites `2 r_max` apart.
     Square,
+    /// Hexagonal (triangular) lattice, sites `2 r_max` apart.
     Hex,
+    /// Random: hexagonal sites `2.2 r_max` apart (gap 0.1), jittered by
+    /// their full free play; [`Packing`] says what happens next.
     Random,
 }
 
+/// `method = "…"` of a `random` packing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Packing {
+    /// The jittered sites as they are (no overlap).
     #[default]
     Loose,
+    /// Settled under gravity inside the box.
     Deposit,
+    /// Random centres, radii grown to their final size (no gravity).
     Grow,
 }
 
+/// `radius = r` or `radius = [rmin, rmax]`.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(untagged, expecting = "a radius r > 0 or a range [rmin, rmax]")]
 pub enum Radius {
+    /// Every disc of radius r.
     One(f64),
+    /// Radii uniform in `[rmin, rmax]`.
     Range([f64; 2]),
 }
 
 impl Radius {
+    /// `(rmin, rmax)`; `(r, r)` for one radius.
     pub fn range(self) -> (f64, f64) {
         match self {
             Radius::One(r) => (r, r),
@@ -138,30 +153,42 @@ impl Radius {
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Default)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum DampingSpec {
+    /// No damping (default).
     #[default]
     None,
     /// Stiffness-proportional dashpots: `c_n = β k_n` (Cundall & Strack),
     /// optional shear `c_s = β_s k_s`.
     ContactViscous {
+        /// β of the normal dashpot, `c_n = β k_n` (time units).
         beta: f64,
+        /// β_s of the shear dashpot, `c_s = β_s k_s` (default 0).
         #[serde(default)]
         beta_shear: f64,
+        /// Clamp the total normal force at zero (no dashpot pull).
         #[serde(default)]
         no_tension: bool,
     },
     /// Dashpots at a fraction ζ of critical, `c = ζ 2√(k m_eff)`.
     CriticalRatio {
+        /// ζ_n of the normal dashpot, 0 ≤ ζ < 1.
         zeta: f64,
+        /// ζ_s of the shear dashpot (default 0).
         #[serde(default)]
         zeta_shear: f64,
+        /// Clamp the total normal force at zero (no dashpot pull).
         #[serde(default)]
         no_tension: bool,
     },
     /// Cundall's non-viscous local damping `F ← F − α|F| sign(v)`.
-    Local { alpha: f64 },
+    Local {
+        /// α, 0 ≤ α < 1.
+        alpha: f64,
+    },
     /// Global mass damping of Eqs. (33)–(34), coefficients c and c*.
     Global {
+        /// `c` of Eq. (33) (force per velocity).
         c: f64,
+        /// `c*` of Eq. (34) (moment per angular velocity; default 0).
         #[serde(default)]
         c_rot: f64,
     },
@@ -171,8 +198,11 @@ pub enum DampingSpec {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WallSpec {
+    /// Unique name (probes and outputs refer to it).
     pub name: String,
+    /// First end point at t = 0.
     pub from: [f64; 2],
+    /// Second end point at t = 0.
     pub to: [f64; 2],
     /// Contact material of the wall (default: the disc's).
     pub material: Option<String>,
@@ -184,10 +214,16 @@ pub struct WallSpec {
     pub history: Option<Vec<[f64; 3]>>,
 }
 
-/// Probe quantities a granular run knows, and what each needs.
+// Probe quantities a granular run knows, and what each needs.
+
+/// Normal force between two discs (`contact = [a, b]`): `k_n δ` or with
+/// the dashpot.
 pub const CONTACT_QUANTITIES: &[&str] = &["normal_elastic", "normal_total"];
+/// Force of the discs on a wall and its first end point (`wall = "name"`).
 pub const WALL_QUANTITIES: &[&str] = &["wall_fx", "wall_fy", "wall_x", "wall_y"];
+/// State of one disc (`disc = k`, 1-based).
 pub const DISC_QUANTITIES: &[&str] = &["x", "y", "vx", "vy", "theta", "omega"];
+/// Assembly-wide energies and the number of touching contacts (no target).
 pub const GLOBAL_QUANTITIES: &[&str] = &[
     "kinetic",
     "rotational",

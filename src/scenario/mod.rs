@@ -21,6 +21,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
+    /// `[simulation]`: time stepping, gravity, coupling options.
     #[serde(default)]
     pub simulation: Simulation,
     /// Contact materials, referenced by name from discs and walls.
@@ -37,6 +38,7 @@ pub struct Scenario {
     /// History outputs, one `history.csv` column each.
     #[serde(default)]
     pub probe: Vec<Probe>,
+    /// `[output]`: history and frame intervals.
     #[serde(default)]
     pub output: Output,
     /// Directory of the scenario file: relative paths inside it resolve here.
@@ -52,6 +54,7 @@ pub struct Scenario {
 pub struct Source {
     /// File name as given (for messages).
     pub file: String,
+    /// The whole TOML text.
     pub text: String,
 }
 
@@ -82,10 +85,13 @@ pub struct Simulation {
     /// `"static"` (one linear solve) or `"dynamic"` (time stepping).
     #[serde(default)]
     pub analysis: Analysis,
-    /// Time step; for DEM runs `None` means `dt_safety ×` the critical step.
+    /// Time step; for DEM runs `None` means
+    /// [`DT_SAFETY`](build::DT_SAFETY) × the critical step.
     pub dt: Option<f64>,
     /// Number of steps (or give `end_time`).
     pub steps: Option<usize>,
+    /// End time; the number of steps is `end_time / dt` (rounded up for
+    /// continuum-only runs, to nearest otherwise).
     pub end_time: Option<f64>,
     /// Gravity acceleration vector.
     #[serde(default)]
@@ -123,8 +129,10 @@ fn yes() -> bool {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum ContactSolve {
+    /// Through the boundary Green matrix, built once.
     #[default]
     Boundary,
+    /// Two solves per contact and step (the reference).
     Direct,
 }
 
@@ -135,8 +143,10 @@ pub enum ContactSolve {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum CouplingScheme {
+    /// Contact springs solved inside each body's Newmark step.
     #[default]
     Implicit,
+    /// The body takes the previous state's contact forces as loads.
     Staggered,
 }
 
@@ -157,10 +167,15 @@ impl Default for Simulation {
     }
 }
 
+/// `[simulation] analysis`: `"static"` or `"dynamic"` (default).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Analysis {
+    /// One linear solve `K̄ U = F` per body (continuum-only runs; granular
+    /// and coupled runs are always dynamic and ignore it).
     Static,
+    /// Time stepping: Newmark for the bodies, central difference for the
+    /// discs.
     #[default]
     Dynamic,
 }
@@ -169,6 +184,7 @@ pub enum Analysis {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
+    /// Unique name; discs, walls and bodies refer to the material by it.
     pub name: String,
     /// Mass density of discs made of this material.
     #[serde(default)]
@@ -247,6 +263,7 @@ pub struct Invalid {
 pub struct Problems(pub Vec<Invalid>);
 
 impl Problems {
+    /// Record `message` at the dotted `path`.
     pub fn push(&mut self, path: impl Into<String>, message: impl Into<String>) {
         self.0.push(Invalid {
             path: path.into(),
@@ -280,22 +297,34 @@ impl Problems {
 /// A problem with its place in the file.
 #[derive(Debug, Clone)]
 pub struct Located {
+    /// 1-based line in the file; `None` when the scenario has no source or
+    /// the path is not in it (a default value).
     pub line: Option<usize>,
     /// Field path as the user writes it: `body[0].elastic.E`.
     pub field: String,
+    /// What is wrong and what is allowed.
     pub message: String,
 }
 
 /// Why a scenario could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
+    /// The file could not be read.
     #[error("{file}: cannot read the scenario: {source}")]
     Io {
+        /// The path as given.
         file: String,
+        /// The i/o error.
         source: std::io::Error,
     },
+    /// TOML syntax or type errors, or semantic problems, with their lines.
     #[error("{}", format_located(file, errors))]
-    Invalid { file: String, errors: Vec<Located> },
+    Invalid {
+        /// File name (or `"scenario"` for one built in code).
+        file: String,
+        /// Every problem found, in order.
+        errors: Vec<Located>,
+    },
 }
 
 fn format_located(file: &str, errors: &[Located]) -> String {
