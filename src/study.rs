@@ -121,6 +121,10 @@ pub fn study_dt(
 ) -> Result<DtStudy, RunError> {
     let dt_critical = coupled(sc)?.0.granular.critical_dt();
     let dt0 = sc.simulation.dt.unwrap_or(0.1 * dt_critical);
+    // trials rescale step counts from the scenario's Δt: make it explicit
+    let mut sc = sc.clone();
+    sc.simulation.dt = Some(dt0);
+    let sc = &sc;
     let mut trials = Vec::new();
     let mut record = |t: Trial, trials: &mut Vec<Trial>| {
         progress(&t);
