@@ -563,7 +563,7 @@ fn example2(job: &mut Job) -> Result<()> {
         )?;
         let rigid = job.run(&format!("nine_disc_rigid_test{tn}"), &rigid_sc)?;
         let rc = rigid.history.col("force_C")?;
-        let rcycle = rigid.history.col("cycle")?;
+        let rcycle = rigid.history.col("step")?;
         let at = |cyc: &[f64], f: &[f64], c: f64| cyc.iter().position(|&x| x == c).map(|i| f[i]);
         let _ = writeln!(
             table,
@@ -636,7 +636,7 @@ fn example2(job: &mut Job) -> Result<()> {
                     ),
                     Series::new(
                         "DEM, rigid plates",
-                        rigid.history.xy("cycle", "force_C", 1e-7)?,
+                        rigid.history.xy("step", "force_C", 1e-7)?,
                         Mark::Dashed,
                     ),
                 ],

@@ -127,8 +127,8 @@ fn check_prints_the_critical_step_and_run_writes_outputs() {
         String::from_utf8_lossy(&out.stderr)
     );
     let (h, rows) = efgdem::output::csv::read(&dir.join("history.csv")).unwrap();
-    assert_eq!(h, ["cycle", "t", "fy"]);
-    assert_eq!(rows.len(), 10);
+    assert_eq!(h, ["step", "t", "fy"]);
+    assert_eq!(rows.len(), 11, "step 0 and 10 steps");
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["discs"], 2);

@@ -144,9 +144,11 @@ fn shipped_examples_run_through_the_cli() {
             .expect("runs");
         assert!(st.success());
         let (h, rows) = efgdem::output::csv::read(&out.join("history.csv")).unwrap();
-        assert_eq!(h, ["cycle", "t", "force_C", "force_C_total"]);
-        assert_eq!(rows.len(), 150);
-        assert_eq!(rows[149][0], 150.0);
+        assert_eq!(h, ["step", "t", "force_C", "force_C_total"]);
+        // a row at step 0 and after each of the 150 cycles
+        assert_eq!(rows.len(), 151);
+        assert_eq!(rows[0][0], 0.0);
+        assert_eq!(rows[150][0], 150.0);
         assert!(rows.iter().all(|r| r.iter().all(|v| v.is_finite())));
         let fc = rows[149][2];
         assert!(fc > 1e7 && fc < 1e8, "force_C at 150 = {fc:e}");

@@ -11,6 +11,11 @@ use std::time::{Duration, Instant};
 pub struct HistoryWriter {
     out: BufWriter<File>,
     ncols: usize,
+    /// Columns written as integers (`step`).
+    integer: Vec<bool>,
+    /// The row being formatted: rows reach the buffer whole, so the file
+    /// never ends in half a row.
+    line: String,
     last_flush: Instant,
 }
 
@@ -23,20 +28,29 @@ impl HistoryWriter {
         Ok(HistoryWriter {
             out,
             ncols: columns.len(),
+            integer: columns.iter().map(|c| *c == "step").collect(),
+            line: String::new(),
             last_flush: Instant::now(),
         })
     }
 
     /// Append one row; `values.len()` must equal the number of columns.
     pub fn row(&mut self, values: &[f64]) -> std::io::Result<()> {
+        use std::fmt::Write as _;
         debug_assert_eq!(values.len(), self.ncols, "history row width");
+        self.line.clear();
         for (i, v) in values.iter().enumerate() {
             if i > 0 {
-                self.out.write_all(b",")?;
+                self.line.push(',');
             }
-            write!(self.out, "{v:e}")?;
+            let _ = if self.integer[i] {
+                write!(self.line, "{}", *v as i64)
+            } else {
+                write!(self.line, "{v:e}")
+            };
         }
-        self.out.write_all(b"\n")?;
+        self.line.push('\n');
+        self.out.write_all(self.line.as_bytes())?;
         if self.last_flush.elapsed() > Duration::from_secs(1) {
             self.flush()?;
         }

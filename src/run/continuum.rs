@@ -111,7 +111,7 @@ pub(super) fn run(
             last: f64::NAN,
         })
         .collect();
-    let mut cols: Vec<&str> = vec!["step", "time"];
+    let mut cols: Vec<&str> = vec!["step", "t"];
     cols.extend(probes.iter().map(|p| p.name.as_str()));
     let mut hist = HistoryWriter::create(&dir.join("history.csv"), &cols)?;
     let mut summary = json!({});

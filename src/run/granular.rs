@@ -12,8 +12,8 @@ use crate::scenario::Scenario;
 use serde_json::json;
 use std::time::Instant;
 
-/// Run a granular scenario: `history.csv` (columns `cycle, t` and one per
-/// probe, a row every `output.every` steps after the step),
+/// Run a granular scenario: `history.csv` (columns `step, t` and one per
+/// probe; a row at step 0, every `output.every` steps and at the last step),
 /// `frames/discs_NNNNNN.vtp` + `discs.pvd` every `output.vtk_every` steps,
 /// `discs_final.csv` and `summary.json`.
 pub(super) fn run(
@@ -31,43 +31,48 @@ pub(super) fn run(
     }
     let out = &opts.out_dir;
     std::fs::create_dir_all(out)?;
-    let mut cols = vec!["cycle", "t"];
+    let mut cols = vec!["step", "t"];
     cols.extend(probes.iter().map(|p| p.0.as_str()));
     let mut hist = HistoryWriter::create(&out.join("history.csv"), &cols)?;
     let every = sc.output.every.max(1);
     let vtk_every = sc.output.vtk_every;
+    // the contact list of the start state (for probes and the first frame)
+    if let System::Granular(g) = &mut model.system {
+        g.prepare_contacts();
+    }
+    let mut row = vec![0.0; cols.len()];
+    let mut record = |model: &Model, row: &mut Vec<f64>, step: usize| {
+        row[0] = step as f64;
+        row[1] = model.time();
+        for (k, (_, s)) in probes.iter().enumerate() {
+            row[2 + k] = model.probe(s);
+        }
+        hist.row(row)
+    };
+    record(&model, &mut row, 0)?;
     let mut pvd = None;
     if vtk_every > 0 {
         std::fs::create_dir_all(out.join("frames"))?;
         let mut s = PvdSeries::new(&out.join("discs.pvd"));
         let f = "frames/discs_000000.vtp";
-        if let System::Granular(g) = &mut model.system {
-            g.prepare_contacts();
-        }
         write_granular(granular(&model), &out.join(f))?;
         s.add(0.0, f)?;
         pvd = Some(s);
     }
     let pb = progress(steps as u64, opts.quiet);
-    let mut row = vec![0.0; cols.len()];
     let t0 = Instant::now();
     let mut last_pb = 0usize;
     for cycle in 1..=steps {
         // disc forces are only read by the frames
         if let System::Granular(g) = &mut model.system {
-            g.store_forces = vtk_every > 0 && cycle % vtk_every == 0;
+            g.store_forces = vtk_every > 0 && (cycle % vtk_every == 0 || cycle == steps);
         }
         model.step()?;
-        if cycle % every == 0 {
-            row[0] = cycle as f64;
-            row[1] = model.time();
-            for (k, (_, s)) in probes.iter().enumerate() {
-                row[2 + k] = model.probe(s);
-            }
-            hist.row(&row)?;
+        if cycle % every == 0 || cycle == steps {
+            record(&model, &mut row, cycle)?;
         }
         if let Some(s) = pvd.as_mut()
-            && cycle % vtk_every == 0
+            && (cycle % vtk_every == 0 || cycle == steps)
         {
             let f = format!("frames/discs_{cycle:06}.vtp");
             write_granular(granular(&model), &out.join(&f))?;

@@ -272,13 +272,13 @@ pub fn steps(sc: &Scenario, dt: f64) -> usize {
     }
 }
 
-/// Number of steps: `simulation.steps`, or `end_time / dt` rounded
-/// (granular and coupled runs) or rounded up (continuum runs).
-fn steps_of(sc: &Scenario, dt: f64, round_up: bool) -> usize {
+/// Number of steps: `simulation.steps`, or the fewest steps that reach
+/// `end_time` (`⌈end_time / dt⌉`, with a relative tolerance of 1e-9 so
+/// that `0.3 / 0.1` is 3 steps, not 4).
+fn steps_of(sc: &Scenario, dt: f64) -> usize {
     match (sc.simulation.steps, sc.simulation.end_time) {
         (Some(n), _) => n,
-        (None, Some(t)) if round_up => (t / dt).ceil() as usize,
-        (None, Some(t)) => (t / dt).round() as usize,
+        (None, Some(t)) => (t / dt * (1.0 - 1e-9)).ceil() as usize,
         (None, None) => 0,
     }
 }
@@ -370,7 +370,7 @@ pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
             } else {
                 None
             };
-            let steps = dt.map_or(0, |dt| steps_of(sc, dt, true));
+            let steps = dt.map_or(0, |dt| steps_of(sc, dt));
             Model {
                 system: System::Continuum {
                     bodies: bodies(sc, dt)?,
@@ -385,7 +385,7 @@ pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
             let g = granular(sc)?;
             Model {
                 dt: g.dt,
-                steps: steps_of(sc, g.dt, false),
+                steps: steps_of(sc, g.dt),
                 system: System::Granular(Box::new(g)),
                 step: 0,
             }
@@ -394,7 +394,7 @@ pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
             let m = coupled(sc)?;
             Model {
                 dt: m.granular.dt,
-                steps: steps_of(sc, m.granular.dt, false),
+                steps: steps_of(sc, m.granular.dt),
                 system: System::Coupled(Box::new(m)),
                 step: 0,
             }
