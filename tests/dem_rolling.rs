@@ -159,8 +159,8 @@ const GOLDEN: [(&str, u64); 4] = [
 
 #[test]
 fn rolling_friction_zero_is_bitwise_the_old_code() {
-    // the pre-issue-13 code knows neither field: generate GOLDEN with PIN = ""
-    const PIN: &str = "";
+    // the pre-issue-13 code knew neither field: GOLDEN was made with PIN = ""
+    const PIN: &str = "slip_normal = \"elastic\"\nrolling_friction = 0.0";
     let dashpots = "{ kind = \"critical-ratio\", zeta = 0.3, zeta_shear = 0.05 }";
     let local = "{ kind = \"local\", alpha = 0.3 }";
     let got = [

@@ -1,14 +1,16 @@
 //! Building a [`Granular`] from a scenario: discs (inline, CSV, generated),
 //! materials with the named damping, walls with their motion.
 
-use super::contact::ContactLaw;
+use super::contact::{ContactLaw, SlipNormal};
 use super::particles::Particles;
 use super::walls::{Wall, WallMotion};
 use super::{BodyDamping, DemError, Granular};
 use crate::geom::Vec2;
 use crate::scenario::Scenario;
 use crate::scenario::generate::{DiscRow, Lattice, discs_from_csv, lattice_packing};
-use crate::scenario::granular::{DampingSpec, DiscsSpec, Generator, GranularSpec, Packing};
+use crate::scenario::granular::{
+    DampingSpec, DiscsSpec, Generator, GranularSpec, Packing, SlipNormalSpec,
+};
 
 /// Default fraction of the critical step when `simulation.dt` is omitted.
 pub const DT_SAFETY: f64 = 0.1;
@@ -34,6 +36,13 @@ pub fn laws(sc: &Scenario, damping: &DampingSpec) -> (Vec<ContactLaw>, BodyDampi
                 ks: m.ks,
                 mu: m.friction,
                 cohesion: m.cohesion,
+                slip_normal: match m.slip_normal {
+                    SlipNormalSpec::Total => SlipNormal::Total,
+                    SlipNormalSpec::Elastic => SlipNormal::Elastic,
+                },
+                mu_roll: m.rolling_friction,
+                roll_stiffness: m.rolling_stiffness,
+                roll_damping: m.rolling_damping,
                 ..Default::default()
             };
             match *damping {
@@ -163,7 +172,8 @@ fn deposit(
 /// uniform in `[r_min, r_max]`; the radii start at the scale that gives a
 /// packing fraction of 0.3 and grow linearly to their final size over 70 %
 /// of `steps` DEM steps (no gravity, local damping 0.7, normal dashpot
-/// ζ = 0.3, four fixed walls), then the packing relaxes for the rest.
+/// ζ = 0.3 with the elastic Coulomb cap, four fixed walls), then the
+/// packing relaxes for the rest.
 fn grow(
     sc: &Scenario,
     lo: Vec2,
@@ -178,6 +188,8 @@ fn grow(
     let (mut mats, _) = laws(sc, &DampingSpec::None);
     let mut law = mats[mi as usize];
     law.zeta_n = 0.3;
+    // the settling dashpot is a numerical aid: it must not add friction
+    law.slip_normal = SlipNormal::Elastic;
     mats = vec![law];
     let mut rng = oorandom::Rand64::new(seed as u128);
     let r_final: Vec<f64> = (0..count)
@@ -243,8 +255,9 @@ fn grow(
 
 /// Settle `rows` in the box `[lo, hi]` (four fixed walls) under `gravity`
 /// for `steps` steps at 0.15 × the critical step, with local damping 0.3
-/// and a normal dashpot at ζ = 0.3 added to `law`. Returns the settled
-/// discs in the input order.
+/// and a normal dashpot at ζ = 0.3 added to `law` (with the elastic
+/// Coulomb cap, so that this settling aid adds no friction). Returns the
+/// settled discs in the input order.
 #[allow(clippy::too_many_arguments)]
 pub fn settle_in_box(
     rows: &[DiscRow],
@@ -266,6 +279,8 @@ pub fn settle_in_box(
         .collect();
     let mut law = law;
     law.zeta_n = 0.3;
+    // the settling dashpot is a numerical aid: it must not add friction
+    law.slip_normal = SlipNormal::Elastic;
     let mut gr = Granular::new(p, vec![law], walls, 1.0);
     gr.dt = 0.15 * gr.critical_dt();
     gr.gravity = gravity;

@@ -617,6 +617,7 @@ fn wall_contact(
 #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
 mod lanes {
     use super::{ContactForce, ContactLaw, Kin};
+    use crate::dem::contact::SlipNormal;
     use crate::geom::Vec2;
     use std::arch::x86_64::*;
 
@@ -700,8 +701,15 @@ mod lanes {
                 fs0,
                 _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(law.ks), vt), _mm_set1_pd(dt)),
             );
+            // the cap's normal force: k_n δ, or max(0, F_n,total) as the
+            // scalar select `if fn_tot > 0 { fn_tot } else { 0 }` (maxpd
+            // returns its second operand unless the first is greater)
+            let fn_cap = match law.slip_normal {
+                SlipNormal::Elastic => fn_el,
+                SlipNormal::Total => _mm_max_pd(fn_tot, zero),
+            };
             let cap = _mm_add_pd(
-                _mm_mul_pd(_mm_set1_pd(law.mu), fn_el),
+                _mm_mul_pd(_mm_set1_pd(law.mu), fn_cap),
                 _mm_set1_pd(law.cohesion),
             );
             // if trial > cap { cap } else { trial }, then if < −cap { −cap }
@@ -740,7 +748,8 @@ mod tests {
 
     /// The two-lane kernel gives bitwise the scalar kernel's forces and
     /// shear histories: touching and separated pairs, sticking and sliding,
-    /// with and without cohesion, dashpots and the no-tension clamp.
+    /// with and without cohesion, dashpots and the no-tension clamp, with
+    /// the total or the elastic normal force in the Coulomb cap.
     #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
     #[test]
     fn two_lanes_equal_the_scalar_contact_bitwise() {
@@ -772,6 +781,11 @@ mod tests {
                 zeta_n: u(0.0, 0.3),
                 zeta_s: if case % 2 == 0 { u(0.0, 0.2) } else { 0.0 },
                 no_tension: case % 4 == 1,
+                slip_normal: if case % 7 < 4 {
+                    contact::SlipNormal::Total
+                } else {
+                    contact::SlipNormal::Elastic
+                },
                 ..Default::default()
             };
             let dash = law.dashpot_terms();

@@ -160,6 +160,33 @@ pub enum DampingSpec {
     },
 }
 
+/// `slip_normal` of a `[[material]]`: which normal force caps the shear
+/// force (and the rolling moment).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum SlipNormalSpec {
+    /// `μ max(0, k_n δ + c_n δ̇) + c` (Eqs. 35, 37; Yade, LAMMPS).
+    #[default]
+    Total,
+    /// `μ k_n δ + c` (PFC's linear model).
+    Elastic,
+}
+
+/// Checks of a material's rolling-resistance fields (`at` gives the
+/// field's path).
+pub fn validate_rolling(m: &super::Material, at: &dyn Fn(&str) -> String, p: &mut Problems) {
+    p.non_negative(m.rolling_friction, at("rolling_friction"));
+    p.positive(m.rolling_stiffness, at("rolling_stiffness"));
+    p.check(
+        m.rolling_damping.is_finite() && (0.0..=1.0).contains(&m.rolling_damping),
+        at("rolling_damping"),
+        format!(
+            "must be in [0, 1] (a fraction of the critical rolling dashpot; got {})",
+            m.rolling_damping
+        ),
+    );
+}
+
 /// A rigid wall segment.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
