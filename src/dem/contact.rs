@@ -335,6 +335,13 @@ pub fn rolling_dashpot(law: &ContactLaw, kr: f64, a_i: f64, a_j: f64) -> f64 {
     law.roll_damping * 2.0 * (kr / s).sqrt()
 }
 
+/// Energy `M_r²/(2k_r)` stored in a rolling spring with history `mr`.
+#[inline]
+pub fn rolling_energy(law: &ContactLaw, rbar: f64, mr: f64) -> f64 {
+    let kr = law.roll_kr(rbar);
+    if kr > 0.0 { 0.5 * mr * mr / kr } else { 0.0 }
+}
+
 /// Rolling radius `r̄ = r_i r_j/(r_i + r_j)` of two discs (a wall or a
 /// body: `r̄ = r_i`).
 #[inline(always)]

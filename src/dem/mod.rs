@@ -77,7 +77,8 @@ pub enum BodyDamping {
 pub struct Energies {
     pub kinetic: f64,
     pub rotational: f64,
-    /// `½k_nδ² + F_s²/(2k_s)` over all contacts (disc–disc and disc–wall).
+    /// `½k_nδ² + F_s²/(2k_s)` (+ `M_r²/(2k_r)` with rolling resistance)
+    /// over all contacts (disc–disc and disc–wall).
     pub spring: f64,
     /// `−Σ m g·x` (relative to the origin).
     pub gravity: f64,
@@ -175,6 +176,13 @@ impl Granular {
             .map(|m| self.materials[m])
             .collect();
         self.dash = self.laws.iter().map(ContactLaw::dashpot_terms).collect();
+        // rolling histories are kept only when some law needs them; the
+        // list is rebuilt (histories from zero) when that changes
+        let rolling = self.laws.iter().chain(&self.wall_laws).any(|l| l.rolling());
+        if rolling != self.contacts.rolling {
+            self.contacts.rolling = rolling;
+            self.grid.stale = true;
+        }
     }
 
     /// The Verlet skin (pairs with a gap below it are listed).
@@ -371,10 +379,23 @@ impl Granular {
             }
             s
         };
-        for (q, &fs) in self.contacts.pairs.iter().zip(&self.contacts.shear) {
+        let roll = &self.contacts.roll;
+        let rolling = self.contacts.rolling && roll.len() == self.contacts.pairs.len();
+        for (k, (q, &fs)) in self
+            .contacts
+            .pairs
+            .iter()
+            .zip(&self.contacts.shear)
+            .enumerate()
+        {
             let (i, j) = (q.i as usize, q.j as usize);
             let dist = (p.pos[j] - p.pos[i]).norm();
-            e.spring += spring(self.law(i, j), p.radius[i] + p.radius[j] - dist, fs);
+            let (ri, rj) = (p.radius[i], p.radius[j]);
+            let law = self.law(i, j);
+            e.spring += spring(law, ri + rj - dist, fs);
+            if rolling && ri + rj > dist {
+                e.spring += contact::rolling_energy(law, contact::rolling_radius(ri, rj), roll[k]);
+            }
         }
         let nm = self.materials.len();
         for q in &self.contacts.walls {
@@ -383,6 +404,9 @@ impl Granular {
             let dist = (w.closest(p.pos[d]) - p.pos[d]).norm();
             let law = &self.wall_laws[q.wall as usize * nm + p.material[d] as usize];
             e.spring += spring(law, p.radius[d] - dist, q.fs);
+            if q.mr != 0.0 && p.radius[d] > dist {
+                e.spring += contact::rolling_energy(law, p.radius[d], q.mr);
+            }
         }
         e
     }
