@@ -235,13 +235,26 @@ impl Granular {
     /// [`prepare_contacts`](Self::prepare_contacts), which may renumber the
     /// slots; cleared by the step.
     pub fn set_external(&mut self, forces: impl IntoIterator<Item = (usize, Vec2, Vec2)>) {
+        self.set_external_with_moments(forces.into_iter().map(|(s, f, x)| (s, f, x, 0.0)));
+    }
+
+    /// [`set_external`](Self::set_external) with a pure moment `m` added
+    /// to each force's moment (e.g. the rolling resistance of a disc–body
+    /// contact; `m = 0` adds nothing, bitwise).
+    pub fn set_external_with_moments(
+        &mut self,
+        forces: impl IntoIterator<Item = (usize, Vec2, Vec2, f64)>,
+    ) {
         let p = &self.particles;
         self.external.clear();
-        self.external.extend(
-            forces
-                .into_iter()
-                .map(|(slot, f, point)| (slot as u32, f, (point - p.pos[slot]).cross(f))),
-        );
+        self.external
+            .extend(forces.into_iter().map(|(slot, f, point, m)| {
+                let mut moment = (point - p.pos[slot]).cross(f);
+                if m != 0.0 {
+                    moment += m;
+                }
+                (slot as u32, f, moment)
+            }));
         // stable: several forces on one disc keep their order
         self.external.sort_by_key(|e| e.0);
     }
@@ -285,6 +298,13 @@ impl Granular {
         let p = &mut self.particles;
         p.force[slot] += f;
         p.torque[slot] += (point - p.pos[slot]).cross(f);
+    }
+
+    /// Add a pure moment to the disc in `slot` (e.g. the rolling
+    /// resistance of a disc–body contact), between the same phases as
+    /// [`add_external_force`](Self::add_external_force).
+    pub fn add_external_moment(&mut self, slot: usize, m: f64) {
+        self.particles.torque[slot] += m;
     }
 
     /// Phase 3: gravity, damping, central difference (Eqs. 50–54, E10),
