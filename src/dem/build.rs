@@ -9,7 +9,7 @@ use crate::geom::Vec2;
 use crate::scenario::Scenario;
 use crate::scenario::generate::{DiscRow, Lattice, discs_from_csv, lattice_packing};
 use crate::scenario::granular::{
-    DampingSpec, DiscsSpec, Generator, GranularSpec, Packing, SlipNormalSpec,
+    DampingSpec, DiscsSpec, Generator, GranularSpec, Packing, SlipNormalSpec, slip_normal,
 };
 
 /// Default fraction of the critical step when `simulation.dt` is omitted.
@@ -36,9 +36,9 @@ pub fn laws(sc: &Scenario, damping: &DampingSpec) -> (Vec<ContactLaw>, BodyDampi
                 ks: m.ks,
                 mu: m.friction,
                 cohesion: m.cohesion,
-                slip_normal: match m.slip_normal {
-                    SlipNormalSpec::Total => SlipNormal::Total,
-                    SlipNormalSpec::Elastic => SlipNormal::Elastic,
+                slip_normal: match slip_normal(m) {
+                    Some(SlipNormalSpec::Elastic) => SlipNormal::Elastic,
+                    _ => SlipNormal::Total,
                 },
                 mu_roll: m.rolling_friction,
                 roll_stiffness: m.rolling_stiffness,

@@ -153,9 +153,11 @@ pub struct Material {
     #[serde(default)]
     pub cohesion: f64,
     /// Normal force in the Coulomb cap and the rolling limit: `"total"`
-    /// (spring + dashpot, the paper; default) or `"elastic"` (PFC).
-    #[serde(default)]
-    pub slip_normal: granular::SlipNormalSpec,
+    /// (spring + dashpot, the paper; default) or `"elastic"` (PFC); read
+    /// with [`granular::slip_normal`] (checked by the validation, so that
+    /// a bad value is reported with its field).
+    #[serde(default = "granular::total")]
+    pub slip_normal: String,
     /// Rolling friction `μ_r` (default 0: no rolling resistance).
     #[serde(default)]
     pub rolling_friction: f64,
@@ -394,7 +396,7 @@ impl Scenario {
             p.non_negative(m.ks, at("ks"));
             p.non_negative(m.friction, at("friction"));
             p.non_negative(m.cohesion, at("cohesion"));
-            granular::validate_rolling(m, &at, &mut p);
+            granular::validate_contact_fields(m, &at, &mut p);
         }
         p.check(
             !self.body.is_empty() || self.granular.is_some(),
