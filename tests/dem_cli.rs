@@ -143,10 +143,30 @@ fn check_prints_the_critical_step_and_run_writes_outputs() {
 #[test]
 fn bad_slip_normal_and_rolling_fields_report_file_line_field() {
     for (name, extra, line, field) in [
-        ("slip.toml", "slip_normal = \"dashpot\"", 12, "material[0].slip_normal"),
-        ("mur.toml", "rolling_friction = -0.1", 12, "material[0].rolling_friction"),
-        ("kr.toml", "rolling_stiffness = 0.0", 12, "material[0].rolling_stiffness"),
-        ("eta.toml", "rolling_damping = 1.5", 12, "material[0].rolling_damping"),
+        (
+            "slip.toml",
+            "slip_normal = \"dashpot\"",
+            12,
+            "material[0].slip_normal",
+        ),
+        (
+            "mur.toml",
+            "rolling_friction = -0.1",
+            12,
+            "material[0].rolling_friction",
+        ),
+        (
+            "kr.toml",
+            "rolling_stiffness = 0.0",
+            12,
+            "material[0].rolling_stiffness",
+        ),
+        (
+            "eta.toml",
+            "rolling_damping = 1.5",
+            12,
+            "material[0].rolling_damping",
+        ),
     ] {
         let text = GOOD.replace("friction = 0.5\n", &format!("friction = 0.5\n{extra}\n"));
         let f = scratch(name, &text);
@@ -164,5 +184,10 @@ fn bad_slip_normal_and_rolling_fields_report_file_line_field() {
     );
     let f = scratch("rolling_ok.toml", &text);
     let out = efgdem(&["check", f.to_str().unwrap()]);
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

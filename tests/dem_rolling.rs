@@ -248,8 +248,7 @@ fn a_disc_rolling_on_a_wall_stops_after_three_quarters_v0_squared_over_mu_r_g() 
         let err = (s - theory) / theory;
         println!(
             "μ_r = {mu_r}, v0 = {v0}: stops after {s:.5} m, theory {theory:.5} m, error {:+.3e} ({:.0} steps)",
-            err,
-            gr.step
+            err, gr.step
         );
         assert!(err.abs() < 0.01, "μ_r = {mu_r}: {s} vs {theory}");
         // and stays (the rolling spring only rocks it back elastically)
@@ -427,7 +426,10 @@ fn rolling_resistance_is_bitwise_thread_independent() {
         .replace("count = 400", "count = 900")
         .replace("[60.0, 50.0]", "[120.0, 50.0]")
         .replace("to = [60.0, 0.0]", "to = [120.0, 0.0]")
-        .replace("from = [60.0, 0.0]\nto = [60.0, 80.0]", "from = [120.0, 0.0]\nto = [120.0, 80.0]")
+        .replace(
+            "from = [60.0, 0.0]\nto = [60.0, 80.0]",
+            "from = [120.0, 0.0]\nto = [120.0, 80.0]",
+        )
         .replace("to = [60.0, 51.0]", "to = [120.0, 51.0]")
         .replace("steps = 3000", "steps = 1500");
     let src = with_fields(

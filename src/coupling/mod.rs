@@ -14,6 +14,12 @@
 //!    (Eq. 46, E7), and the discs get exactly the opposite forces at the
 //!    next step.
 //!
+//! Rolling resistance ([`crate::dem::contact::rolling`], `r̄ = r`, relative
+//! rotation `ω_disc`) acts on the disc alone: the body feels no moment,
+//! only the contact force on its boundary. It is evaluated after the
+//! contact solve, from the contact's normal force at `t + Δt` (it does not
+//! change the body's unknowns).
+//!
 //! With sub-cycling (`substeps` = n > 1 DEM steps per body step) the body
 //! side is explicit instead: the contact forces at each DEM step, from the
 //! body's last state, are averaged over the n steps and applied as loads of
@@ -593,8 +599,8 @@ fn body_rolling(
 ) -> f64 {
     let r = p.radius[slot];
     let c_r = if law.roll_damping != 0.0 {
-        let a = contact::inv_contact_inertia(p.inv_mass[slot], p.inv_inertia[slot], r);
-        contact::rolling_dashpot(law, law.roll_kr(r), a, 0.0)
+        let a = contact::contact_inertia(p.inv_mass[slot], p.inv_inertia[slot], r);
+        contact::rolling_dashpot(law, law.roll_kr(r), a, (0.0, 1.0))
     } else {
         0.0
     };

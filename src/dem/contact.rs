@@ -1,5 +1,8 @@
 //! The linear contact law: normal spring + dashpot, incremental shear spring
-//! with a Coulomb–cohesion cap (Eqs. 35–38 corrected per ERRATA E6, E12).
+//! with a Coulomb–cohesion cap (Eqs. 35–38 corrected per ERRATA E6, E12),
+//! the cap on the total normal force `max(0, k_n δ + c_n δ̇)` as Eq. (37)
+//! with Eq. (35) (or on `k_n δ`, PFC: [`SlipNormal`]); optional rolling
+//! resistance, an elastic–plastic spring–dashpot moment ([`rolling`]).
 //!
 //! Geometry of a contact between disc i and an entity j (disc or wall):
 //! `n` is the unit normal from i towards j, `t = perp(n)` (n rotated +90°),
@@ -308,31 +311,46 @@ pub fn rolling(
     let trial = *mr - kr * omega_rel * dt;
     let capped = if trial > limit { limit } else { trial };
     let capped = if capped < -limit { -limit } else { capped };
-    let damp = if capped == trial { c_r * omega_rel } else { 0.0 };
+    let damp = if capped == trial {
+        c_r * omega_rel
+    } else {
+        0.0
+    };
     *mr = capped;
     capped - damp
 }
 
-/// `1/(I + m r²)` of one side of a contact from its inverse mass and
-/// inertia (the moment of inertia about the contact point); 0 for a wall
-/// or a fixed disc.
+/// `1/(I + m r²)` of one side of a contact (the inverse of its moment of
+/// inertia about the contact point) as a fraction `n/d` with
+/// `n = I⁻¹ m⁻¹`, `d = m⁻¹ + r² I⁻¹`, from the inverse mass and inertia;
+/// `(0, 1)` for a wall or a fixed disc. No division here: see
+/// [`rolling_dashpot`].
 #[inline(always)]
-pub fn inv_contact_inertia(inv_m: f64, inv_i: f64, r: f64) -> f64 {
+pub fn contact_inertia(inv_m: f64, inv_i: f64, r: f64) -> (f64, f64) {
     let d = inv_m + r * r * inv_i;
-    if d > 0.0 { inv_i * inv_m / d } else { 0.0 }
+    if d > 0.0 {
+        (inv_i * inv_m, d)
+    } else {
+        (0.0, 1.0)
+    }
 }
 
 /// Rolling dashpot `C_r = η_r 2√(I_r k_r)` with
-/// `I_r = [1/(I_i + m_i r_i²) + 1/(I_j + m_j r_j²)]⁻¹` (Ai et al. 2011;
-/// `a_i`, `a_j` from [`inv_contact_inertia`]); 0 when neither side can
-/// turn.
+/// `I_r = [1/(I_i + m_i r_i²) + 1/(I_j + m_j r_j²)]⁻¹ = d_i d_j/(n_i d_j + n_j d_i)`
+/// (Ai et al. 2011; `(n, d)` from [`contact_inertia`]: one division and
+/// one square root); 0 when neither side can turn.
 #[inline(always)]
-pub fn rolling_dashpot(law: &ContactLaw, kr: f64, a_i: f64, a_j: f64) -> f64 {
-    let s = a_i + a_j;
+pub fn rolling_dashpot(
+    law: &ContactLaw,
+    kr: f64,
+    (ni, di): (f64, f64),
+    (nj, dj): (f64, f64),
+) -> f64 {
+    let s = ni * dj + nj * di;
     if law.roll_damping == 0.0 || s <= 0.0 {
         return 0.0;
     }
-    law.roll_damping * 2.0 * (kr / s).sqrt()
+    law.roll_damping * 2.0 * (kr * (di * dj) / s).sqrt()
 }
 
 /// Energy `M_r²/(2k_r)` stored in a rolling spring with history `mr`.

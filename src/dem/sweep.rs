@@ -346,8 +346,9 @@ fn cross_pairs_roll(
             let mut mr = roll[k as usize];
             let (i, j) = (q.i as usize, q.j as usize);
             let l = p.material[i] as usize * nm + p.material[j] as usize;
-            let (cf, m) =
-                pair_contact_roll(kin, inert, i, j, &laws[l], &dash[l], q, &mut fs, &mut mr, dt);
+            let (cf, m) = pair_contact_roll(
+                kin, inert, i, j, &laws[l], &dash[l], q, &mut fs, &mut mr, dt,
+            );
             *out = (cf, fs);
             *out_r = (m, mr);
         });
@@ -505,6 +506,40 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                     inv_mass,
                     inv_inertia,
                 };
+                // two inner pairs side by side, as below
+                #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+                if single && k + 1 < end && (pairs[k + 1].j as usize) < hi {
+                    let j2 = pairs[k + 1].j as usize - lo;
+                    let (q1, q2) = (&pairs[k], &pairs[k + 1]);
+                    if let Some((cf, fs, m, mr)) = lanes::pair_contacts_roll(
+                        kin,
+                        inert,
+                        [d, d],
+                        [jl, j2],
+                        [shear[k], shear[k + 1]],
+                        [roll[k], roll[k + 1]],
+                        [q1.sqrt_m_eff, q2.sqrt_m_eff],
+                        &law0,
+                        &dash0,
+                        ctx.dt,
+                    ) {
+                        shear[k] = fs[0];
+                        shear[k + 1] = fs[1];
+                        roll[k] = mr[0];
+                        roll[k + 1] = mr[1];
+                        for (jx, c, m) in [(jl, cf[0], m[0]), (j2, cf[1], m[1])] {
+                            let a = &mut acc[jx];
+                            a.0 -= c.f;
+                            a.1 += c.fs;
+                            acc_r[jx] -= m;
+                            sf += c.f;
+                            st += c.fs;
+                            sr += m;
+                        }
+                        k += 2;
+                        continue;
+                    }
+                }
                 let (q, fs, mr) = (&pairs[k], &mut shear[k], &mut roll[k]);
                 let (cf, m) = if single {
                     pair_contact_roll(kin, inert, d, jl, &law0, &dash0, q, fs, mr, ctx.dt)
@@ -755,8 +790,8 @@ fn pair_contact_roll(
     }
     let rbar = contact::rolling_radius(si.radius, sj.radius);
     let c_r = if law.roll_damping != 0.0 {
-        let a_i = contact::inv_contact_inertia(m.inv_mass[i], m.inv_inertia[i], si.radius);
-        let a_j = contact::inv_contact_inertia(m.inv_mass[j], m.inv_inertia[j], sj.radius);
+        let a_i = contact::contact_inertia(m.inv_mass[i], m.inv_inertia[i], si.radius);
+        let a_j = contact::contact_inertia(m.inv_mass[j], m.inv_inertia[j], sj.radius);
         contact::rolling_dashpot(law, law.roll_kr(rbar), a_i, a_j)
     } else {
         0.0
@@ -837,8 +872,8 @@ fn wall_contact_roll(
     }
     let r = disc.radius;
     let c_r = if law.roll_damping != 0.0 {
-        let a = contact::inv_contact_inertia(inv_mass, inv_inertia, r);
-        contact::rolling_dashpot(law, law.roll_kr(r), a, 0.0)
+        let a = contact::contact_inertia(inv_mass, inv_inertia, r);
+        contact::rolling_dashpot(law, law.roll_kr(r), a, (0.0, 1.0))
     } else {
         0.0
     };
@@ -876,14 +911,16 @@ fn wall_geometry(disc: &Side, w: &Wall) -> Option<(Vec2, f64, Vec2)> {
 
 /// Two disc–disc contacts in the two lanes of SSE2 registers (baseline on
 /// x86-64). Every lane performs exactly the IEEE operations of
-/// [`pair_contact`] and [`contact::evaluate`], in the same order (no fused
-/// multiply–add), so the results are bitwise those of the scalar code.
+/// [`pair_contact`] and [`contact::evaluate`] (with rolling resistance:
+/// [`pair_contact_roll`] and [`contact::rolling`]), in the same order (no
+/// fused multiply–add), so the results are bitwise those of the scalar
+/// code.
 ///
 /// The intrinsics are `unsafe` only because they require SSE2, which the
 /// `cfg` guarantees is enabled for the whole build.
 #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
 mod lanes {
-    use super::{ContactForce, ContactLaw, Kin};
+    use super::{ContactForce, ContactLaw, Inert, Kin};
     use crate::dem::contact::SlipNormal;
     use crate::geom::Vec2;
     use std::arch::x86_64::*;
@@ -915,9 +952,50 @@ mod lanes {
         dash: &[f64; 4],
         dt: f64,
     ) -> Option<([ContactForce; 2], [f64; 2])> {
+        let no = Inert {
+            inv_mass: &[],
+            inv_inertia: &[],
+        };
+        pair_contacts_in::<false>(p, no, ix, jx, fs, [0.0; 2], sm, law, dash, dt)
+            .map(|(cf, fs, _, _)| (cf, fs))
+    }
+
+    /// [`pair_contacts`] with rolling resistance: also the rolling moments
+    /// on disc i and the new rolling histories (`mr` the old ones).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    pub(super) fn pair_contacts_roll(
+        p: Kin,
+        m: Inert,
+        ix: [usize; 2],
+        jx: [usize; 2],
+        fs: [f64; 2],
+        mr: [f64; 2],
+        sm: [f64; 2],
+        law: &ContactLaw,
+        dash: &[f64; 4],
+        dt: f64,
+    ) -> Option<([ContactForce; 2], [f64; 2], [f64; 2], [f64; 2])> {
+        pair_contacts_in::<true>(p, m, ix, jx, fs, mr, sm, law, dash, dt)
+    }
+
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn pair_contacts_in<const ROLL: bool>(
+        p: Kin,
+        m: Inert,
+        ix: [usize; 2],
+        jx: [usize; 2],
+        fs: [f64; 2],
+        mr: [f64; 2],
+        sm: [f64; 2],
+        law: &ContactLaw,
+        dash: &[f64; 4],
+        dt: f64,
+    ) -> Option<([ContactForce; 2], [f64; 2], [f64; 2], [f64; 2])> {
         // SAFETY: SSE2 is enabled (module cfg); no memory is accessed
         // through pointers.
-        let (fx, fy, fs_tot, fs_new) = unsafe {
+        let (fx, fy, fs_tot, fs_new, mom, mr_new) = unsafe {
             let [i1, i2] = ix;
             let [j1, j2] = jx;
             let (pi1, pi2, pj1, pj2) = (p.pos[i1], p.pos[i2], p.pos[j1], p.pos[j2]);
@@ -991,7 +1069,55 @@ mod lanes {
             let (fx, fy) = (get(_mm_and_pd(touch, fx)), get(_mm_and_pd(touch, fy)));
             let fs_tot = get(_mm_and_pd(touch, fs_tot));
             let fs_new = get(_mm_and_pd(touch, capped));
-            (fx, fy, fs_tot, fs_new)
+            // rolling resistance, as contact::rolling (ROLL only)
+            let (mom, mr_new) = if ROLL && law.rolling() {
+                // r̄ = r_i r_j/(r_i + r_j), k_r = β_r k_s r̄², limit μ_r r̄ F_n
+                let rbar = _mm_div_pd(_mm_mul_pd(ri, rj), rsum);
+                let kr = _mm_mul_pd(
+                    _mm_mul_pd(_mm_set1_pd(law.roll_stiffness * law.ks), rbar),
+                    rbar,
+                );
+                let limit = _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(law.mu_roll), rbar), fn_cap);
+                let c_r = if law.roll_damping != 0.0 {
+                    // 1/(I + m r²) = n/d, n = ii·im, d = im + r² ii; (0, 1)
+                    // where d = 0 (contact::contact_inertia)
+                    let a = |k: [usize; 2], r: __m128d| {
+                        let im = set(m.inv_mass[k[0]], m.inv_mass[k[1]]);
+                        let ii = set(m.inv_inertia[k[0]], m.inv_inertia[k[1]]);
+                        let d = _mm_add_pd(im, _mm_mul_pd(_mm_mul_pd(r, r), ii));
+                        let pos = _mm_cmpgt_pd(d, zero);
+                        let one = _mm_set1_pd(1.0);
+                        (
+                            _mm_and_pd(pos, _mm_mul_pd(ii, im)),
+                            _mm_or_pd(_mm_and_pd(pos, d), _mm_andnot_pd(pos, one)),
+                        )
+                    };
+                    let ((ni, di), (nj, dj)) = (a(ix, ri), a(jx, rj));
+                    let s = _mm_add_pd(_mm_mul_pd(ni, dj), _mm_mul_pd(nj, di));
+                    let c = _mm_mul_pd(
+                        _mm_set1_pd(law.roll_damping * 2.0),
+                        _mm_sqrt_pd(_mm_div_pd(_mm_mul_pd(kr, _mm_mul_pd(di, dj)), s)),
+                    );
+                    _mm_and_pd(_mm_cmpgt_pd(s, zero), c)
+                } else {
+                    zero
+                };
+                let w_rel = _mm_sub_pd(wi, wj);
+                let trial = _mm_sub_pd(
+                    set(mr[0], mr[1]),
+                    _mm_mul_pd(_mm_mul_pd(kr, w_rel), _mm_set1_pd(dt)),
+                );
+                let capped = _mm_min_pd(limit, trial);
+                let capped = _mm_max_pd(_mm_xor_pd(limit, sign), capped);
+                let damp = _mm_and_pd(_mm_cmpeq_pd(capped, trial), _mm_mul_pd(c_r, w_rel));
+                (
+                    get(_mm_and_pd(touch, _mm_sub_pd(capped, damp))),
+                    get(_mm_and_pd(touch, capped)),
+                )
+            } else {
+                ([0.0; 2], [0.0; 2])
+            };
+            (fx, fy, fs_tot, fs_new, mom, mr_new)
         };
         Some((
             [
@@ -1005,6 +1131,8 @@ mod lanes {
                 },
             ],
             fs_new,
+            mom,
+            mr_new,
         ))
     }
 }
@@ -1079,5 +1207,106 @@ mod tests {
             }
         }
         assert!(cases > 1000, "touching cases: {cases}");
+    }
+
+    /// The same with rolling resistance: forces, shear and rolling
+    /// histories and rolling moments of the two-lane kernel are bitwise
+    /// those of [`pair_contact_roll`] (at and below the limit, with and
+    /// without the rolling dashpot, fixed discs, μ_r = 0).
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    #[test]
+    fn two_lanes_with_rolling_equal_the_scalar_contact_bitwise() {
+        let mut rng = oorandom::Rand64::new(11);
+        let mut u = |a: f64, b: f64| a + (b - a) * rng.rand_float();
+        let (mut touching, mut moment) = (0, 0);
+        for case in 0..4000 {
+            let n = 4;
+            let pos: Vec<Vec2> = (0..n)
+                .map(|_| Vec2::new(u(0.0, 2.5), u(0.0, 2.5)))
+                .collect();
+            let vel: Vec<Vec2> = (0..n)
+                .map(|_| Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)))
+                .collect();
+            let omega: Vec<f64> = (0..n).map(|_| u(-5.0, 5.0)).collect();
+            let radius: Vec<f64> = (0..n).map(|_| u(0.8, 1.2)).collect();
+            // some discs fixed (inverse mass and inertia 0)
+            let inv_mass: Vec<f64> = (0..n)
+                .map(|k| {
+                    if (case + k) % 5 == 0 {
+                        0.0
+                    } else {
+                        u(0.2, 2.0)
+                    }
+                })
+                .collect();
+            let inv_inertia: Vec<f64> = inv_mass.iter().map(|&im| im * u(1.0, 3.0)).collect();
+            let kin = Kin {
+                pos: &pos,
+                vel: &vel,
+                omega: &omega,
+                radius: &radius,
+            };
+            let inert = Inert {
+                inv_mass: &inv_mass,
+                inv_inertia: &inv_inertia,
+            };
+            let law = ContactLaw {
+                kn: 1.0e4,
+                ks: u(0.5e4, 1.0e4),
+                mu: u(0.1, 0.8),
+                zeta_n: u(0.0, 0.3),
+                slip_normal: if case % 3 == 0 {
+                    contact::SlipNormal::Elastic
+                } else {
+                    contact::SlipNormal::Total
+                },
+                mu_roll: if case % 7 == 0 { 0.0 } else { u(0.01, 0.5) },
+                roll_stiffness: u(0.3, 2.0),
+                roll_damping: if case % 2 == 0 { u(0.0, 1.0) } else { 0.0 },
+                ..Default::default()
+            };
+            let dash = law.dashpot_terms();
+            let mk = |i: u32, j: u32| Pair {
+                i,
+                j,
+                sqrt_m_eff: 0.7,
+            };
+            let q = [mk(0, 1), mk(2, 3)];
+            let mut fs = [u(-300.0, 300.0), u(-300.0, 300.0)];
+            let mut mr = [u(-100.0, 100.0), u(-100.0, 100.0)];
+            let dt = 1e-3;
+            let (cfl, fsl, ml, mrl) = lanes::pair_contacts_roll(
+                kin,
+                inert,
+                [0, 2],
+                [1, 3],
+                fs,
+                mr,
+                [0.7, 0.7],
+                &law,
+                &dash,
+                dt,
+            )
+            .expect("distinct centres");
+            for (l, (i, j)) in [(0, 1), (2, 3)].into_iter().enumerate() {
+                let (cf, m) = pair_contact_roll(
+                    kin, inert, i, j, &law, &dash, &q[l], &mut fs[l], &mut mr[l], dt,
+                );
+                let bits = |c: &ContactForce| [c.f.x.to_bits(), c.f.y.to_bits(), c.fs.to_bits()];
+                assert_eq!(bits(&cf), bits(&cfl[l]), "case {case} lane {l}");
+                assert_eq!(fs[l].to_bits(), fsl[l].to_bits(), "case {case} lane {l}");
+                assert_eq!(
+                    m.to_bits(),
+                    ml[l].to_bits(),
+                    "case {case} lane {l}: {m} {}",
+                    ml[l]
+                );
+                assert_eq!(mr[l].to_bits(), mrl[l].to_bits(), "case {case} lane {l}");
+                touching += usize::from(cf.f != Vec2::ZERO && law.mu_roll > 0.0);
+                moment += usize::from(m != 0.0);
+            }
+        }
+        println!("touching with rolling: {touching}, with a rolling moment: {moment}");
+        assert!(touching > 1000 && moment > 1000, "{touching} {moment}");
     }
 }

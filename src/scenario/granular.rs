@@ -188,11 +188,7 @@ pub fn slip_normal(m: &super::Material) -> Option<SlipNormalSpec> {
 
 /// Checks of a material's issue-13 fields, `slip_normal` and rolling
 /// resistance (`at` gives the field's path).
-pub fn validate_contact_fields(
-    m: &super::Material,
-    at: &dyn Fn(&str) -> String,
-    p: &mut Problems,
-) {
+pub fn validate_contact_fields(m: &super::Material, at: &dyn Fn(&str) -> String, p: &mut Problems) {
     p.check(
         slip_normal(m).is_some(),
         at("slip_normal"),
