@@ -7,7 +7,9 @@
 //! The dense packing is made once by gravity deposition and cached in
 //! `target/dem-bench-cache/dense_N.csv`.
 //!
-//! `DEM_BENCH_SIZES=10000` restricts the sizes.
+//! `DEM_BENCH_SIZES=10000` restricts the sizes; `DEM_BENCH_ROLLING=0.1`
+//! adds rolling resistance (μ_r = 0.1, rolling dashpot η_r = 0.3) to the
+//! measured assembly (the packing is the same).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use efgdem::Vec2;
@@ -102,6 +104,13 @@ pub fn assembly(rows: &[DiscRow], n: usize) -> Granular {
         .collect();
     let mut l = law();
     l.zeta_n = 0.2;
+    if let Some(mu_r) = std::env::var("DEM_BENCH_ROLLING")
+        .ok()
+        .and_then(|s| s.parse::<f64>().ok())
+    {
+        l.mu_roll = mu_r;
+        l.roll_damping = 0.3;
+    }
     let mut g = Granular::new(p, vec![l], walls, 1.0);
     g.dt = 0.15 * g.critical_dt();
     g.gravity = Vec2::new(0.0, -9.81);

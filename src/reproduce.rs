@@ -548,8 +548,9 @@ fn example2(job: &mut Job) -> Result<()> {
     let _ = writeln!(
         job.report,
         "\n## Example 2 — nine discs against a deformable plate (§4.2)\n\n\
-         Cundall & Strack's nine-disc test (k_n = k_s = 1.35e9, μ = 0.5, normal dashpot β = 0.1, Δt = 0.01525, \
-         150 cycles), left plate an EFG strip 50 × 300 (3 × 11 nodes, ν = 0.3, ρ = 2000, undamped) whose top and \
+         Cundall & Strack's nine-disc test (k_n = k_s = 1.35e9, μ = 0.5, normal dashpot β = 0.1, Coulomb cap on the \
+         total normal force k_n δ + c_n δ̇ as Eqs. 35 and 37 (`slip_normal = \"total\"`; PFC's `\"elastic\"` caps with k_n δ), \
+         Δt = 0.01525, 150 cycles), left plate an EFG strip 50 × 300 (3 × 11 nodes, ν = 0.3, ρ = 2000, undamped) whose top and \
          bottom edges follow the rigid left plate. Force at contact C (discs 4–5), elastic part k_n δ.\n"
     );
     let mut table = String::from(

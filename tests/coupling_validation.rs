@@ -208,7 +208,12 @@ vtk_every = 0
 /// Validation 4 (and issue 5, validation 3): nine discs against the EFG
 /// plate and against the FE plate with E = 2.1e14 (the shipped Tests 1 and
 /// 2): force at contact C within 1 % of the rigid-plate run at every cycle
-/// after 20.
+/// after 20. Measured with the default Coulomb cap on the total normal
+/// force (issue 13): EFG 0.49 % / 0.33 % (Tests 1 / 2), FE 0.014 % /
+/// 0.008 %. With the elastic cap the EFG deviation was 0.18 %. During
+/// loading it is still 0.19 %. After the plates stop, the undamped plate's
+/// vibration (γ = ½) enters the friction limit of its three contacts
+/// through the normal dashpot, which the elastic cap ignores.
 #[test]
 fn nine_discs_against_a_stiff_plate_match_the_rigid_plates() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");

@@ -138,3 +138,56 @@ fn check_prints_the_critical_step_and_run_writes_outputs() {
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("warning"));
 }
+
+/// The issue-13 material fields: bad values are reported at their line.
+#[test]
+fn bad_slip_normal_and_rolling_fields_report_file_line_field() {
+    for (name, extra, line, field) in [
+        (
+            "slip.toml",
+            "slip_normal = \"dashpot\"",
+            12,
+            "material[0].slip_normal",
+        ),
+        (
+            "mur.toml",
+            "rolling_friction = -0.1",
+            12,
+            "material[0].rolling_friction",
+        ),
+        (
+            "kr.toml",
+            "rolling_stiffness = 0.0",
+            12,
+            "material[0].rolling_stiffness",
+        ),
+        (
+            "eta.toml",
+            "rolling_damping = 1.5",
+            12,
+            "material[0].rolling_damping",
+        ),
+    ] {
+        let text = GOOD.replace("friction = 0.5\n", &format!("friction = 0.5\n{extra}\n"));
+        let f = scratch(name, &text);
+        let out = efgdem(&["check", f.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        println!("{err}");
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains(&format!("{name}:{line}:")), "{err}");
+        assert!(err.contains(field), "{err}");
+    }
+    // good values pass
+    let text = GOOD.replace(
+        "friction = 0.5\n",
+        "friction = 0.5\nslip_normal = \"elastic\"\nrolling_friction = 0.1\nrolling_stiffness = 0.5\nrolling_damping = 0.3\n",
+    );
+    let f = scratch("rolling_ok.toml", &text);
+    let out = efgdem(&["check", f.to_str().unwrap()]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

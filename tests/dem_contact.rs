@@ -244,3 +244,96 @@ fn sliding_disc_ends_rolling_at_two_thirds() {
     assert!(rel < 1e-2);
     assert!((-w * r - v).abs() / v < 1e-2, "not rolling");
 }
+
+/// Issue 13 §1: the Coulomb cap's normal force. Two discs (r = 1, δ = 0.1)
+/// pressed together at δ̇ and sliding past each other fast enough to slide
+/// in one step, velocities prescribed; one step. With the normal dashpot
+/// c_n = β k_n the normal force is `F_n = k_n δ + c_n δ̇` either way, and
+/// the shear force sits on the cap:
+/// * `slip_normal = "total"` (default, Eqs. 35 + 37): `μ max(0, F_n)`,
+/// * `"elastic"` (PFC): `μ k_n δ`,
+///
+/// so they differ by `μ c_n δ̇` while the dashpot pushes, and by the whole
+/// elastic cap `μ k_n δ` once it pulls harder than the spring pushes
+/// (`F_n < 0`: no friction with the total force).
+#[test]
+fn two_discs_sliding_cap_with_the_total_or_the_elastic_normal_force() {
+    use efgdem::dem::contact::SlipNormal;
+    use efgdem::dem::particles::{FIX_X, FIX_Y};
+    let (kn, beta, mu, delta, dt) = (1.0e5, 0.02, 0.4, 0.1, 1.0e-3);
+    let run = |slip: SlipNormal, vn: f64| {
+        let mut p = Particles::default();
+        p.push(Vec2::new(0.0, 0.0), 1.0, 1.0, 1.0, 0);
+        p.push(Vec2::new(2.0 - delta, 0.0), 1.0, 1.0, 1.0, 0);
+        p.fixity = vec![FIX_X | FIX_Y | FIX_ROT; 2];
+        // disc 2 moves up at 100 (slides: k_s v_t Δt = 1e4 > both caps)
+        // and towards disc 1 at vn
+        p.vel[1] = Vec2::new(-vn, 100.0);
+        let mut l = law(kn, kn, mu);
+        l.beta_n = beta;
+        l.slip_normal = slip;
+        let mut g = Granular::new(p, vec![l], vec![], dt);
+        g.step();
+        let s = g.slot(0);
+        (g.particles.force[s], g.particles.torque[s])
+    };
+    for vn in [0.5, -6.0] {
+        // by hand: F_n total, the two caps (no cohesion)
+        let f_n = kn * delta + beta * kn * vn;
+        let cap_total = mu * f_n.max(0.0);
+        let cap_elastic = mu * kn * delta;
+        let (ft, tt) = run(SlipNormal::Total, vn);
+        let (fe, te) = run(SlipNormal::Elastic, vn);
+        println!(
+            "δ̇ = {vn}: F_n = {f_n}, F_s total {} (by hand {cap_total}), elastic {} (by hand {cap_elastic})",
+            ft.y, fe.y
+        );
+        // on disc 1: −F_n along n = x̂, +F_s along t = ŷ (disc 2 drags it up)
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+        assert!(close(ft.x, -f_n) && close(fe.x, -f_n));
+        assert!(close(ft.y, cap_total), "{} vs {cap_total}", ft.y);
+        assert!(close(fe.y, cap_elastic), "{} vs {cap_elastic}", fe.y);
+        assert!(close(tt, cap_total) && close(te, cap_elastic));
+        let diff = if f_n > 0.0 {
+            mu * beta * kn * vn
+        } else {
+            -mu * kn * delta
+        };
+        assert!(close(ft.y - fe.y, diff), "{} vs {diff}", ft.y - fe.y);
+    }
+}
+
+/// The same cap on a disc–wall contact: a disc pressed into a floor at δ̇
+/// while sliding along it.
+#[test]
+fn disc_sliding_on_a_wall_caps_with_the_total_normal_force() {
+    use efgdem::dem::contact::SlipNormal;
+    use efgdem::dem::particles::{FIX_X, FIX_Y};
+    let (kn, beta, mu, delta, dt, vn) = (1.0e5, 0.02, 0.4, 0.1, 1.0e-3, 0.5);
+    for slip in [SlipNormal::Total, SlipNormal::Elastic] {
+        let mut p = Particles::default();
+        p.push(Vec2::new(0.0, 1.0 - delta), 1.0, 1.0, 1.0, 0);
+        p.fixity = vec![FIX_X | FIX_Y | FIX_ROT];
+        p.vel[0] = Vec2::new(100.0, -vn);
+        let mut l = law(kn, kn, mu);
+        l.beta_n = beta;
+        l.slip_normal = slip;
+        let floor = Wall::new(
+            "floor",
+            Vec2::new(-10.0, 0.0),
+            Vec2::new(10.0, 0.0),
+            WallMotion::Fixed,
+        );
+        let mut g = Granular::new(p, vec![l], vec![floor], dt);
+        g.step();
+        let f_n = kn * delta + beta * kn * vn;
+        let cap = match slip {
+            SlipNormal::Total => mu * f_n,
+            SlipNormal::Elastic => mu * kn * delta,
+        };
+        let f = g.particles.force[0];
+        println!("{slip:?}: force on the disc {f:?}, cap by hand {cap}");
+        assert!((f.y - f_n).abs() <= 1e-12 * f_n);
+        assert!((f.x + cap).abs() <= 1e-12 * cap, "{} vs {cap}", f.x);
+    }
+}

@@ -23,7 +23,7 @@
 #![allow(missing_docs)]
 
 use crate::continuum::compliance::Compliance;
-use crate::dem::contact::ContactLaw;
+use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::geom::Vec2;
 
 /// One disc–body contact candidate of a step, linearised in the increment
@@ -65,7 +65,12 @@ pub struct Eval {
     pub overlap: f64,
     pub fn_elastic: f64,
     pub fn_total: f64,
-    /// Open 0, stick 1, slide ±2, +4 when the no-tension clamp bites.
+    /// Normal force of the Coulomb cap (`max(0, F_n,total)` or `k_n δ`,
+    /// [`ContactLaw::slip_normal`]); it also limits the rolling moment.
+    pub fn_cap: f64,
+    /// Open 0; else stick 1, slide along +t 2, along −t 3, plus 4 when the
+    /// no-tension clamp bites and 8 when the total-force cap is clamped at
+    /// zero (each a different affine piece).
     pub regime: i8,
 }
 
@@ -99,6 +104,7 @@ impl Linear {
                 overlap: 0.0,
                 fn_elastic: 0.0,
                 fn_total: 0.0,
+                fn_cap: 0.0,
                 regime: 1,
             };
         }
@@ -114,6 +120,7 @@ impl Linear {
                 overlap: delta,
                 fn_elastic: 0.0,
                 fn_total: 0.0,
+                fn_cap: 0.0,
                 regime: 0,
             };
         }
@@ -130,15 +137,30 @@ impl Linear {
             regime = 4;
         }
         let trial = self.fs_old - law.ks * vt * dt;
-        let cap = law.mu * fn_el + law.cohesion;
+        // the cap's normal force and its gradient ∂F_cap/∂w = dcap · n:
+        // with the total force (the default, Eq. 37 with Eq. 35) the
+        // sliding shear force follows the normal dashpot too, so the slide
+        // branch's Jacobian has the term μ (k_n + c_n/Δt) along n
+        let (fn_cap, dcap) = match law.slip_normal {
+            SlipNormal::Elastic => (fn_el, -law.kn),
+            SlipNormal::Total => {
+                if fn_tot > 0.0 {
+                    (fn_tot, dfn)
+                } else {
+                    regime += 8;
+                    (0.0, 0.0)
+                }
+            }
+        };
+        let cap = law.mu * fn_cap + law.cohesion;
         // F_s total and its gradient ∂F_s/∂w = dfs_t · t + dfs_n · n
         let (fs, fs_tot, dfs_t, dfs_n) = if trial.abs() <= cap {
             regime += 1;
             (trial, trial - self.cs * vt, law.ks + self.cs / dt, 0.0)
         } else {
             let s = trial.signum();
-            regime += 2 * s as i8;
-            (s * cap, s * cap, 0.0, -s * law.mu * law.kn)
+            regime += if s > 0.0 { 2 } else { 3 };
+            (s * cap, s * cap, 0.0, s * law.mu * dcap)
         };
         // g = F_n n − F_s t
         let g = n * fn_tot - t * fs_tot;
@@ -158,6 +180,7 @@ impl Linear {
             overlap: delta,
             fn_elastic: fn_el,
             fn_total: fn_tot,
+            fn_cap,
             regime,
         }
     }
@@ -530,18 +553,34 @@ mod tests {
         }
     }
 
-    /// The linearised law is the DEM law with the body point moving by `w`.
+    /// The linearised law is the DEM law with the body point moving by `w`,
+    /// with either normal force in the Coulomb cap (the total one gives
+    /// the slide branch a Jacobian term μ (k_n + c_n/Δt) along n).
     #[test]
     fn matches_the_dem_contact_law_in_every_regime() {
         let dt = 1e-3;
         let n = Vec2::new(0.6, -0.8);
-        for (fs_old, vt0, w) in [
-            (0.0, 0.1, Vec2::new(1e-5, 2e-5)),   // stick
-            (150.0, 3.0, Vec2::new(-1e-5, 0.0)), // slide +
-            (-50.0, -4.0, Vec2::new(0.0, 3e-5)), // slide −
-            (0.0, 0.0, Vec2::new(-8e-4, 1e-3)),  // open
-        ] {
-            let l = law();
+        for (slip, (fs_old, vt0, vn0, w, regime)) in [SlipNormal::Total, SlipNormal::Elastic]
+            .into_iter()
+            .flat_map(|s| {
+                let el = s == SlipNormal::Elastic;
+                [
+                    (0.0, 0.1, 0.2, Vec2::new(1e-5, 2e-5), 1),   // stick
+                    (150.0, 3.0, 0.2, Vec2::new(-1e-5, 0.0), 3), // slide, F_s < 0
+                    (-50.0, -4.0, 0.2, Vec2::new(0.0, 3e-5), 2), // slide, F_s > 0
+                    (0.0, 0.0, 0.2, Vec2::new(8e-4, -1e-3), 0),  // open
+                    // separating fast: the dashpot pulls (F_n,total < 0),
+                    // the total-force cap is 0, the elastic one k_n δ μ
+                    (100.0, 3.0, -0.2, Vec2::ZERO, 3),
+                    (100.0, 0.01, -0.2, Vec2::ZERO, if el { 1 } else { 2 }),
+                ]
+                .map(|c| (s, c))
+            })
+        {
+            let l = ContactLaw {
+                slip_normal: slip,
+                ..law()
+            };
             let (cn, cs) = (l.beta_n * l.kn, 0.0);
             let c = Linear {
                 law: l,
@@ -549,13 +588,24 @@ mod tests {
                 cs,
                 n,
                 delta0: 5e-4,
-                vn0: 0.2,
+                vn0,
                 vt0,
                 fs_old,
                 dt,
                 spring: None,
             };
             let e = c.eval(w);
+            // the cap's clamp at zero is its own piece (flag 8)
+            let clamped = slip == SlipNormal::Total && e.fn_total <= 0.0 && regime != 0;
+            assert_eq!(e.regime, regime + if clamped { 8 } else { 0 }, "{e:?}");
+            if regime >= 2 {
+                assert_eq!(e.fs.abs(), l.mu * e.fn_cap);
+                let want = match slip {
+                    SlipNormal::Total => e.fn_total.max(0.0),
+                    SlipNormal::Elastic => e.fn_elastic,
+                };
+                assert_eq!(e.fn_cap, want);
+            }
             // the same contact through dem::contact::evaluate: disc i at
             // rest frame, body point j moving with w/dt
             let t = n.perp();
@@ -635,7 +685,7 @@ mod tests {
         assert_eq!(c.eval(w).regime, out[0].regime);
         assert!((c.eval(w).g - g).norm() < 1e-9 * g.norm());
         // sliding (v_t Δt k_s = 1000 > μ F_n): the shear sits on the cap
-        assert_eq!(out[0].regime.abs(), 2);
+        assert_eq!(out[0].regime, 3);
         assert!((out[0].fs.abs() - l.mu * out[0].fn_elastic).abs() < 1e-9 * out[0].fn_elastic);
     }
 

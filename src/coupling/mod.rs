@@ -14,6 +14,12 @@
 //!    (Eq. 46, E7), and the discs get exactly the opposite forces at the
 //!    next step.
 //!
+//! Rolling resistance ([`crate::dem::contact::rolling`], `r̄ = r`, relative
+//! rotation `ω_disc`) acts on the disc alone: the body feels no moment,
+//! only the contact force on its boundary. It is evaluated after the
+//! contact solve, from the contact's normal force at `t + Δt` (it does not
+//! change the body's unknowns).
+//!
 //! With sub-cycling (`substeps` = n > 1 DEM steps per body step) the body
 //! side is explicit instead: the contact forces at each DEM step, from the
 //! body's last state, are averaged over the n steps and applied as loads of
@@ -49,6 +55,14 @@ pub struct BodyContact {
     pub chain: u16,
     /// Shear force history along `t = perp(n_disc→body)`.
     pub fs: f64,
+    /// Rolling-spring history: the rolling resistance moment on the disc
+    /// ([`contact::rolling`], relative rotation `ω_disc`; 0 without
+    /// rolling friction).
+    pub mr: f64,
+    /// Rolling moment on the disc (spring + dashpot). The body feels no
+    /// moment: the rolling resistance acts on the disc only, and the body
+    /// takes the contact force on its boundary alone.
+    pub moment: f64,
     /// Overlap at the last evaluation.
     pub overlap: f64,
     /// Elastic normal force `k_n δ` (Eq. 35, E6).
@@ -150,6 +164,8 @@ struct Load {
     arm: Vec2,
     /// Force on the disc.
     f: Vec2,
+    /// Rolling moment on the disc (not on the body).
+    moment: f64,
 }
 
 /// Why a coupled step failed.
@@ -235,10 +251,11 @@ impl CoupledModel {
                 .map(|q| {
                     let slot = g.slot(q.disc as usize);
                     let arm = g.particles.pos[slot] + q.normal * g.particles.radius[slot];
-                    (slot, q.force, arm)
+                    // the rolling moment acts on the disc only
+                    (slot, q.force, arm, q.moment)
                 })
                 .collect();
-            self.granular.set_external(ext);
+            self.granular.set_external_with_moments(ext);
             let t1 = Instant::now();
             self.granular.step();
             let t2 = Instant::now();
@@ -311,7 +328,7 @@ impl CoupledModel {
                 // the step are part of the implicit solve
                 for (d, t) in touching(chain, &self.grids[b][c], p, CANDIDATE_MARGIN) {
                     let r = p.radius[d];
-                    let fs_old = shear_history(&self.contacts, (p.id[d], b as u16, c as u16));
+                    let (fs_old, _) = history(&self.contacts, (p.id[d], b as u16, c as u16));
                     let law = self.body_laws[b * nm + p.material[d] as usize];
                     let (cn, cs) = law.dashpots(effective_mass(p.inv_mass[d], 0.0));
                     let n = -t.normal; // from the disc towards the body
@@ -376,11 +393,22 @@ impl CoupledModel {
                     continue;
                 }
                 let (d, b, c, point, feature) = w.meta[k];
+                let key = (p.id[d], b as u16, c as u16);
+                // rolling resistance on the disc (the body feels no moment),
+                // limited by the contact's normal force at t + Δt
+                let law = &self.body_laws[b * nm + p.material[d] as usize];
+                let (mut mr, mut moment) = (0.0, 0.0);
+                if advance && law.rolling() {
+                    mr = history(&self.contacts, key).1;
+                    moment = body_rolling(law, p, d, e.fn_cap, &mut mr, dt);
+                }
                 next.push(BodyContact {
-                    disc: p.id[d],
-                    body: b as u16,
-                    chain: c as u16,
+                    disc: key.0,
+                    body: key.1,
+                    chain: key.2,
                     fs: e.fs,
+                    mr,
+                    moment,
                     overlap: e.overlap,
                     fn_elastic: e.fn_elastic,
                     fn_total: e.fn_total,
@@ -420,7 +448,7 @@ impl CoupledModel {
                 for (d, t) in touching(chain, &self.grids[b][c], p, 0.0) {
                     let (x, r) = (p.pos[d], p.radius[d]);
                     let key = (p.id[d], b as u16, c as u16);
-                    let mut fs = shear_history(&self.contacts, key);
+                    let (mut fs, mut mr) = history(&self.contacts, key);
                     let v_h = body.boundary_velocity(c, t.material);
                     let law = &self.body_laws[b * nm + p.material[d] as usize];
                     let n = -t.normal; // from the disc towards the body
@@ -439,7 +467,16 @@ impl CoupledModel {
                         radius: 0.0,
                     };
                     let dashpots = law.dashpots(m_eff);
-                    let cf = contact::evaluate(law, n, t.overlap, &i, &j, dashpots, &mut fs, dt);
+                    let (cf, fn_cap) =
+                        contact::evaluate_capped(law, n, t.overlap, &i, &j, dashpots, &mut fs, dt);
+                    // rolling resistance on the disc only (the body feels
+                    // no moment)
+                    let moment = if law.rolling() {
+                        body_rolling(law, p, d, fn_cap, &mut mr, dt)
+                    } else {
+                        mr = 0.0;
+                        0.0
+                    };
                     let vn = (i.vel - v_h).dot(n);
                     let (fe, ft) = contact::normal_force(law, t.overlap, vn, m_eff);
                     next.push(BodyContact {
@@ -447,6 +484,8 @@ impl CoupledModel {
                         body: key.1,
                         chain: key.2,
                         fs,
+                        mr,
+                        moment,
                         overlap: t.overlap,
                         fn_elastic: fe,
                         fn_total: ft,
@@ -464,12 +503,16 @@ impl CoupledModel {
                         // torque arm r n, the DEM's convention (E12)
                         arm: x + n * r,
                         f: cf.f,
+                        moment,
                     });
                 }
             }
         }
         for l in &self.loads {
             self.granular.add_external_force(l.slot, l.f, l.arm);
+            if l.moment != 0.0 {
+                self.granular.add_external_moment(l.slot, l.moment);
+            }
             self.bodies[l.body].add_point_load(l.chain, l.material, -l.f * share);
         }
         next.sort_by_key(|q| q.key());
@@ -504,6 +547,10 @@ impl CoupledModel {
                 if law.ks > 0.0 {
                     e += 0.5 * q.fs * q.fs / law.ks;
                 }
+                if q.mr != 0.0 {
+                    let r = self.granular.particles.radius[slot];
+                    e += contact::rolling_energy(law, r, q.mr);
+                }
                 e
             })
             .sum()
@@ -534,9 +581,35 @@ fn touching<'a>(
     })
 }
 
-/// Shear force history of the contact `key`, 0 for a new contact.
-fn shear_history(contacts: &[BodyContact], key: (u32, u16, u16)) -> f64 {
+/// Shear force and rolling-spring histories of the contact `key`, 0 for
+/// a new contact.
+fn history(contacts: &[BodyContact], key: (u32, u16, u16)) -> (f64, f64) {
     contacts
         .binary_search_by(|q| q.key().cmp(&key))
-        .map_or(0.0, |i| contacts[i].fs)
+        .map_or((0.0, 0.0), |i| (contacts[i].fs, contacts[i].mr))
+}
+
+/// Rolling resistance of a disc–body contact ([`contact::rolling`] with
+/// `r̄ = r`, relative rotation `ω_disc`: the body's own local rotation is
+/// not counted, as a wall's): the moment on the disc in `slot`, with the
+/// history `mr` updated. The body feels no moment — the rolling
+/// resistance is a couple on the disc alone, and the body takes only the
+/// contact force on its boundary — so this moment does work on the disc
+/// only (dissipated at the limit, stored in the rolling spring below it).
+fn body_rolling(
+    law: &ContactLaw,
+    p: &Particles,
+    slot: usize,
+    fn_cap: f64,
+    mr: &mut f64,
+    dt: f64,
+) -> f64 {
+    let r = p.radius[slot];
+    let c_r = if law.roll_damping != 0.0 {
+        let a = contact::contact_inertia(p.inv_mass[slot], p.inv_inertia[slot], r);
+        contact::rolling_dashpot(law, law.roll_kr(r), a, (0.0, 1.0))
+    } else {
+        0.0
+    };
+    contact::rolling(law, r, fn_cap, p.omega[slot], c_r, mr, dt)
 }

@@ -32,12 +32,15 @@ pub struct Pair {
     pub sqrt_m_eff: f64,
 }
 
-/// A disc–wall pair closer than the skin and its shear history.
+/// A disc–wall pair closer than the skin, its shear history and its
+/// rolling-spring history `mr` (the moment on the disc; 0 without rolling
+/// resistance).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WallPair {
     pub disc: u32,
     pub wall: u32,
     pub fs: f64,
+    pub mr: f64,
 }
 
 /// The flat contact arrays, and the index of the "cross" pairs whose
@@ -50,6 +53,14 @@ pub struct ContactList {
     /// Shear history of each pair (force along `t = perp(n)`, n from i to
     /// j; 0 when open), same index as `pairs`.
     pub shear: Vec<f64>,
+    /// Some law has rolling resistance: `roll` is kept (set by the
+    /// assembly from its laws).
+    pub rolling: bool,
+    /// Rolling-spring history of each pair when `rolling` (the moment on
+    /// disc i, [`rolling`](super::contact::rolling); 0 when open), same
+    /// index as `pairs`; empty otherwise, so that the sweep without
+    /// rolling resistance reads and writes nothing more.
+    pub roll: Vec<f64>,
     /// Pairs whose first disc is `k`: `first[k]..first[k + 1]`.
     pub first: Vec<u32>,
     /// Disc–wall pairs, sorted by `(disc, wall)`.
@@ -60,6 +71,9 @@ pub struct ContactList {
     pub cross: Vec<u32>,
     /// Force and new shear history of each cross pair in the current step.
     pub cross_buf: Vec<(ContactForce, f64)>,
+    /// Rolling moment on the first disc and new rolling history of each
+    /// cross pair (when `rolling`).
+    pub cross_roll: Vec<(f64, f64)>,
     /// Cross pairs whose first disc is in block `b`: `cross_first[b]..cross_first[b + 1]`.
     pub cross_first: Vec<u32>,
     /// Cross pairs whose second disc is in block `b`:
@@ -123,13 +137,18 @@ impl ContactList {
         self.cross_buf.clear();
         self.cross_buf
             .resize(self.cross.len(), (ContactForce::default(), 0.0));
+        self.cross_roll.clear();
+        if self.rolling {
+            self.cross_roll.resize(self.cross.len(), (0.0, 0.0));
+        }
     }
 
     /// Bytes held (capacity).
     pub fn heap_bytes(&self) -> usize {
         use std::mem::size_of;
         self.pairs.capacity() * size_of::<Pair>()
-            + self.shear.capacity() * 8
+            + (self.shear.capacity() + self.roll.capacity()) * 8
+            + self.cross_roll.capacity() * 16
             + (self.first.capacity() + self.cross.capacity() + self.cross_first.capacity()) * 4
             + self.cross_in_start.capacity() * 4
             + self.cross_buf.capacity() * size_of::<(ContactForce, f64)>()
@@ -290,18 +309,38 @@ impl NeighbourGrid {
         if self.reorder_every > 0 && self.rebuilds.is_multiple_of(self.reorder_every) {
             let order = self.strip_order();
             let new_of_old = p.permute(&order);
-            let mut moved: Vec<(Pair, f64)> = list
-                .pairs
-                .iter()
-                .zip(&list.shear)
-                .map(|(q, &fs)| {
-                    let (a, b) = (new_of_old[q.i as usize], new_of_old[q.j as usize]);
-                    let (i, j) = if a < b { (a, b) } else { (b, a) };
-                    (Pair { i, j, ..*q }, fs)
-                })
-                .collect();
-            moved.sort_unstable_by_key(|(q, _)| (q.i, q.j));
-            (list.pairs, list.shear) = moved.into_iter().unzip();
+            let renumber = |q: &Pair| {
+                let (a, b) = (new_of_old[q.i as usize], new_of_old[q.j as usize]);
+                let (i, j) = if a < b { (a, b) } else { (b, a) };
+                Pair { i, j, ..*q }
+            };
+            if list.roll.len() == list.pairs.len() && list.rolling {
+                // the rolling histories travel with their pairs (the moment
+                // on the first disc: negated when the pair's order flips)
+                let mut moved: Vec<(Pair, (f64, f64))> = list
+                    .pairs
+                    .iter()
+                    .zip(list.shear.iter().zip(&list.roll))
+                    .map(|(q, (&fs, &mr))| {
+                        let r = renumber(q);
+                        let flip = new_of_old[q.i as usize] > new_of_old[q.j as usize];
+                        (r, (fs, if flip { -mr } else { mr }))
+                    })
+                    .collect();
+                moved.sort_unstable_by_key(|(q, _)| (q.i, q.j));
+                let hist: Vec<(f64, f64)>;
+                (list.pairs, hist) = moved.into_iter().unzip();
+                (list.shear, list.roll) = hist.into_iter().unzip();
+            } else {
+                let mut moved: Vec<(Pair, f64)> = list
+                    .pairs
+                    .iter()
+                    .zip(&list.shear)
+                    .map(|(q, &fs)| (renumber(q), fs))
+                    .collect();
+                moved.sort_unstable_by_key(|(q, _)| (q.i, q.j));
+                (list.pairs, list.shear) = moved.into_iter().unzip();
+            }
             for w in &mut list.walls {
                 w.disc = new_of_old[w.disc as usize];
             }
@@ -361,8 +400,11 @@ impl NeighbourGrid {
         let total: usize = chunks.iter().map(|c| c.1.len()).sum();
         let old = std::mem::take(&mut list.pairs);
         let old_shear = std::mem::take(&mut list.shear);
+        let old_roll = std::mem::take(&mut list.roll);
+        let roll_kept = old_roll.len() == old.len();
         let mut pairs = Vec::with_capacity(total + total / 8);
         let mut shear = Vec::with_capacity(total + total / 8);
+        let mut roll = Vec::with_capacity(if list.rolling { total + total / 8 } else { 0 });
         list.first.clear();
         list.first.reserve(n + 1);
         list.first.push(0);
@@ -376,11 +418,11 @@ impl NeighbourGrid {
                     while o < old.len() && (old[o].i, old[o].j) < (i, j) {
                         o += 1;
                     }
-                    let fs = if o < old.len() && old[o].i == i && old[o].j == j {
-                        old_shear[o]
-                    } else {
-                        0.0
-                    };
+                    let found = o < old.len() && old[o].i == i && old[o].j == j;
+                    let fs = if found { old_shear[o] } else { 0.0 };
+                    if list.rolling {
+                        roll.push(if found && roll_kept { old_roll[o] } else { 0.0 });
+                    }
                     let m_eff = super::contact::effective_mass(
                         p.inv_mass[i as usize],
                         p.inv_mass[j as usize],
@@ -399,6 +441,7 @@ impl NeighbourGrid {
         }
         list.pairs = pairs;
         list.shear = shear;
+        list.roll = roll;
         list.index_cross(n);
     }
 
@@ -430,15 +473,16 @@ impl NeighbourGrid {
                     while o < old.len() && (old[o].disc, old[o].wall) < key {
                         o += 1;
                     }
-                    let fs = if o < old.len() && (old[o].disc, old[o].wall) == key {
-                        old[o].fs
+                    let (fs, mr) = if o < old.len() && (old[o].disc, old[o].wall) == key {
+                        (old[o].fs, old[o].mr)
                     } else {
-                        0.0
+                        (0.0, 0.0)
                     };
                     out.push(WallPair {
                         disc: key.0,
                         wall: key.1,
                         fs,
+                        mr,
                     });
                 }
             }

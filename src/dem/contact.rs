@@ -1,5 +1,8 @@
 //! The linear contact law: normal spring + dashpot, incremental shear spring
-//! with a Coulomb–cohesion cap (Eqs. 35–38 corrected per ERRATA E6, E12).
+//! with a Coulomb–cohesion cap (Eqs. 35–38 corrected per ERRATA E6, E12),
+//! the cap on the total normal force `max(0, k_n δ + c_n δ̇)` as Eq. (37)
+//! with Eq. (35) (or on `k_n δ`, PFC: [`SlipNormal`]); optional rolling
+//! resistance, an elastic–plastic spring–dashpot moment ([`rolling`]).
 //!
 //! Geometry of a contact between disc i and an entity j (disc or wall):
 //! `n` is the unit normal from i towards j, `t = perp(n)` (n rotated +90°),
@@ -14,9 +17,24 @@
 
 use crate::geom::Vec2;
 
-/// Stiffness, friction, cohesion and dashpot coefficients of one material
-/// pair (disc–disc) or of a wall against a disc material.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+/// Which normal force caps the shear force (`slip_normal` of a material).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SlipNormal {
+    /// `|F_s| ≤ μ max(0, k_n δ + c_n δ̇) + c`: the total normal force of
+    /// Eq. (35), clamped at zero as the normal force is — the paper's
+    /// Eq. (37), Yade's `ViscElPhys` and LAMMPS `granular` (`damping
+    /// velocity`). The default.
+    #[default]
+    Total,
+    /// `|F_s| ≤ μ k_n δ + c`: the elastic part only — PFC's linear
+    /// contact model (the dashpot is a separate parallel element).
+    Elastic,
+}
+
+/// Stiffness, friction, cohesion, dashpot and rolling-resistance
+/// coefficients of one material pair (disc–disc) or of a wall or body
+/// against a disc material.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactLaw {
     /// Normal stiffness `k_n`.
     pub kn: f64,
@@ -39,12 +57,46 @@ pub struct ContactLaw {
     /// never tensile but the dashpot may pull while the discs overlap, which
     /// gives the textbook restitution `exp(−πζ/√(1−ζ²))`.
     pub no_tension: bool,
+    /// Normal force in the Coulomb cap (Eq. 37) and in the rolling limit.
+    pub slip_normal: SlipNormal,
+    /// Rolling friction `μ_r`: limiting rolling moment `μ_r r̄ F_n`
+    /// ([`rolling`]); 0 = no rolling resistance.
+    pub mu_roll: f64,
+    /// Rolling stiffness factor `β_r`: `k_r = β_r k_s r̄²` (default 1,
+    /// Iwashita & Oda 1998).
+    pub roll_stiffness: f64,
+    /// Rolling dashpot as a fraction of critical: `C_r = η_r 2√(I_r k_r)`
+    /// (Ai et al. 2011, model C; default 0).
+    pub roll_damping: f64,
+}
+
+impl Default for ContactLaw {
+    fn default() -> Self {
+        ContactLaw {
+            kn: 0.0,
+            ks: 0.0,
+            mu: 0.0,
+            cohesion: 0.0,
+            beta_n: 0.0,
+            beta_s: 0.0,
+            zeta_n: 0.0,
+            zeta_s: 0.0,
+            no_tension: false,
+            slip_normal: SlipNormal::Total,
+            mu_roll: 0.0,
+            roll_stiffness: 1.0,
+            roll_damping: 0.0,
+        }
+    }
 }
 
 impl ContactLaw {
     /// Combine two materials (disc–disc): stiffnesses in series scaled so
-    /// that equal materials give back their own value (`2 k_i k_j/(k_i+k_j)`),
-    /// friction and cohesion the smaller of the two (Eq. 37).
+    /// that equal materials give back their own value (`2 k_i k_j/(k_i+k_j)`,
+    /// also for the rolling stiffness factor), friction, cohesion, rolling
+    /// friction and rolling damping the smaller of the two (Eq. 37); the
+    /// elastic Coulomb cap if either material asks for it (symmetric, so
+    /// that the pair's law does not depend on the slot order).
     pub fn mix(a: &ContactLaw, b: &ContactLaw) -> ContactLaw {
         let h = |x: f64, y: f64| {
             if x + y > 0.0 {
@@ -58,8 +110,30 @@ impl ContactLaw {
             ks: h(a.ks, b.ks),
             mu: a.mu.min(b.mu),
             cohesion: a.cohesion.min(b.cohesion),
+            slip_normal: if a.slip_normal == SlipNormal::Elastic
+                || b.slip_normal == SlipNormal::Elastic
+            {
+                SlipNormal::Elastic
+            } else {
+                SlipNormal::Total
+            },
+            mu_roll: a.mu_roll.min(b.mu_roll),
+            roll_stiffness: h(a.roll_stiffness, b.roll_stiffness),
+            roll_damping: a.roll_damping.min(b.roll_damping),
             ..*a
         }
+    }
+
+    /// Is rolling resistance on (`μ_r > 0`)?
+    #[inline(always)]
+    pub fn rolling(&self) -> bool {
+        self.mu_roll > 0.0
+    }
+
+    /// Rolling stiffness `k_r = β_r k_s r̄²` for the rolling radius `r̄`.
+    #[inline(always)]
+    pub fn roll_kr(&self, rbar: f64) -> f64 {
+        self.roll_stiffness * self.ks * rbar * rbar
     }
 
     /// Normal and shear dashpot coefficients for effective mass `m_eff`.
@@ -125,8 +199,10 @@ pub struct Side {
 ///   tensile), `δ̇ = (v_i − v_j)·n` at the contact;
 /// * shear: `F_s ← F_s − k_s v_t Δt` with the contact-point relative
 ///   tangential velocity `v_t = (v_i − v_j)·t + ω_i l_i + ω_j l_j`, capped at
-///   `|F_s| ≤ k_n δ tan φ + c` (Eq. 37); the shear dashpot `−c_s v_t` acts
-///   only while the contact sticks;
+///   `|F_s| ≤ F_n tan φ + c` (Eq. 37) with `F_n = max(0, k_n δ + c_n δ̇)`
+///   ([`SlipNormal::Total`], the default: Eqs. 35 and 37 as printed) or
+///   `F_n = k_n δ` ([`SlipNormal::Elastic`], PFC); the shear dashpot
+///   `−c_s v_t` acts only while the contact sticks;
 /// * moments `r_c × F` about each centre (E12): `r_i F_s` and `r_j F_s`
 ///   (returned as `fs`; the caller multiplies by the radius).
 ///
@@ -146,6 +222,24 @@ pub fn evaluate(
     fs: &mut f64,
     dt: f64,
 ) -> ContactForce {
+    evaluate_capped(law, n, delta, i, j, (cn, cs), fs, dt).0
+}
+
+/// [`evaluate`], also returning the normal force of the Coulomb cap
+/// (`max(0, k_n δ + c_n δ̇)` or `k_n δ`, per [`ContactLaw::slip_normal`]),
+/// which also limits the rolling moment ([`rolling`]).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_capped(
+    law: &ContactLaw,
+    n: Vec2,
+    delta: f64,
+    i: &Side,
+    j: &Side,
+    (cn, cs): (f64, f64),
+    fs: &mut f64,
+    dt: f64,
+) -> (ContactForce, f64) {
     let t = n.perp();
     let dv = i.vel - j.vel;
     let vn = dv.dot(n);
@@ -156,7 +250,19 @@ pub fn evaluate(
         fn_tot = 0.0;
     }
     let trial = *fs - law.ks * vt * dt;
-    let cap = law.mu * fn_el + law.cohesion;
+    let fn_cap = match law.slip_normal {
+        SlipNormal::Elastic => fn_el,
+        // clamped at zero as the normal force (a pulling dashpot gives no
+        // friction); written as a select so that it compiles to maxsd
+        SlipNormal::Total => {
+            if fn_tot > 0.0 {
+                fn_tot
+            } else {
+                0.0
+            }
+        }
+    };
+    let cap = law.mu * fn_cap + law.cohesion;
     // Coulomb cap, branch-free (min/max): sliding when the cap bites, and
     // then the shear dashpot is off
     // (written as selects so that they compile to minsd/maxsd)
@@ -165,10 +271,103 @@ pub fn evaluate(
     let damp = if capped == trial { cs * vt } else { 0.0 };
     *fs = capped;
     let fs_tot = capped - damp;
-    ContactForce {
-        f: n * (-fn_tot) + t * fs_tot,
-        fs: fs_tot,
+    (
+        ContactForce {
+            f: n * (-fn_tot) + t * fs_tot,
+            fs: fs_tot,
+        },
+        fn_cap,
+    )
+}
+
+/// Rolling resistance of one contact: the elastic–plastic spring–dashpot
+/// model (Ai, Chen, Rotter & Ooi 2011, "type C"; the spring of Iwashita &
+/// Oda 1998), in 2D.
+///
+/// Sign convention: `omega_rel = ω_i − ω_j` (counter-clockwise positive;
+/// `ω_j = 0` for a wall or a body), the relative rolling rotation of i
+/// against j over the step is `Δθ_r = ω_rel Δt`, and `mr` is the contact's
+/// rolling-spring history, *the moment on i* (j gets `−mr`):
+///
+/// * spring `M_k ← M_k − k_r Δθ_r`, `k_r = β_r k_s r̄²`;
+/// * plastic limit `|M_k| ≤ μ_r r̄ F_n` (F_n as in the Coulomb cap:
+///   [`ContactLaw::slip_normal`]);
+/// * dashpot `M_d = −C_r ω_rel` only while the spring is below the limit
+///   (Ai et al.'s f = 0), `C_r` = `c_r` ([`rolling_dashpot`]).
+///
+/// Returns the moment on i, `M_k + M_d`. The pair is energy-consistent:
+/// the moments do work `M_i ω_i + M_j ω_j = M ω_rel`, i.e. the spring
+/// stores `M_k²/(2k_r)` and the limit dissipates `μ_r r̄ F_n |Δθ_plastic|`.
+/// Written as selects (min/max) like the shear cap.
+#[inline(always)]
+pub fn rolling(
+    law: &ContactLaw,
+    rbar: f64,
+    fn_cap: f64,
+    omega_rel: f64,
+    c_r: f64,
+    mr: &mut f64,
+    dt: f64,
+) -> f64 {
+    let kr = law.roll_kr(rbar);
+    let limit = law.mu_roll * rbar * fn_cap;
+    let trial = *mr - kr * omega_rel * dt;
+    let capped = if trial > limit { limit } else { trial };
+    let capped = if capped < -limit { -limit } else { capped };
+    let damp = if capped == trial {
+        c_r * omega_rel
+    } else {
+        0.0
+    };
+    *mr = capped;
+    capped - damp
+}
+
+/// `1/(I + m r²)` of one side of a contact (the inverse of its moment of
+/// inertia about the contact point) as a fraction `n/d` with
+/// `n = I⁻¹ m⁻¹`, `d = m⁻¹ + r² I⁻¹`, from the inverse mass and inertia;
+/// `(0, 1)` for a wall or a fixed disc. No division here: see
+/// [`rolling_dashpot`].
+#[inline(always)]
+pub fn contact_inertia(inv_m: f64, inv_i: f64, r: f64) -> (f64, f64) {
+    let d = inv_m + r * r * inv_i;
+    if d > 0.0 {
+        (inv_i * inv_m, d)
+    } else {
+        (0.0, 1.0)
     }
+}
+
+/// Rolling dashpot `C_r = η_r 2√(I_r k_r)` with
+/// `I_r = [1/(I_i + m_i r_i²) + 1/(I_j + m_j r_j²)]⁻¹ = d_i d_j/(n_i d_j + n_j d_i)`
+/// (Ai et al. 2011; `(n, d)` from [`contact_inertia`]: one division and
+/// one square root); 0 when neither side can turn.
+#[inline(always)]
+pub fn rolling_dashpot(
+    law: &ContactLaw,
+    kr: f64,
+    (ni, di): (f64, f64),
+    (nj, dj): (f64, f64),
+) -> f64 {
+    let s = ni * dj + nj * di;
+    if law.roll_damping == 0.0 || s <= 0.0 {
+        return 0.0;
+    }
+    law.roll_damping * 2.0 * (kr * (di * dj) / s).sqrt()
+}
+
+/// Energy `M_r²/(2k_r)` stored in a rolling spring with history `mr`.
+#[inline]
+pub fn rolling_energy(law: &ContactLaw, rbar: f64, mr: f64) -> f64 {
+    let kr = law.roll_kr(rbar);
+    if kr > 0.0 { 0.5 * mr * mr / kr } else { 0.0 }
+}
+
+/// Rolling radius `r̄ = r_i r_j/(r_i + r_j)` of two discs (a wall or a
+/// body: `r̄ = r_i`).
+#[inline(always)]
+pub fn rolling_radius(ri: f64, rj: f64) -> f64 {
+    ri * rj / (ri + rj)
 }
 
 /// Normal force of a contact from the present state (for probes): elastic

@@ -96,7 +96,8 @@ pub struct Energies {
     pub kinetic: f64,
     /// Rotational kinetic energy `Σ ½ I ω²`.
     pub rotational: f64,
-    /// `½k_nδ² + F_s²/(2k_s)` over all contacts (disc–disc and disc–wall).
+    /// `½k_nδ² + F_s²/(2k_s)` (+ `M_r²/(2k_r)` with rolling resistance)
+    /// over all contacts (disc–disc and disc–wall).
     pub spring: f64,
     /// `−Σ m g·x` (relative to the origin).
     pub gravity: f64,
@@ -202,6 +203,13 @@ impl Granular {
             .map(|m| self.materials[m])
             .collect();
         self.dash = self.laws.iter().map(ContactLaw::dashpot_terms).collect();
+        // rolling histories are kept only when some law needs them; the
+        // list is rebuilt (histories from zero) when that changes
+        let rolling = self.laws.iter().chain(&self.wall_laws).any(|l| l.rolling());
+        if rolling != self.contacts.rolling {
+            self.contacts.rolling = rolling;
+            self.grid.stale = true;
+        }
     }
 
     /// The Verlet skin (pairs with a gap below it are listed).
@@ -266,13 +274,26 @@ impl Granular {
     /// [`prepare_contacts`](Self::prepare_contacts), which may renumber the
     /// slots; cleared by the step.
     pub fn set_external(&mut self, forces: impl IntoIterator<Item = (usize, Vec2, Vec2)>) {
+        self.set_external_with_moments(forces.into_iter().map(|(s, f, x)| (s, f, x, 0.0)));
+    }
+
+    /// [`set_external`](Self::set_external) with a pure moment `m` added
+    /// to each force's moment (e.g. the rolling resistance of a disc–body
+    /// contact; `m = 0` adds nothing, bitwise).
+    pub fn set_external_with_moments(
+        &mut self,
+        forces: impl IntoIterator<Item = (usize, Vec2, Vec2, f64)>,
+    ) {
         let p = &self.particles;
         self.external.clear();
-        self.external.extend(
-            forces
-                .into_iter()
-                .map(|(slot, f, point)| (slot as u32, f, (point - p.pos[slot]).cross(f))),
-        );
+        self.external
+            .extend(forces.into_iter().map(|(slot, f, point, m)| {
+                let mut moment = (point - p.pos[slot]).cross(f);
+                if m != 0.0 {
+                    moment += m;
+                }
+                (slot as u32, f, moment)
+            }));
         // stable: several forces on one disc keep their order
         self.external.sort_by_key(|e| e.0);
     }
@@ -316,6 +337,13 @@ impl Granular {
         let p = &mut self.particles;
         p.force[slot] += f;
         p.torque[slot] += (point - p.pos[slot]).cross(f);
+    }
+
+    /// Add a pure moment to the disc in `slot` (e.g. the rolling
+    /// resistance of a disc–body contact), between the same phases as
+    /// [`add_external_force`](Self::add_external_force).
+    pub fn add_external_moment(&mut self, slot: usize, m: f64) {
+        self.particles.torque[slot] += m;
     }
 
     /// Phase 3: gravity, damping, central difference (Eqs. 50–54, E10),
@@ -410,10 +438,23 @@ impl Granular {
             }
             s
         };
-        for (q, &fs) in self.contacts.pairs.iter().zip(&self.contacts.shear) {
+        let roll = &self.contacts.roll;
+        let rolling = self.contacts.rolling && roll.len() == self.contacts.pairs.len();
+        for (k, (q, &fs)) in self
+            .contacts
+            .pairs
+            .iter()
+            .zip(&self.contacts.shear)
+            .enumerate()
+        {
             let (i, j) = (q.i as usize, q.j as usize);
             let dist = (p.pos[j] - p.pos[i]).norm();
-            e.spring += spring(self.law(i, j), p.radius[i] + p.radius[j] - dist, fs);
+            let (ri, rj) = (p.radius[i], p.radius[j]);
+            let law = self.law(i, j);
+            e.spring += spring(law, ri + rj - dist, fs);
+            if rolling && ri + rj > dist {
+                e.spring += contact::rolling_energy(law, contact::rolling_radius(ri, rj), roll[k]);
+            }
         }
         let nm = self.materials.len();
         for q in &self.contacts.walls {
@@ -422,6 +463,9 @@ impl Granular {
             let dist = (w.closest(p.pos[d]) - p.pos[d]).norm();
             let law = &self.wall_laws[q.wall as usize * nm + p.material[d] as usize];
             e.spring += spring(law, p.radius[d] - dist, q.fs);
+            if q.mr != 0.0 && p.radius[d] > dist {
+                e.spring += contact::rolling_energy(law, p.radius[d], q.mr);
+            }
         }
         e
     }

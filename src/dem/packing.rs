@@ -1,7 +1,7 @@
 //! Packings: discs on lattices, gravity deposition and radius growth in a
 //! box. Plain parameters in, disc rows out.
 
-use super::contact::ContactLaw;
+use super::contact::{ContactLaw, SlipNormal};
 use super::particles::Particles;
 use super::walls::{Wall, WallMotion};
 use super::{BodyDamping, DemError, Granular};
@@ -111,8 +111,9 @@ pub fn lattice_packing(
 
 /// Settle `rows` in the box `[lo, hi]` (four fixed walls) under `gravity`
 /// for `steps` steps at 0.15 × the critical step, with local damping 0.3
-/// and a normal dashpot at ζ = 0.3 added to `law`. Returns the settled
-/// discs in the input order.
+/// and a normal dashpot at ζ = 0.3 added to `law` (with the elastic
+/// Coulomb cap, so that this settling aid adds no friction). Returns the
+/// settled discs in the input order.
 #[allow(clippy::too_many_arguments)]
 pub fn settle_in_box(
     rows: &[DiscRow],
@@ -134,6 +135,8 @@ pub fn settle_in_box(
         .collect();
     let mut law = law;
     law.zeta_n = 0.3;
+    // the settling dashpot is a numerical aid: it must not add friction
+    law.slip_normal = SlipNormal::Elastic;
     let mut gr = Granular::new(p, vec![law], walls, 1.0);
     gr.dt = 0.15 * gr.critical_dt();
     gr.gravity = gravity;
@@ -159,7 +162,8 @@ pub fn settle_in_box(
 /// uniform in `[r_min, r_max]`; the radii start at the scale that gives a
 /// packing fraction of 0.3 and grow linearly to their final size over 70 %
 /// of `steps` DEM steps (no gravity, local damping 0.7, normal dashpot
-/// ζ = 0.3, four fixed walls), then the packing relaxes for the rest.
+/// ζ = 0.3 with the elastic Coulomb cap, four fixed walls), then the
+/// packing relaxes for the rest.
 #[allow(clippy::too_many_arguments)]
 pub fn grow_in_box(
     lo: Vec2,
@@ -174,6 +178,8 @@ pub fn grow_in_box(
 ) -> Result<Vec<DiscRow>, DemError> {
     let mut law = law;
     law.zeta_n = 0.3;
+    // the settling dashpot is a numerical aid: it must not add friction
+    law.slip_normal = SlipNormal::Elastic;
     let mats = vec![law];
     let mut rng = oorandom::Rand64::new(seed as u128);
     let r_final: Vec<f64> = (0..count)

@@ -33,6 +33,9 @@ use rayon::prelude::*;
 thread_local! {
     /// Per-thread accumulators of the block being swept (grown once).
     static ACC: std::cell::RefCell<Vec<(Vec2, f64)>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// Per-thread accumulators of the rolling moments (rolling resistance
+    /// only).
+    static ACC_ROLL: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// Per-step constants of the sweep.
@@ -44,6 +47,8 @@ struct Ctx<'a> {
     walls: &'a [Wall],
     first: &'a [u32],
     cross_buf: &'a [(ContactForce, f64)],
+    /// Rolling moment and new history of each cross pair (rolling only).
+    cross_roll: &'a [(f64, f64)],
     cross_first: &'a [u32],
     cross_in_start: &'a [u32],
     cross_in: &'a [(u32, u32)],
@@ -76,6 +81,8 @@ struct Block<'a> {
     ref_pos: &'a [Vec2],
     pairs: &'a [Pair],
     shear: &'a mut [f64],
+    /// Rolling histories (same index as `pairs`; empty without rolling).
+    roll: &'a mut [f64],
     walls: &'a mut [WallPair],
     wall_buf: &'a mut [ContactForce],
 }
@@ -103,6 +110,11 @@ impl<'a> Block<'a> {
         let kp = first[at] as usize - pair_lo;
         let (pairs, pairs2) = self.pairs.split_at(kp);
         let (shear, shear2) = self.shear.split_at_mut(kp);
+        let (roll, roll2) = if self.roll.is_empty() {
+            (self.roll, &mut [][..])
+        } else {
+            self.roll.split_at_mut(kp)
+        };
         let w = self.walls.partition_point(|q| (q.disc as usize) < at);
         let (walls, walls2) = self.walls.split_at_mut(w);
         let (wall_buf, wall_buf2) = self.wall_buf.split_at_mut(w);
@@ -123,6 +135,7 @@ impl<'a> Block<'a> {
                 ref_pos,
                 pairs,
                 shear,
+                roll,
                 walls,
                 wall_buf,
             },
@@ -142,6 +155,7 @@ impl<'a> Block<'a> {
                 ref_pos: ref_pos2,
                 pairs: pairs2,
                 shear: shear2,
+                roll: roll2,
                 walls: walls2,
                 wall_buf: wall_buf2,
             },
@@ -162,32 +176,65 @@ impl Granular {
             self.grid.stale = true;
             self.prepare_contacts();
         }
+        if self.contacts.rolling {
+            self.sweep_with::<ADVANCE, true>()
+        } else {
+            self.sweep_with::<ADVANCE, false>()
+        }
+    }
+
+    /// [`sweep`](Self::sweep) with (`ROLL`) or without rolling resistance:
+    /// without, the kernels are those before rolling resistance existed
+    /// (bitwise the same results, nothing more read or written).
+    fn sweep_with<const ADVANCE: bool, const ROLL: bool>(&mut self) -> f64 {
         let n = self.particles.len();
         let ContactList {
             pairs,
             shear,
+            roll,
             first,
             walls: wall_pairs,
             wall_buf,
             cross,
             cross_buf,
+            cross_roll,
             cross_first,
             cross_in_start,
             cross_in,
             block,
+            ..
         } = &mut self.contacts;
         let nm = self.materials.len();
-        cross_pairs(
-            &self.particles,
-            &self.laws,
-            &self.dash,
-            nm,
-            pairs,
-            shear,
-            cross,
-            cross_buf,
-            self.dt,
-        );
+        if ROLL {
+            // lists built before rolling was switched on start from zero
+            roll.resize(pairs.len(), 0.0);
+            cross_roll.resize(cross.len(), (0.0, 0.0));
+            cross_pairs_roll(
+                &self.particles,
+                &self.laws,
+                &self.dash,
+                nm,
+                pairs,
+                shear,
+                roll,
+                cross,
+                cross_buf,
+                cross_roll,
+                self.dt,
+            );
+        } else {
+            cross_pairs(
+                &self.particles,
+                &self.laws,
+                &self.dash,
+                nm,
+                pairs,
+                shear,
+                cross,
+                cross_buf,
+                self.dt,
+            );
+        }
         let ctx = Ctx {
             laws: &self.laws,
             dash: &self.dash,
@@ -196,6 +243,7 @@ impl Granular {
             walls: &self.walls,
             first,
             cross_buf,
+            cross_roll,
             cross_first,
             cross_in_start,
             cross_in,
@@ -228,11 +276,12 @@ impl Granular {
             ref_pos,
             pairs,
             shear,
+            roll: if ROLL { roll } else { &mut [] },
             walls: wall_pairs,
             wall_buf,
         };
         let has_ref = !ref_pos.is_empty();
-        let max2 = sweep_blocks::<ADVANCE>(0..n.div_ceil(*block), all, &ctx);
+        let max2 = sweep_blocks::<ADVANCE, ROLL>(0..n.div_ceil(*block), all, &ctx);
         if has_ref { max2.sqrt() } else { f64::INFINITY }
     }
 }
@@ -266,41 +315,93 @@ fn cross_pairs(
         });
 }
 
+/// [`cross_pairs`] with rolling resistance: also the rolling moment on
+/// the first disc and the new rolling history into `cross_roll`.
+#[allow(clippy::too_many_arguments)]
+fn cross_pairs_roll(
+    p: &Particles,
+    laws: &[ContactLaw],
+    dash: &[[f64; 4]],
+    nm: usize,
+    pairs: &[Pair],
+    shear: &[f64],
+    roll: &[f64],
+    cross: &[u32],
+    cross_buf: &mut [(ContactForce, f64)],
+    cross_roll: &mut [(f64, f64)],
+    dt: f64,
+) {
+    let kin = Kin::whole(p);
+    let inert = Inert {
+        inv_mass: &p.inv_mass,
+        inv_inertia: &p.inv_inertia,
+    };
+    cross
+        .par_iter()
+        .zip(cross_buf.par_iter_mut().zip(cross_roll.par_iter_mut()))
+        .with_min_len(256)
+        .for_each(|(&k, (out, out_r))| {
+            let q = &pairs[k as usize];
+            let mut fs = shear[k as usize];
+            let mut mr = roll[k as usize];
+            let (i, j) = (q.i as usize, q.j as usize);
+            let l = p.material[i] as usize * nm + p.material[j] as usize;
+            let (cf, m) = pair_contact_roll(
+                kin, inert, i, j, &laws[l], &dash[l], q, &mut fs, &mut mr, dt,
+            );
+            *out = (cf, fs);
+            *out_r = (m, mr);
+        });
+}
+
 /// Split the block range in halves and sweep them in parallel; returns the
 /// largest squared displacement (an exact max: thread-count independent).
-fn sweep_blocks<const ADVANCE: bool>(blocks: std::ops::Range<usize>, all: Block, ctx: &Ctx) -> f64 {
+fn sweep_blocks<const ADVANCE: bool, const ROLL: bool>(
+    blocks: std::ops::Range<usize>,
+    all: Block,
+    ctx: &Ctx,
+) -> f64 {
     if blocks.len() <= 1 {
         return if blocks.is_empty() {
             0.0
         } else {
-            sweep_block::<ADVANCE>(blocks.start, all, ctx)
+            sweep_block::<ADVANCE, ROLL>(blocks.start, all, ctx)
         };
     }
     let mid = blocks.start + blocks.len() / 2;
     let pair_lo = ctx.first[all.lo] as usize;
     let (a, b) = all.split(mid * ctx.block, ctx.first, pair_lo);
     let (x, y) = rayon::join(
-        || sweep_blocks::<ADVANCE>(blocks.start..mid, a, ctx),
-        || sweep_blocks::<ADVANCE>(mid..blocks.end, b, ctx),
+        || sweep_blocks::<ADVANCE, ROLL>(blocks.start..mid, a, ctx),
+        || sweep_blocks::<ADVANCE, ROLL>(mid..blocks.end, b, ctx),
     );
     x.max(y)
 }
 
 /// Sweep one block: its discs in slot order, each one's contacts, then (with
 /// `ADVANCE`) the disc's step.
-fn sweep_block<const ADVANCE: bool>(blk: usize, b: Block, ctx: &Ctx) -> f64 {
+fn sweep_block<const ADVANCE: bool, const ROLL: bool>(blk: usize, b: Block, ctx: &Ctx) -> f64 {
     ACC.with_borrow_mut(|acc| {
         acc.clear();
         acc.resize(b.pos.len(), (Vec2::ZERO, 0.0));
-        sweep_block_in::<ADVANCE>(blk, b, acc, ctx)
+        if ROLL {
+            ACC_ROLL.with_borrow_mut(|acc_r| {
+                acc_r.clear();
+                acc_r.resize(b.pos.len(), 0.0);
+                sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, acc_r, ctx)
+            })
+        } else {
+            sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, &mut [], ctx)
+        }
     })
 }
 
 #[inline(never)]
-fn sweep_block_in<const ADVANCE: bool>(
+fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
     blk: usize,
     b: Block,
     acc: &mut [(Vec2, f64)],
+    acc_r: &mut [f64],
     ctx: &Ctx,
 ) -> f64 {
     let Block {
@@ -319,6 +420,7 @@ fn sweep_block_in<const ADVANCE: bool>(
         ref_pos,
         pairs,
         shear,
+        roll,
         walls,
         wall_buf,
     } = b;
@@ -354,6 +456,9 @@ fn sweep_block_in<const ADVANCE: bool>(
         let a = &mut acc[j as usize - lo];
         a.0 -= cf.f;
         a.1 += cf.fs;
+        if ROLL {
+            acc_r[j as usize - lo] -= ctx.cross_roll[k as usize].0;
+        }
     }
     let mut ck = ctx.cross_first[blk] as usize;
     let pair_lo = ctx.first[lo] as usize;
@@ -369,12 +474,19 @@ fn sweep_block_in<const ADVANCE: bool>(
     };
     for d in 0..n {
         let (mut sf, mut st) = acc[d];
+        // rolling moments on d (ROLL only)
+        let mut sr = if ROLL { acc_r[d] } else { 0.0 };
         let end = ctx.first[lo + d + 1] as usize - pair_lo;
         let mut k = pk;
         while k < end {
             let j = pairs[k].j as usize;
             if j >= hi {
                 let (cf, fs) = ctx.cross_buf[ck];
+                if ROLL {
+                    let (m, mr) = ctx.cross_roll[ck];
+                    roll[k] = mr;
+                    sr += m;
+                }
                 ck += 1;
                 shear[k] = fs;
                 sf += cf.f;
@@ -389,6 +501,63 @@ fn sweep_block_in<const ADVANCE: bool>(
                 omega,
                 radius,
             };
+            if ROLL {
+                let inert = Inert {
+                    inv_mass,
+                    inv_inertia,
+                };
+                // two inner pairs side by side, as below
+                #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+                if single && k + 1 < end && (pairs[k + 1].j as usize) < hi {
+                    let j2 = pairs[k + 1].j as usize - lo;
+                    let (q1, q2) = (&pairs[k], &pairs[k + 1]);
+                    if let Some((cf, fs, m, mr)) = lanes::pair_contacts_roll(
+                        kin,
+                        inert,
+                        [d, d],
+                        [jl, j2],
+                        [shear[k], shear[k + 1]],
+                        [roll[k], roll[k + 1]],
+                        [q1.sqrt_m_eff, q2.sqrt_m_eff],
+                        &law0,
+                        &dash0,
+                        ctx.dt,
+                    ) {
+                        shear[k] = fs[0];
+                        shear[k + 1] = fs[1];
+                        roll[k] = mr[0];
+                        roll[k + 1] = mr[1];
+                        for (jx, c, m) in [(jl, cf[0], m[0]), (j2, cf[1], m[1])] {
+                            let a = &mut acc[jx];
+                            a.0 -= c.f;
+                            a.1 += c.fs;
+                            acc_r[jx] -= m;
+                            sf += c.f;
+                            st += c.fs;
+                            sr += m;
+                        }
+                        k += 2;
+                        continue;
+                    }
+                }
+                let (q, fs, mr) = (&pairs[k], &mut shear[k], &mut roll[k]);
+                let (cf, m) = if single {
+                    pair_contact_roll(kin, inert, d, jl, &law0, &dash0, q, fs, mr, ctx.dt)
+                } else {
+                    let l = material[d] as usize * ctx.n_mat + material[jl] as usize;
+                    let (law, dash) = (&ctx.laws[l], &ctx.dash[l]);
+                    pair_contact_roll(kin, inert, d, jl, law, dash, q, fs, mr, ctx.dt)
+                };
+                let a = &mut acc[jl];
+                a.0 -= cf.f;
+                a.1 += cf.fs;
+                acc_r[jl] -= m;
+                sf += cf.f;
+                st += cf.fs;
+                sr += m;
+                k += 1;
+                continue;
+            }
             // two inner pairs of disc d side by side when the lanes apply
             #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
             if single && k + 1 < end && (pairs[k + 1].j as usize) < hi {
@@ -442,13 +611,23 @@ fn sweep_block_in<const ADVANCE: bool>(
                 omega: omega[d],
                 radius: radius[d],
             };
-            let cf = wall_contact(disc, inv_mass[d], &ctx.walls[w], law, &mut q.fs, ctx.dt);
+            let cf = if ROLL {
+                let (im, ii) = (inv_mass[d], inv_inertia[d]);
+                let (cf, m) = wall_contact_roll(disc, im, ii, &ctx.walls[w], law, q, ctx.dt);
+                sr += m;
+                cf
+            } else {
+                wall_contact(disc, inv_mass[d], &ctx.walls[w], law, &mut q.fs, ctx.dt)
+            };
             wall_buf[wk] = cf;
             sf += cf.f;
             st += cf.fs;
             wk += 1;
         }
         let mut tq = radius[d] * st;
+        if ROLL {
+            tq += sr;
+        }
         while ek < ctx.external.len() && ctx.external[ek].0 as usize == lo + d {
             sf += ctx.external[ek].1;
             tq += ctx.external[ek].2;
@@ -503,6 +682,60 @@ impl<'a> Kin<'a> {
     }
 }
 
+/// Inverse masses and inertias (the rolling dashpot's `I_r`).
+#[derive(Clone, Copy)]
+struct Inert<'a> {
+    inv_mass: &'a [f64],
+    inv_inertia: &'a [f64],
+}
+
+/// Unit normal from disc i to disc j and their overlap, `None` when apart.
+#[inline(always)]
+fn pair_geometry(p: Kin, i: usize, j: usize) -> Option<(Vec2, f64)> {
+    let (pi, pj) = (p.pos[i], p.pos[j]);
+    let rsum = p.radius[i] + p.radius[j];
+    let d = pj - pi;
+    let d2 = d.norm2();
+    if d2 >= rsum * rsum {
+        return None;
+    }
+    let (n, dist) = if d2 > 0.0 {
+        let dist = d2.sqrt();
+        (d * (1.0 / dist), dist)
+    } else {
+        (Vec2::new(1.0, 0.0), 0.0)
+    };
+    Some((n, rsum - dist))
+}
+
+/// The two sides of a disc–disc contact.
+#[inline(always)]
+fn sides(p: Kin, i: usize, j: usize) -> (Side, Side) {
+    (
+        Side {
+            pos: p.pos[i],
+            vel: p.vel[i],
+            omega: p.omega[i],
+            radius: p.radius[i],
+        },
+        Side {
+            pos: p.pos[j],
+            vel: p.vel[j],
+            omega: p.omega[j],
+            radius: p.radius[j],
+        },
+    )
+}
+
+/// Dashpot coefficients of a pair from the law's terms and `√m_eff`.
+#[inline(always)]
+fn pair_dashpots(dash: &[f64; 4], q: &Pair) -> (f64, f64) {
+    (
+        dash[0] + dash[1] * q.sqrt_m_eff,
+        dash[2] + dash[3] * q.sqrt_m_eff,
+    )
+}
+
 /// One disc–disc contact between the discs at `i` and `j` of `p`; `fs` is
 /// the pair's shear history.
 #[inline(always)]
@@ -517,44 +750,55 @@ fn pair_contact(
     fs: &mut f64,
     dt: f64,
 ) -> ContactForce {
-    let (pi, pj) = (p.pos[i], p.pos[j]);
-    let (ri, rj) = (p.radius[i], p.radius[j]);
-    let rsum = ri + rj;
-    let d = pj - pi;
-    let d2 = d.norm2();
-    if d2 >= rsum * rsum {
+    let Some((n, delta)) = pair_geometry(p, i, j) else {
         *fs = 0.0;
         return ContactForce::default();
-    }
-    let (n, dist) = if d2 > 0.0 {
-        let dist = d2.sqrt();
-        (d * (1.0 / dist), dist)
-    } else {
-        (Vec2::new(1.0, 0.0), 0.0)
     };
-    contact::evaluate(
-        law,
-        n,
-        rsum - dist,
-        &Side {
-            pos: pi,
-            vel: p.vel[i],
-            omega: p.omega[i],
-            radius: ri,
-        },
-        &Side {
-            pos: pj,
-            vel: p.vel[j],
-            omega: p.omega[j],
-            radius: rj,
-        },
-        (
-            dash[0] + dash[1] * q.sqrt_m_eff,
-            dash[2] + dash[3] * q.sqrt_m_eff,
-        ),
-        fs,
-        dt,
-    )
+    let (si, sj) = sides(p, i, j);
+    contact::evaluate(law, n, delta, &si, &sj, pair_dashpots(dash, q), fs, dt)
+}
+
+/// [`pair_contact`] with rolling resistance: also the rolling moment on
+/// disc i (j gets its opposite), `mr` the pair's rolling history
+/// ([`contact::rolling`], relative rotation `ω_i − ω_j`, rolling radius
+/// `r_i r_j/(r_i + r_j)`).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn pair_contact_roll(
+    p: Kin,
+    m: Inert,
+    i: usize,
+    j: usize,
+    law: &ContactLaw,
+    dash: &[f64; 4],
+    q: &Pair,
+    fs: &mut f64,
+    mr: &mut f64,
+    dt: f64,
+) -> (ContactForce, f64) {
+    let Some((n, delta)) = pair_geometry(p, i, j) else {
+        *fs = 0.0;
+        *mr = 0.0;
+        return (ContactForce::default(), 0.0);
+    };
+    let (si, sj) = sides(p, i, j);
+    let (cf, fn_cap) =
+        contact::evaluate_capped(law, n, delta, &si, &sj, pair_dashpots(dash, q), fs, dt);
+    if !law.rolling() {
+        *mr = 0.0;
+        return (cf, 0.0);
+    }
+    let rbar = contact::rolling_radius(si.radius, sj.radius);
+    let c_r = if law.roll_damping != 0.0 {
+        let a_i = contact::contact_inertia(m.inv_mass[i], m.inv_inertia[i], si.radius);
+        let a_j = contact::contact_inertia(m.inv_mass[j], m.inv_inertia[j], sj.radius);
+        contact::rolling_dashpot(law, law.roll_kr(rbar), a_i, a_j)
+    } else {
+        0.0
+    };
+    let omega_rel = si.omega - sj.omega;
+    let mom = contact::rolling(law, rbar, fn_cap, omega_rel, c_r, mr, dt);
+    (cf, mom)
 }
 
 /// One disc–wall contact: the wall is side j with zero radius, the normal
@@ -568,14 +812,86 @@ fn wall_contact(
     fs: &mut f64,
     dt: f64,
 ) -> ContactForce {
+    let Some((n, delta, c)) = wall_geometry(&disc, w) else {
+        *fs = 0.0;
+        return ContactForce::default();
+    };
+    contact::evaluate(
+        law,
+        n,
+        delta,
+        &disc,
+        &Side {
+            pos: c,
+            vel: w.vel,
+            omega: 0.0,
+            radius: 0.0,
+        },
+        law.dashpots(effective_mass(inv_mass, 0.0)),
+        fs,
+        dt,
+    )
+}
+
+/// [`wall_contact`] with rolling resistance: also the rolling moment on
+/// the disc (relative rotation `ω_i`, rolling radius `r`), the histories
+/// in `q`.
+#[inline(always)]
+fn wall_contact_roll(
+    disc: Side,
+    inv_mass: f64,
+    inv_inertia: f64,
+    w: &Wall,
+    law: &ContactLaw,
+    q: &mut WallPair,
+    dt: f64,
+) -> (ContactForce, f64) {
+    let Some((n, delta, c)) = wall_geometry(&disc, w) else {
+        q.fs = 0.0;
+        q.mr = 0.0;
+        return (ContactForce::default(), 0.0);
+    };
+    let (cf, fn_cap) = contact::evaluate_capped(
+        law,
+        n,
+        delta,
+        &disc,
+        &Side {
+            pos: c,
+            vel: w.vel,
+            omega: 0.0,
+            radius: 0.0,
+        },
+        law.dashpots(effective_mass(inv_mass, 0.0)),
+        &mut q.fs,
+        dt,
+    );
+    if !law.rolling() {
+        q.mr = 0.0;
+        return (cf, 0.0);
+    }
+    let r = disc.radius;
+    let c_r = if law.roll_damping != 0.0 {
+        let a = contact::contact_inertia(inv_mass, inv_inertia, r);
+        contact::rolling_dashpot(law, law.roll_kr(r), a, (0.0, 1.0))
+    } else {
+        0.0
+    };
+    let mom = contact::rolling(law, r, fn_cap, disc.omega, c_r, &mut q.mr, dt);
+    (cf, mom)
+}
+
+/// Unit normal from the disc centre to the closest point `c` of the wall,
+/// the overlap and `c`; `None` when apart.
+#[inline(always)]
+fn wall_geometry(disc: &Side, w: &Wall) -> Option<(Vec2, f64, Vec2)> {
     let x = disc.pos;
     let r = disc.radius;
     let c = w.closest(x);
     let dd = c - x;
     let d2 = dd.norm2();
     if d2 >= r * r {
-        *fs = 0.0;
-        return ContactForce::default();
+        return None;
     }
     let dist = d2.sqrt();
     let n = if dist > 0.0 {
@@ -590,33 +906,22 @@ fn wall_contact(
             Vec2::new(1.0, 0.0)
         }
     };
-    contact::evaluate(
-        law,
-        n,
-        r - dist,
-        &disc,
-        &Side {
-            pos: c,
-            vel: w.vel,
-            omega: 0.0,
-            radius: 0.0,
-        },
-        law.dashpots(effective_mass(inv_mass, 0.0)),
-        fs,
-        dt,
-    )
+    Some((n, r - dist, c))
 }
 
 /// Two disc–disc contacts in the two lanes of SSE2 registers (baseline on
 /// x86-64). Every lane performs exactly the IEEE operations of
-/// [`pair_contact`] and [`contact::evaluate`], in the same order (no fused
-/// multiply–add), so the results are bitwise those of the scalar code.
+/// [`pair_contact`] and [`contact::evaluate`] (with rolling resistance:
+/// [`pair_contact_roll`] and [`contact::rolling`]), in the same order (no
+/// fused multiply–add), so the results are bitwise those of the scalar
+/// code.
 ///
 /// The intrinsics are `unsafe` only because they require SSE2, which the
 /// `cfg` guarantees is enabled for the whole build.
 #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
 mod lanes {
-    use super::{ContactForce, ContactLaw, Kin};
+    use super::{ContactForce, ContactLaw, Inert, Kin};
+    use crate::dem::contact::SlipNormal;
     use crate::geom::Vec2;
     use std::arch::x86_64::*;
 
@@ -647,9 +952,50 @@ mod lanes {
         dash: &[f64; 4],
         dt: f64,
     ) -> Option<([ContactForce; 2], [f64; 2])> {
+        let no = Inert {
+            inv_mass: &[],
+            inv_inertia: &[],
+        };
+        pair_contacts_in::<false>(p, no, ix, jx, fs, [0.0; 2], sm, law, dash, dt)
+            .map(|(cf, fs, _, _)| (cf, fs))
+    }
+
+    /// [`pair_contacts`] with rolling resistance: also the rolling moments
+    /// on disc i and the new rolling histories (`mr` the old ones).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    pub(super) fn pair_contacts_roll(
+        p: Kin,
+        m: Inert,
+        ix: [usize; 2],
+        jx: [usize; 2],
+        fs: [f64; 2],
+        mr: [f64; 2],
+        sm: [f64; 2],
+        law: &ContactLaw,
+        dash: &[f64; 4],
+        dt: f64,
+    ) -> Option<([ContactForce; 2], [f64; 2], [f64; 2], [f64; 2])> {
+        pair_contacts_in::<true>(p, m, ix, jx, fs, mr, sm, law, dash, dt)
+    }
+
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn pair_contacts_in<const ROLL: bool>(
+        p: Kin,
+        m: Inert,
+        ix: [usize; 2],
+        jx: [usize; 2],
+        fs: [f64; 2],
+        mr: [f64; 2],
+        sm: [f64; 2],
+        law: &ContactLaw,
+        dash: &[f64; 4],
+        dt: f64,
+    ) -> Option<([ContactForce; 2], [f64; 2], [f64; 2], [f64; 2])> {
         // SAFETY: SSE2 is enabled (module cfg); no memory is accessed
         // through pointers.
-        let (fx, fy, fs_tot, fs_new) = unsafe {
+        let (fx, fy, fs_tot, fs_new, mom, mr_new) = unsafe {
             let [i1, i2] = ix;
             let [j1, j2] = jx;
             let (pi1, pi2, pj1, pj2) = (p.pos[i1], p.pos[i2], p.pos[j1], p.pos[j2]);
@@ -700,8 +1046,15 @@ mod lanes {
                 fs0,
                 _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(law.ks), vt), _mm_set1_pd(dt)),
             );
+            // the cap's normal force: k_n δ, or max(0, F_n,total) as the
+            // scalar select `if fn_tot > 0 { fn_tot } else { 0 }` (maxpd
+            // returns its second operand unless the first is greater)
+            let fn_cap = match law.slip_normal {
+                SlipNormal::Elastic => fn_el,
+                SlipNormal::Total => _mm_max_pd(fn_tot, zero),
+            };
             let cap = _mm_add_pd(
-                _mm_mul_pd(_mm_set1_pd(law.mu), fn_el),
+                _mm_mul_pd(_mm_set1_pd(law.mu), fn_cap),
                 _mm_set1_pd(law.cohesion),
             );
             // if trial > cap { cap } else { trial }, then if < −cap { −cap }
@@ -716,7 +1069,55 @@ mod lanes {
             let (fx, fy) = (get(_mm_and_pd(touch, fx)), get(_mm_and_pd(touch, fy)));
             let fs_tot = get(_mm_and_pd(touch, fs_tot));
             let fs_new = get(_mm_and_pd(touch, capped));
-            (fx, fy, fs_tot, fs_new)
+            // rolling resistance, as contact::rolling (ROLL only)
+            let (mom, mr_new) = if ROLL && law.rolling() {
+                // r̄ = r_i r_j/(r_i + r_j), k_r = β_r k_s r̄², limit μ_r r̄ F_n
+                let rbar = _mm_div_pd(_mm_mul_pd(ri, rj), rsum);
+                let kr = _mm_mul_pd(
+                    _mm_mul_pd(_mm_set1_pd(law.roll_stiffness * law.ks), rbar),
+                    rbar,
+                );
+                let limit = _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(law.mu_roll), rbar), fn_cap);
+                let c_r = if law.roll_damping != 0.0 {
+                    // 1/(I + m r²) = n/d, n = ii·im, d = im + r² ii; (0, 1)
+                    // where d = 0 (contact::contact_inertia)
+                    let a = |k: [usize; 2], r: __m128d| {
+                        let im = set(m.inv_mass[k[0]], m.inv_mass[k[1]]);
+                        let ii = set(m.inv_inertia[k[0]], m.inv_inertia[k[1]]);
+                        let d = _mm_add_pd(im, _mm_mul_pd(_mm_mul_pd(r, r), ii));
+                        let pos = _mm_cmpgt_pd(d, zero);
+                        let one = _mm_set1_pd(1.0);
+                        (
+                            _mm_and_pd(pos, _mm_mul_pd(ii, im)),
+                            _mm_or_pd(_mm_and_pd(pos, d), _mm_andnot_pd(pos, one)),
+                        )
+                    };
+                    let ((ni, di), (nj, dj)) = (a(ix, ri), a(jx, rj));
+                    let s = _mm_add_pd(_mm_mul_pd(ni, dj), _mm_mul_pd(nj, di));
+                    let c = _mm_mul_pd(
+                        _mm_set1_pd(law.roll_damping * 2.0),
+                        _mm_sqrt_pd(_mm_div_pd(_mm_mul_pd(kr, _mm_mul_pd(di, dj)), s)),
+                    );
+                    _mm_and_pd(_mm_cmpgt_pd(s, zero), c)
+                } else {
+                    zero
+                };
+                let w_rel = _mm_sub_pd(wi, wj);
+                let trial = _mm_sub_pd(
+                    set(mr[0], mr[1]),
+                    _mm_mul_pd(_mm_mul_pd(kr, w_rel), _mm_set1_pd(dt)),
+                );
+                let capped = _mm_min_pd(limit, trial);
+                let capped = _mm_max_pd(_mm_xor_pd(limit, sign), capped);
+                let damp = _mm_and_pd(_mm_cmpeq_pd(capped, trial), _mm_mul_pd(c_r, w_rel));
+                (
+                    get(_mm_and_pd(touch, _mm_sub_pd(capped, damp))),
+                    get(_mm_and_pd(touch, capped)),
+                )
+            } else {
+                ([0.0; 2], [0.0; 2])
+            };
+            (fx, fy, fs_tot, fs_new, mom, mr_new)
         };
         Some((
             [
@@ -730,6 +1131,8 @@ mod lanes {
                 },
             ],
             fs_new,
+            mom,
+            mr_new,
         ))
     }
 }
@@ -740,7 +1143,8 @@ mod tests {
 
     /// The two-lane kernel gives bitwise the scalar kernel's forces and
     /// shear histories: touching and separated pairs, sticking and sliding,
-    /// with and without cohesion, dashpots and the no-tension clamp.
+    /// with and without cohesion, dashpots and the no-tension clamp, with
+    /// the total or the elastic normal force in the Coulomb cap.
     #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
     #[test]
     fn two_lanes_equal_the_scalar_contact_bitwise() {
@@ -772,6 +1176,11 @@ mod tests {
                 zeta_n: u(0.0, 0.3),
                 zeta_s: if case % 2 == 0 { u(0.0, 0.2) } else { 0.0 },
                 no_tension: case % 4 == 1,
+                slip_normal: if case % 7 < 4 {
+                    contact::SlipNormal::Total
+                } else {
+                    contact::SlipNormal::Elastic
+                },
                 ..Default::default()
             };
             let dash = law.dashpot_terms();
@@ -798,5 +1207,106 @@ mod tests {
             }
         }
         assert!(cases > 1000, "touching cases: {cases}");
+    }
+
+    /// The same with rolling resistance: forces, shear and rolling
+    /// histories and rolling moments of the two-lane kernel are bitwise
+    /// those of [`pair_contact_roll`] (at and below the limit, with and
+    /// without the rolling dashpot, fixed discs, μ_r = 0).
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    #[test]
+    fn two_lanes_with_rolling_equal_the_scalar_contact_bitwise() {
+        let mut rng = oorandom::Rand64::new(11);
+        let mut u = |a: f64, b: f64| a + (b - a) * rng.rand_float();
+        let (mut touching, mut moment) = (0, 0);
+        for case in 0..4000 {
+            let n = 4;
+            let pos: Vec<Vec2> = (0..n)
+                .map(|_| Vec2::new(u(0.0, 2.5), u(0.0, 2.5)))
+                .collect();
+            let vel: Vec<Vec2> = (0..n)
+                .map(|_| Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)))
+                .collect();
+            let omega: Vec<f64> = (0..n).map(|_| u(-5.0, 5.0)).collect();
+            let radius: Vec<f64> = (0..n).map(|_| u(0.8, 1.2)).collect();
+            // some discs fixed (inverse mass and inertia 0)
+            let inv_mass: Vec<f64> = (0..n)
+                .map(|k| {
+                    if (case + k) % 5 == 0 {
+                        0.0
+                    } else {
+                        u(0.2, 2.0)
+                    }
+                })
+                .collect();
+            let inv_inertia: Vec<f64> = inv_mass.iter().map(|&im| im * u(1.0, 3.0)).collect();
+            let kin = Kin {
+                pos: &pos,
+                vel: &vel,
+                omega: &omega,
+                radius: &radius,
+            };
+            let inert = Inert {
+                inv_mass: &inv_mass,
+                inv_inertia: &inv_inertia,
+            };
+            let law = ContactLaw {
+                kn: 1.0e4,
+                ks: u(0.5e4, 1.0e4),
+                mu: u(0.1, 0.8),
+                zeta_n: u(0.0, 0.3),
+                slip_normal: if case % 3 == 0 {
+                    contact::SlipNormal::Elastic
+                } else {
+                    contact::SlipNormal::Total
+                },
+                mu_roll: if case % 7 == 0 { 0.0 } else { u(0.01, 0.5) },
+                roll_stiffness: u(0.3, 2.0),
+                roll_damping: if case % 2 == 0 { u(0.0, 1.0) } else { 0.0 },
+                ..Default::default()
+            };
+            let dash = law.dashpot_terms();
+            let mk = |i: u32, j: u32| Pair {
+                i,
+                j,
+                sqrt_m_eff: 0.7,
+            };
+            let q = [mk(0, 1), mk(2, 3)];
+            let mut fs = [u(-300.0, 300.0), u(-300.0, 300.0)];
+            let mut mr = [u(-100.0, 100.0), u(-100.0, 100.0)];
+            let dt = 1e-3;
+            let (cfl, fsl, ml, mrl) = lanes::pair_contacts_roll(
+                kin,
+                inert,
+                [0, 2],
+                [1, 3],
+                fs,
+                mr,
+                [0.7, 0.7],
+                &law,
+                &dash,
+                dt,
+            )
+            .expect("distinct centres");
+            for (l, (i, j)) in [(0, 1), (2, 3)].into_iter().enumerate() {
+                let (cf, m) = pair_contact_roll(
+                    kin, inert, i, j, &law, &dash, &q[l], &mut fs[l], &mut mr[l], dt,
+                );
+                let bits = |c: &ContactForce| [c.f.x.to_bits(), c.f.y.to_bits(), c.fs.to_bits()];
+                assert_eq!(bits(&cf), bits(&cfl[l]), "case {case} lane {l}");
+                assert_eq!(fs[l].to_bits(), fsl[l].to_bits(), "case {case} lane {l}");
+                assert_eq!(
+                    m.to_bits(),
+                    ml[l].to_bits(),
+                    "case {case} lane {l}: {m} {}",
+                    ml[l]
+                );
+                assert_eq!(mr[l].to_bits(), mrl[l].to_bits(), "case {case} lane {l}");
+                touching += usize::from(cf.f != Vec2::ZERO && law.mu_roll > 0.0);
+                moment += usize::from(m != 0.0);
+            }
+        }
+        println!("touching with rolling: {touching}, with a rolling moment: {moment}");
+        assert!(touching > 1000 && moment > 1000, "{touching} {moment}");
     }
 }

@@ -11,13 +11,13 @@ use super::body::{
 use super::generate::discs_from_csv;
 use super::granular::{
     CONTACT_QUANTITIES, DISC_QUANTITIES, DampingSpec, DiscsSpec, GLOBAL_QUANTITIES, Generator,
-    GranularSpec, Packing, WALL_QUANTITIES,
+    GranularSpec, Packing, SlipNormalSpec, WALL_QUANTITIES, slip_normal,
 };
 use super::{Analysis, ContactSolve, CouplingScheme, Invalid, Scenario};
 use crate::continuum::ComplianceMode;
 use crate::continuum::Continuum;
 use crate::coupling::CoupledModel;
-use crate::dem::contact::ContactLaw;
+use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::dem::packing::{
     DiscRow, Lattice, grow_in_box, lattice_packing, overlapping_pairs, settle_in_box,
 };
@@ -60,6 +60,13 @@ pub fn laws(sc: &Scenario, damping: &DampingSpec) -> (Vec<ContactLaw>, BodyDampi
                 ks: m.ks,
                 mu: m.friction,
                 cohesion: m.cohesion,
+                slip_normal: match slip_normal(m) {
+                    Some(SlipNormalSpec::Elastic) => SlipNormal::Elastic,
+                    _ => SlipNormal::Total,
+                },
+                mu_roll: m.rolling_friction,
+                roll_stiffness: m.rolling_stiffness,
+                roll_damping: m.rolling_damping,
                 ..Default::default()
             };
             match *damping {

@@ -194,6 +194,55 @@ pub enum DampingSpec {
     },
 }
 
+/// `slip_normal` of a `[[material]]`: which normal force caps the shear
+/// force (and the rolling moment).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SlipNormalSpec {
+    /// `μ max(0, k_n δ + c_n δ̇) + c` (Eqs. 35, 37; Yade, LAMMPS).
+    #[default]
+    Total,
+    /// `μ k_n δ + c` (PFC's linear model).
+    Elastic,
+}
+
+/// The default `slip_normal`.
+pub fn total() -> String {
+    "total".into()
+}
+
+/// A material's `slip_normal` (`None` if it is neither `"total"` nor
+/// `"elastic"`; the validation reports that).
+pub fn slip_normal(m: &super::Material) -> Option<SlipNormalSpec> {
+    match m.slip_normal.as_str() {
+        "total" => Some(SlipNormalSpec::Total),
+        "elastic" => Some(SlipNormalSpec::Elastic),
+        _ => None,
+    }
+}
+
+/// Checks of a material's issue-13 fields, `slip_normal` and rolling
+/// resistance (`at` gives the field's path).
+pub fn validate_contact_fields(m: &super::Material, at: &dyn Fn(&str) -> String, p: &mut Problems) {
+    p.check(
+        slip_normal(m).is_some(),
+        at("slip_normal"),
+        format!(
+            "must be \"total\" (the Coulomb cap uses spring + dashpot, the default) or \"elastic\" (spring only, PFC) (got \"{}\")",
+            m.slip_normal
+        ),
+    );
+    p.non_negative(m.rolling_friction, at("rolling_friction"));
+    p.positive(m.rolling_stiffness, at("rolling_stiffness"));
+    p.check(
+        m.rolling_damping.is_finite() && (0.0..=1.0).contains(&m.rolling_damping),
+        at("rolling_damping"),
+        format!(
+            "must be in [0, 1] (a fraction of the critical rolling dashpot; got {})",
+            m.rolling_damping
+        ),
+    );
+}
+
 /// A rigid wall segment.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -201,6 +201,25 @@ pub struct Material {
     /// Cohesion `c` (force) in the Coulomb cap (Eq. 37).
     #[serde(default)]
     pub cohesion: f64,
+    /// Normal force in the Coulomb cap and the rolling limit: `"total"`
+    /// (spring + dashpot, the paper; default) or `"elastic"` (PFC); read
+    /// with [`granular::slip_normal`] (checked by the validation, so that
+    /// a bad value is reported with its field).
+    #[serde(default = "granular::total")]
+    pub slip_normal: String,
+    /// Rolling friction `μ_r` (default 0: no rolling resistance).
+    #[serde(default)]
+    pub rolling_friction: f64,
+    /// Rolling stiffness factor `β_r`, `k_r = β_r k_s r̄²` (default 1).
+    #[serde(default = "one_f64")]
+    pub rolling_stiffness: f64,
+    /// Rolling dashpot, fraction of critical `η_r` (default 0).
+    #[serde(default)]
+    pub rolling_damping: f64,
+}
+
+fn one_f64() -> f64 {
+    1.0
 }
 
 /// `[[probe]]`: one named time series in `history.csv`. Which fields are
@@ -473,6 +492,7 @@ impl Scenario {
             p.non_negative(m.ks, at("ks"));
             p.non_negative(m.friction, at("friction"));
             p.non_negative(m.cohesion, at("cohesion"));
+            granular::validate_contact_fields(m, &at, &mut p);
         }
         let dynamic = sim.analysis == Analysis::Dynamic || self.granular.is_some();
         p.check(
