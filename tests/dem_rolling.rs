@@ -96,8 +96,9 @@ velocity = [0.3, -4.0]
 /// and the wall forces.
 fn dem_hash(src: &str) -> u64 {
     let sc = scenario::parse(src, "t.toml").expect("valid scenario");
-    let mut g = efgdem::dem::build::build(&sc).expect("builds");
-    let steps = efgdem::dem::build::steps(&sc, g.dt);
+    let model = sc.build().expect("builds");
+    let steps = model.steps;
+    let mut g = model.into_granular().expect("granular");
     let mut h = Hash::new();
     for s in 0..steps {
         g.step();
@@ -124,11 +125,13 @@ fn dem_hash(src: &str) -> u64 {
 /// forces, every step.
 fn coupled_hash(src: &str) -> u64 {
     let sc = scenario::parse(src, "t.toml").expect("valid scenario");
-    let mut b = efgdem::coupling::run::build(&sc).expect("builds");
+    let model = sc.build().expect("builds");
+    let steps = model.steps;
+    let mut m = model.into_coupled().expect("coupled");
     let mut h = Hash::new();
-    for _ in 0..b.steps {
-        b.model.step().expect("steps");
-        let g = &b.model.granular;
+    for _ in 0..steps {
+        m.step().expect("steps");
+        let g = &m.granular;
         let p = &g.particles;
         for id in 0..p.len() {
             let k = g.slot(id);
@@ -136,7 +139,7 @@ fn coupled_hash(src: &str) -> u64 {
                 h.f(x);
             }
         }
-        for c in &b.model.contacts {
+        for c in &m.contacts {
             h.f(c.force.x);
             h.f(c.force.y);
             h.f(c.fs);

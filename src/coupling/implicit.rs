@@ -19,9 +19,6 @@
 //! * the body takes the forces, the discs get their opposite at the next
 //!   step: both sides see the same force at the same time level.
 
-// TODO(issue 11): document after the granular-physics merge
-#![allow(missing_docs)]
-
 use crate::continuum::compliance::Compliance;
 use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::geom::Vec2;
@@ -30,19 +27,23 @@ use crate::geom::Vec2;
 /// `w` of its body point.
 #[derive(Debug, Clone, Copy)]
 pub struct Linear {
+    /// Contact law of the disc–boundary pair (Eqs. 35–38).
     pub law: ContactLaw,
-    /// Dashpot coefficients.
+    /// Normal dashpot coefficient `c_n` for this contact's effective mass.
     pub cn: f64,
+    /// Shear dashpot coefficient `c_s`.
     pub cs: f64,
     /// Unit normal from the disc towards the body.
     pub n: Vec2,
     /// Overlap for `w = 0`.
     pub delta0: f64,
-    /// Disc contact-point velocity components: `v·n` and `v·t + ω r`.
+    /// Relative normal velocity `v·n` of the disc's contact point for `w = 0`.
     pub vn0: f64,
+    /// Relative tangential velocity `v·t + ω r` for `w = 0`.
     pub vt0: f64,
     /// Shear force history at the start of the step.
     pub fs_old: f64,
+    /// Time step Δt of the body step (increments over it).
     pub dt: f64,
     /// Not a contact but a contact's geometric stiffness `C` (row-major) on
     /// the increment `w` of its functional pair
@@ -60,10 +61,13 @@ pub struct Eval {
     pub g: Vec2,
     /// `∂g/∂w`, row-major.
     pub jac: [f64; 4],
-    /// New shear history, overlap, elastic and total normal force.
+    /// New shear history (force along `t = perp(n)`, Eq. 36 capped by Eq. 37).
     pub fs: f64,
+    /// Overlap δ at `w`.
     pub overlap: f64,
+    /// Elastic normal force `k_n δ`.
     pub fn_elastic: f64,
+    /// Total normal force `k_n δ + c_n δ̇` (clamped at 0 with `no_tension`).
     pub fn_total: f64,
     /// Normal force of the Coulomb cap (`max(0, F_n,total)` or `k_n δ`,
     /// [`ContactLaw::slip_normal`]); it also limits the rolling moment.

@@ -12,9 +12,6 @@
 //! Shear histories survive rebuilds and renumberings: the new pair list is
 //! merged with the old one on the sorted keys `(i, j)`, `i < j` (slots).
 
-// TODO(issue 11): document after the granular-physics merge
-#![allow(missing_docs)]
-
 use super::contact::ContactForce;
 use super::particles::Particles;
 use super::walls::Wall;
@@ -27,8 +24,11 @@ use rayon::prelude::*;
 /// is only read during a step (no write-back of 16 bytes per pair).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pair {
+    /// Slot of the first disc (`i < j`).
     pub i: u32,
+    /// Slot of the second disc.
     pub j: u32,
+    /// `√m_eff` of the pair, cached for the critical-ratio dashpots.
     pub sqrt_m_eff: f64,
 }
 
@@ -37,9 +37,13 @@ pub struct Pair {
 /// resistance).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WallPair {
+    /// Slot of the disc.
     pub disc: u32,
+    /// Index of the wall.
     pub wall: u32,
+    /// Shear force history along `t = perp(n)`, n from the disc to the wall.
     pub fs: f64,
+    /// Rolling-spring history: the moment on the disc.
     pub mr: f64,
 }
 
@@ -80,6 +84,8 @@ pub struct ContactList {
     /// `cross_in[cross_in_start[b]..cross_in_start[b + 1]]`, as
     /// (second disc, index into `cross`), in list order.
     pub cross_in_start: Vec<u32>,
+    /// (second disc, index into `cross`) of each cross pair, grouped by the
+    /// block of the second disc.
     pub cross_in: Vec<(u32, u32)>,
     /// Discs per sweep block ([`block_size`]).
     pub block: usize,
@@ -198,6 +204,7 @@ const CHUNK: usize = 4096;
 const STRIP: usize = 16;
 
 impl NeighbourGrid {
+    /// An empty grid with Verlet skin `skin` (stale: built at the first step).
     pub fn new(skin: f64) -> Self {
         NeighbourGrid {
             skin,

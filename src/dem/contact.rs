@@ -12,9 +12,6 @@
 //! contact-point velocity (`r_i ω_i + r_j ω_j`) and for the moments
 //! (`r_i F_s`, `r_j F_s`), so the pair is work-consistent.
 
-// TODO(issue 11): document after the granular-physics merge
-#![allow(missing_docs)]
-
 use crate::geom::Vec2;
 
 /// Which normal force caps the shear force (`slip_normal` of a material).
@@ -180,16 +177,23 @@ impl ContactLaw {
 /// `r_c × F` with `r_c = r_i n` and `r_c = −r_j n`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ContactForce {
+    /// Force on side i (side j gets the opposite).
     pub f: Vec2,
+    /// Shear force along `t = perp(n)` (total, with the shear dashpot).
     pub fs: f64,
 }
 
 /// Kinematic state of one side of a contact.
 #[derive(Debug, Clone, Copy)]
 pub struct Side {
+    /// Centre (a disc) or contact point (a wall).
     pub pos: Vec2,
+    /// Velocity of that point.
     pub vel: Vec2,
+    /// Spin ω, counter-clockwise positive (0 for a wall).
     pub omega: f64,
+    /// Lever arm from the centre to the contact point: the disc radius, 0
+    /// for a wall.
     pub radius: f64,
 }
 

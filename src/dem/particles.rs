@@ -7,9 +7,6 @@
 //! scenario's numbering is kept in [`Particles::id`] and its inverse
 //! [`Particles::slot`].
 
-// TODO(issue 11): document after the granular-physics merge
-#![allow(missing_docs)]
-
 use crate::geom::Vec2;
 
 /// Fixity flag: the x velocity is prescribed (not changed by forces).
@@ -30,12 +27,15 @@ pub struct Particles {
     pub theta: Vec<f64>,
     /// Spin ω at the half step (Eq. 54), counter-clockwise positive.
     pub omega: Vec<f64>,
+    /// Radius r.
     pub radius: Vec<f64>,
     /// m = ρ π r² t.
     pub mass: Vec<f64>,
     /// I = m r² / 2 (a solid cylinder about its axis).
     pub inertia: Vec<f64>,
+    /// 1/m (0 for an immovable disc).
     pub inv_mass: Vec<f64>,
+    /// 1/I.
     pub inv_inertia: Vec<f64>,
     /// Resultant force of the current step (contacts + external; gravity is
     /// added during integration).
@@ -53,9 +53,11 @@ pub struct Particles {
 }
 
 impl Particles {
+    /// Number of discs.
     pub fn len(&self) -> usize {
         self.pos.len()
     }
+    /// No discs.
     pub fn is_empty(&self) -> bool {
         self.pos.is_empty()
     }
