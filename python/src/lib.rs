@@ -116,7 +116,11 @@ fn model_error(e: impl std::fmt::Display) -> PyErr {
 fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
     use toml::Value;
     let bad = |what: String| {
-        let at = if path.is_empty() { String::new() } else { format!("{path}: ") };
+        let at = if path.is_empty() {
+            String::new()
+        } else {
+            format!("{path}: ")
+        };
         ScenarioError::new_err(format!("{DICT_FILE}: {at}{what}"))
     };
     if let Ok(b) = obj.cast::<PyBool>() {
@@ -143,7 +147,11 @@ fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
             if v.is_none() {
                 continue; // TOML has no null: an absent key takes the default
             }
-            let sub = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+            let sub = if path.is_empty() {
+                k.clone()
+            } else {
+                format!("{path}.{k}")
+            };
             t.insert(k, to_toml(&v, &sub)?);
         }
         return Ok(Value::Table(t));
@@ -312,7 +320,10 @@ fn node(b: BodyRef<'_>, k: usize) -> Vec2 {
     }
 }
 
-fn vec2_array<'py>(py: Python<'py>, v: impl ExactSizeIterator<Item = Vec2>) -> Bound<'py, PyArray2<f64>> {
+fn vec2_array<'py>(
+    py: Python<'py>,
+    v: impl ExactSizeIterator<Item = Vec2>,
+) -> Bound<'py, PyArray2<f64>> {
     let n = v.len();
     let flat: Vec<f64> = v.flat_map(|p| [p.x, p.y]).collect();
     Array2::from_shape_vec((n, 2), flat)
@@ -355,12 +366,7 @@ struct PyModel {
     inner: Mutex<Inner>,
 }
 
-fn build(
-    py: Python<'_>,
-    sc: Scenario,
-    threads: Option<usize>,
-    dict: bool,
-) -> PyResult<PyModel> {
+fn build(py: Python<'_>, sc: Scenario, threads: Option<usize>, dict: bool) -> PyResult<PyModel> {
     let n = threads.unwrap_or(sc.simulation.threads);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(n)
@@ -506,7 +512,11 @@ impl PyModel {
     /// Number of discs (0 without a granular assembly).
     #[getter]
     fn n_discs(&self) -> PyResult<usize> {
-        Ok(self.lock()?.model.granular().map_or(0, |g| g.particles.len()))
+        Ok(self
+            .lock()?
+            .model
+            .granular()
+            .map_or(0, |g| g.particles.len()))
     }
 
     /// Disc centres, shape (n, 2), id order (a copy).
@@ -554,7 +564,10 @@ impl PyModel {
     /// the order of `disc_views()` (a copy).
     fn disc_ids<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<u32>>> {
         let g = self.lock()?;
-        let ids = g.model.granular().map_or_else(Vec::new, |g| g.particles.id.clone());
+        let ids = g
+            .model
+            .granular()
+            .map_or_else(Vec::new, |g| g.particles.id.clone());
         Ok(ids.into_pyarray(py))
     }
 
@@ -699,7 +712,11 @@ impl PyModel {
         d.set_item("x", vec2_array(py, (0..n).map(|k| node(b, k))))?;
         d.set_item("u", vec2_array(py, u.into_iter()))?;
         d.set_item("v", vec2_array(py, v.into_iter()))?;
-        let m3 = |x: Vec<f64>| Array2::from_shape_vec((n, 3), x).expect("n × 3").into_pyarray(py);
+        let m3 = |x: Vec<f64>| {
+            Array2::from_shape_vec((n, 3), x)
+                .expect("n × 3")
+                .into_pyarray(py)
+        };
         d.set_item("strain", m3(e))?;
         d.set_item("stress", m3(s))?;
         Ok(d)
@@ -713,10 +730,7 @@ impl PyModel {
         body: &Bound<'py, PyAny>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let d = self.body_fields(py, body)?;
-        Ok((
-            d.get_item("x")?.expect("x"),
-            d.get_item("u")?.expect("u"),
-        ))
+        Ok((d.get_item("x")?.expect("x"), d.get_item("u")?.expect("u")))
     }
 
     /// The true fields of a body (by name or index) at reference point(s)
@@ -773,7 +787,11 @@ impl PyModel {
         } else {
             d.set_item("u", vec2_array(py, u.into_iter()))?;
             d.set_item("v", vec2_array(py, v.into_iter()))?;
-            let m3 = |x: Vec<f64>| Array2::from_shape_vec((m, 3), x).expect("m × 3").into_pyarray(py);
+            let m3 = |x: Vec<f64>| {
+                Array2::from_shape_vec((m, 3), x)
+                    .expect("m × 3")
+                    .into_pyarray(py)
+            };
             d.set_item("strain", m3(e))?;
             d.set_item("stress", m3(s))?;
         }
@@ -806,11 +824,10 @@ impl PyModel {
     fn write_frame(&self, py: Python<'_>, dir: PathBuf) -> PyResult<Vec<PathBuf>> {
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
-        py.detach(|| write_frame(inner, &dir))
-            .map_err(|e| match e {
-                FrameError::Io(e) => PyIOError::new_err(format!("{}: {e}", dir.display())),
-                FrameError::Model(e) => model_error(e),
-            })
+        py.detach(|| write_frame(inner, &dir)).map_err(|e| match e {
+            FrameError::Io(e) => PyIOError::new_err(format!("{}: {e}", dir.display())),
+            FrameError::Model(e) => model_error(e),
+        })
     }
 
     fn __repr__(&self) -> PyResult<String> {
@@ -846,12 +863,20 @@ impl From<std::io::Error> for FrameError {
 fn write_frame(inner: &mut Inner, dir: &Path) -> Result<Vec<PathBuf>, FrameError> {
     let static_ = matches!(inner.model.system, System::Continuum { dynamic: false, .. });
     // the names `efgdem run` gives its frames
-    let width = if matches!(inner.model.system, System::Coupled(_)) { 7 } else { 6 };
+    let width = if matches!(inner.model.system, System::Coupled(_)) {
+        7
+    } else {
+        6
+    };
     let step = inner.model.step;
     let names = inner.body_names();
     for i in 0..names.len() {
         if inner.frame_data[i].is_none() {
-            let d = inner.model.body(i).frame_data().map_err(FrameError::Model)?;
+            let d = inner
+                .model
+                .body(i)
+                .frame_data()
+                .map_err(FrameError::Model)?;
             inner.frame_data[i] = Some(d);
         }
     }
@@ -880,7 +905,11 @@ fn write_frame(inner: &mut Inner, dir: &Path) -> Result<Vec<PathBuf>, FrameError
         if has_discs {
             s.push(PvdSeries::new(&dir.join("discs.pvd")));
         }
-        s.extend(names.iter().map(|n| PvdSeries::new(&dir.join(format!("{n}.pvd")))));
+        s.extend(
+            names
+                .iter()
+                .map(|n| PvdSeries::new(&dir.join(format!("{n}.pvd")))),
+        );
         s
     });
     let mut k = 0;
