@@ -76,6 +76,20 @@ pub fn read(path: &Path) -> std::io::Result<(Vec<String>, Vec<Vec<f64>>)> {
     Ok((header, rows))
 }
 
+/// Write the discs as `x,y,r,vx,vy,omega` in scenario order (readable as a
+/// `discs = { csv = ... }` source: the extra columns are... not accepted,
+/// so only `x,y,r` are written).
+pub fn write_discs_csv(gr: &Granular, path: &std::path::Path) -> std::io::Result<()> {
+    let p = &gr.particles;
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(w, "x,y,r")?;
+    for id in 0..p.len() {
+        let k = p.slot[id] as usize;
+        writeln!(w, "{:e},{:e},{:e}", p.pos[k].x, p.pos[k].y, p.radius[k])?;
+    }
+    w.flush()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -95,18 +109,4 @@ mod tests {
         assert_eq!(rows, vec![vec![0.0, 1.5], vec![0.1, -2.25e-9]]);
         std::fs::remove_dir_all(dir).unwrap();
     }
-}
-
-/// Write the discs as `x,y,r,vx,vy,omega` in scenario order (readable as a
-/// `discs = { csv = ... }` source: the extra columns are... not accepted,
-/// so only `x,y,r` are written).
-pub fn write_discs_csv(gr: &Granular, path: &std::path::Path) -> std::io::Result<()> {
-    let p = &gr.particles;
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
-    writeln!(w, "x,y,r")?;
-    for id in 0..p.len() {
-        let k = p.slot[id] as usize;
-        writeln!(w, "{:e},{:e},{:e}", p.pos[k].x, p.pos[k].y, p.radius[k])?;
-    }
-    w.flush()
 }

@@ -66,35 +66,6 @@ pub fn write_quad_grid(
     std::fs::rename(tmp, path)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn writes_a_readable_grid() {
-        let dir = std::env::temp_dir().join(format!("efgdem-vtu-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join("g.vtu");
-        let pts = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]];
-        let u = [0.0; 8];
-        write_quad_grid(
-            &p,
-            2,
-            2,
-            &pts,
-            &[Field {
-                name: "u",
-                ncomp: 2,
-                values: &u,
-            }],
-        )
-        .unwrap();
-        let s = std::fs::read_to_string(&p).unwrap();
-        assert!(s.contains("NumberOfCells=\"1\"") && s.contains("0 1 3 2"));
-        std::fs::remove_dir_all(dir).unwrap();
-    }
-}
-
 /// A `.vtu` frame of a body: true nodal displacement, velocity and stress
 /// (`shapes`: the EFG body's nodal shape rows, from
 /// [`BodyRef::frame_data`]).
@@ -168,4 +139,33 @@ fn write_fields(
             },
         ],
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_a_readable_grid() {
+        let dir = std::env::temp_dir().join(format!("efgdem-vtu-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("g.vtu");
+        let pts = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]];
+        let u = [0.0; 8];
+        write_quad_grid(
+            &p,
+            2,
+            2,
+            &pts,
+            &[Field {
+                name: "u",
+                ncomp: 2,
+                values: &u,
+            }],
+        )
+        .unwrap();
+        let s = std::fs::read_to_string(&p).unwrap();
+        assert!(s.contains("NumberOfCells=\"1\"") && s.contains("0 1 3 2"));
+        std::fs::remove_dir_all(dir).unwrap();
+    }
 }
