@@ -3,8 +3,10 @@
 A dense hexagonal packing of 10 000 discs (r = 1) under gravity in a closed
 box, no probes, no frames: the CLI's time loop (`run_seconds` of its
 summary.json) against `model.step(100)` called from a Python loop (timed
-around the loop; building is excluded from both). Runs alternate, and the
-medians are compared. The final positions of both are checked to be
+around the loop; building is excluded from both); also the CPU time of each
+(build and run, all threads: the machine is shared, and CPU time is less
+disturbed by other load than wall time). The two alternate (which one goes first too), and the
+medians are compared (and the minima). The final positions of both are checked to be
 bitwise equal.
 
     python python/bench_step.py                      # 1 thread, 5 repetitions
@@ -14,6 +16,7 @@ bitwise equal.
 
 import argparse
 import json
+import resource
 import statistics
 import subprocess
 import tempfile
@@ -70,21 +73,30 @@ every = {steps}
 """
 
 
+def children_cpu():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def run_cli(exe, scenario, out, threads):
+    c0 = children_cpu()
     subprocess.run([exe, "run", str(scenario), "-o", str(out), "-q", "--threads", str(threads)],
-                   check=True)
+                   check=True, capture_output=True)
+    cpu = children_cpu() - c0
     s = json.loads((out / "summary.json").read_text())
     pos = np.loadtxt(out / "discs_final.csv", delimiter=",", skiprows=1)[:, :2]
-    return s["run_seconds"], pos
+    return s["run_seconds"], cpu, pos
 
 
 def run_python(scenario, threads, per_call):
+    c0 = time.process_time()
     m = efgdem.Model.from_scenario(scenario, threads=threads)
     n = m.steps
     t0 = time.perf_counter()
     while m.step_count < n:
         m.step(min(per_call, n - m.step_count))
-    return time.perf_counter() - t0, m.disc_positions()
+    wall = time.perf_counter() - t0
+    return wall, time.process_time() - c0, m.disc_positions()
 
 
 def main():
@@ -103,14 +115,21 @@ def main():
         tmp = Path(tmp)
         sc = tmp / "bench.toml"
         sc.write_text(SCENARIO.format(discs=args.discs, steps=args.steps, w=w, h=h))
-        cli, py = [], []
+        cli, py, cli_cpu, py_cpu = [], [], [], []
         for k in range(args.repeat):
-            t, pos_cli = run_cli(args.cli, sc, tmp / f"cli{k}", args.threads)
-            cli.append(t)
-            t, pos_py = run_python(sc, args.threads, args.per_call)
-            py.append(t)
+            # alternate which goes first (the machine's load drifts)
+            for which in (["cli", "py"] if k % 2 == 0 else ["py", "cli"]):
+                if which == "cli":
+                    t, cpu, pos_cli = run_cli(args.cli, sc, tmp / f"cli{k}", args.threads)
+                    cli.append(t)
+                    cli_cpu.append(cpu)
+                else:
+                    t, cpu, pos_py = run_python(sc, args.threads, args.per_call)
+                    py.append(t)
+                    py_cpu.append(cpu)
             assert pos_py.tobytes() == pos_cli.tobytes(), "Python and CLI results differ"
-            print(f"run {k + 1}: cli {cli[-1]:.3f} s, python {py[-1]:.3f} s", flush=True)
+            print(f"run {k + 1}: cli {cli[-1]:.3f} s (cpu {cli_cpu[-1]:.3f} s), "
+                  f"python {py[-1]:.3f} s (cpu {py_cpu[-1]:.3f} s)", flush=True)
     c, p = statistics.median(cli), statistics.median(py)
     rate = args.discs * args.steps
     print(f"\n{args.discs} discs, {args.steps} steps, {args.per_call} steps per call, "
@@ -120,6 +139,10 @@ def main():
     print(f"  Python step() : {p:.3f} s  ({rate / p / 1e6:.1f} M disc-steps/s)")
     print(f"  overhead      : {100.0 * (p / c - 1.0):+.1f} %  "
           f"(min against min: {100.0 * (min(py) / min(cli) - 1.0):+.1f} %)")
+    cc, pc = statistics.median(cli_cpu), statistics.median(py_cpu)
+    print(f"  CPU time, build + run (all threads): efgdem run {cc:.3f} s, Python {pc:.3f} s: "
+          f"{100.0 * (pc / cc - 1.0):+.1f} % (min against min: "
+          f"{100.0 * (min(py_cpu) / min(cli_cpu) - 1.0):+.1f} %)")
 
 
 if __name__ == "__main__":
