@@ -12,6 +12,14 @@ bitwise equal.
     python python/bench_step.py                      # 1 thread, 5 repetitions
     python python/bench_step.py --threads 2 --repeat 7
     python python/bench_step.py --cli target/release/efgdem
+
+The installed module (maturin develop) links its own compilation of the
+efgdem crate, whose machine code for the DEM kernel can differ from the
+CLI's (the two builds differ in `-C metadata` only, and the kernel's speed
+moves by a few per cent with it). To compare the same machine code:
+
+    cargo build --release --workspace
+    python python/bench_step.py --module target/release/libefgdem_python.so
 """
 
 import argparse
@@ -25,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-import efgdem
+efgdem = None  # imported in main() (--module: a given build of it)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -107,7 +115,23 @@ def main():
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--cli", default=str(ROOT / "target" / "release" / "efgdem"))
+    ap.add_argument("--module", help="load the module from this shared library (e.g. "
+                    "target/release/libefgdem_python.so after `cargo build --release "
+                    "--workspace`, whose efgdem code is the CLI's own) instead of the "
+                    "installed one")
     args = ap.parse_args()
+    global efgdem
+    if args.module:
+        import importlib.machinery
+        import importlib.util
+        loader = importlib.machinery.ExtensionFileLoader("efgdem", args.module)
+        spec = importlib.util.spec_from_file_location("efgdem", args.module, loader=loader)
+        efgdem = importlib.util.module_from_spec(spec)
+        loader.exec_module(efgdem)
+    else:
+        import efgdem as installed
+        efgdem = installed
+    print(f"module: {efgdem.__file__}", flush=True)
 
     w = 200.0
     h = 2.0 * np.ceil(args.discs / (w / 2.0) * np.sqrt(3.0) / 2.0 + 2.0)

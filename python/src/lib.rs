@@ -76,12 +76,20 @@ struct ContactRecord {
     f: [f64; 8],
 }
 
-fn scenario_error(py: Python<'_>, e: scenario::ScenarioError, dict: bool) -> PyErr {
+/// `e` as a Python `ScenarioError`. `dict`: the TOML text made from a
+/// dict (its lines mean nothing to the user: they are dropped, and a
+/// problem found by the TOML parser, which names no field, gets the field
+/// its line holds).
+fn scenario_error(py: Python<'_>, e: scenario::ScenarioError, dict: Option<&str>) -> PyErr {
     let (file, errors) = match e {
         scenario::ScenarioError::Invalid { file, mut errors } => {
-            if dict {
-                // lines of the TOML text made from the dict mean nothing to the user
+            if let Some(text) = dict {
                 for l in &mut errors {
+                    if l.field.is_empty()
+                        && let Some(f) = l.line.and_then(|n| field_at_line(text, n))
+                    {
+                        l.field = f;
+                    }
                     l.line = None;
                 }
             }
@@ -105,6 +113,62 @@ fn scenario_error(py: Python<'_>, e: scenario::ScenarioError, dict: bool) -> PyE
     let _ = value.setattr("file", file);
     let _ = value.setattr("errors", list);
     err
+}
+
+/// The field (`material[0].kn`, `wall[1]`) that line `line` (1-based) of
+/// TOML text written by `toml::to_string` holds: the key of a `key = value`
+/// line under its table header, or the header itself.
+fn field_at_line(text: &str, line: usize) -> Option<String> {
+    // current index of each array of tables, by its plain dotted path
+    let mut index: HashMap<String, usize> = HashMap::new();
+    // entries of each array of tables, by its path with parents' indices
+    let mut count: HashMap<String, usize> = HashMap::new();
+    let render = |plain: &str, index: &HashMap<String, usize>| {
+        let mut out = String::new();
+        let mut so_far = String::new();
+        for part in plain.split('.') {
+            let part = part.trim().trim_matches('"');
+            if !so_far.is_empty() {
+                so_far.push('.');
+                out.push('.');
+            }
+            so_far.push_str(part);
+            out.push_str(part);
+            if let Some(i) = index.get(&so_far) {
+                out.push_str(&format!("[{i}]"));
+            }
+        }
+        out
+    };
+    let mut header = String::new();
+    for (k, l) in text.lines().enumerate() {
+        let t = l.trim();
+        if let Some(name) = t.strip_prefix("[[").and_then(|r| r.strip_suffix("]]")) {
+            let name = name.trim();
+            let mut parent = index.clone();
+            parent.remove(name);
+            let key = render(name, &parent);
+            let c = count.entry(key).or_insert(0);
+            index.insert(name.to_string(), *c);
+            *c += 1;
+            header = render(name, &index);
+        } else if let Some(name) = t.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
+            header = render(name.trim(), &index);
+        } else if k + 1 == line
+            && let Some((key, _)) = t.split_once('=')
+        {
+            let key = key.trim().trim_matches('"');
+            return Some(if header.is_empty() {
+                key.to_string()
+            } else {
+                format!("{header}.{key}")
+            });
+        }
+        if k + 1 == line {
+            return (!header.is_empty()).then_some(header);
+        }
+    }
+    None
 }
 
 fn model_error(e: impl std::fmt::Display) -> PyErr {
@@ -379,7 +443,10 @@ fn build(py: Python<'_>, sc: Scenario, threads: Option<usize>, dict: bool) -> Py
             Ok::<_, scenario::ScenarioError>((model, probes))
         })
     });
-    let (model, probes) = built.map_err(|e| scenario_error(py, e, dict))?;
+    let text = dict
+        .then(|| sc.source.as_ref().map(|s| s.text.as_str()))
+        .flatten();
+    let (model, probes) = built.map_err(|e| scenario_error(py, e, text))?;
     Ok(PyModel {
         inner: Mutex::new(Inner::new(model, probes, pool)),
     })
@@ -416,7 +483,7 @@ impl PyModel {
     #[staticmethod]
     #[pyo3(signature = (path, threads = None))]
     fn from_scenario(py: Python<'_>, path: PathBuf, threads: Option<usize>) -> PyResult<Self> {
-        let sc = scenario::load(&path).map_err(|e| scenario_error(py, e, false))?;
+        let sc = scenario::load(&path).map_err(|e| scenario_error(py, e, None))?;
         build(py, sc, threads, false)
     }
 
@@ -435,7 +502,8 @@ impl PyModel {
         threads: Option<usize>,
     ) -> PyResult<Self> {
         let text = toml_text(scenario)?;
-        let mut sc = scenario::parse(&text, DICT_FILE).map_err(|e| scenario_error(py, e, true))?;
+        let mut sc =
+            scenario::parse(&text, DICT_FILE).map_err(|e| scenario_error(py, e, Some(&text)))?;
         sc.base_dir = base_dir.unwrap_or_else(|| PathBuf::from("."));
         build(py, sc, threads, true)
     }

@@ -324,6 +324,29 @@ def test_bad_dict_raises_scenario_error_with_field():
             BOX_DICT["granular"], discs=[[0, 0, 1], [object(), 0, 1]])))
 
 
+def test_dict_type_errors_name_the_field():
+    import copy
+
+    def bad(change):
+        d = copy.deepcopy(BOX_DICT)
+        change(d)
+        with pytest.raises(efgdem.ScenarioError) as e:
+            efgdem.Model.from_dict(d)
+        return str(e.value)
+
+    assert bad(lambda d: d["simulation"].update(dt="x")).startswith(
+        "<dict>: simulation.dt: invalid type")
+    assert bad(lambda d: d["material"][0].update(frction=1)).startswith(
+        "<dict>: material[0].frction: unknown field")
+    assert bad(lambda d: d["wall"][1].update(to=[1.0])).startswith("<dict>: wall[1].to: ")
+    assert bad(lambda d: d["granular"].update(damping={"kind": "viscous"})).startswith(
+        "<dict>: granular.damping.kind: unknown variant `viscous`")
+    ex = load_toml(EXAMPLE1)
+    ex["body"][0]["bc"][0]["edge"] = "lft"
+    with pytest.raises(efgdem.ScenarioError, match=r"^<dict>: body\[0\]\.bc\[0\]\.edge: unknown variant"):
+        efgdem.Model.from_dict(ex)
+
+
 def test_model_error_is_a_runtime_error():
     assert issubclass(efgdem.ModelError, RuntimeError)
     assert issubclass(efgdem.ScenarioError, ValueError)
