@@ -1,7 +1,7 @@
 //! Python bindings of efgdem: the module `efgdem` (built by maturin from
 //! `python/pyproject.toml`).
 //!
-//! One class, [`PyModel`] (`efgdem.Model`), wraps [`efgdem::model::Model`]
+//! One class, `PyModel` (`efgdem.Model`), wraps [`efgdem::model::Model`]
 //! with the scenario's bound probes, a thread pool of its own (stepping runs
 //! inside it, as `efgdem run` does) and what frames and nodal sampling need
 //! (cached on first use). Errors become `efgdem.ScenarioError` (a
@@ -13,8 +13,8 @@
 //! views in slot order (`disc_views()`). The views borrow the disc arrays of
 //! the Rust model, with the Python `Model` object as their numpy base. That
 //! is sound because those arrays are allocated once, when the assembly is
-//! built, and never reallocated ([`efgdem::dem::particles::Particles::permute`]
-//! reorders them in place); [`Inner::check_buffers`] asserts it after every
+//! built, and never reallocated (`Particles::permute`
+//! reorders them in place); `Inner::check_buffers` asserts it after every
 //! step.
 
 use efgdem::dem::Granular;
