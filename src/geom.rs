@@ -2,7 +2,9 @@
 
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
-/// A 2D vector or point, `f64` components.
+/// A 2D vector or point, `f64` components. `repr(C)`: a `[Vec2]` is laid
+/// out as `[f64; 2]` pairs, so bindings can view it as an `(n, 2)` array.
+#[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Vec2 {
     /// x component (horizontal).

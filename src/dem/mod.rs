@@ -162,6 +162,8 @@ impl Granular {
         walls: Vec<Wall>,
         dt: f64,
     ) -> Granular {
+        let mut particles = particles;
+        particles.shrink_to_fit();
         let skin = 0.1 * particles.max_radius().max(f64::MIN_POSITIVE);
         let mut g = Granular {
             particles,

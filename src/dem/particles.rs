@@ -102,11 +102,13 @@ impl Particles {
 
     /// Reorder slots: the disc now in slot `k` is the one that was in slot
     /// `order[k]`. Returns `new_slot_of_old` (the inverse permutation), which
-    /// callers use to remap contact keys.
+    /// callers use to remap contact keys. The arrays are permuted in place:
+    /// their buffers keep their address for the life of the assembly (the
+    /// Python bindings hand out zero-copy views of them).
     pub fn permute(&mut self, order: &[u32]) -> Vec<u32> {
-        fn apply<T: Copy>(v: &mut Vec<T>, order: &[u32]) {
+        fn apply<T: Copy>(v: &mut [T], order: &[u32]) {
             let out: Vec<T> = order.iter().map(|&o| v[o as usize]).collect();
-            *v = out;
+            v.copy_from_slice(&out);
         }
         apply(&mut self.pos, order);
         apply(&mut self.vel, order);
@@ -132,6 +134,27 @@ impl Particles {
         new_of_old
     }
 
+    /// Release the arrays' spare capacity (an assembly's discs are all
+    /// pushed before it starts; [`permute`](Self::permute) keeps the
+    /// buffers as they are).
+    pub fn shrink_to_fit(&mut self) {
+        self.pos.shrink_to_fit();
+        self.vel.shrink_to_fit();
+        self.theta.shrink_to_fit();
+        self.omega.shrink_to_fit();
+        self.radius.shrink_to_fit();
+        self.mass.shrink_to_fit();
+        self.inertia.shrink_to_fit();
+        self.inv_mass.shrink_to_fit();
+        self.inv_inertia.shrink_to_fit();
+        self.force.shrink_to_fit();
+        self.torque.shrink_to_fit();
+        self.fixity.shrink_to_fit();
+        self.material.shrink_to_fit();
+        self.id.shrink_to_fit();
+        self.slot.shrink_to_fit();
+    }
+
     /// Bytes held by the per-disc arrays (capacity, not length).
     pub fn heap_bytes(&self) -> usize {
         use std::mem::size_of;
@@ -140,5 +163,31 @@ impl Particles {
             + self.fixity.capacity()
             + self.material.capacity() * 2
             + self.id.capacity() * 4 * 2
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn permute_reorders_in_place() {
+        let mut p = Particles::default();
+        for k in 0..5 {
+            p.push(Vec2::new(k as f64, 0.0), 1.0 + k as f64, 1.0, 1.0, 0);
+        }
+        p.shrink_to_fit();
+        let (pos, id, radius) = (p.pos.as_ptr(), p.id.as_ptr(), p.radius.as_ptr());
+        let new_of_old = p.permute(&[3, 0, 4, 1, 2]);
+        assert_eq!(p.id, [3, 0, 4, 1, 2]);
+        assert_eq!(p.pos[0], Vec2::new(3.0, 0.0));
+        assert_eq!(p.radius[2], 5.0);
+        assert_eq!(new_of_old, [1, 3, 4, 0, 2]);
+        assert_eq!(p.slot, [1, 3, 4, 0, 2]);
+        // the buffers stay where they were (zero-copy views rely on it)
+        assert_eq!(
+            (p.pos.as_ptr(), p.id.as_ptr(), p.radius.as_ptr()),
+            (pos, id, radius)
+        );
     }
 }

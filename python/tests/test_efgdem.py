@@ -1,0 +1,410 @@
+"""Tests of the efgdem Python module (build it first: `maturin develop
+--release -m python/Cargo.toml`, then `pytest python/tests`)."""
+
+import gc
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import efgdem
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLE1 = ROOT / "examples" / "paper_cantilever_disc.toml"
+
+# Three discs on a floor between two walls; discs 1 and 2 overlap at t = 0.
+BOX_TOML = """\
+[simulation]
+dt = 1.0e-4
+steps = 400
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "grain"
+density = 2000.0
+kn = 1.0e5
+ks = 5.0e4
+friction = 0.4
+
+[granular]
+material = "grain"
+thickness = 0.1
+discs = [[0.10, 0.05, 0.05], [0.195, 0.05, 0.05], [0.15, 0.2, 0.04]]
+damping = { kind = "contact-viscous", beta = 1.0e-4 }
+
+[[wall]]
+name = "floor"
+from = [0.0, 0.0]
+to = [0.4, 0.0]
+
+[[wall]]
+name = "left"
+from = [0.0, 0.0]
+to = [0.0, 0.4]
+
+[[probe]]
+name = "y3"
+disc = 3
+quantity = "y"
+"""
+
+BOX_DICT = {
+    "simulation": {"dt": 1.0e-4, "steps": 400, "gravity": [0.0, -9.81]},
+    "material": [
+        {"name": "grain", "density": 2000.0, "kn": 1.0e5, "ks": 5.0e4, "friction": 0.4}
+    ],
+    "granular": {
+        "material": "grain",
+        "thickness": 0.1,
+        "discs": [[0.10, 0.05, 0.05], [0.195, 0.05, 0.05], [0.15, 0.2, 0.04]],
+        "damping": {"kind": "contact-viscous", "beta": 1.0e-4},
+    },
+    "wall": [
+        {"name": "floor", "from": [0.0, 0.0], "to": [0.4, 0.0]},
+        {"name": "left", "from": [0.0, 0.0], "to": [0.0, 0.4]},
+    ],
+    "probe": [{"name": "y3", "disc": 3, "quantity": "y"}],
+}
+
+
+def settling(count=300, seed=5):
+    """A loose random packing in a closed box (the DEM renumbers its slots
+    as the discs fall)."""
+    walls = [((0, 0), (40, 0)), ((40, 0), (40, 60)), ((40, 60), (0, 60)), ((0, 60), (0, 0))]
+    return {
+        "simulation": {"dt": 4.0e-4, "steps": 3000, "gravity": [0.0, -9.81]},
+        "material": [{"name": "g", "density": 1.0, "kn": 1.0e6, "ks": 1.0e6, "friction": 0.5}],
+        "granular": {
+            "material": "g",
+            "discs": {"generate": "random", "box": [[0, 0], [40, 60]],
+                      "radius": [0.8, 1.2], "count": count, "seed": seed},
+            "damping": {"kind": "critical-ratio", "zeta": 0.2},
+        },
+        "wall": [{"name": f"w{k}", "from": list(a), "to": list(b)}
+                 for k, (a, b) in enumerate(walls)],
+    }
+
+
+@pytest.fixture
+def box_file(tmp_path):
+    p = tmp_path / "box.toml"
+    p.write_text(BOX_TOML)
+    return p
+
+
+def load_toml(path):
+    tomllib = pytest.importorskip("tomllib")
+    with open(path, "rb") as f:
+        return tomllib.load(f)
+
+
+# --- from_scenario and from_dict -------------------------------------------
+
+
+def test_from_scenario_equals_from_dict_bitwise(box_file):
+    a = efgdem.Model.from_scenario(box_file)
+    b = efgdem.Model.from_dict(BOX_DICT)
+    for m in (a, b):
+        m.step(150)
+        m.step()
+        m.run(0.03)
+    assert a.step_count == b.step_count == 300
+    assert a.time == b.time
+    for f in ("disc_positions", "disc_velocities", "disc_spins", "disc_forces"):
+        x, y = getattr(a, f)(), getattr(b, f)()
+        assert x.tobytes() == y.tobytes(), f
+    assert a.contacts().tobytes() == b.contacts().tobytes()
+    assert a.probe("y3") == b.probe("y3")
+
+
+def test_example1_from_scenario_equals_from_dict_bitwise():
+    a = efgdem.Model.from_scenario(EXAMPLE1)
+    b = efgdem.Model.from_dict(load_toml(EXAMPLE1), base_dir=EXAMPLE1.parent)
+    assert a.kind == b.kind == "coupled"
+    a.step(120)
+    b.step(120)
+    assert a.disc_positions().tobytes() == b.disc_positions().tobytes()
+    xa, ua = a.body_displacement("beam")
+    xb, ub = b.body_displacement(0)
+    assert xa.tobytes() == xb.tobytes() and ua.tobytes() == ub.tobytes()
+    assert a.contacts().tobytes() == b.contacts().tobytes()
+    assert a.probe("tip_uy") == b.probe("tip_uy")
+
+
+def test_dict_accepts_tuples_numpy_values_and_none():
+    d = {
+        "simulation": {"dt": np.float64(1.0e-4), "steps": np.int64(400),
+                       "gravity": (0.0, -9.81), "threads": None},
+        "material": BOX_DICT["material"],
+        "granular": dict(BOX_DICT["granular"],
+                         discs=np.array(BOX_DICT["granular"]["discs"])),
+        "wall": BOX_DICT["wall"],
+    }
+    a = efgdem.Model.from_dict(d)
+    b = efgdem.Model.from_dict(BOX_DICT)
+    a.step(50)
+    b.step(50)
+    assert a.disc_positions().tobytes() == b.disc_positions().tobytes()
+    assert "[[material]]" in efgdem.scenario_toml(BOX_DICT)
+
+
+def test_results_do_not_depend_on_threads():
+    a = efgdem.Model.from_dict(settling(), threads=1)
+    b = efgdem.Model.from_dict(settling(), threads=2)
+    a.step(500)
+    b.step(500)
+    assert a.disc_positions().tobytes() == b.disc_positions().tobytes()
+
+
+# --- state as numpy arrays --------------------------------------------------
+
+
+def test_state_arrays_shapes_dtypes_and_initial_values(box_file):
+    m = efgdem.Model.from_scenario(box_file)
+    discs = np.array(BOX_DICT["granular"]["discs"])
+    assert m.kind == "granular" and m.n_discs == 3 and m.body_names() == []
+    assert (m.dt, m.steps, m.step_count, m.time) == (1.0e-4, 400, 0, 0.0)
+    pos = m.disc_positions()
+    assert pos.shape == (3, 2) and pos.dtype == np.float64 and pos.flags.c_contiguous
+    assert np.array_equal(pos, discs[:, :2])  # id order: row i is disc i
+    assert np.array_equal(m.disc_radii(), discs[:, 2])
+    for f in ("disc_velocities", "disc_forces"):
+        a = getattr(m, f)()
+        assert a.shape == (3, 2) and a.dtype == np.float64 and not a.any()
+    for f in ("disc_spins", "disc_rotations"):
+        a = getattr(m, f)()
+        assert a.shape == (3,) and a.dtype == np.float64 and not a.any()
+    ids = m.disc_ids()
+    assert ids.dtype == np.uint32 and sorted(ids) == [0, 1, 2]
+    assert m.probe_names() == ["y3"] and m.probe("y3") == 0.2
+    # copies are snapshots
+    pos[:] = 0.0
+    assert np.array_equal(m.disc_positions(), discs[:, :2])
+    m.step(10)
+    assert (pos == 0.0).all() and m.disc_positions()[2, 1] < 0.2
+    assert m.probe("y3") == m.disc_positions()[2, 1]
+
+
+def test_contacts_structured_array(box_file):
+    m = efgdem.Model.from_scenario(box_file)
+    m.step()
+    c = m.contacts()
+    assert c.dtype.names == ("kind", "disc", "other", "x", "y", "nx", "ny", "overlap",
+                             "fn_elastic", "fn_total", "fs")
+    assert c.dtype["kind"] == np.uint8 and c.dtype["disc"] == np.uint32
+    assert c.dtype["x"] == np.float64
+    # discs 0 and 1 overlap, both touch the floor (wall 0)
+    dd = c[c["kind"] == efgdem.CONTACT_DISC_DISC]
+    assert len(dd) == 1 and {int(dd["disc"][0]), int(dd["other"][0])} == {0, 1}
+    pos, r = m.disc_positions(), m.disc_radii()
+    d = np.linalg.norm(pos[1] - pos[0])
+    assert dd["overlap"][0] == pytest.approx(r[0] + r[1] - d, rel=1e-12)
+    assert dd["fn_elastic"][0] == pytest.approx(1.0e5 * dd["overlap"][0], rel=1e-12)
+    n = np.array([dd["nx"][0], dd["ny"][0]])
+    assert np.linalg.norm(n) == pytest.approx(1.0)
+    dw = c[c["kind"] == efgdem.CONTACT_DISC_WALL]
+    assert sorted(zip(dw["disc"].tolist(), dw["other"].tolist())) == [(0, 0), (1, 0)]
+    assert (c["fn_elastic"] > 0).all() and (c["overlap"] > 0).all()
+    assert len(efgdem.Model.from_dict(settling()).contacts()) == 0
+
+
+def test_views_are_zero_copy_read_only_and_live():
+    m = efgdem.Model.from_dict(settling())
+    v = m.disc_views()
+    assert set(v) == {"pos", "vel", "force", "radius", "omega", "theta", "id"}
+    assert v["pos"].shape == (300, 2) and v["id"].dtype == np.uint32
+    for a in v.values():
+        assert not a.flags.writeable and not a.flags.owndata
+        with pytest.raises(ValueError):
+            a[0] = 0
+    before = v["pos"].copy()
+    # the discs fall: the slots are renumbered several times on the way
+    for _ in range(6):
+        m.step(500)
+        order = np.argsort(v["id"])
+        assert np.array_equal(v["pos"][order], m.disc_positions())
+        assert np.array_equal(v["vel"][order], m.disc_velocities())
+        assert np.array_equal(v["radius"][order], m.disc_radii())
+        assert np.array_equal(v["id"], m.disc_ids())
+    assert not np.array_equal(v["pos"], before)
+    assert np.array_equal(m.disc_views()["pos"], v["pos"])
+    # a view keeps the model alive
+    ids = m.disc_ids()
+    pos = m.disc_positions()
+    del m
+    gc.collect()
+    assert np.array_equal(v["pos"][np.argsort(ids)], pos)
+
+
+def test_disc_forces_after_each_call_are_those_of_the_last_step(box_file):
+    a = efgdem.Model.from_scenario(box_file)
+    b = efgdem.Model.from_scenario(box_file)
+    a.step(7)
+    for _ in range(7):
+        b.step()
+    assert a.disc_forces().tobytes() == b.disc_forces().tobytes()
+    assert a.disc_forces().any()
+
+
+def test_body_fields_and_sampling():
+    m = efgdem.Model.from_scenario(EXAMPLE1)
+    assert m.body_names() == ["beam"]
+    m.run(0.02)
+    assert m.step_count == 200 and m.time == pytest.approx(0.02)
+    x, u = m.body_displacement("beam")
+    assert x.shape == u.shape == (80, 2)
+    assert np.array_equal(x, m.body_displacement(0)[0])
+    f = m.body_fields(-1)
+    assert f["stress"].shape == (80, 3) and np.array_equal(f["u"], u)
+    tip = np.argmin(np.linalg.norm(x - [1.0, 0.1], axis=1))
+    s = m.sample("beam", 1.0, 0.1)
+    assert s["u"].shape == (2,) and s["stress"].shape == (3,)
+    assert s["u"][1] == m.probe("tip_uy") and s["u"][0] == m.probe("tip_ux")
+    assert np.allclose(s["u"], u[tip], rtol=1e-9, atol=0)
+    assert u[:, 1].min() < -1e-4  # the disc pushes the beam down
+    many = m.sample("beam", [0.5, 1.0], [0.0, 0.1])
+    assert many["u"].shape == (2, 2) and np.array_equal(many["u"][1], s["u"])
+    with pytest.raises(KeyError):
+        m.body_fields("column")
+    with pytest.raises(IndexError):
+        m.body_fields(3)
+    with pytest.raises(efgdem.ModelError):
+        m.sample("beam", 5.0, 5.0)
+    c = m.contacts()
+    assert len(c) == 1 and c["kind"][0] == efgdem.CONTACT_DISC_BODY and c["other"][0] == 0
+
+
+def test_static_model():
+    m = efgdem.Model.from_scenario(ROOT / "examples" / "timoshenko.toml")
+    assert m.kind == "continuum" and m.n_discs == 0
+    assert m.disc_positions().shape == (0, 2) and len(m.contacts()) == 0
+    with pytest.raises(efgdem.ModelError, match="solve_static"):
+        m.step()
+    m.solve_static()
+    assert m.probe("tip_uy") == pytest.approx(-0.0089, rel=0.02)
+
+
+# --- errors -----------------------------------------------------------------
+
+
+def test_bad_scenario_file_raises_scenario_error_with_file_line(tmp_path):
+    bad = tmp_path / "bad_box.toml"
+    bad.write_text(BOX_TOML.replace("kn = 1.0e5", "kn = -1.0e5"))
+    with pytest.raises(efgdem.ScenarioError) as e:
+        efgdem.Model.from_scenario(bad)
+    assert isinstance(e.value, ValueError)
+    assert "bad_box.toml:9: material[0].kn: must be a finite number" in str(e.value)
+    assert e.value.errors[0][:2] == (9, "material[0].kn")
+    assert e.value.file.endswith("bad_box.toml")
+    # a syntax error, and an unknown field
+    bad.write_text(BOX_TOML.replace("steps = 400", "steps = = 400"))
+    with pytest.raises(efgdem.ScenarioError, match=r"bad_box\.toml:3: "):
+        efgdem.Model.from_scenario(bad)
+    bad.write_text(BOX_TOML.replace("friction = 0.4", "friction = 0.4\nfrction = 1"))
+    with pytest.raises(efgdem.ScenarioError, match=r"bad_box\.toml:\d+: .*frction"):
+        efgdem.Model.from_scenario(bad)
+    # a semantic error found while building: a probe of a missing disc
+    bad.write_text(BOX_TOML.replace("disc = 3", "disc = 9"))
+    with pytest.raises(efgdem.ScenarioError, match=r"bad_box\.toml:\d+: probe\[0\]"):
+        efgdem.Model.from_scenario(bad)
+    with pytest.raises(efgdem.ScenarioError, match="cannot read"):
+        efgdem.Model.from_scenario(tmp_path / "missing.toml")
+
+
+def test_bad_dict_raises_scenario_error_with_field():
+    d = dict(BOX_DICT, simulation={"dt": -1.0, "steps": 10})
+    with pytest.raises(efgdem.ScenarioError, match=r"^<dict>: simulation\.dt: must be"):
+        efgdem.Model.from_dict(d)
+    with pytest.raises(efgdem.ScenarioError, match=r"<dict>: granular\.discs\[1\]\[0\]: .*type `object`"):
+        efgdem.Model.from_dict(dict(BOX_DICT, granular=dict(
+            BOX_DICT["granular"], discs=[[0, 0, 1], [object(), 0, 1]])))
+
+
+def test_dict_type_errors_name_the_field():
+    import copy
+
+    def bad(change):
+        d = copy.deepcopy(BOX_DICT)
+        change(d)
+        with pytest.raises(efgdem.ScenarioError) as e:
+            efgdem.Model.from_dict(d)
+        return str(e.value)
+
+    assert bad(lambda d: d["simulation"].update(dt="x")).startswith(
+        "<dict>: simulation.dt: invalid type")
+    assert bad(lambda d: d["material"][0].update(frction=1)).startswith(
+        "<dict>: material[0].frction: unknown field")
+    assert bad(lambda d: d["wall"][1].update(to=[1.0])).startswith("<dict>: wall[1].to: ")
+    assert bad(lambda d: d["granular"].update(damping={"kind": "viscous"})).startswith(
+        "<dict>: granular.damping.kind: unknown variant `viscous`")
+    ex = load_toml(EXAMPLE1)
+    ex["body"][0]["bc"][0]["edge"] = "lft"
+    with pytest.raises(efgdem.ScenarioError, match=r"^<dict>: body\[0\]\.bc\[0\]\.edge: unknown variant"):
+        efgdem.Model.from_dict(ex)
+
+
+def test_model_error_is_a_runtime_error():
+    assert issubclass(efgdem.ModelError, RuntimeError)
+    assert issubclass(efgdem.ScenarioError, ValueError)
+    d = settling(count=50)
+    d["simulation"].update(dt=1e10, gravity=[0.0, -1e300])  # velocities overflow
+    m = efgdem.Model.from_dict(d)
+    with pytest.raises(efgdem.ModelError, match="unstable at step 256"):
+        m.step(300)
+
+
+# --- frames -------------------------------------------------------------------
+
+
+def cli():
+    for p in (ROOT / "target" / "release" / "efgdem", shutil.which("efgdem")):
+        if p and Path(p).exists():
+            return str(p)
+    return None
+
+
+def test_write_frame_writes_what_the_cli_writes(tmp_path):
+    exe = cli()
+    if exe is None:
+        pytest.skip("no efgdem binary (cargo build --release)")
+    sc = tmp_path / "ex1.toml"
+    sc.write_text(EXAMPLE1.read_text().replace("end_time = 0.2", "end_time = 0.01"))
+    subprocess.run([exe, "run", str(sc), "-o", str(tmp_path / "cli"), "-q"], check=True)
+    m = efgdem.Model.from_scenario(sc)
+    out = tmp_path / "py"
+    first = m.write_frame(out)
+    assert [p.name for p in first] == ["discs_0000000.vtp", "beam_0000000.vtu"]
+    m.step(100)
+    m.write_frame(out)
+    for f in ("frames/discs_0000100.vtp", "frames/beam_0000100.vtu", "frames/beam_0000000.vtu",
+              "discs.pvd", "beam.pvd"):
+        assert (out / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
+
+
+def test_write_frame_granular(box_file, tmp_path):
+    m = efgdem.Model.from_scenario(box_file)
+    m.write_frame(tmp_path)
+    m.step(10)
+    paths = m.write_frame(tmp_path)
+    assert [p.name for p in paths] == ["discs_000010.vtp"]
+    text = (tmp_path / "discs.pvd").read_text()
+    assert "frames/discs_000000.vtp" in text and "frames/discs_000010.vtp" in text
+
+
+# --- the examples ----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("script", ["settling_box.py", "example1_fig12.py"])
+def test_examples_run(script, tmp_path):
+    pytest.importorskip("matplotlib")
+    png = tmp_path / "out.png"
+    env = dict(os.environ, EFGDEM_FAST="1")
+    r = subprocess.run([sys.executable, str(ROOT / "python" / "examples" / script), "-o", str(png)],
+                       env=env, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert png.stat().st_size > 10_000
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
