@@ -919,7 +919,7 @@ impl PyModel {
 
 enum FrameError {
     Io(std::io::Error),
-    Model(efgdem::efg::EfgError),
+    Model(efgdem::model::body::BodyError),
 }
 
 impl From<std::io::Error> for FrameError {
