@@ -35,6 +35,7 @@ material = "grain"
 thickness = 0.1
 discs = [[0.10, 0.05, 0.05], [0.195, 0.05, 0.05], [0.15, 0.2, 0.04]]
 damping = { kind = "contact-viscous", beta = 1.0e-4 }
+allow_overlap = true  # discs 1 and 2 start pressed together on purpose
 
 [[wall]]
 name = "floor"
@@ -62,6 +63,7 @@ BOX_DICT = {
         "thickness": 0.1,
         "discs": [[0.10, 0.05, 0.05], [0.195, 0.05, 0.05], [0.15, 0.2, 0.04]],
         "damping": {"kind": "contact-viscous", "beta": 1.0e-4},
+        "allow_overlap": True,
     },
     "wall": [
         {"name": "floor", "from": [0.0, 0.0], "to": [0.4, 0.0]},
@@ -350,11 +352,15 @@ def test_dict_type_errors_name_the_field():
 def test_model_error_is_a_runtime_error():
     assert issubclass(efgdem.ModelError, RuntimeError)
     assert issubclass(efgdem.ScenarioError, ValueError)
+    # (a time step above the critical one is now refused when the scenario
+    # is built: a ScenarioError; a static model cannot be stepped: a ModelError)
     d = settling(count=50)
-    d["simulation"].update(dt=1e10, gravity=[0.0, -1e300])  # velocities overflow
-    m = efgdem.Model.from_dict(d)
-    with pytest.raises(efgdem.ModelError, match="unstable at step 256"):
-        m.step(300)
+    d["simulation"].update(dt=1e10)
+    with pytest.raises(efgdem.ScenarioError, match="simulation.dt: dt = 1e10 is"):
+        efgdem.Model.from_dict(d)
+    m = efgdem.Model.from_scenario(ROOT / "examples" / "timoshenko.toml")
+    with pytest.raises(efgdem.ModelError, match="static analysis has no time steps"):
+        m.step(1)
 
 
 # --- frames -------------------------------------------------------------------
