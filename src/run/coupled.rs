@@ -17,8 +17,6 @@ use crate::scenario::Scenario;
 use serde_json::{Value, json};
 use std::time::Instant;
 
-pub use crate::coupling::energy::EnergyAccount;
-
 /// Watches for discs whose centre enters a body through an edge that is
 /// not one of its contact edges: the body does not see such a disc from
 /// outside, and its contact chains may see it from inside (forces up to

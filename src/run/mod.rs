@@ -10,8 +10,6 @@ use crate::scenario::{Scenario, ScenarioError};
 use std::path::PathBuf;
 use std::time::Instant;
 
-pub use coupled::EnergyAccount;
-
 /// Options of `efgdem run` that are not part of the scenario.
 #[derive(Debug, Clone)]
 pub struct RunOptions {
