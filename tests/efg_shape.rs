@@ -119,3 +119,42 @@ fn too_small_support_is_an_error_naming_the_point() {
     assert!(e.covering >= 3, "{e}");
     assert!(e.to_string().contains("collinear"));
 }
+
+/// Regression (issue 12): a 42 × 8 node grid on a 40 × 6 rectangle has
+/// nodes at the very edge of other nodes' supports, where `|Δx| < d_m` and
+/// `|Δx|/d_m < 1` disagree by one rounding; the nodal shape rows (frames)
+/// overran their buffer. `covers` and the shape functions now agree at
+/// every node.
+#[test]
+fn nodes_on_the_edge_of_a_support_are_counted_as_the_shape_functions_see_them() {
+    use efgdem::continuum::{BodyParams, Edge, EdgeCondition, Elastic, Plane, Rectangle};
+    let mut p = BodyParams::new(
+        "footing",
+        Rectangle {
+            origin: [0.0, 0.0],
+            size: [40.0, 6.0],
+        },
+        [42, 8],
+        Elastic {
+            e: 1e9,
+            nu: 0.2,
+            density: 2400.0,
+            thickness: 1.0,
+            plane: Plane::Stress,
+        },
+    );
+    p.bc.push(EdgeCondition {
+        fixed: true,
+        ..EdgeCondition::on(Edge::Bottom)
+    });
+    let b = efgdem::efg::EfgBody::new(&p, [0.0, 0.0]).expect("builds");
+    let shapes = b.nodal_shapes().expect("nodal shape rows");
+    let mut row = efgdem::efg::ShapeRow::new();
+    let mut covering = Vec::new();
+    for i in 0..b.n_nodes() {
+        b.support.covering(b.node(i), &mut covering);
+        efgdem::efg::shape::shape_functions(&b.support, b.node(i), &mut row).unwrap();
+        assert_eq!(covering.len(), row.len(), "node {i}");
+        assert_eq!(shapes.ptr[i + 1] - shapes.ptr[i], row.len(), "node {i}");
+    }
+}

@@ -180,8 +180,12 @@ impl Support {
     /// Does the open support of node `k` contain `p` (weight > 0)?
     #[inline]
     pub fn covers(&self, k: usize, p: Vec2) -> bool {
-        let n = &self.node[k];
-        (p.x - n[0]).abs() < n[2] && (p.y - n[1]).abs() < n[3]
+        // the test `shape_functions` makes (`|Δx| / d_m < 1` with the stored
+        // reciprocal), so that counts made with it size its rows exactly:
+        // `|Δx| < d_m` differs from it by one rounding at the support's edge
+        // (a 42 × 8 node grid had nodes there and overran its row buffer)
+        let (n, inv) = (&self.node[k], &self.inv_half[k]);
+        (p.x - n[0]).abs() * inv[0] < 1.0 && (p.y - n[1]).abs() * inv[1] < 1.0
     }
 
     /// Nodes whose support covers `p`, in increasing order, into `out`.
