@@ -127,7 +127,7 @@ fn too_small_support_is_an_error_naming_the_point() {
 /// every node.
 #[test]
 fn nodes_on_the_edge_of_a_support_are_counted_as_the_shape_functions_see_them() {
-    use efgdem::continuum::{BodyParams, Edge, EdgeCondition, Elastic, Plane, Rectangle};
+    use efgdem::continuum::{BodyParams, Edge, EdgeCondition, Elastic, Rectangle};
     let mut p = BodyParams::new(
         "footing",
         Rectangle {
@@ -135,18 +135,9 @@ fn nodes_on_the_edge_of_a_support_are_counted_as_the_shape_functions_see_them() 
             size: [40.0, 6.0],
         },
         [42, 8],
-        Elastic {
-            e: 1e9,
-            nu: 0.2,
-            density: 2400.0,
-            thickness: 1.0,
-            plane: Plane::Stress,
-        },
+        Elastic::new(1e9, 0.2).density(2400.0),
     );
-    p.bc.push(EdgeCondition {
-        fixed: true,
-        ..EdgeCondition::on(Edge::Bottom)
-    });
+    p.bc.push(EdgeCondition::fixed(Edge::Bottom));
     let b = efgdem::efg::EfgBody::new(&p, [0.0, 0.0]).expect("builds");
     let shapes = b.nodal_shapes().expect("nodal shape rows");
     let mut row = efgdem::efg::ShapeRow::new();

@@ -54,6 +54,36 @@ pub struct Elastic {
     pub plane: Plane,
 }
 
+impl Elastic {
+    /// Young's modulus and Poisson's ratio with the other fields at their
+    /// defaults (the `#[serde(default)]`s above): density 0, thickness 1,
+    /// plane stress.
+    pub fn new(e: f64, nu: f64) -> Self {
+        Elastic {
+            e,
+            nu,
+            density: 0.0,
+            thickness: one(),
+            plane: Plane::default(),
+        }
+    }
+    /// Mass density.
+    pub fn density(mut self, rho: f64) -> Self {
+        self.density = rho;
+        self
+    }
+    /// Out-of-plane thickness.
+    pub fn thickness(mut self, t: f64) -> Self {
+        self.thickness = t;
+        self
+    }
+    /// Plane strain instead of plane stress.
+    pub fn plane_strain(mut self) -> Self {
+        self.plane = Plane::Strain;
+        self
+    }
+}
+
 /// Plane stress (Eq. 31) or plane strain (Eq. 32).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]

@@ -154,6 +154,22 @@ impl EdgeCondition {
         }
     }
 
+    /// Both displacement components zero on `edge`.
+    pub fn fixed(edge: Edge) -> Self {
+        EdgeCondition {
+            fixed: true,
+            ..EdgeCondition::on(edge)
+        }
+    }
+
+    /// A uniform traction `[tx, ty]` on `edge`.
+    pub fn traction(edge: Edge, t: [f64; 2]) -> Self {
+        EdgeCondition {
+            traction: Some(t),
+            ..EdgeCondition::on(edge)
+        }
+    }
+
     /// Is this a load (traction) rather than a prescribed displacement?
     pub fn is_load(&self) -> bool {
         self.traction.is_some() || self.parabolic_shear.is_some()

@@ -69,7 +69,7 @@ impl ContactBody for EfgBody {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::continuum::{BodyParams, Continuum, Edge, EdgeCondition, Elastic, Plane, Rectangle};
+    use crate::continuum::{BodyParams, Continuum, Edge, EdgeCondition, Elastic, Rectangle};
 
     fn body() -> EfgBody {
         let mut p = BodyParams::new(
@@ -79,18 +79,9 @@ mod tests {
                 size: [2.0, 1.0],
             },
             [5, 3],
-            Elastic {
-                e: 1000.0,
-                nu: 0.3,
-                density: 1.0,
-                thickness: 1.0,
-                plane: Plane::Stress,
-            },
+            Elastic::new(1000.0, 0.3).density(1.0),
         );
-        p.bc.push(EdgeCondition {
-            fixed: true,
-            ..EdgeCondition::on(Edge::Left)
-        });
+        p.bc.push(EdgeCondition::fixed(Edge::Left));
         EfgBody::new(&p, [0.0, 0.0]).unwrap()
     }
 

@@ -233,8 +233,7 @@ impl Penalty {
 #[cfg(test)]
 mod tests {
     use crate::continuum::{
-        BodyParams, Edge, EdgeCondition, Elastic, LinearField, MotionField, Plane, Prescribed,
-        Rectangle,
+        BodyParams, Edge, EdgeCondition, Elastic, LinearField, MotionField, Prescribed, Rectangle,
     };
     use crate::efg::EfgBody;
 
@@ -249,13 +248,7 @@ mod tests {
                 size: [2.0, 1.0],
             },
             [6, 4],
-            Elastic {
-                e: 1000.0,
-                nu: 0.3,
-                density: 1.0,
-                thickness: 0.5,
-                plane: Plane::Stress,
-            },
+            Elastic::new(1000.0, 0.3).density(1.0).thickness(0.5),
         );
         p.penalty = Some(2000.0);
         let motion = MotionField {

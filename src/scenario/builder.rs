@@ -6,7 +6,7 @@
 //! deserialises the smallest valid table), so a scenario built here and
 //! the same scenario read from a file are identical.
 
-use super::body::{BcSpec, BodySpec, Edge, Elastic, Method, Plane, Rectangle};
+use super::body::{BcSpec, BodySpec, Edge, Elastic, Method, Rectangle};
 use super::granular::{DampingSpec, DiscsSpec, GranularSpec, WallSpec};
 use super::{Analysis, Material, Probe, Scenario};
 use serde::de::DeserializeOwned;
@@ -142,31 +142,6 @@ impl WallSpec {
     }
 }
 
-impl Elastic {
-    /// Young's modulus and Poisson's ratio; density 0, thickness 1, plane stress.
-    pub fn new(e: f64, nu: f64) -> Self {
-        let mut el: Elastic = defaults("E = 1.0\nnu = 0.0");
-        el.e = e;
-        el.nu = nu;
-        el
-    }
-    /// Mass density.
-    pub fn density(mut self, rho: f64) -> Self {
-        self.density = rho;
-        self
-    }
-    /// Out-of-plane thickness.
-    pub fn thickness(mut self, t: f64) -> Self {
-        self.thickness = t;
-        self
-    }
-    /// Plane strain instead of plane stress.
-    pub fn plane_strain(mut self) -> Self {
-        self.plane = Plane::Strain;
-        self
-    }
-}
-
 impl BodySpec {
     /// An EFG body on the rectangle `origin`, `size` with `nodes` and the
     /// format's defaults (4 × 4 Gauss points, `d_max = 2`, average
@@ -212,23 +187,6 @@ impl BodySpec {
     pub fn self_weight(mut self, on: bool) -> Self {
         self.self_weight = on;
         self
-    }
-}
-
-impl BcSpec {
-    /// Both displacement components zero on `edge`.
-    pub fn fixed(edge: Edge) -> Self {
-        BcSpec {
-            fixed: true,
-            ..BcSpec::on(edge)
-        }
-    }
-    /// A uniform traction `[tx, ty]` on `edge`.
-    pub fn traction(edge: Edge, t: [f64; 2]) -> Self {
-        BcSpec {
-            traction: Some(t),
-            ..BcSpec::on(edge)
-        }
     }
 }
 
