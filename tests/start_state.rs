@@ -1,7 +1,8 @@
 //! Impossible start states are refused by `efgdem check` (and `run`) with
 //! `file:line: field: message` and exit code 2 (issue 12).
 
-use std::process::Command;
+#[allow(dead_code)]
+mod common;
 
 const BASE: &str = r#"[simulation]
 dt = 1.0e-5
@@ -21,15 +22,9 @@ DISCS
 
 /// Run `efgdem check` on `text`; (exit code, stderr).
 fn check(name: &str, text: &str) -> (i32, String) {
-    let dir = std::env::temp_dir().join(format!("efgdem-start-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let f = dir.join(format!("{name}.toml"));
+    let f = common::tmpdir(&format!("start-{name}")).join(format!("{name}.toml"));
     std::fs::write(&f, text).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_efgdem"))
-        .arg("check")
-        .arg(&f)
-        .output()
-        .unwrap();
+    let out = common::bin().arg("check").arg(&f).output().unwrap();
     (
         out.status.code().unwrap_or(-1),
         String::from_utf8_lossy(&out.stderr).into_owned(),

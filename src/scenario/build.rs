@@ -23,7 +23,7 @@ use crate::dem::packing::{
 };
 use crate::dem::particles::Particles;
 use crate::dem::walls::{Wall, WallMotion};
-use crate::dem::{BodyDamping, Granular};
+use crate::dem::{BodyDamping, DT_WARN, Granular};
 use crate::efg::EfgBody;
 use crate::efg::boundary::EfgContinuum;
 use crate::fem::{FemBody, FemContinuum};
@@ -427,10 +427,10 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
         return Err(bad(
             "simulation.dt",
             format!(
-                "dt = {:e} is {:.2} × the DEM critical step 2√(m_min/k_max) = {crit:e}: the central difference is unstable; use at most {:e} (0.2 × critical)",
+                "dt = {:e} is {:.2} × the DEM critical step 2√(m_min/k_max) = {crit:e}: the central difference is unstable; use at most {:e} ({DT_WARN} × critical)",
                 g.dt,
                 g.dt / crit,
-                0.2 * crit
+                DT_WARN * crit
             ),
         ));
     }
@@ -478,52 +478,52 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
             ),
         ));
     }
-    for (wi, w) in g.walls.iter().enumerate() {
-        let hits: Vec<(usize, f64)> = (0..p.len())
+    // discs whose overlap `overlap(centre, r)` with one wall or body is
+    // above the tolerance: (disc id, overlap)
+    let hits = |overlap: &dyn Fn(Vec2, f64) -> f64| -> Vec<(usize, f64)> {
+        (0..p.len())
             .filter_map(|k| {
-                let d = p.radius[k] - (w.closest(p.pos[k]) - p.pos[k]).norm();
+                let d = overlap(p.pos[k], p.radius[k]);
                 (d > tol * p.radius[k]).then_some((p.id[k] as usize, d))
             })
-            .collect();
-        if !hits.is_empty() {
-            return Err(bad(
-                &format!("wall.{wi}"),
-                format!(
-                    "{} disc(s) cross wall `{}` at the start: {}; {hint}",
-                    hits.len(),
-                    w.name,
-                    list(&hits)
-                ),
-            ));
+            .collect()
+    };
+    let refuse = |path: String, what: String, hits: Vec<(usize, f64)>| {
+        let message = format!(
+            "{} disc(s) {what} at the start: {}; {hint}",
+            hits.len(),
+            list(&hits)
+        );
+        Err(bad(&path, message))
+    };
+    for (wi, w) in g.walls.iter().enumerate() {
+        let found = hits(&|x, r| r - (w.closest(x) - x).norm());
+        if !found.is_empty() {
+            return refuse(
+                format!("wall.{wi}"),
+                format!("cross wall `{}`", w.name),
+                found,
+            );
         }
     }
     for (bi, b) in sc.body.iter().enumerate() {
         let lo = Vec2::from(b.rectangle.origin);
         let hi = lo + Vec2::from(b.rectangle.size);
-        let hits: Vec<(usize, f64)> = (0..p.len())
-            .filter_map(|k| {
-                let x = p.pos[k];
-                let c = Vec2::new(x.x.clamp(lo.x, hi.x), x.y.clamp(lo.y, hi.y));
-                let inside = c == x;
-                let d = if inside {
-                    // centre inside: overlap = r + distance to the nearest edge
-                    p.radius[k] + (x.x - lo.x).min(hi.x - x.x).min(x.y - lo.y).min(hi.y - x.y)
-                } else {
-                    p.radius[k] - (c - x).norm()
-                };
-                (d > tol * p.radius[k]).then_some((p.id[k] as usize, d))
-            })
-            .collect();
-        if !hits.is_empty() {
-            return Err(bad(
-                &format!("body.{bi}"),
-                format!(
-                    "{} disc(s) overlap body `{}` at the start: {}; {hint}",
-                    hits.len(),
-                    b.name,
-                    list(&hits)
-                ),
-            ));
+        let found = hits(&|x, r| {
+            let c = Vec2::new(x.x.clamp(lo.x, hi.x), x.y.clamp(lo.y, hi.y));
+            if c == x {
+                // centre inside: overlap = r + distance to the nearest edge
+                r + (x.x - lo.x).min(hi.x - x.x).min(x.y - lo.y).min(hi.y - x.y)
+            } else {
+                r - (c - x).norm()
+            }
+        });
+        if !found.is_empty() {
+            return refuse(
+                format!("body.{bi}"),
+                format!("overlap body `{}`", b.name),
+                found,
+            );
         }
     }
     Ok(())
