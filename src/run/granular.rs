@@ -30,7 +30,6 @@ pub(super) fn run(
         warnings.push(w);
     }
     let out = &opts.out_dir;
-    std::fs::create_dir_all(out)?;
     let mut cols = vec!["step", "t"];
     cols.extend(probes.iter().map(|p| p.0.as_str()));
     let mut hist = HistoryWriter::create(&out.join("history.csv"), &cols)?;

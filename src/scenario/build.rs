@@ -107,7 +107,7 @@ fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid>
 }
 
 /// The discs the scenario describes (generating or reading them).
-pub fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, Invalid> {
+fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, Invalid> {
     let g = spec(sc)?;
     match &g.discs {
         DiscsSpec::Inline(rows) => Ok(rows
