@@ -7,6 +7,9 @@
 //! The dense packing is made once by gravity deposition and cached in
 //! `target/dem-bench-cache/dense_N.csv`.
 //!
+//! On 1 thread the same steps are also timed through `Model::step`
+//! (`model_step_threads_1`), which adds the per-step stability check.
+//!
 //! `DEM_BENCH_SIZES=10000` restricts the sizes; `DEM_BENCH_ROLLING=0.1`
 //! adds rolling resistance (μ_r = 0.1, rolling dashpot η_r = 0.3) to the
 //! measured assembly (the packing is the same).
@@ -18,6 +21,7 @@ use efgdem::dem::contact::ContactLaw;
 use efgdem::dem::packing::{DiscRow, Lattice, lattice_packing, settle_in_box};
 use efgdem::dem::particles::Particles;
 use efgdem::dem::walls::{Wall, WallMotion};
+use efgdem::model::{Model, System};
 use efgdem::scenario::generate::discs_from_csv;
 use std::path::PathBuf;
 
@@ -170,6 +174,25 @@ fn bench(c: &mut Criterion) {
                     "  rebuilds so far: {} over {} steps",
                     g.grid.rebuilds, g.step
                 );
+                if threads == 1 {
+                    // the same steps through the library's `Model::step`,
+                    // which adds the per-step stability check
+                    let mut m = Model {
+                        dt: g.dt,
+                        steps: usize::MAX,
+                        step: 0,
+                        system: System::Granular(Box::new(g)),
+                    };
+                    group.bench_function("model_step_threads_1", |b| {
+                        b.iter(|| {
+                            pool.install(|| {
+                                for _ in 0..STEPS {
+                                    m.step().expect("stable");
+                                }
+                            })
+                        })
+                    });
+                }
             }
             group.finish();
         }

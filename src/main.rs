@@ -2,10 +2,13 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
+use efgdem::model::ModelError;
 use efgdem::run::RunError;
 use efgdem::scenario::{self, ScenarioError};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize};
 
 /// Element-free Galerkin continua coupled with discrete elements (Wang et al. 2020).
 #[derive(Parser)]
@@ -18,6 +21,11 @@ struct Cli {
 #[derive(Subcommand)]
 enum Cmd {
     /// Run a scenario file and write summary.json, history.csv and ParaView frames.
+    ///
+    /// Ctrl-C (SIGINT) or SIGTERM stops the run after the current step with
+    /// complete outputs and "status": "interrupted" in summary.json (exit
+    /// code 130 or 143); a second Ctrl-C aborts at once. Exit codes: 0 done,
+    /// 1 other failure, 2 bad input, 3 the run became unstable.
     Run {
         /// The scenario (TOML), see docs/scenario.md.
         file: PathBuf,
@@ -27,9 +35,14 @@ enum Cmd {
         /// Worker threads (0 = all cores; results do not depend on it).
         #[arg(long)]
         threads: Option<usize>,
-        /// No progress bar.
+        /// No progress display.
         #[arg(short, long)]
         quiet: bool,
+        /// Run into a non-empty output directory, removing the files of a
+        /// previous run there first (history.csv, summary.json, *.pvd,
+        /// *.vtu, frames/, …; other files are kept).
+        #[arg(long)]
+        overwrite: bool,
     },
     /// Reproduce the paper's §4 (both examples, all variants) from built-in
     /// scenarios: run data, PNG plots of Figs. 9–17 and report.md.
@@ -66,21 +79,42 @@ fn main() -> ExitCode {
     match dispatch(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            // Bad input is exit code 2; anything else 1.
-            let scenario = e.downcast_ref::<ScenarioError>().or_else(|| {
-                e.chain().find_map(|c| match c.downcast_ref::<RunError>() {
-                    Some(RunError::Scenario(se)) => Some(se),
-                    _ => None,
-                })
-            });
-            if let Some(se) = scenario {
+            if let Some(se) = e.downcast_ref::<ScenarioError>() {
                 eprintln!("error: {se}");
                 return ExitCode::from(2);
             }
+            let run = e.chain().find_map(|c| c.downcast_ref::<RunError>());
+            // Bad input is exit code 2, an unstable run 3, a stopped one
+            // 128 + signal (the shell's convention); anything else 1.
+            let code = match run {
+                Some(RunError::Scenario(se)) => {
+                    eprintln!("error: {se}");
+                    return ExitCode::from(2);
+                }
+                Some(RunError::NotEmpty(_)) => 2,
+                Some(RunError::Model(ModelError::Unstable(_))) => 3,
+                Some(RunError::Interrupted { signal, .. }) => 128 + (*signal as u8 & 0x7f),
+                _ => 1,
+            };
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            ExitCode::from(code)
         }
     }
+}
+
+/// A flag that SIGINT and SIGTERM set to their number, so that a run can
+/// stop after its current step; a second signal exits at once.
+fn stop_on_signals() -> anyhow::Result<Arc<AtomicUsize>> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let stop = Arc::new(AtomicUsize::new(0));
+    let again = Arc::new(AtomicBool::new(false));
+    for sig in [SIGINT, SIGTERM] {
+        // registered first, so it sees the flag as the previous signal left it
+        signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, Arc::clone(&again))?;
+        signal_hook::flag::register(sig, Arc::clone(&again))?;
+        signal_hook::flag::register_usize(sig, Arc::clone(&stop), sig as usize)?;
+    }
+    Ok(stop)
 }
 
 /// Run `f` on a pool of `n` worker threads (0 = one per core). The whole
@@ -103,11 +137,14 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             out,
             threads,
             quiet,
+            overwrite,
         } => {
             let sc = scenario::load(&file)?;
             let opts = efgdem::run::RunOptions {
-                out_dir: out.clone(),
                 quiet,
+                overwrite,
+                stop: Some(stop_on_signals()?),
+                ..efgdem::run::RunOptions::new(&out)
             };
             let t0 = std::time::Instant::now();
             in_pool(threads.unwrap_or(sc.simulation.threads), || {

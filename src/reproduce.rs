@@ -139,9 +139,11 @@ impl Job {
     fn run(&mut self, name: &str, sc: &Scenario) -> Result<Done> {
         let dir = self.out.join("runs").join(name);
         let t0 = Instant::now();
+        // the report's own run directories: replaced on every reproduction
         let opts = RunOptions {
-            out_dir: dir.clone(),
             quiet: true,
+            overwrite: true,
+            ..RunOptions::new(&dir)
         };
         let summary = crate::run::run(sc, &opts).map_err(|source| ReproduceError::Run {
             name: name.to_string(),

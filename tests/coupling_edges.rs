@@ -58,9 +58,10 @@ every = 1
 
 /// Run `scenario(edges)`; returns stderr and the history columns.
 fn run(tag: &str, edges: &str) -> (String, Vec<String>, Vec<Vec<f64>>) {
-    let dir = tmpdir(tag);
-    let file = dir.join("s.toml");
+    let root = tmpdir(tag);
+    let file = root.join("s.toml");
     std::fs::write(&file, scenario(edges)).unwrap();
+    let dir = root.join("out");
     let out = bin()
         .args([
             "run",

@@ -59,8 +59,9 @@ fn footing_driven_through_free_space_dissipates_nothing() {
         ));
         let sc = parse(&FOOTING.replace("METHOD", method), "footing.toml").unwrap();
         let opts = efgdem::run::RunOptions {
-            out_dir: dir.clone(),
             quiet: true,
+            overwrite: true,
+            ..efgdem::run::RunOptions::new(&dir)
         };
         efgdem::run::run(&sc, &opts).unwrap();
         let (cols, rows) = efgdem::output::csv::read(&dir.join("history.csv")).unwrap();

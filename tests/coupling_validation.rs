@@ -174,8 +174,9 @@ vtk_every = 0
 "#;
     let sc = parse(src, "bounce.toml").unwrap();
     let opts = efgdem::run::RunOptions {
-        out_dir: dir.clone(),
         quiet: true,
+        overwrite: true,
+        ..efgdem::run::RunOptions::new(&dir)
     };
     efgdem::run::run(&sc, &opts).unwrap();
     let (cols, rows) = efgdem::output::csv::read(&dir.join("history.csv")).unwrap();

@@ -156,7 +156,7 @@ fn shipped_examples_run_through_the_cli() {
         assert!((rows[149][3] - fc).abs() < 1e-3 * fc);
         assert!(out.join("summary.json").exists());
         assert!(out.join("discs.pvd").exists());
-        assert!(out.join("frames/discs_000150.vtp").exists());
+        assert!(out.join("frames/discs_0000150.vtp").exists());
         std::fs::remove_dir_all(&out).ok();
     }
 }

@@ -37,8 +37,9 @@ fn timoshenko_example_reports_tip_deflection() {
 
 #[test]
 fn dynamic_run_writes_frames_and_series() {
-    let out = tmpdir("cli-dyn");
-    let f = out.join("vib.toml");
+    let root = tmpdir("cli-dyn");
+    let f = root.join("vib.toml");
+    let out = root.join("out");
     std::fs::write(
         &f,
         r#"
@@ -71,7 +72,7 @@ vtk_every = 5
     run(&f, &out);
     let pvd = std::fs::read_to_string(out.join("b.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet").count(), 5);
-    let frame = std::fs::read_to_string(out.join("frames/b_000020.vtu")).unwrap();
+    let frame = std::fs::read_to_string(out.join("frames/b_0000020.vtu")).unwrap();
     assert!(frame.contains("Name=\"displacement\"") && frame.contains("Name=\"stress_xx_yy_xy\""));
     let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
     assert_eq!(hist.lines().count(), 22);

@@ -66,13 +66,14 @@ vtk_every = 5
 
 #[test]
 fn fem_dynamic_run_writes_frames_and_history() {
-    let out = tmpdir("femcli-dyn");
-    let f = out.join("vib.toml");
+    let root = tmpdir("femcli-dyn");
+    let f = root.join("vib.toml");
+    let out = root.join("out");
     std::fs::write(&f, DYN).unwrap();
     run(&f, &out);
     let pvd = std::fs::read_to_string(out.join("b.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet").count(), 5);
-    let frame = std::fs::read_to_string(out.join("frames/b_000020.vtu")).unwrap();
+    let frame = std::fs::read_to_string(out.join("frames/b_0000020.vtu")).unwrap();
     assert!(frame.contains("Name=\"displacement\"") && frame.contains("Name=\"stress_xx_yy_xy\""));
     let hist = std::fs::read_to_string(out.join("history.csv")).unwrap();
     assert_eq!(hist.lines().count(), 22);

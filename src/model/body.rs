@@ -2,6 +2,7 @@
 //! view of one that samples its true fields.
 
 use crate::continuum::Sample;
+use crate::continuum::newmark::State;
 use crate::efg::assemble::PointShapes;
 use crate::efg::{EfgBody, EfgError, ShapeRow};
 
@@ -153,6 +154,13 @@ impl<'a> BodyRef<'a> {
     /// strain, stress).
     pub fn sample(self, p: Vec2) -> Result<Sample, BodyError> {
         Ok(self.sample_at(&self.bind(p)?))
+    }
+    /// The Newmark state `U`, `U̇`, `Ü` (nodal parameters).
+    pub fn state(self) -> &'a State {
+        match self {
+            BodyRef::Efg(b) => &b.state,
+            BodyRef::Fem(b) => &b.state,
+        }
     }
     /// Reference position of node `i`.
     pub fn node(self, i: usize) -> Vec2 {

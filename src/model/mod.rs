@@ -8,6 +8,7 @@
 pub mod body;
 pub mod contacts;
 pub mod probe;
+pub mod stability;
 
 use crate::coupling::{CoupledModel, CouplingError};
 use crate::dem::{DemError, Granular};
@@ -16,6 +17,7 @@ use crate::fem::FemContinuum;
 use body::{Body, BodyRef};
 pub use contacts::{ContactKind, ContactView};
 pub use probe::Probe;
+pub use stability::Instability;
 use std::ops::ControlFlow;
 
 /// Why a step failed.
@@ -30,6 +32,9 @@ pub enum ModelError {
     /// A coupled step failed.
     #[error(transparent)]
     Coupling(#[from] CouplingError),
+    /// The state stopped being physical (exit code 3 of `efgdem run`).
+    #[error("{0}")]
+    Unstable(Box<Instability>),
     /// A static model has no time steps (call [`Model::solve_static`]).
     #[error("a static analysis has no time steps; call solve_static()")]
     Static,
@@ -64,25 +69,27 @@ pub struct Model {
 }
 
 impl Model {
-    /// Advance one time step.
+    /// Advance one time step, then check that the state is still physical
+    /// ([`stability::check`]: finite, no disc moving more than its radius
+    /// per step); an instability is [`ModelError::Unstable`] with a
+    /// diagnosis and a suggested time step.
     pub fn step(&mut self) -> Result<(), ModelError> {
-        match &mut self.system {
+        let r = match &mut self.system {
             System::Continuum { dynamic: false, .. } => return Err(ModelError::Static),
-            System::Continuum { bodies, .. } => {
-                for b in bodies {
-                    b.advance()?;
-                }
-            }
+            System::Continuum { bodies, .. } => bodies
+                .iter_mut()
+                .try_for_each(|b| b.advance())
+                .map_err(ModelError::from),
             System::Granular(g) => {
                 g.step();
-                if g.step % 256 == 0 {
-                    g.check_finite()?;
-                }
+                Ok(())
             }
-            System::Coupled(m) => m.step()?,
-        }
+            System::Coupled(m) => m.step().map_err(ModelError::from),
+        };
         self.step += 1;
-        Ok(())
+        // the inner checks only see non-finite discs: diagnose here
+        stability::check(self).map_err(|e| ModelError::Unstable(Box::new(e)))?;
+        r
     }
 
     /// Step until the time reaches `t_end` (within half a step), calling

@@ -17,21 +17,62 @@ pub struct HistoryWriter {
     /// never ends in half a row.
     line: String,
     last_flush: Instant,
+    /// Bytes of the file so far (written or buffered).
+    bytes: u64,
 }
 
 impl HistoryWriter {
     /// Create `path` and write the header line.
     pub fn create(path: &Path, columns: &[&str]) -> std::io::Result<Self> {
         let mut out = BufWriter::new(File::create(path)?);
-        writeln!(out, "{}", columns.join(","))?;
+        let header = format!("{}\n", columns.join(","));
+        out.write_all(header.as_bytes())?;
         out.flush()?;
-        Ok(HistoryWriter {
+        Ok(Self::with(out, columns, header.len() as u64))
+    }
+
+    /// Continue `path` (a restart): keep its first `bytes` bytes (what a
+    /// checkpoint recorded with [`bytes`](Self::bytes)), drop the rest, and
+    /// append from there. Fails if the file is shorter or its header is
+    /// not `columns`.
+    pub fn resume(path: &Path, columns: &[&str], bytes: u64) -> std::io::Result<Self> {
+        use std::io::{Error, ErrorKind, Read, Seek, SeekFrom};
+        let bad =
+            |m: String| Error::new(ErrorKind::InvalidData, format!("{}: {m}", path.display()));
+        let mut f = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(path)?;
+        let header = format!("{}\n", columns.join(","));
+        let mut first = vec![0; header.len()];
+        if f.read_exact(&mut first).is_err() || first != header.as_bytes() {
+            return Err(bad(format!("the header is not `{}`", header.trim_end())));
+        }
+        let len = f.metadata()?.len();
+        if len < bytes {
+            return Err(bad(format!(
+                "{len} bytes, shorter than the {bytes} the checkpoint recorded"
+            )));
+        }
+        f.set_len(bytes)?;
+        f.seek(SeekFrom::End(0))?;
+        Ok(Self::with(BufWriter::new(f), columns, bytes))
+    }
+
+    fn with(out: BufWriter<File>, columns: &[&str], bytes: u64) -> Self {
+        HistoryWriter {
             out,
             ncols: columns.len(),
             integer: columns.iter().map(|c| *c == "step").collect(),
             line: String::new(),
             last_flush: Instant::now(),
-        })
+            bytes,
+        }
+    }
+
+    /// Length of the file once flushed (header and every row so far).
+    pub fn bytes(&self) -> u64 {
+        self.bytes
     }
 
     /// Append one row; `values.len()` must equal the number of columns.
@@ -51,6 +92,7 @@ impl HistoryWriter {
         }
         self.line.push('\n');
         self.out.write_all(self.line.as_bytes())?;
+        self.bytes += self.line.len() as u64;
         if self.last_flush.elapsed() > Duration::from_secs(1) {
             self.flush()?;
         }

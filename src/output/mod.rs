@@ -3,6 +3,7 @@
 //! run that is stopped keeps what it computed.
 
 pub mod csv;
+pub mod frames;
 pub mod plot;
 pub mod vtk;
 pub mod vtp;

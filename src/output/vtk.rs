@@ -24,6 +24,23 @@ impl PvdSeries {
     /// Register a frame file (path relative to the `.pvd`) at time `t`.
     pub fn add(&mut self, t: f64, file: &str) -> std::io::Result<()> {
         self.entries.push((t, file.to_string()));
+        self.write()
+    }
+
+    /// The frames registered so far: `(time, file)`.
+    pub fn entries(&self) -> &[(f64, String)] {
+        &self.entries
+    }
+
+    /// Replace the entries (a restart continues the series it checkpointed)
+    /// and rewrite the file.
+    pub fn resume(&mut self, entries: Vec<(f64, String)>) -> std::io::Result<()> {
+        self.entries = entries;
+        self.write()
+    }
+
+    /// Write the collection (temporary file + rename: always complete).
+    fn write(&self) -> std::io::Result<()> {
         let mut s = String::from(
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n<Collection>\n",
         );

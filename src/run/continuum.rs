@@ -11,14 +11,14 @@
 //! Bodies are EFG or bilinear FE (`method = "fem-q4"`); both are driven
 //! the same way through [`Body`].
 
+use super::session::{Ended, Session, due};
 use super::{RunError, RunOptions};
 use crate::geom::Vec2;
 use crate::model::body::{Body, BodyError};
 use crate::model::{Model, Probe, System};
 use crate::output::csv::HistoryWriter;
-use crate::output::vtk::PvdSeries;
-use crate::output::vtu::write_body;
-use crate::output::{progress, write_json};
+use crate::output::frames::Frames;
+use crate::output::write_json;
 use crate::scenario::{Analysis, Scenario};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
@@ -33,16 +33,10 @@ struct Recorded {
     last: f64,
 }
 
-fn record(
-    probes: &mut [Recorded],
-    model: &Model,
-    hist: &mut HistoryWriter,
-    step: usize,
-    t: f64,
-) -> std::io::Result<()> {
+fn record(probes: &mut [Recorded], model: &Model, hist: &mut HistoryWriter) -> std::io::Result<()> {
     let mut row = Vec::with_capacity(probes.len() + 2);
-    row.push(step as f64);
-    row.push(t);
+    row.push(model.step as f64);
+    row.push(model.time());
     for p in probes.iter_mut() {
         let v = model.probe(&p.probe);
         p.min = p.min.min(v);
@@ -116,63 +110,46 @@ pub(super) fn run(
     let mut hist = HistoryWriter::create(&dir.join("history.csv"), &cols)?;
     let mut summary = json!({});
     let t_solve = Instant::now();
-    let names = super::body_names(&model);
-    match sc.simulation.analysis {
+    let mut frames = Frames::new(&model, dir)?;
+    let ended = match sc.simulation.analysis {
         Analysis::Static => {
             model.solve_static()?;
-            record(&mut probes, &model, &mut hist, 0, 0.0)?;
-            for (i, name) in names.iter().enumerate() {
-                let b = model.body(i);
-                let shapes = b.frame_data()?;
-                write_body(b, shapes.as_ref(), &dir.join(format!("{name}.vtu")))?;
-            }
+            record(&mut probes, &model, &mut hist)?;
+            frames.write_static(&model)?;
             summary["analysis"] = json!("static");
+            Ended::Completed
         }
         Analysis::Dynamic => {
             let (steps, dt) = (model.steps, model.dt);
             let vtk_every = sc.output.vtk_every;
-            let frames = dir.join("frames");
-            let mut series = Vec::new();
-            let mut nodal = Vec::new();
+            record(&mut probes, &model, &mut hist)?;
             if vtk_every > 0 {
-                std::fs::create_dir_all(&frames)?;
-                for (i, name) in names.iter().enumerate() {
-                    series.push(PvdSeries::new(&dir.join(format!("{name}.pvd"))));
-                    nodal.push(model.body(i).frame_data()?);
-                }
+                frames.write(&model)?;
             }
-            let frame =
-                |model: &Model, series: &mut [PvdSeries], step: usize| -> std::io::Result<()> {
-                    for (k, name) in names.iter().enumerate() {
-                        let f = format!("{name}_{step:06}.vtu");
-                        write_body(model.body(k), nodal[k].as_ref(), &frames.join(&f))?;
-                        series[k].add(model.time(), &format!("frames/{f}"))?;
-                    }
-                    Ok(())
-                };
-            record(&mut probes, &model, &mut hist, 0, 0.0)?;
-            if vtk_every > 0 {
-                frame(&model, &mut series, 0)?;
-            }
-            let pb = progress(steps as u64, opts.quiet);
-            for step in 1..=steps {
-                model.step()?;
-                let t = model.time();
-                if step % sc.output.every == 0 || step == steps {
-                    record(&mut probes, &model, &mut hist, step, t)?;
+            let mut session = Session::new(opts, &model);
+            let ended = loop {
+                if let Some(end) = session.step(&mut model)? {
+                    break end;
                 }
-                if vtk_every > 0 && (step % vtk_every == 0 || step == steps) {
-                    frame(&model, &mut series, step)?;
+                let step = model.step;
+                if due(step, sc.output.every, steps) {
+                    record(&mut probes, &model, &mut hist)?;
                 }
-                pb.inc(1);
-            }
-            pb.finish_and_clear();
+                if due(step, vtk_every, steps) {
+                    frames.write(&model)?;
+                }
+                if let Some(end) = session.after_step(&model) {
+                    break end;
+                }
+            };
+            session.finish();
             summary["analysis"] = json!("dynamic");
             summary["steps"] = json!(steps);
             summary["dt"] = json!(dt);
             summary["end_time"] = json!(model.time());
+            ended
         }
-    }
+    };
     hist.flush()?;
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let mut extrema = serde_json::Map::new();
@@ -194,8 +171,9 @@ pub(super) fn run(
         "total_seconds": t_build + t_start.elapsed().as_secs_f64(),
         "threads": rayon::current_num_threads(),
     });
+    ended.record(&mut summary, &model);
     write_json(&dir.join("summary.json"), &summary)?;
-    Ok(summary)
+    ended.result(summary, &model)
 }
 
 /// Validate further (build every body: coverage of every quadrature point,

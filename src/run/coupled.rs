@@ -1,5 +1,6 @@
 //! Driver for coupled scenarios (bodies and discs): `efgdem run` / `check`.
 
+use super::session::{Session, due};
 use super::{RunError, RunOptions};
 use crate::continuum::Edge;
 use crate::coupling::CoupledModel;
@@ -7,12 +8,10 @@ use crate::coupling::energy::WorkMeter;
 use crate::geom::Vec2;
 use crate::model::body::At;
 use crate::model::body::BodyRef;
-use crate::model::{Model, Probe, System, coupled_body as body, probe};
+use crate::model::{Model, Probe, System, coupled_body as body};
 use crate::output::csv::HistoryWriter;
-use crate::output::vtk::PvdSeries;
-use crate::output::vtp::write_granular;
-use crate::output::vtu::write_body;
-use crate::output::{progress, write_json};
+use crate::output::frames::Frames;
+use crate::output::write_json;
 use crate::scenario::Scenario;
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -162,23 +161,77 @@ fn chain_corners(m: &CoupledModel) -> Vec<Vec<Vec<Vec2>>> {
         .collect()
 }
 
+/// What the run watches for in the contact force, for the summary
+/// (§4.1.2 and §4.1.4 of the paper: single-disc events).
+#[derive(Default)]
+struct Events {
+    /// Largest total elastic contact force and when.
+    peak: (f64, f64),
+    first_contact: Option<f64>,
+    /// After the peak, when the force no longer carries the disc's weight.
+    below_weight: Option<f64>,
+    lost_contact: Option<f64>,
+    /// When a contact point reached a corner or end of a contact chain.
+    fall_off: Option<f64>,
+}
+
+impl Events {
+    /// Look at the contacts of the present state; returns the total
+    /// elastic contact force.
+    fn observe(&mut self, m: &CoupledModel, corners: &[Vec<Vec<Vec2>>]) -> f64 {
+        let t = m.granular.time;
+        let fn_sum: f64 = m.contacts.iter().map(|c| c.fn_elastic).sum();
+        // single-disc runs only
+        let weight = (m.granular.particles.len() == 1)
+            .then(|| m.granular.particles.mass[0] * m.granular.gravity.norm());
+        if fn_sum > self.peak.0 {
+            self.peak = (fn_sum, t);
+            self.below_weight = None;
+        } else if let Some(w) = weight
+            && self.below_weight.is_none()
+            && self.peak.0 > w
+            && fn_sum < w
+        {
+            self.below_weight = Some(t);
+        }
+        // §4.1.2: the disc falls off when its centre's projection leaves the
+        // edge, i.e. its contact point reaches a corner (or end) of the
+        // contact boundary — from there on it is a particle–point contact
+        // (Fig. 5b)
+        if weight.is_some()
+            && self.fall_off.is_none()
+            && m.contacts.iter().any(|c| {
+                corners[c.body as usize][c.chain as usize]
+                    .iter()
+                    .any(|k| (*k - c.material).norm() <= 1e-9 * k.norm().max(1e-300))
+            })
+        {
+            self.fall_off = Some(t);
+        }
+        if !m.contacts.is_empty() && self.first_contact.is_none() {
+            self.first_contact = Some(t);
+        }
+        if m.contacts.is_empty() && self.first_contact.is_some() && self.lost_contact.is_none() {
+            self.lost_contact = Some(t);
+        }
+        fn_sum
+    }
+}
+
 /// Run a coupled scenario.
 pub(super) fn run(
     sc: &Scenario,
-    full: Model,
+    mut model: Model,
     probes: Vec<(String, Probe)>,
     t_build: f64,
     opts: &RunOptions,
 ) -> Result<Value, RunError> {
     let dir = &opts.out_dir;
-    let body_names = super::body_names(&full);
-    let steps = full.steps;
-    let System::Coupled(model) = full.system else {
-        unreachable!("a coupled model")
-    };
-    let mut model = *model;
-    let body_dt = model.granular.dt * model.substeps as f64;
-    if let Some(w) = model.granular.dt_warning() {
+    let body_names = super::body_names(&model);
+    let steps = model.steps;
+    let m = coupled(&model);
+    let body_dt = m.granular.dt * m.substeps as f64;
+    if let Some(w) = m.granular.dt_warning() {
         eprintln!("warning: {w}");
     }
     let mut cols: Vec<&str> = vec!["step", "t"];
@@ -194,117 +247,69 @@ pub(super) fn run(
         "E_diss",
     ]);
     let mut hist = HistoryWriter::create(&dir.join("history.csv"), &cols)?;
-    let mut meter = WorkMeter::new(&model);
-    let mut watch = EntryWatch::new(sc, &model)?;
+    let mut meter = WorkMeter::new(m);
+    let mut watch = EntryWatch::new(sc, m)?;
     let mut entered = 0;
     let vtk_every = sc.output.vtk_every;
-    let mut pvd_discs = PvdSeries::new(&dir.join("discs.pvd"));
-    let mut pvd_bodies: Vec<PvdSeries> = body_names
-        .iter()
-        .map(|n| PvdSeries::new(&dir.join(format!("{n}.pvd"))))
-        .collect();
-    let nodal: Vec<_> = (0..model.bodies.len())
-        .map(|i| body(&model, i).frame_data())
-        .collect::<Result<_, _>>()?;
-    if vtk_every > 0 {
-        std::fs::create_dir_all(dir.join("frames"))?;
-    }
+    let mut frames = Frames::new(&model, dir)?;
     let mut row = Vec::with_capacity(cols.len());
-    let mut peak = (0.0f64, 0.0f64);
-    let mut first_contact: Option<f64> = None;
-    // §4.1.4: after the peak, the disc falls off when the contact force no
-    // longer carries its weight (single-disc runs only)
-    let weight = (model.granular.particles.len() == 1)
-        .then(|| model.granular.particles.mass[0] * model.granular.gravity.norm());
-    let mut below_weight: Option<f64> = None;
-    let mut lost_contact: Option<f64> = None;
-    // §4.1.2: the disc falls off when its centre's projection leaves the
-    // edge, i.e. its contact point reaches a corner (or end) of the contact
-    // boundary — from there on it is a particle–point contact (Fig. 5b)
-    let corners = chain_corners(&model);
-    let mut fall_off: Option<f64> = None;
-    let pb = progress(steps as u64, opts.quiet);
-    let mut t_total = 0.0;
-    for step in 0..=steps {
-        if step > 0 {
-            let ts = Instant::now();
-            model.step()?;
-            t_total += ts.elapsed().as_secs_f64();
-            meter.after_step(&model.granular);
-            pb.inc(1);
-        }
-        let t = model.granular.time;
-        let fn_sum: f64 = model.contacts.iter().map(|c| c.fn_elastic).sum();
-        if fn_sum > peak.0 {
-            peak = (fn_sum, t);
-            below_weight = None;
-        } else if let Some(w) = weight
-            && below_weight.is_none()
-            && peak.0 > w
-            && fn_sum < w
-        {
-            below_weight = Some(t);
-        }
-        if weight.is_some()
-            && fall_off.is_none()
-            && model.contacts.iter().any(|c| {
-                corners[c.body as usize][c.chain as usize]
-                    .iter()
-                    .any(|k| (*k - c.material).norm() <= 1e-9 * k.norm().max(1e-300))
-            })
-        {
-            fall_off = Some(t);
-        }
-        if !model.contacts.is_empty() && first_contact.is_none() {
-            first_contact = Some(t);
-        }
-        if model.contacts.is_empty() && first_contact.is_some() && lost_contact.is_none() {
-            lost_contact = Some(t);
-        }
-        if step % sc.output.every == 0 || step == steps {
-            entered += watch.check(&model, &body_names);
-            let e = meter.account(&model);
+    let mut events = Events::default();
+    let corners = chain_corners(m);
+    // the outputs of the present step
+    let mut output = |model: &Model, meter: &WorkMeter| -> Result<(), RunError> {
+        let (step, m) = (model.step, coupled(model));
+        let fn_sum = events.observe(m, &corners);
+        if due(step, sc.output.every, steps) {
+            entered += watch.check(m, &body_names);
+            let e = meter.account(m);
             row.clear();
             row.push(step as f64);
-            row.push(t);
-            row.extend(probes.iter().map(|(_, p)| {
-                probe::value(p, Some(&model.granular), Some(&model), |i| body(&model, i))
-            }));
+            row.push(m.granular.time);
+            row.extend(probes.iter().map(|(_, p)| model.probe(p)));
             row.extend([
                 fn_sum, e.kin_dem, e.kin_body, e.strain, e.penalty, e.contact, e.w_ext, e.diss,
             ]);
             hist.row(&row)?;
         }
-        if vtk_every > 0 && (step % vtk_every == 0 || step == steps) {
-            let f = format!("frames/discs_{step:07}.vtp");
-            write_granular(&model.granular, &dir.join(&f))?;
-            pvd_discs.add(t, &f)?;
-            for (i, n) in body_names.iter().enumerate() {
-                let f = format!("frames/{n}_{step:07}.vtu");
-                write_body(body(&model, i), nodal[i].as_ref(), &dir.join(&f))?;
-                pvd_bodies[i].add(t, &f)?;
-            }
+        if due(step, vtk_every, steps) {
+            frames.write(model)?;
         }
-    }
-    pb.finish_and_clear();
+        Ok(())
+    };
+    output(&model, &meter)?;
+    let mut session = Session::new(opts, &model);
+    let t_loop = Instant::now();
+    let ended = loop {
+        if let Some(end) = session.step(&mut model)? {
+            break end;
+        }
+        meter.after_step(&coupled(&model).granular);
+        output(&model, &meter)?;
+        if let Some(end) = session.after_step(&model) {
+            break end;
+        }
+    };
+    let t_total = t_loop.elapsed().as_secs_f64();
+    session.finish();
     hist.flush()?;
-    let e = meter.account(&model);
-    let summary = json!({
+    let m = coupled(&model);
+    let e = meter.account(m);
+    let mut summary = json!({
         "kind": "coupled",
         "steps": steps,
-        "dt": model.granular.dt,
+        "dt": m.granular.dt,
         "body_dt": body_dt,
-        "substeps": model.substeps,
-        "coupling": if model.staggered { "staggered" } else { "implicit" },
-        "dem_critical_dt": model.granular.critical_dt(),
-        "discs": model.granular.particles.len(),
+        "substeps": m.substeps,
+        "coupling": if m.staggered { "staggered" } else { "implicit" },
+        "dem_critical_dt": m.granular.critical_dt(),
+        "discs": m.granular.particles.len(),
         "bodies": body_names,
-        "peak_contact_force": peak.0,
-        "peak_contact_time": peak.1,
-        "first_contact_time": first_contact,
-        "fall_off_time": fall_off,
-        "force_below_weight_time": below_weight,
-        "contact_lost_time": lost_contact,
+        "peak_contact_force": events.peak.0,
+        "peak_contact_time": events.peak.1,
+        "first_contact_time": events.first_contact,
+        "fall_off_time": events.fall_off,
+        "force_below_weight_time": events.below_weight,
+        "contact_lost_time": events.lost_contact,
         "discs_entered_through_non_contact_edges": entered,
         "energy": {
             "E_kin_dem": e.kin_dem, "E_kin_body": e.kin_body, "E_strain": e.strain,
@@ -313,17 +318,22 @@ pub(super) fn run(
         "timing": {
             "build_seconds": t_build,
             "loop_seconds": t_total,
-            "seconds_per_step": if steps > 0 { t_total / steps as f64 } else { 0.0 },
+            "seconds_per_step": if model.step > 0 { t_total / model.step as f64 } else { 0.0 },
             "split_seconds": {
-                "dem": model.timing.dem,
-                "transfer": model.timing.transfer,
-                "contact_solve": model.timing.contact_solve,
-                "body_solve": model.timing.body,
+                "dem": m.timing.dem,
+                "transfer": m.timing.transfer,
+                "contact_solve": m.timing.contact_solve,
+                "body_solve": m.timing.body,
             },
         },
     });
+    ended.record(&mut summary, &model);
     write_json(&dir.join("summary.json"), &summary)?;
-    Ok(summary)
+    ended.result(summary, &model)
+}
+
+fn coupled(model: &Model) -> &CoupledModel {
+    model.coupled().expect("a coupled model")
 }
 
 /// What `efgdem check` prints for a coupled scenario.

@@ -1,20 +1,20 @@
 //! Driver for granular-only scenarios (discs and walls): `efgdem run` and
 //! `efgdem check`.
 
+use super::session::{Session, due};
 use super::{RunError, RunOptions};
 use crate::dem::DT_WARN;
 use crate::model::{Model, Probe, System};
 use crate::output::csv::{HistoryWriter, write_discs_csv};
-use crate::output::vtk::PvdSeries;
-use crate::output::vtp::write_granular;
-use crate::output::{progress, write_json};
+use crate::output::frames::Frames;
+use crate::output::write_json;
 use crate::scenario::Scenario;
 use serde_json::json;
 use std::time::Instant;
 
 /// Run a granular scenario: `history.csv` (columns `step, t` and one per
 /// probe; a row at step 0, every `output.every` steps and at the last step),
-/// `frames/discs_NNNNNN.vtp` + `discs.pvd` every `output.vtk_every` steps,
+/// `frames/discs_NNNNNNN.vtp` + `discs.pvd` every `output.vtk_every` steps,
 /// `discs_final.csv` and `summary.json`.
 pub(super) fn run(
     sc: &Scenario,
@@ -35,63 +35,55 @@ pub(super) fn run(
     let mut hist = HistoryWriter::create(&out.join("history.csv"), &cols)?;
     let every = sc.output.every.max(1);
     let vtk_every = sc.output.vtk_every;
+    let mut frames = Frames::new(&model, out)?;
     // the contact list of the start state (for probes and the first frame)
     if let System::Granular(g) = &mut model.system {
         g.prepare_contacts();
     }
     let mut row = vec![0.0; cols.len()];
-    let mut record = |model: &Model, row: &mut Vec<f64>, step: usize| {
-        row[0] = step as f64;
+    let mut record = |model: &Model, row: &mut Vec<f64>| {
+        row[0] = model.step as f64;
         row[1] = model.time();
         for (k, (_, s)) in probes.iter().enumerate() {
             row[2 + k] = model.probe(s);
         }
         hist.row(row)
     };
-    record(&model, &mut row, 0)?;
-    let mut pvd = None;
+    record(&model, &mut row)?;
     if vtk_every > 0 {
-        std::fs::create_dir_all(out.join("frames"))?;
-        let mut s = PvdSeries::new(&out.join("discs.pvd"));
-        let f = "frames/discs_000000.vtp";
-        write_granular(granular(&model), &out.join(f))?;
-        s.add(0.0, f)?;
-        pvd = Some(s);
+        frames.write(&model)?;
     }
-    let pb = progress(steps as u64, opts.quiet);
+    let mut session = Session::new(opts, &model);
     let t0 = Instant::now();
-    let mut last_pb = 0usize;
-    for cycle in 1..=steps {
+    let ended = loop {
         // disc forces are only read by the frames
+        let next = model.step + 1;
         if let System::Granular(g) = &mut model.system {
-            g.store_forces = vtk_every > 0 && (cycle % vtk_every == 0 || cycle == steps);
+            g.store_forces = due(next, vtk_every, steps);
         }
-        model.step()?;
-        if cycle % every == 0 || cycle == steps {
-            record(&model, &mut row, cycle)?;
+        if let Some(end) = session.step(&mut model)? {
+            break end;
         }
-        if let Some(s) = pvd.as_mut()
-            && (cycle % vtk_every == 0 || cycle == steps)
-        {
-            let f = format!("frames/discs_{cycle:06}.vtp");
-            write_granular(granular(&model), &out.join(&f))?;
-            s.add(model.time(), &f)?;
+        let step = model.step;
+        if due(step, every, steps) {
+            record(&model, &mut row)?;
         }
-        if cycle - last_pb >= 1000 || cycle == steps {
-            pb.inc((cycle - last_pb) as u64);
-            last_pb = cycle;
+        if due(step, vtk_every, steps) {
+            frames.write(&model)?;
         }
-    }
-    pb.finish_and_clear();
+        if let Some(end) = session.after_step(&model) {
+            break end;
+        }
+    };
+    session.finish();
     hist.flush()?;
     let wall_s = t0.elapsed().as_secs_f64();
     let gr = granular(&model);
-    gr.check_finite()?;
     write_discs_csv(gr, &out.join("discs_final.csv"))?;
     let n = gr.particles.len();
     let (dd, dw) = gr.touching();
     let e = gr.energies();
-    let summary = json!({
+    let mut summary = json!({
         "kind": "granular",
         "discs": n,
         "walls": gr.walls.len(),
@@ -111,8 +103,9 @@ pub(super) fn run(
         "wall_forces": gr.walls.iter().map(|w| json!({"name": w.name, "force": [w.force.x, w.force.y], "position_from": [w.a.x, w.a.y]})).collect::<Vec<_>>(),
         "warnings": warnings,
     });
+    ended.record(&mut summary, &model);
     write_json(&out.join("summary.json"), &summary)?;
-    Ok(summary)
+    ended.result(summary, &model)
 }
 
 /// What `efgdem check` prints for a granular scenario.

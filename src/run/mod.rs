@@ -4,10 +4,14 @@
 mod continuum;
 mod coupled;
 mod granular;
+pub mod progress;
+mod session;
 
 use crate::model::{Model, ModelError, System};
 use crate::scenario::{Scenario, ScenarioError};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicUsize;
 use std::time::Instant;
 
 /// Options of `efgdem run` that are not part of the scenario.
@@ -15,8 +19,29 @@ use std::time::Instant;
 pub struct RunOptions {
     /// Output directory (created if missing).
     pub out_dir: PathBuf,
-    /// No progress bar.
+    /// No progress display.
     pub quiet: bool,
+    /// Accept a non-empty output directory, removing the files a run
+    /// writes (`history.csv`, `summary.json`, `*.pvd`, `*.vtu`,
+    /// `frames/`, …) first; other files are kept.
+    pub overwrite: bool,
+    /// Stop request: when it holds a non-zero signal number (set by a
+    /// SIGINT/SIGTERM handler), the run finishes its step, completes its
+    /// outputs and ends with [`RunError::Interrupted`].
+    pub stop: Option<Arc<AtomicUsize>>,
+}
+
+impl RunOptions {
+    /// Write into `out_dir` (which must be empty or missing), with progress,
+    /// no stop request.
+    pub fn new(out_dir: impl AsRef<Path>) -> Self {
+        RunOptions {
+            out_dir: out_dir.as_ref().to_path_buf(),
+            quiet: false,
+            overwrite: false,
+            stop: None,
+        }
+    }
 }
 
 /// Why a run failed.
@@ -28,9 +53,34 @@ pub enum RunError {
     /// Writing an output file failed.
     #[error("i/o: {0}")]
     Io(#[from] std::io::Error),
-    /// A step or solve of the model failed.
+    /// The output directory cannot be created or read.
+    #[error("output directory {}: {source}", path.display())]
+    OutDir {
+        /// The directory.
+        path: PathBuf,
+        /// What failed.
+        source: std::io::Error,
+    },
+    /// The output directory holds files and `overwrite` was not given
+    /// (exit code 2).
+    #[error(
+        "output directory {} is not empty; choose another (-o) or pass --overwrite to replace the run's files in it",
+        .0.display()
+    )]
+    NotEmpty(PathBuf),
+    /// A step or solve of the model failed (an instability: exit code 3).
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// A stop was requested; the outputs are complete up to `step` and
+    /// `summary.json` says `"status": "interrupted"` (exit code 128 +
+    /// signal).
+    #[error("interrupted by signal {signal} after step {step}; outputs are complete up to it")]
+    Interrupted {
+        /// The signal number (2 SIGINT, 15 SIGTERM).
+        signal: usize,
+        /// Steps taken.
+        step: usize,
+    },
 }
 
 impl From<crate::model::body::BodyError> for RunError {
@@ -54,9 +104,11 @@ impl From<crate::coupling::CouplingError> for RunError {
 /// Build `sc` and run it, writing `summary.json`, `history.csv` and frames
 /// into `opts.out_dir`. Returns the summary that was written.
 pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunError> {
-    std::fs::create_dir_all(&opts.out_dir)?;
+    session::prepare_out_dir(opts)?;
     let t0 = Instant::now();
+    let spin = progress::spinner("building the model", opts.quiet);
     let model = sc.build()?;
+    spin.finish_and_clear();
     let build_s = t0.elapsed().as_secs_f64();
     let probes = sc.probes(&model)?;
     match model.system {
