@@ -8,6 +8,7 @@
 pub mod body;
 pub mod contacts;
 pub mod probe;
+pub mod state;
 
 use crate::coupling::{CoupledModel, CouplingError};
 use crate::dem::{DemError, Granular};
@@ -16,6 +17,7 @@ use crate::fem::FemContinuum;
 use body::{Body, BodyRef};
 pub use contacts::{ContactKind, ContactView};
 pub use probe::Probe;
+pub use state::{ModelState, STATE_FORMAT_VERSION, SystemState};
 use std::ops::ControlFlow;
 
 /// Why a step failed.
@@ -30,6 +32,9 @@ pub enum ModelError {
     /// A coupled step failed.
     #[error(transparent)]
     Coupling(#[from] CouplingError),
+    /// A saved state does not fit the model ([`Model::restore_state`]).
+    #[error("cannot restore the state: {0}")]
+    State(#[from] crate::continuum::StateError),
     /// A static model has no time steps (call [`Model::solve_static`]).
     #[error("a static analysis has no time steps; call solve_static()")]
     Static,
