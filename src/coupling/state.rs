@@ -71,9 +71,7 @@ impl CoupledModel {
                 && (q.body as usize) < nb
                 && (q.chain as usize) < self.bodies[q.body as usize].contact_boundary().len()
         };
-        if !s.contacts.iter().all(fits)
-            || !s.contacts.windows(2).all(|w| w[0].key() < w[1].key())
-        {
+        if !s.contacts.iter().all(fits) || !s.contacts.windows(2).all(|w| w[0].key() < w[1].key()) {
             return Err(StateError::new(
                 "the saved disc–body contacts are not sorted or name a missing disc, body or chain",
             ));

@@ -158,7 +158,10 @@ impl Granular {
         self.check_state(s)?;
         let n = self.particles.len();
         // move each disc's constants to its saved slot
-        let order: Vec<u32> = s.id.iter().map(|&id| self.particles.slot[id as usize]).collect();
+        let order: Vec<u32> =
+            s.id.iter()
+                .map(|&id| self.particles.slot[id as usize])
+                .collect();
         let p = &mut self.particles;
         p.permute(&order);
         p.pos.copy_from_slice(&s.pos);
@@ -263,17 +266,20 @@ impl Granular {
             .wall_pairs
             .iter()
             .all(|w| (w.disc as usize) < n && (w.wall as usize) < nw)
-            && s
-                .wall_pairs
+            && s.wall_pairs
                 .windows(2)
                 .all(|w| (w[0].disc, w[0].wall) < (w[1].disc, w[1].wall));
         if !pairs_ok || !walls_ok {
-            return Err(bad("the saved contact list is not sorted or out of range".into()));
+            return Err(bad(
+                "the saved contact list is not sorted or out of range".into()
+            ));
         }
         if !(s.ref_pos.is_empty() || s.ref_pos.len() == n)
             || !(s.wall_ref.is_empty() || s.wall_ref.len() == nw)
         {
-            return Err(bad("the saved Verlet reference does not match the discs or walls".into()));
+            return Err(bad(
+                "the saved Verlet reference does not match the discs or walls".into(),
+            ));
         }
         Ok(())
     }
