@@ -392,10 +392,12 @@ fn check_bed(src: &str, n: usize, k: usize) -> (Model, Model) {
     );
     assert!(on_body >= 10, "{on_body} disc–body contacts with shear");
     assert!(m.granular.shear.iter().filter(|f| **f != 0.0).count() > 20);
+    let green = m.bodies[0].boundary.as_ref().unwrap().green.as_ref();
     eprintln!(
-        "bed on plate: {} discs, {} disc–body contacts, checkpoint {} bytes",
+        "bed on plate: {} discs, {} disc–body contacts, Green matrix in {} batch(es), checkpoint {} bytes",
         m.granular.id.len(),
         m.contacts.len(),
+        green.map_or(0, Vec::len),
         bytes.len()
     );
     assert_same(&a, &c);
@@ -429,6 +431,16 @@ fn bed_on_fem_plate_substepped_restarts_bitwise() {
         "loads pending"
     );
     check_bed(&src, n, k);
+}
+
+/// A state saved before the first step (nothing built yet: no neighbour
+/// list, no Green matrix, the implicit scheme not primed) restarts too.
+#[test]
+fn restarts_from_step_zero() {
+    for src in [packing(0.0), DISC_ON_BEAM.to_string(), cantilever("efg")] {
+        let (a, c, _) = restart(&src, 200, 0);
+        assert_same(&a, &c);
+    }
 }
 
 /// The same restart on 1 and 2 threads: saved on one, restored on the

@@ -594,6 +594,40 @@ mod tests {
     use super::*;
     use crate::sparse::tests::lap;
 
+    /// A `G` extended in several batches is built again bitwise from its
+    /// batches (checkpoint/restart); bad batches are refused.
+    #[test]
+    fn boundary_green_replays_its_batches_bitwise() {
+        let n = 80;
+        let f = Cholesky::factor(&lap(n)).unwrap();
+        let mut excluded = vec![false; n];
+        excluded[13] = true;
+        let mut g = BoundaryGreen::new(n, excluded.clone());
+        g.extend([20, 3, 4], &f).unwrap();
+        g.extend([2, 3, 6, 30], &f).unwrap();
+        g.extend([3], &f).unwrap(); // nothing new: no batch
+        let batches = g.batches();
+        assert_eq!(batches.len(), 2);
+        assert_eq!(batches[0], [6, 7, 8, 9, 40, 41]);
+        assert_eq!(batches[1], [4, 5, 12, 60, 61]);
+        let mut h = BoundaryGreen::new(n, excluded.clone());
+        for b in &batches {
+            h.extend_dofs(b, &f).unwrap();
+        }
+        assert_eq!(h.dofs, g.dofs);
+        assert_eq!(
+            h.g.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            g.g.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        assert_eq!((&h.sig_start, &h.sig), (&g.sig_start, &g.sig));
+        assert_eq!(h.batches(), batches);
+        for bad in [vec![13], vec![5, 4], vec![80], vec![6]] {
+            let mut k = BoundaryGreen::new(n, excluded.clone());
+            k.extend_dofs(&[6, 7], &f).unwrap();
+            assert!(k.extend_dofs(&bad, &f).is_err(), "{bad:?}");
+        }
+    }
+
     /// `G`, its extension, blocks, `S` and products against a dense
     /// inverse of the same matrix.
     #[test]
