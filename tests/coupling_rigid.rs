@@ -5,7 +5,9 @@
 
 use efgdem::Vec2;
 use efgdem::continuum::compliance::Compliance;
-use efgdem::continuum::{BodyEnergies, BoundaryChain, ChainStiffness, Continuum, SolveError};
+use efgdem::continuum::{
+    BodyEnergies, BodyState, BoundaryChain, ChainStiffness, Continuum, SolveError, StateError,
+};
 use efgdem::coupling::CoupledModel;
 use efgdem::dem::Granular;
 use efgdem::dem::contact::ContactLaw;
@@ -68,6 +70,16 @@ impl Continuum for Fixed {
     }
     fn as_any(&self) -> &dyn std::any::Any {
         self
+    }
+    /// Rigid: nothing but the pending load changes (none between steps).
+    fn save_state(&self) -> BodyState {
+        BodyState {
+            name: "fixed".into(),
+            ..Default::default()
+        }
+    }
+    fn restore_state(&mut self, _: &BodyState) -> Result<(), StateError> {
+        Ok(())
     }
 }
 

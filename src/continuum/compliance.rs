@@ -20,6 +20,7 @@
 //! they touch, not on the size of the body (the body still pays its two
 //! solves per step: the free step and the contact forces).
 
+use super::state::StateError;
 use crate::geom::Vec2;
 use crate::sparse::{Cholesky, SparseError};
 use rayon::prelude::*;
@@ -47,6 +48,8 @@ pub struct BoundaryGreen {
     /// ([`SIGNIFICANT`]), ascending: `sig[sig_start[b]..sig_start[b + 1]]`.
     sig_start: Vec<u32>,
     sig: Vec<u32>,
+    /// End in `dofs` of each batch of [`extend`](Self::extend) so far.
+    batch_end: Vec<u32>,
 }
 
 /// Entries of `G` below `ε √(G_aa G_bb)` are left out of the products `S x`.
@@ -69,7 +72,44 @@ impl BoundaryGreen {
             excluded,
             sig_start: Vec::new(),
             sig: Vec::new(),
+            batch_end: Vec::new(),
         }
+    }
+
+    /// The DOFs of `B` in the batches they were added in (each ascending),
+    /// as [`extend_dofs`](Self::extend_dofs) takes them to build the same
+    /// `G` again: the same solves, the same order of rows and columns.
+    pub fn batches(&self) -> Vec<Vec<u32>> {
+        let mut lo = 0;
+        self.batch_end
+            .iter()
+            .map(|&e| {
+                let b = self.dofs[lo..e as usize].to_vec();
+                lo = e as usize;
+                b
+            })
+            .collect()
+    }
+
+    /// Add one batch of DOFs of [`batches`](Self::batches) to `B` (as the
+    /// [`extend`](Self::extend) that made it did); refused unless they are
+    /// ascending, in range, not excluded and not in `B` yet.
+    pub fn extend_dofs(&mut self, dofs: &[u32], factor: &Cholesky) -> Result<(), StateError> {
+        let n = self.index.len();
+        for (k, &i) in dofs.iter().enumerate() {
+            let i = i as usize;
+            let ok = i < n
+                && self.index[i] == NONE
+                && !self.excluded.get(i).copied().unwrap_or(false)
+                && (k == 0 || dofs[k - 1] < i as u32);
+            if !ok {
+                return Err(StateError::new(format!(
+                    "the saved boundary Green matrix has DOF {i}, which does not fit the body ({n} DOFs)"
+                )));
+            }
+        }
+        self.add(dofs.to_vec(), factor)
+            .map_err(|e| StateError::new(e.to_string()))
     }
 
     /// Number of DOFs in `B`.
@@ -129,10 +169,17 @@ impl BoundaryGreen {
                 }
             }
         }
+        new.sort_unstable();
+        self.add(new, factor)
+    }
+
+    /// Add the DOFs `new` (ascending, none in `B` yet) to `B`: one solve
+    /// per DOF, in blocks; one batch.
+    fn add(&mut self, new: Vec<u32>, factor: &Cholesky) -> Result<(), SparseError> {
         if new.is_empty() {
             return Ok(());
         }
-        new.sort_unstable();
+        let n = self.index.len();
         let old = self.dofs.len();
         let total = old + new.len();
         self.dofs.extend_from_slice(&new);
@@ -172,6 +219,7 @@ impl BoundaryGreen {
         }
         self.g = g;
         self.find_significant();
+        self.batch_end.push(total as u32);
         Ok(())
     }
 
@@ -545,6 +593,40 @@ fn dense_mul(s: &[f64], x: &[Vec2], y: &mut [Vec2]) {
 mod tests {
     use super::*;
     use crate::sparse::tests::lap;
+
+    /// A `G` extended in several batches is built again bitwise from its
+    /// batches (checkpoint/restart); bad batches are refused.
+    #[test]
+    fn boundary_green_replays_its_batches_bitwise() {
+        let n = 80;
+        let f = Cholesky::factor(&lap(n)).unwrap();
+        let mut excluded = vec![false; n];
+        excluded[13] = true;
+        let mut g = BoundaryGreen::new(n, excluded.clone());
+        g.extend([20, 3, 4], &f).unwrap();
+        g.extend([2, 3, 6, 30], &f).unwrap();
+        g.extend([3], &f).unwrap(); // nothing new: no batch
+        let batches = g.batches();
+        assert_eq!(batches.len(), 2);
+        assert_eq!(batches[0], [6, 7, 8, 9, 40, 41]);
+        assert_eq!(batches[1], [4, 5, 12, 60, 61]);
+        let mut h = BoundaryGreen::new(n, excluded.clone());
+        for b in &batches {
+            h.extend_dofs(b, &f).unwrap();
+        }
+        assert_eq!(h.dofs, g.dofs);
+        assert_eq!(
+            h.g.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            g.g.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        assert_eq!((&h.sig_start, &h.sig), (&g.sig_start, &g.sig));
+        assert_eq!(h.batches(), batches);
+        for bad in [vec![13], vec![5, 4], vec![80], vec![6]] {
+            let mut k = BoundaryGreen::new(n, excluded.clone());
+            k.extend_dofs(&[6, 7], &f).unwrap();
+            assert!(k.extend_dofs(&bad, &f).is_err(), "{bad:?}");
+        }
+    }
 
     /// `G`, its extension, blocks, `S` and products against a dense
     /// inverse of the same matrix.

@@ -9,11 +9,13 @@ pub mod conditions;
 pub mod material;
 pub mod newmark;
 pub mod quadrature;
+pub mod state;
 pub mod timoshenko;
 
 pub use body_params::{BodyParams, Elastic, MassKind, Plane, Rectangle};
 pub use conditions::{Edge, EdgeCondition, LinearField, MotionField, Prescribed, TimoshenkoSpec};
 pub use material::{Material, Sample};
+pub use state::{BodyState, BoundaryState, StateError};
 
 use crate::continuum::compliance::{BoundaryGreen, Compliance, PointRows};
 use crate::continuum::newmark::{Newmark, State, pair_values};
@@ -221,6 +223,14 @@ pub trait Continuum: Send {
     }
     /// The concrete body (for outputs that need more than the trait).
     fn as_any(&self) -> &dyn std::any::Any;
+    /// Everything that changes while the body steps (checkpoint/restart,
+    /// [`state`]); call between steps.
+    fn save_state(&self) -> BodyState;
+    /// Restore a state saved by [`save_state`](Self::save_state) from a
+    /// body built from the same parameters; the body then steps bitwise as
+    /// the one it was saved from. A state of another body (name, DOFs) is
+    /// refused.
+    fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError>;
 }
 
 /// A body on a rectangular node grid that the coupling can drive through
@@ -267,6 +277,10 @@ pub trait ContactBody: Send + Sync + 'static {
     /// Kinetic, strain and penalty energy and load work of the present
     /// state.
     fn energies(&self) -> BodyEnergies;
+    /// The body's evolving state ([`state`]), without the boundary's.
+    fn save_state(&self) -> BodyState;
+    /// Restore a state of [`save_state`](Self::save_state) (sizes checked).
+    fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError>;
 }
 
 /// `F += Φᵀ f`: the point load `f` on the nodal force vector through a row.
@@ -555,6 +569,47 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     }
     fn as_any(&self) -> &dyn std::any::Any {
         self
+    }
+    /// The body's state, the compliance mode and the Green matrix's DOFs
+    /// batch by batch (not its entries: [`restore_state`](Self::restore_state)
+    /// computes them again by the same solves, in the same order).
+    fn save_state(&self) -> BodyState {
+        let mut s = self.body.save_state();
+        s.boundary = Some(BoundaryState {
+            direct: self.mode == ComplianceMode::Direct,
+            green: self.green.as_ref().map(BoundaryGreen::batches),
+        });
+        s
+    }
+    fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError> {
+        let name = self.body.name().to_string();
+        let Some(b) = &s.boundary else {
+            return Err(StateError::new(format!(
+                "body `{name}`: the saved state has no contact boundary (a continuum-only model's)"
+            )));
+        };
+        self.body.restore_state(s)?;
+        self.refresh();
+        self.mode = if b.direct {
+            ComplianceMode::Direct
+        } else {
+            ComplianceMode::Boundary
+        };
+        self.green = None;
+        if let Some(batches) = &b.green {
+            let Some(nm) = self.body.newmark_mut() else {
+                return Err(StateError::new(format!(
+                    "body `{name}`: a saved boundary Green matrix, but the body is not dynamic"
+                )));
+            };
+            let mut g = BoundaryGreen::new(nm.n(), nm.imposed().to_vec());
+            for batch in batches {
+                g.extend_dofs(batch, nm.factor())
+                    .map_err(|e| StateError::new(format!("body `{name}`: {e}")))?;
+            }
+            self.green = Some(g);
+        }
+        Ok(())
     }
 }
 

@@ -42,7 +42,7 @@ impl NewmarkParams {
 }
 
 /// Displacement, velocity and acceleration (nodal parameters).
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct State {
     /// `U`: nodal parameters `u_I` (Eq. 12), interleaved `[u_x, u_y]` per
     /// node; for EFG not the displacement at the node (no Kronecker delta).

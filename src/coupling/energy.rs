@@ -38,7 +38,11 @@ impl EnergyAccount {
     }
 }
 
-/// Tracks the external work between steps.
+/// Tracks the external work between steps. It belongs to the driver, not
+/// to the model: a restart restores it with the model's state (it is
+/// serde-serialisable; [`WorkMeter::new`] on a restored model would start
+/// the account afresh there).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WorkMeter {
     /// Initial disc positions by disc id (the DEM renumbers its slots).
     x0: Vec<Vec2>,

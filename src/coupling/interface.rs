@@ -16,7 +16,7 @@ use crate::continuum::{BoundaryChain, ChainStiffness};
 use crate::geom::{Vec2, closest_on_segment};
 
 /// Which primitive of the boundary the disc touches (Fig. 5).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Feature {
     /// Inside segment `i` (between chain points `i` and `i + 1`), Fig. 5a.
     Segment(usize),

@@ -31,6 +31,7 @@ pub mod energy;
 pub mod implicit;
 pub mod interface;
 pub mod segments;
+pub mod state;
 
 use crate::continuum::{BoundaryChain, Continuum};
 use crate::dem::Granular;
@@ -43,7 +44,7 @@ use std::time::Instant;
 /// Shear history and last state of one disc–body contact, keyed by
 /// `(disc id, body, chain)` so that a disc sliding from one segment to the
 /// next keeps its shear force.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BodyContact {
     /// Disc id (stable; not the DEM slot, which changes when the DEM
     /// reorders its discs).

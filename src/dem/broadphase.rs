@@ -108,7 +108,7 @@ pub fn block_size(n: usize) -> usize {
 impl ContactList {
     /// Index the cross pairs of the sweep blocks (after `pairs` and
     /// `first` were built for `n` discs).
-    fn index_cross(&mut self, n: usize) {
+    pub(crate) fn index_cross(&mut self, n: usize) {
         let bs = block_size(n);
         self.block = bs;
         let nb = n.div_ceil(bs);

@@ -33,6 +33,7 @@ pub mod contact;
 pub mod integrate;
 pub mod packing;
 pub mod particles;
+pub mod state;
 pub mod sweep;
 pub mod walls;
 

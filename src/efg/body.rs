@@ -15,7 +15,7 @@ use crate::continuum::material::energy_error_of;
 use crate::continuum::newmark::{Newmark, NewmarkParams, State};
 use crate::continuum::quadrature::{self, QuadPoint};
 use crate::continuum::timoshenko::Timoshenko;
-use crate::continuum::{BodyParams, Edge, Material, Prescribed, Sample};
+use crate::continuum::{BodyParams, BodyState, Edge, Material, Prescribed, Sample, StateError};
 use crate::geom::Vec2;
 use crate::sparse::{Cholesky, RowSelection};
 use std::time::Instant;
@@ -458,6 +458,37 @@ impl EfgBody {
         self.f_point.iter_mut().for_each(|x| *x = 0.0);
         self.step += 1;
         self.time = self.step as f64 * self.params.dt;
+        Ok(())
+    }
+
+    /// What changes while the body steps ([`BodyState`]): `U`, `U̇`, `Ü`,
+    /// clock, pending point loads, work of the moving edges. Call between
+    /// steps (never between [`predict`](Self::predict) and
+    /// [`commit`](Self::commit)).
+    pub fn save_state(&self) -> BodyState {
+        BodyState {
+            name: self.name.clone(),
+            state: self.state.clone(),
+            step: self.step,
+            time: self.time,
+            f_point: self.f_point.clone(),
+            motion_work: self.motion_work,
+            reactions: Vec::new(),
+            boundary: None,
+        }
+    }
+
+    /// Restore a [`save_state`](Self::save_state) of a body built from the
+    /// same parameters (name and DOFs checked). The operators, the factor
+    /// and the prescribed motion (a function of the step) are the build's.
+    pub fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError> {
+        s.check(&self.name, self.n_dofs(), 0)?;
+        self.state.clone_from(&s.state);
+        self.step = s.step;
+        self.time = s.time;
+        self.f_point.clone_from(&s.f_point);
+        self.motion_work = s.motion_work;
+        self.refine_pending = false;
         Ok(())
     }
 

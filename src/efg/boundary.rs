@@ -7,7 +7,9 @@ use super::EfgError;
 use super::body::EfgBody;
 use super::shape::ShapeRow;
 use crate::continuum::newmark::{Newmark, State};
-use crate::continuum::{BodyEnergies, ContactBody, Row, WithBoundary, add_dof_load, add_row_load};
+use crate::continuum::{
+    BodyEnergies, BodyState, ContactBody, Row, StateError, WithBoundary, add_dof_load, add_row_load,
+};
 use crate::geom::Vec2;
 
 /// An [`EfgBody`] with its contact boundary: what the coupling drives.
@@ -47,6 +49,12 @@ impl ContactBody for EfgBody {
     }
     fn commit(&mut self) -> Result<(), EfgError> {
         EfgBody::commit(self)
+    }
+    fn save_state(&self) -> BodyState {
+        EfgBody::save_state(self)
+    }
+    fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError> {
+        EfgBody::restore_state(self, s)
     }
     fn energies(&self) -> BodyEnergies {
         BodyEnergies {

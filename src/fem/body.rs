@@ -45,7 +45,7 @@ use crate::continuum::newmark::{Newmark, NewmarkParams, State};
 use crate::continuum::quadrature::{self, QuadPoint};
 use crate::continuum::timoshenko::Timoshenko;
 use crate::continuum::{BodyParams, Edge, MassKind, MotionField, Prescribed};
-use crate::continuum::{Material, Sample};
+use crate::continuum::{BodyState, Material, Sample, StateError};
 use crate::geom::Vec2;
 use crate::sparse::{Cholesky, Pattern, SymCsc};
 use std::sync::Arc;
@@ -666,6 +666,37 @@ impl FemBody {
         self.f_point.iter_mut().for_each(|x| *x = 0.0);
         self.step += 1;
         self.time = self.step as f64 * self.params.dt;
+        Ok(())
+    }
+
+    /// What changes while the body steps ([`BodyState`]): `U`, `U̇`, `Ü`,
+    /// clock, pending point loads, the work of the moving supports and
+    /// their last reactions. Call between steps.
+    pub fn save_state(&self) -> BodyState {
+        BodyState {
+            name: self.name.clone(),
+            state: self.state.clone(),
+            step: self.step,
+            time: self.time,
+            f_point: self.f_point.clone(),
+            motion_work: self.motion_work,
+            reactions: self.constraints.iter().map(|c| c.reaction).collect(),
+            boundary: None,
+        }
+    }
+
+    /// Restore a [`save_state`](Self::save_state) of a body built from the
+    /// same parameters (name, DOFs and prescribed DOFs checked).
+    pub fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError> {
+        s.check(&self.name, self.n_dofs(), self.constraints.len())?;
+        self.state.clone_from(&s.state);
+        self.step = s.step;
+        self.time = s.time;
+        self.f_point.clone_from(&s.f_point);
+        self.motion_work = s.motion_work;
+        for (c, &r) in self.constraints.iter_mut().zip(&s.reactions) {
+            c.reaction = r;
+        }
         Ok(())
     }
 

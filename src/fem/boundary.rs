@@ -10,7 +10,9 @@
 use super::FemError;
 use super::body::FemBody;
 use crate::continuum::newmark::{Newmark, State};
-use crate::continuum::{BodyEnergies, ContactBody, Row, WithBoundary, add_dof_load};
+use crate::continuum::{
+    BodyEnergies, BodyState, ContactBody, Row, StateError, WithBoundary, add_dof_load,
+};
 use crate::geom::Vec2;
 
 /// A [`FemBody`] with its contact boundary: what the coupling drives.
@@ -45,6 +47,12 @@ impl ContactBody for FemBody {
     }
     fn commit(&mut self) -> Result<(), FemError> {
         FemBody::commit(self)
+    }
+    fn save_state(&self) -> BodyState {
+        FemBody::save_state(self)
+    }
+    fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError> {
+        FemBody::restore_state(self, s)
     }
     fn energies(&self) -> BodyEnergies {
         BodyEnergies {

@@ -1,8 +1,8 @@
 //! A continuum body of either method (EFG or bilinear FE), and a borrowed
 //! view of one that samples its true fields.
 
-use crate::continuum::Sample;
 use crate::continuum::newmark::State;
+use crate::continuum::{BodyState, Sample, StateError};
 use crate::efg::assemble::PointShapes;
 use crate::efg::{EfgBody, EfgError, ShapeRow};
 
@@ -79,6 +79,21 @@ impl Body {
         match self {
             Body::Efg(b) => b.strain_energy(),
             Body::Fem(b) => b.strain_energy(),
+        }
+    }
+    /// Everything that changes while the body steps (checkpoint/restart).
+    pub fn save_state(&self) -> BodyState {
+        match self {
+            Body::Efg(b) => b.save_state(),
+            Body::Fem(b) => b.save_state(),
+        }
+    }
+    /// Restore a [`save_state`](Self::save_state) of a body built from the
+    /// same parameters (name and sizes checked).
+    pub fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError> {
+        match self {
+            Body::Efg(b) => b.restore_state(s),
+            Body::Fem(b) => b.restore_state(s),
         }
     }
     /// Borrow as a [`BodyRef`].

@@ -9,6 +9,7 @@ pub mod body;
 pub mod contacts;
 pub mod probe;
 pub mod stability;
+pub mod state;
 
 use crate::coupling::{CoupledModel, CouplingError};
 use crate::dem::{DemError, Granular};
@@ -18,6 +19,7 @@ use body::{Body, BodyRef};
 pub use contacts::{ContactKind, ContactView};
 pub use probe::Probe;
 pub use stability::Instability;
+pub use state::{ModelState, STATE_FORMAT_VERSION, SystemState};
 use std::ops::ControlFlow;
 
 /// Why a step failed.
@@ -35,6 +37,9 @@ pub enum ModelError {
     /// The state stopped being physical (exit code 3 of `efgdem run`).
     #[error("{0}")]
     Unstable(Box<Instability>),
+    /// A saved state does not fit the model ([`Model::restore_state`]).
+    #[error("cannot restore the state: {0}")]
+    State(#[from] crate::continuum::StateError),
     /// A static model has no time steps (call [`Model::solve_static`]).
     #[error("a static analysis has no time steps; call solve_static()")]
     Static,

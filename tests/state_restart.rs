@@ -1,0 +1,554 @@
+//! Checkpoint/restart of the library (issue 12): a run of N steps and a run
+//! of k steps, saved to bytes, restored onto a model built afresh from the
+//! same scenario and stepped N − k more, end bitwise equal — granular,
+//! continuum (EFG, FE) and coupled models, on 1 and 2 threads. A state that
+//! does not fit the model is refused, and the model left as it was.
+
+use efgdem::coupling::energy::WorkMeter;
+use efgdem::model::{Model, ModelState, STATE_FORMAT_VERSION, SystemState};
+use efgdem::scenario;
+
+fn build(src: &str) -> Model {
+    scenario::parse(src, "<state_restart>")
+        .unwrap()
+        .build()
+        .unwrap()
+}
+
+fn run(m: &mut Model, n: usize) {
+    for _ in 0..n {
+        m.step().unwrap();
+    }
+}
+
+/// A: `n` steps. B: `k` steps, saved as bytes. C: built afresh, restored
+/// from those bytes, `n − k` steps. Returns A, C and the bytes.
+fn restart(src: &str, n: usize, k: usize) -> (Model, Model, Vec<u8>) {
+    let mut a = build(src);
+    run(&mut a, n);
+    let mut b = build(src);
+    run(&mut b, k);
+    let saved = b.save_state();
+    let bytes = saved.to_bytes();
+    drop(b);
+    let mut c = build(src);
+    let s = ModelState::from_bytes(&bytes).unwrap();
+    assert!(s == saved, "the bytes give back the state");
+    c.restore_state(&s).unwrap();
+    assert!(
+        c.save_state().to_bytes() == bytes,
+        "the restored model saves the state it was given"
+    );
+    run(&mut c, n - k);
+    (a, c, bytes)
+}
+
+fn bits(v: impl IntoIterator<Item = f64>) -> Vec<u64> {
+    v.into_iter().map(f64::to_bits).collect()
+}
+
+/// Every saved array of `a` and `c` bitwise equal, and what the outputs
+/// read (discs in id order, contacts, body fields, energies).
+fn assert_same(a: &Model, c: &Model) {
+    assert_eq!(a.step, c.step);
+    assert_eq!(a.time().to_bits(), c.time().to_bits());
+    assert!(
+        a.save_state().to_bytes() == c.save_state().to_bytes(),
+        "the states differ"
+    );
+    if let (Some(ga), Some(gc)) = (a.granular(), c.granular()) {
+        let by_id = |g: &efgdem::dem::Granular| {
+            let p = &g.particles;
+            let s = |id: usize| g.slot(id);
+            (
+                bits((0..p.len()).flat_map(|i| [p.pos[s(i)].x, p.pos[s(i)].y])),
+                bits((0..p.len()).flat_map(|i| [p.vel[s(i)].x, p.vel[s(i)].y])),
+                bits((0..p.len()).flat_map(|i| [p.omega[s(i)], p.theta[s(i)]])),
+            )
+        };
+        assert_eq!(by_id(ga), by_id(gc));
+        assert_eq!(ga.particles.id, gc.particles.id);
+        let (ea, ec) = (ga.energies(), gc.energies());
+        assert_eq!(
+            bits([ea.kinetic, ea.rotational, ea.spring, ea.gravity]),
+            bits([ec.kinetic, ec.rotational, ec.spring, ec.gravity])
+        );
+        assert_eq!(ga.grid.rebuilds, gc.grid.rebuilds);
+    }
+    assert_eq!(a.contacts(), c.contacts());
+    for i in 0..a.n_bodies() {
+        let u = |m: &Model| match m.body(i) {
+            efgdem::model::body::BodyRef::Efg(b) => {
+                bits(b.state.u.iter().chain(&b.state.v).copied())
+            }
+            efgdem::model::body::BodyRef::Fem(b) => {
+                bits(b.state.u.iter().chain(&b.state.v).copied())
+            }
+        };
+        assert_eq!(u(a), u(c));
+        assert_eq!(
+            a.body(i).strain_energy().to_bits(),
+            c.body(i).strain_energy().to_bits()
+        );
+    }
+}
+
+/// ~1000 discs settling in a box with friction, rolling resistance, contact
+/// dashpots and a wall pushing in.
+fn packing(rolling: f64) -> String {
+    format!(
+        r#"
+[simulation]
+steps = 2000
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "sand"
+density = 2650.0
+kn = 1.0e6
+ks = 5.0e5
+friction = 0.5
+rolling_friction = {rolling}
+
+[granular]
+material = "sand"
+discs = {{ generate = "hex", box = [[0.0, 0.0], [0.3, 0.24]], radius = [0.0035, 0.0045], jitter = 0.5, seed = 3 }}
+damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+
+[[wall]]
+name = "floor"
+from = [0.0, 0.0]
+to = [0.3, 0.0]
+
+[[wall]]
+name = "left"
+from = [0.0, 0.0]
+to = [0.0, 0.4]
+
+[[wall]]
+name = "right"
+from = [0.3, 0.0]
+to = [0.3, 0.4]
+velocity = [-0.02, 0.0]
+"#
+    )
+}
+
+/// The DEM state at the save point is a loaded packing, and the restored
+/// model rebuilds its neighbour list (and renumbers) before the end.
+fn check_packing(rolling: f64) {
+    let src = packing(rolling);
+    let (n, k) = (2000, 1300);
+    let (a, c, bytes) = restart(&src, n, k);
+    let s = ModelState::from_bytes(&bytes).unwrap();
+    let SystemState::Granular(g) = &s.system else {
+        panic!("a granular state")
+    };
+    let discs = g.id.len();
+    eprintln!(
+        "packing (rolling {rolling}) at the save: {} shear springs loaded of {} pairs, {} wall springs of {}",
+        g.shear.iter().filter(|f| **f != 0.0).count(),
+        g.pairs.len(),
+        g.wall_pairs.iter().filter(|w| w.fs != 0.0).count(),
+        g.wall_pairs.len()
+    );
+    assert!(discs > 900, "{discs} discs");
+    let loaded = g.shear.iter().filter(|f| **f != 0.0).count();
+    let on_walls = g.wall_pairs.iter().filter(|w| w.fs != 0.0).count();
+    assert!(loaded > discs, "{loaded} disc–disc shear springs loaded");
+    assert!(on_walls > 10, "{on_walls} disc–wall shear springs loaded");
+    if rolling > 0.0 {
+        assert!(g.roll.iter().filter(|m| **m != 0.0).count() > discs);
+    } else {
+        assert!(g.roll.is_empty());
+    }
+    let rebuilds = c.granular().unwrap().grid.rebuilds;
+    assert!(
+        rebuilds > g.rebuilds + 1,
+        "rebuilds after the restore: {} → {rebuilds}",
+        g.rebuilds
+    );
+    let (dd, dw) = c.granular().unwrap().touching();
+    assert!(
+        dd > discs / 2 && dw > 10,
+        "{dd} disc and {dw} wall contacts"
+    );
+    eprintln!(
+        "packing (rolling {rolling}): {discs} discs, {} pairs, {} wall pairs, checkpoint {} bytes ({:.0} B/disc); rebuilds {} at the save, {rebuilds} at the end",
+        g.pairs.len(),
+        g.wall_pairs.len(),
+        bytes.len(),
+        bytes.len() as f64 / discs as f64,
+        g.rebuilds
+    );
+    assert_same(&a, &c);
+}
+
+#[test]
+fn granular_packing_restarts_bitwise() {
+    check_packing(0.0);
+}
+
+#[test]
+fn granular_packing_with_rolling_resistance_restarts_bitwise() {
+    check_packing(0.1);
+}
+
+/// A cantilever (EFG or FE) under self-weight whose right edge is driven
+/// down for part of the run (penalty refinement, work of moving edges, FE
+/// support reactions).
+fn cantilever(method: &str) -> String {
+    format!(
+        r#"
+[simulation]
+analysis = "dynamic"
+dt = 2.0e-3
+steps = 240
+gravity = [0.0, -9.81]
+
+[[body]]
+name = "beam"
+method = "{method}"
+rectangle = {{ origin = [0.0, -0.2], size = [4.0, 0.4] }}
+nodes = [21, 5]
+elastic = {{ E = 1.0e6, nu = 0.3, density = 10.0, plane = "stress" }}
+newmark = {{ gamma = 0.5, beta = 0.25 }}
+
+[[body.bc]]
+edge = "left"
+fixed = true
+
+[[body.bc]]
+edge = "right"
+uy = {{ velocity = -0.05, until_step = 150 }}
+"#
+    )
+}
+
+#[test]
+fn efg_body_restarts_bitwise() {
+    let (a, c, bytes) = restart(&cantilever("efg"), 240, 97);
+    eprintln!("EFG cantilever: checkpoint {} bytes", bytes.len());
+    assert_same(&a, &c);
+    assert!(a.body(0).kinetic_energy() > 0.0);
+}
+
+#[test]
+fn fem_body_restarts_bitwise() {
+    let (a, c, bytes) = restart(&cantilever("fem-q4"), 240, 97);
+    eprintln!("FE cantilever: checkpoint {} bytes", bytes.len());
+    assert_same(&a, &c);
+    let SystemState::Continuum(b) = ModelState::from_bytes(&bytes).unwrap().system else {
+        panic!("a continuum state")
+    };
+    assert!(
+        b[0].reactions.iter().any(|r| *r != 0.0),
+        "support reactions saved"
+    );
+    assert!(b[0].motion_work != 0.0);
+}
+
+/// Example 1 (a disc on the free end of an EFG cantilever), shortened.
+const DISC_ON_BEAM: &str = r#"
+[simulation]
+dt = 1.0e-4
+steps = 700
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "disc"
+density = 1000.0
+kn = 1.0e6
+ks = 1.0e6
+friction = 0.5
+
+[granular]
+material = "disc"
+thickness = 1.0
+discs = [[0.999999, 0.15, 0.05]]
+damping = { kind = "none" }
+
+[[body]]
+name = "beam"
+rectangle = { origin = [0.0, -0.1], size = [1.0, 0.2] }
+nodes = [20, 4]
+gauss = 4
+d_max = 2.0
+elastic = { E = 2.1e8, nu = 0.3, density = 2000.0, thickness = 0.025, plane = "stress" }
+newmark = { gamma = 1.5, beta = 0.8 }
+self_weight = false
+contact_edges = ["top", "right"]
+
+[[body.bc]]
+edge = "left"
+fixed = true
+"#;
+
+#[test]
+fn disc_on_efg_beam_restarts_bitwise() {
+    let (a, c, bytes) = restart(DISC_ON_BEAM, 700, 400);
+    let s = ModelState::from_bytes(&bytes).unwrap();
+    let SystemState::Coupled(m) = &s.system else {
+        panic!("a coupled state")
+    };
+    assert_eq!(m.contacts.len(), 1, "the disc is on the beam at the save");
+    let green = m.bodies[0].boundary.as_ref().unwrap().green.as_ref();
+    assert!(green.is_some_and(|g| !g.is_empty()), "Green matrix built");
+    eprintln!("disc on beam: checkpoint {} bytes", bytes.len());
+    assert_same(&a, &c);
+}
+
+/// The driver's energy account ([`WorkMeter`]) lives beside the model: a
+/// restart saves it too, and the account after the restart is bitwise the
+/// one of the run in one go.
+#[test]
+fn energy_account_restarts_with_the_model() {
+    let (n, k) = (700, 400);
+    let go = |m: &mut Model, w: &mut WorkMeter, steps: usize| {
+        for _ in 0..steps {
+            m.step().unwrap();
+            w.after_step(m.granular().unwrap());
+        }
+    };
+    let account = |m: &Model, w: &WorkMeter| {
+        let e = w.account(m.coupled().unwrap());
+        bits([e.kin_dem, e.kin_body, e.strain, e.contact, e.w_ext, e.diss])
+    };
+    let mut a = build(DISC_ON_BEAM);
+    let mut wa = WorkMeter::new(a.coupled().unwrap());
+    go(&mut a, &mut wa, n);
+    let mut b = build(DISC_ON_BEAM);
+    let mut wb = WorkMeter::new(b.coupled().unwrap());
+    go(&mut b, &mut wb, k);
+    let (model_bytes, meter_bytes) = (b.save_state().to_bytes(), postcard::to_stdvec(&wb).unwrap());
+    let mut c = build(DISC_ON_BEAM);
+    c.restore_state(&ModelState::from_bytes(&model_bytes).unwrap())
+        .unwrap();
+    let mut wc: WorkMeter = postcard::from_bytes(&meter_bytes).unwrap();
+    assert_eq!(account(&b, &wb), account(&c, &wc));
+    go(&mut c, &mut wc, n - k);
+    assert_eq!(account(&a, &wa), account(&c, &wc));
+}
+
+/// A bed of discs between walls on an EFG plate (fixed at its bottom),
+/// settling with many disc–body, disc–disc and disc–wall contacts.
+fn bed_on_plate(method: &str, extra: &str) -> String {
+    format!(
+        r#"
+[simulation]
+dt = 5.0e-5
+steps = 800
+gravity = [0.0, -9.81]
+{extra}
+
+[[material]]
+name = "sand"
+density = 2650.0
+kn = 1.0e6
+ks = 5.0e5
+friction = 0.5
+rolling_friction = 0.05
+
+[granular]
+material = "sand"
+discs = {{ generate = "hex", box = [[0.0, 0.0], [0.2, 0.04]], radius = [0.0045, 0.005], jitter = 0.2, seed = 5 }}
+damping = {{ kind = "critical-ratio", zeta = 0.1 }}
+
+[[wall]]
+name = "left"
+from = [0.0, -0.05]
+to = [0.0, 0.1]
+
+[[wall]]
+name = "right"
+from = [0.2, -0.05]
+to = [0.2, 0.1]
+
+[[body]]
+name = "plate"
+method = "{method}"
+rectangle = {{ origin = [0.0, -0.04], size = [0.2, 0.04] }}
+nodes = [21, 5]
+elastic = {{ E = 5.0e7, nu = 0.3, density = 2000.0, plane = "strain" }}
+contact_edges = ["top"]
+
+[[body.bc]]
+edge = "bottom"
+fixed = true
+"#
+    )
+}
+
+fn check_bed(src: &str, n: usize, k: usize) -> (Model, Model) {
+    let (a, c, bytes) = restart(src, n, k);
+    let s = ModelState::from_bytes(&bytes).unwrap();
+    let SystemState::Coupled(m) = &s.system else {
+        panic!("a coupled state")
+    };
+    let on_body = m.contacts.iter().filter(|q| q.fs != 0.0).count();
+    eprintln!(
+        "bed at the save: {on_body} of {} disc–body contacts with shear",
+        m.contacts.len()
+    );
+    assert!(on_body >= 10, "{on_body} disc–body contacts with shear");
+    assert!(m.granular.shear.iter().filter(|f| **f != 0.0).count() > 20);
+    let green = m.bodies[0].boundary.as_ref().unwrap().green.as_ref();
+    eprintln!(
+        "bed on plate: {} discs, {} disc–body contacts, Green matrix in {} batch(es), checkpoint {} bytes",
+        m.granular.id.len(),
+        m.contacts.len(),
+        green.map_or(0, Vec::len),
+        bytes.len()
+    );
+    assert_same(&a, &c);
+    (a, c)
+}
+
+#[test]
+fn bed_on_efg_plate_restarts_bitwise() {
+    check_bed(&bed_on_plate("efg", ""), 800, 450);
+}
+
+/// Sub-cycled, staggered transfer (an FE plate): saved in the middle of
+/// a body step, with the discs' loads of its first DEM steps pending.
+#[test]
+fn bed_on_fem_plate_substepped_restarts_bitwise() {
+    let src = bed_on_plate("fem-q4", "substeps = 3");
+    let src = src.replace(
+        "contact_edges",
+        "newmark = { gamma = 1.5, beta = 0.8 }\ncontact_edges",
+    );
+    let (n, k) = (800, 449);
+    let mut b = build(&src);
+    run(&mut b, k);
+    let s = b.save_state();
+    let SystemState::Coupled(m) = &s.system else {
+        panic!("a coupled state")
+    };
+    assert_eq!(m.sub, k % 3);
+    assert!(
+        m.bodies[0].f_point.iter().any(|f| *f != 0.0),
+        "loads pending"
+    );
+    check_bed(&src, n, k);
+}
+
+/// A state saved before the first step (nothing built yet: no neighbour
+/// list, no Green matrix, the implicit scheme not primed) restarts too.
+#[test]
+fn restarts_from_step_zero() {
+    for src in [packing(0.0), DISC_ON_BEAM.to_string(), cantilever("efg")] {
+        let (a, c, _) = restart(&src, 200, 0);
+        assert_same(&a, &c);
+    }
+}
+
+/// The same restart on 1 and 2 threads: saved on one, restored on the
+/// other, and the run in one go on either, all bitwise equal.
+#[test]
+fn restarts_across_thread_counts() {
+    let pool = |n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+    };
+    for src in [packing(0.1), bed_on_plate("efg", "")] {
+        let (n, k) = (500, 260);
+        let mut whole = Vec::new();
+        for threads in [1, 2] {
+            whole.push(pool(threads).install(|| {
+                let mut a = build(&src);
+                run(&mut a, n);
+                a.save_state().to_bytes()
+            }));
+        }
+        assert!(whole[0] == whole[1], "1 and 2 threads agree");
+        for (save_on, resume_on) in [(1, 2), (2, 1)] {
+            let bytes = pool(save_on).install(|| {
+                let mut b = build(&src);
+                run(&mut b, k);
+                b.save_state().to_bytes()
+            });
+            let end = pool(resume_on).install(|| {
+                let mut c = build(&src);
+                c.restore_state(&ModelState::from_bytes(&bytes).unwrap())
+                    .unwrap();
+                run(&mut c, n - k);
+                c.save_state().to_bytes()
+            });
+            assert!(
+                end == whole[0],
+                "saved on {save_on} thread(s), resumed on {resume_on}"
+            );
+        }
+    }
+}
+
+/// States of another kind or size are refused with an error, and the
+/// model is left as it was; bad bytes are refused.
+#[test]
+fn mismatched_states_are_refused() {
+    let small = DISC_ON_BEAM;
+    let mut coupled = build(small);
+    run(&mut coupled, 3);
+    let before = coupled.save_state();
+    let mut granular = build(&packing(0.0));
+    run(&mut granular, 3);
+    let g_state = granular.save_state();
+    // another kind
+    let e = coupled.restore_state(&g_state).unwrap_err().to_string();
+    assert!(e.contains("granular") && e.contains("coupled"), "{e}");
+    // another disc count
+    let mut fewer = build(&packing(0.0).replace("0.24]]", "0.12]]"));
+    let e = fewer.restore_state(&g_state).unwrap_err().to_string();
+    assert!(e.contains("discs"), "{e}");
+    // rolling resistance switched on
+    let mut rolling = build(&packing(0.1));
+    let e = rolling.restore_state(&g_state).unwrap_err().to_string();
+    assert!(e.contains("rolling"), "{e}");
+    // a beam of other DOFs: refused after the discs were restored, and
+    // put back
+    let mut other = build(&small.replace("nodes = [20, 4]", "nodes = [21, 4]"));
+    run(&mut other, 2);
+    let other_before = other.save_state();
+    let e = other.restore_state(&before).unwrap_err().to_string();
+    assert!(e.contains("DOFs"), "{e}");
+    assert!(other.save_state() == other_before, "left as it was");
+    // a body of another name
+    let mut renamed = build(&small.replace("\"beam\"", "\"plank\""));
+    let e = renamed.restore_state(&before).unwrap_err().to_string();
+    assert!(e.contains("plank"), "{e}");
+    // a continuum state onto a continuum model of another method's sizes
+    let efg = build(&cantilever("efg")).save_state();
+    let mut fem = build(&cantilever("fem-q4"));
+    let e = fem.restore_state(&efg).unwrap_err().to_string();
+    assert!(e.contains("prescribed"), "{e}");
+    // corrupted contents: disc ids that are not a permutation
+    let mut bad = g_state.clone();
+    if let SystemState::Granular(g) = &mut bad.system {
+        g.id[0] = g.id[1];
+    }
+    let fresh = build(&packing(0.0));
+    let mut target = build(&packing(0.0));
+    assert!(target.restore_state(&bad).is_err());
+    assert!(target.save_state() == fresh.save_state(), "left as it was");
+    // bytes
+    let bytes = before.to_bytes();
+    assert_eq!(bytes[..4], STATE_FORMAT_VERSION.to_le_bytes());
+    assert!(ModelState::from_bytes(&bytes[..bytes.len() - 3]).is_err());
+    assert!(ModelState::from_bytes(&bytes[..2]).is_err());
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(ModelState::from_bytes(&longer).is_err());
+    let mut newer = bytes.clone();
+    newer[..4].copy_from_slice(&(STATE_FORMAT_VERSION + 1).to_le_bytes());
+    let e = ModelState::from_bytes(&newer).unwrap_err().to_string();
+    assert!(e.contains("version"), "{e}");
+    // and the good bytes restore
+    let mut again = build(small);
+    again
+        .restore_state(&ModelState::from_bytes(&bytes).unwrap())
+        .unwrap();
+    assert!(again.save_state() == before);
+}
