@@ -23,18 +23,29 @@ enum Cmd {
     /// Run a scenario file and write summary.json, history.csv and ParaView frames.
     ///
     /// Ctrl-C (SIGINT) or SIGTERM stops the run after the current step with
-    /// complete outputs and "status": "interrupted" in summary.json (exit
-    /// code 130 or 143); a second Ctrl-C aborts at once. Exit codes: 0 done,
-    /// 1 other failure, 2 bad input, 3 the run became unstable.
+    /// complete outputs, OUT/checkpoint.bin and "status": "interrupted" in
+    /// summary.json (exit code 130 or 143); `--restart OUT/checkpoint.bin`
+    /// continues it. A second Ctrl-C aborts at once. Exit codes: 0 done, 1
+    /// other failure, 2 bad input, 3 the run became unstable.
     Run {
         /// The scenario (TOML), see docs/scenario.md.
         file: PathBuf,
-        /// Output directory (created if missing).
-        #[arg(short, long, default_value = "out")]
-        out: PathBuf,
+        /// Output directory (created if missing; default `out`, or the
+        /// checkpoint's directory with --restart).
+        #[arg(short, long)]
+        out: Option<PathBuf>,
         /// Worker threads (0 = all cores; results do not depend on it).
         #[arg(long)]
         threads: Option<usize>,
+        /// Write OUT/checkpoint.bin every N steps (atomically; one is also
+        /// written when the run is stopped by Ctrl-C or SIGTERM).
+        #[arg(long, value_name = "N", default_value_t = 0)]
+        checkpoint_every: usize,
+        /// Continue a stopped run from its checkpoint: same scenario, same
+        /// output directory; the outputs are continued as if the run had
+        /// never stopped (bitwise, on any number of threads).
+        #[arg(long, value_name = "CHECKPOINT")]
+        restart: Option<PathBuf>,
         /// No progress display.
         #[arg(short, long)]
         quiet: bool,
@@ -91,7 +102,7 @@ fn main() -> ExitCode {
                     eprintln!("error: {se}");
                     return ExitCode::from(2);
                 }
-                Some(RunError::NotEmpty(_)) => 2,
+                Some(RunError::NotEmpty(_) | RunError::Restart { .. }) => 2,
                 Some(RunError::Model(ModelError::Unstable(_))) => 3,
                 Some(RunError::Interrupted { signal, .. }) => 128 + (*signal as u8 & 0x7f),
                 _ => 1,
@@ -138,12 +149,20 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             threads,
             quiet,
             overwrite,
+            checkpoint_every,
+            restart,
         } => {
             let sc = scenario::load(&file)?;
+            let out = out.unwrap_or_else(|| match &restart {
+                Some(ck) => ck.parent().map_or_else(PathBuf::new, PathBuf::from),
+                None => PathBuf::from("out"),
+            });
             let opts = efgdem::run::RunOptions {
                 quiet,
                 overwrite,
                 stop: Some(stop_on_signals()?),
+                checkpoint_every,
+                restart,
                 ..efgdem::run::RunOptions::new(&out)
             };
             let t0 = std::time::Instant::now();

@@ -552,3 +552,177 @@ fn mismatched_states_are_refused() {
         .unwrap();
     assert!(again.save_state() == before);
 }
+
+// ---------------------------------------------------------------------------
+// Through the drivers (`efgdem run --checkpoint-every N` / `--restart`): the
+// outputs of a run of N steps and of a run checkpointed at k, then
+// restarted, are byte-identical (history.csv, every frame and .pvd,
+// discs_final.csv), whichever thread counts; a run stopped by a signal
+// continues the same way; a changed scenario is refused.
+
+use efgdem::run::{RunError, RunOptions};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicUsize;
+
+/// Output every 7 steps and frames every 50 (k is chosen to be a multiple
+/// of neither), with a probe.
+fn with_outputs(src: &str, probe: &str) -> String {
+    format!("{src}\n[output]\nevery = 7\nvtk_every = 50\n\n[[probe]]\nname = \"p\"\n{probe}\n")
+}
+
+fn out_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("efgdem-restart-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// `efgdem::run::run` on `threads` threads.
+fn drive(src: &str, threads: usize, opts: RunOptions) -> Result<serde_json::Value, RunError> {
+    let sc = scenario::parse(src, "<restart>").unwrap();
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(|| efgdem::run::run(&sc, &opts))
+}
+
+fn opts(dir: &Path) -> RunOptions {
+    RunOptions {
+        quiet: true,
+        ..RunOptions::new(dir)
+    }
+}
+
+/// Every file a run wrote under `dir` except the summary (timings) and the
+/// checkpoint.
+fn outputs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut files = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+                continue;
+            }
+            let name = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
+            if name != "summary.json" && name != "checkpoint.bin" {
+                files.insert(name, std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    files
+}
+
+fn assert_same_outputs(a: &Path, b: &Path, what: &str) {
+    let (fa, fb) = (outputs(a), outputs(b));
+    assert_eq!(
+        fa.keys().collect::<Vec<_>>(),
+        fb.keys().collect::<Vec<_>>(),
+        "{what}: the same files"
+    );
+    for (name, bytes) in &fa {
+        assert!(bytes == &fb[name], "{what}: {name} differs");
+    }
+    assert!(fa.contains_key("history.csv") && fa.keys().any(|k| k.starts_with("frames")));
+}
+
+fn status(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+/// The restart contract for one scenario of `n` steps, checkpointed at `k`
+/// (n < 2k: the only checkpoint).
+fn check_run_restart(tag: &str, src: &str, n: usize, k: usize) {
+    assert!(!k.is_multiple_of(7) && !k.is_multiple_of(50) && n < 2 * k);
+    let whole = out_dir(&format!("{tag}-whole"));
+    let s = drive(src, 1, opts(&whole)).unwrap();
+    assert_eq!(
+        (s["status"].as_str(), s["last_step"].as_u64()),
+        (Some("completed"), Some(n as u64))
+    );
+    for (t1, t2) in [(1, 2), (2, 1)] {
+        let dir = out_dir(&format!("{tag}-{t1}{t2}"));
+        let first = RunOptions {
+            checkpoint_every: k,
+            ..opts(&dir)
+        };
+        drive(src, t1, first).unwrap();
+        let again = RunOptions {
+            restart: Some(dir.join("checkpoint.bin")),
+            ..opts(&dir)
+        };
+        let s = drive(src, t2, again).unwrap();
+        assert_eq!(s["last_step"].as_u64(), Some(n as u64));
+        assert_same_outputs(
+            &whole,
+            &dir,
+            &format!("{tag}: checkpoint on {t1}, restart on {t2} thread(s)"),
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+    // stopped by a signal (here: requested before the first step, so it
+    // stops after step 1), then continued
+    let dir = out_dir(&format!("{tag}-stop"));
+    let stopped = RunOptions {
+        stop: Some(Arc::new(AtomicUsize::new(15))),
+        ..opts(&dir)
+    };
+    match drive(src, 2, stopped) {
+        Err(RunError::Interrupted {
+            signal: 15,
+            step: 1,
+            checkpoint,
+        }) => {
+            assert_eq!(checkpoint, dir.join("checkpoint.bin"))
+        }
+        other => panic!("{tag}: expected an interruption, got {other:?}"),
+    }
+    let s = status(&dir);
+    assert_eq!(
+        (s["status"].as_str(), s["last_step"].as_u64()),
+        (Some("interrupted"), Some(1))
+    );
+    let again = RunOptions {
+        restart: Some(dir.join("checkpoint.bin")),
+        ..opts(&dir)
+    };
+    drive(src, 1, again).unwrap();
+    assert_eq!(status(&dir)["status"].as_str(), Some("completed"));
+    assert_same_outputs(&whole, &dir, &format!("{tag}: stopped at step 1"));
+    // another scenario (one more step) is refused, naming the checkpoint
+    let changed = src.replacen("steps = ", "steps = 1", 1);
+    let again = RunOptions {
+        restart: Some(dir.join("checkpoint.bin")),
+        ..opts(&dir)
+    };
+    match drive(&changed, 1, again) {
+        Err(e @ RunError::Restart { .. }) => {
+            assert!(e.to_string().contains("scenario has changed"), "{e}")
+        }
+        other => panic!("{tag}: expected a refusal, got {other:?}"),
+    }
+    for d in [whole, dir] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+#[test]
+fn a_granular_run_restarts_with_identical_outputs() {
+    let src = with_outputs(&packing(0.1), "quantity = \"kinetic\"");
+    check_run_restart("granular", &src, 2000, 1301);
+}
+
+#[test]
+fn a_continuum_run_restarts_with_identical_outputs() {
+    let src = with_outputs(&cantilever("efg"), "point = [4.0, 0.0]\nquantity = \"uy\"");
+    check_run_restart("continuum", &src, 240, 131);
+}
+
+#[test]
+fn a_coupled_run_restarts_with_identical_outputs() {
+    let src = with_outputs(&bed_on_plate("efg", ""), "quantity = \"kinetic\"");
+    check_run_restart("coupled", &src, 800, 433);
+}

@@ -11,37 +11,34 @@
 //! Bodies are EFG or bilinear FE (`method = "fem-q4"`); both are driven
 //! the same way through [`Body`].
 
-use super::session::{Ended, Session, due};
-use super::{RunError, RunOptions};
+use super::session::{Ended, Outputs, Session, due};
+use super::{Run, RunError};
 use crate::geom::Vec2;
 use crate::model::body::{Body, BodyError};
 use crate::model::{Model, Probe, System};
 use crate::output::csv::HistoryWriter;
-use crate::output::frames::Frames;
 use crate::output::write_json;
 use crate::scenario::{Analysis, Scenario};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::time::Instant;
 
-/// A bound probe with its extrema.
-struct Recorded {
-    name: String,
-    probe: Probe,
-    min: f64,
-    max: f64,
-    last: f64,
-}
+/// Each probe's `[min, max, last]` recorded value (the driver's running
+/// values: checkpointed).
+type Extrema = Vec<[f64; 3]>;
 
-fn record(probes: &mut [Recorded], model: &Model, hist: &mut HistoryWriter) -> std::io::Result<()> {
+fn record(
+    probes: &[(String, Probe)],
+    ext: &mut Extrema,
+    model: &Model,
+    hist: &mut HistoryWriter,
+) -> std::io::Result<()> {
     let mut row = Vec::with_capacity(probes.len() + 2);
     row.push(model.step as f64);
     row.push(model.time());
-    for p in probes.iter_mut() {
-        let v = model.probe(&p.probe);
-        p.min = p.min.min(v);
-        p.max = p.max.max(v);
-        p.last = v;
+    for ((_, p), e) in probes.iter().zip(ext.iter_mut()) {
+        let v = model.probe(p);
+        *e = [e[0].min(v), e[1].max(v), v];
         row.push(v);
     }
     hist.row(&row)
@@ -86,59 +83,49 @@ fn body_summary(b: &Body) -> Result<Value, BodyError> {
 }
 
 /// Run a continuum-only scenario.
-pub(super) fn run(
-    sc: &Scenario,
-    mut model: Model,
-    probes: Vec<(String, Probe)>,
-    t_build: f64,
-    opts: &RunOptions,
-) -> Result<Value, RunError> {
+pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     let t_start = Instant::now();
-    let dir = &opts.out_dir;
-    let mut probes: Vec<Recorded> = probes
-        .into_iter()
-        .map(|(name, probe)| Recorded {
-            name,
-            probe,
-            min: f64::INFINITY,
-            max: f64::NEG_INFINITY,
-            last: f64::NAN,
-        })
-        .collect();
+    let (sc, dir) = (run.sc, &run.opts.out_dir);
+    let probes = &run.probes;
+    let mut ext: Extrema = match &run.restart {
+        Some(ck) => ck.driver()?,
+        None => vec![[f64::INFINITY, f64::NEG_INFINITY, f64::NAN]; probes.len()],
+    };
     let mut cols: Vec<&str> = vec!["step", "t"];
-    cols.extend(probes.iter().map(|p| p.name.as_str()));
-    let mut hist = HistoryWriter::create(&dir.join("history.csv"), &cols)?;
+    cols.extend(probes.iter().map(|p| p.0.as_str()));
+    let mut out = Outputs::open(&run, &model, &cols)?;
     let mut summary = json!({});
     let t_solve = Instant::now();
-    let mut frames = Frames::new(&model, dir)?;
     let ended = match sc.simulation.analysis {
         Analysis::Static => {
             model.solve_static()?;
-            record(&mut probes, &model, &mut hist)?;
-            frames.write_static(&model)?;
+            record(probes, &mut ext, &model, &mut out.hist)?;
+            out.frames.write_static(&model)?;
             summary["analysis"] = json!("static");
             Ended::Completed
         }
         Analysis::Dynamic => {
             let (steps, dt) = (model.steps, model.dt);
             let vtk_every = sc.output.vtk_every;
-            record(&mut probes, &model, &mut hist)?;
-            if vtk_every > 0 {
-                frames.write(&model)?;
+            if run.restart.is_none() {
+                record(probes, &mut ext, &model, &mut out.hist)?;
+                if vtk_every > 0 {
+                    out.frames.write(&model)?;
+                }
             }
-            let mut session = Session::new(opts, &model);
+            let mut session = Session::new(&run, &model);
             let ended = loop {
                 if let Some(end) = session.step(&mut model)? {
                     break end;
                 }
                 let step = model.step;
                 if due(step, sc.output.every, steps) {
-                    record(&mut probes, &model, &mut hist)?;
+                    record(probes, &mut ext, &model, &mut out.hist)?;
                 }
                 if due(step, vtk_every, steps) {
-                    frames.write(&model)?;
+                    out.frames.write(&model)?;
                 }
-                if let Some(end) = session.after_step(&model) {
+                if let Some(end) = session.after_step(&model, &mut out, &ext)? {
                     break end;
                 }
             };
@@ -150,14 +137,14 @@ pub(super) fn run(
             ended
         }
     };
-    hist.flush()?;
+    out.hist.flush()?;
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let mut extrema = serde_json::Map::new();
-    for p in &probes {
-        summary[p.name.as_str()] = json!(p.last);
+    for ((name, _), [min, max, last]) in probes.iter().zip(&ext) {
+        summary[name.as_str()] = json!(last);
         extrema.insert(
-            p.name.clone(),
-            json!({ "min": p.min, "max": p.max, "final": p.last }),
+            name.clone(),
+            json!({ "min": min, "max": max, "final": last }),
         );
     }
     summary["probes"] = Value::Object(extrema);
@@ -166,14 +153,14 @@ pub(super) fn run(
     };
     summary["bodies"] = Value::Array(bodies.iter().map(body_summary).collect::<Result<_, _>>()?);
     summary["timing"] = json!({
-        "build_seconds": t_build,
+        "build_seconds": run.build_s,
         "solve_seconds": solve_seconds,
-        "total_seconds": t_build + t_start.elapsed().as_secs_f64(),
+        "total_seconds": run.build_s + t_start.elapsed().as_secs_f64(),
         "threads": rayon::current_num_threads(),
     });
     ended.record(&mut summary, &model);
     write_json(&dir.join("summary.json"), &summary)?;
-    ended.result(summary, &model)
+    ended.result(summary, &model, dir)
 }
 
 /// Validate further (build every body: coverage of every quadrature point,

@@ -1,18 +1,17 @@
 //! Driver for coupled scenarios (bodies and discs): `efgdem run` / `check`.
 
-use super::session::{Session, due};
-use super::{RunError, RunOptions};
+use super::session::{Outputs, Session, due};
+use super::{Run, RunError};
 use crate::continuum::Edge;
 use crate::coupling::CoupledModel;
 use crate::coupling::energy::WorkMeter;
 use crate::geom::Vec2;
 use crate::model::body::At;
 use crate::model::body::BodyRef;
-use crate::model::{Model, Probe, System, coupled_body as body};
-use crate::output::csv::HistoryWriter;
-use crate::output::frames::Frames;
+use crate::model::{Model, System, coupled_body as body};
 use crate::output::write_json;
 use crate::scenario::Scenario;
+use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use std::time::Instant;
 
@@ -22,8 +21,6 @@ use std::time::Instant;
 /// 2 k_n r). Each disc is reported once, as a warning on stderr.
 struct EntryWatch {
     bodies: Vec<Watched>,
-    /// By disc id: already reported.
-    reported: Vec<bool>,
 }
 
 /// A body with at least one edge that is not a contact edge.
@@ -59,16 +56,14 @@ impl EntryWatch {
                 open,
             });
         }
-        Ok(EntryWatch {
-            bodies,
-            reported: vec![false; m.granular.particles.len()],
-        })
+        Ok(EntryWatch { bodies })
     }
 
     /// Report the discs that entered a body through a non-contact edge since
     /// the last call (at output steps: one pass over the discs, like the
-    /// energy account's); returns how many.
-    fn check(&mut self, m: &CoupledModel, names: &[String]) -> usize {
+    /// energy account's) and are not yet marked in `reported` (by disc id);
+    /// returns how many.
+    fn check(&self, m: &CoupledModel, names: &[String], reported: &mut [bool]) -> usize {
         let p = &m.granular.particles;
         let mut new = 0;
         for w in &self.bodies {
@@ -90,9 +85,9 @@ impl EntryWatch {
                 let id = p.id[d] as usize;
                 if let Some(k) = entered_edge(&quad, x, p.vel[d] - v_body)
                     && w.open[k]
-                    && !self.reported[id]
+                    && !reported[id]
                 {
-                    self.reported[id] = true;
+                    reported[id] = true;
                     new += 1;
                     eprintln!(
                         "warning: disc {} entered body `{}` through a non-contact edge ({}) at t = {:.6} s (step {}); list the edge in `contact_edges` (default: all four)",
@@ -163,7 +158,7 @@ fn chain_corners(m: &CoupledModel) -> Vec<Vec<Vec<Vec2>>> {
 
 /// What the run watches for in the contact force, for the summary
 /// (§4.1.2 and §4.1.4 of the paper: single-disc events).
-#[derive(Default)]
+#[derive(Default, Serialize, Deserialize)]
 struct Events {
     /// Largest total elastic contact force and when.
     peak: (f64, f64),
@@ -218,15 +213,18 @@ impl Events {
     }
 }
 
+/// The driver's running values (checkpointed with the model).
+#[derive(Serialize, Deserialize)]
+struct Running {
+    events: Events,
+    meter: WorkMeter,
+    /// By disc id: reported as having entered a body.
+    reported: Vec<bool>,
+}
+
 /// Run a coupled scenario.
-pub(super) fn run(
-    sc: &Scenario,
-    mut model: Model,
-    probes: Vec<(String, Probe)>,
-    t_build: f64,
-    opts: &RunOptions,
-) -> Result<Value, RunError> {
-    let dir = &opts.out_dir;
+pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
+    let (sc, dir, probes) = (run.sc, &run.opts.out_dir, &run.probes);
     let body_names = super::body_names(&model);
     let steps = model.steps;
     let m = coupled(&model);
@@ -246,22 +244,26 @@ pub(super) fn run(
         "W_ext",
         "E_diss",
     ]);
-    let mut hist = HistoryWriter::create(&dir.join("history.csv"), &cols)?;
-    let mut meter = WorkMeter::new(m);
-    let mut watch = EntryWatch::new(sc, m)?;
-    let mut entered = 0;
+    let mut out = Outputs::open(&run, &model, &cols)?;
+    let mut r = match &run.restart {
+        Some(ck) => ck.driver()?,
+        None => Running {
+            events: Events::default(),
+            meter: WorkMeter::new(m),
+            reported: vec![false; m.granular.particles.len()],
+        },
+    };
+    let watch = EntryWatch::new(sc, m)?;
     let vtk_every = sc.output.vtk_every;
-    let mut frames = Frames::new(&model, dir)?;
     let mut row = Vec::with_capacity(cols.len());
-    let mut events = Events::default();
     let corners = chain_corners(m);
     // the outputs of the present step
-    let mut output = |model: &Model, meter: &WorkMeter| -> Result<(), RunError> {
+    let mut output = |model: &Model, r: &mut Running, out: &mut Outputs| -> Result<(), RunError> {
         let (step, m) = (model.step, coupled(model));
-        let fn_sum = events.observe(m, &corners);
+        let fn_sum = r.events.observe(m, &corners);
         if due(step, sc.output.every, steps) {
-            entered += watch.check(m, &body_names);
-            let e = meter.account(m);
+            watch.check(m, &body_names, &mut r.reported);
+            let e = r.meter.account(m);
             row.clear();
             row.push(step as f64);
             row.push(m.granular.time);
@@ -269,31 +271,34 @@ pub(super) fn run(
             row.extend([
                 fn_sum, e.kin_dem, e.kin_body, e.strain, e.penalty, e.contact, e.w_ext, e.diss,
             ]);
-            hist.row(&row)?;
+            out.hist.row(&row)?;
         }
         if due(step, vtk_every, steps) {
-            frames.write(model)?;
+            out.frames.write(model)?;
         }
         Ok(())
     };
-    output(&model, &meter)?;
-    let mut session = Session::new(opts, &model);
+    if run.restart.is_none() {
+        output(&model, &mut r, &mut out)?;
+    }
+    let mut session = Session::new(&run, &model);
     let t_loop = Instant::now();
     let ended = loop {
         if let Some(end) = session.step(&mut model)? {
             break end;
         }
-        meter.after_step(&coupled(&model).granular);
-        output(&model, &meter)?;
-        if let Some(end) = session.after_step(&model) {
+        r.meter.after_step(&coupled(&model).granular);
+        output(&model, &mut r, &mut out)?;
+        if let Some(end) = session.after_step(&model, &mut out, &r)? {
             break end;
         }
     };
     let t_total = t_loop.elapsed().as_secs_f64();
     session.finish();
-    hist.flush()?;
+    out.hist.flush()?;
     let m = coupled(&model);
-    let e = meter.account(m);
+    let e = r.meter.account(m);
+    let events = &r.events;
     let mut summary = json!({
         "kind": "coupled",
         "steps": steps,
@@ -310,13 +315,13 @@ pub(super) fn run(
         "fall_off_time": events.fall_off,
         "force_below_weight_time": events.below_weight,
         "contact_lost_time": events.lost_contact,
-        "discs_entered_through_non_contact_edges": entered,
+        "discs_entered_through_non_contact_edges": r.reported.iter().filter(|&&x| x).count(),
         "energy": {
             "E_kin_dem": e.kin_dem, "E_kin_body": e.kin_body, "E_strain": e.strain,
             "E_penalty": e.penalty, "E_contact": e.contact, "W_ext": e.w_ext, "E_diss": e.diss,
         },
         "timing": {
-            "build_seconds": t_build,
+            "build_seconds": run.build_s,
             "loop_seconds": t_total,
             "seconds_per_step": if model.step > 0 { t_total / model.step as f64 } else { 0.0 },
             "split_seconds": {
@@ -329,7 +334,7 @@ pub(super) fn run(
     });
     ended.record(&mut summary, &model);
     write_json(&dir.join("summary.json"), &summary)?;
-    ended.result(summary, &model)
+    ended.result(summary, &model, dir)
 }
 
 fn coupled(model: &Model) -> &CoupledModel {

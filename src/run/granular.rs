@@ -1,12 +1,11 @@
 //! Driver for granular-only scenarios (discs and walls): `efgdem run` and
 //! `efgdem check`.
 
-use super::session::{Session, due};
-use super::{RunError, RunOptions};
+use super::session::{Outputs, Session, due};
+use super::{Run, RunError};
 use crate::dem::DT_WARN;
-use crate::model::{Model, Probe, System};
-use crate::output::csv::{HistoryWriter, write_discs_csv};
-use crate::output::frames::Frames;
+use crate::model::{Model, System};
+use crate::output::csv::write_discs_csv;
 use crate::output::write_json;
 use crate::scenario::Scenario;
 use serde_json::json;
@@ -16,44 +15,40 @@ use std::time::Instant;
 /// probe; a row at step 0, every `output.every` steps and at the last step),
 /// `frames/discs_NNNNNNN.vtp` + `discs.pvd` every `output.vtk_every` steps,
 /// `discs_final.csv` and `summary.json`.
-pub(super) fn run(
-    sc: &Scenario,
-    mut model: Model,
-    probes: Vec<(String, Probe)>,
-    build_s: f64,
-    opts: &RunOptions,
-) -> Result<serde_json::Value, RunError> {
+pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunError> {
+    let (sc, out) = (run.sc, &run.opts.out_dir);
     let steps = model.steps;
     let mut warnings = Vec::new();
     if let Some(w) = model.granular().and_then(|g| g.dt_warning()) {
         eprintln!("warning: {w}");
         warnings.push(w);
     }
-    let out = &opts.out_dir;
     let mut cols = vec!["step", "t"];
-    cols.extend(probes.iter().map(|p| p.0.as_str()));
-    let mut hist = HistoryWriter::create(&out.join("history.csv"), &cols)?;
+    cols.extend(run.probes.iter().map(|p| p.0.as_str()));
+    let mut outputs = Outputs::open(&run, &model, &cols)?;
     let every = sc.output.every.max(1);
     let vtk_every = sc.output.vtk_every;
-    let mut frames = Frames::new(&model, out)?;
-    // the contact list of the start state (for probes and the first frame)
-    if let System::Granular(g) = &mut model.system {
-        g.prepare_contacts();
-    }
     let mut row = vec![0.0; cols.len()];
-    let mut record = |model: &Model, row: &mut Vec<f64>| {
+    let record = |model: &Model, row: &mut Vec<f64>, out: &mut Outputs| {
         row[0] = model.step as f64;
         row[1] = model.time();
-        for (k, (_, s)) in probes.iter().enumerate() {
+        for (k, (_, s)) in run.probes.iter().enumerate() {
             row[2 + k] = model.probe(s);
         }
-        hist.row(row)
+        out.hist.row(row)
     };
-    record(&model, &mut row)?;
-    if vtk_every > 0 {
-        frames.write(&model)?;
+    if run.restart.is_none() {
+        // the contact list of the start state (for probes and the first frame)
+        if let System::Granular(g) = &mut model.system {
+            g.prepare_contacts();
+        }
+        record(&model, &mut row, &mut outputs)?;
+        if vtk_every > 0 {
+            outputs.frames.write(&model)?;
+        }
     }
-    let mut session = Session::new(opts, &model);
+    let start = model.step;
+    let mut session = Session::new(&run, &model);
     let t0 = Instant::now();
     let ended = loop {
         // disc forces are only read by the frames
@@ -66,17 +61,18 @@ pub(super) fn run(
         }
         let step = model.step;
         if due(step, every, steps) {
-            record(&model, &mut row)?;
+            record(&model, &mut row, &mut outputs)?;
         }
         if due(step, vtk_every, steps) {
-            frames.write(&model)?;
+            outputs.frames.write(&model)?;
         }
-        if let Some(end) = session.after_step(&model) {
+        // the model is the whole state of a granular run
+        if let Some(end) = session.after_step(&model, &mut outputs, &())? {
             break end;
         }
     };
     session.finish();
-    hist.flush()?;
+    outputs.hist.flush()?;
     let wall_s = t0.elapsed().as_secs_f64();
     let gr = granular(&model);
     write_discs_csv(gr, &out.join("discs_final.csv"))?;
@@ -93,9 +89,9 @@ pub(super) fn run(
         "dt_over_critical": gr.dt / gr.critical_dt(),
         "time": gr.time,
         "threads": rayon::current_num_threads(),
-        "build_seconds": build_s,
+        "build_seconds": run.build_s,
         "run_seconds": wall_s,
-        "particle_steps_per_second": if wall_s > 0.0 { (n * steps) as f64 / wall_s } else { 0.0 },
+        "particle_steps_per_second": if wall_s > 0.0 { (n * (model.step - start)) as f64 / wall_s } else { 0.0 },
         "neighbour_rebuilds": gr.grid.rebuilds,
         "contacts": { "disc_disc": dd, "disc_wall": dw, "listed_pairs": gr.contacts.pairs.len() },
         "bytes_per_disc": gr.heap_bytes() as f64 / n.max(1) as f64,
@@ -105,7 +101,7 @@ pub(super) fn run(
     });
     ended.record(&mut summary, &model);
     write_json(&out.join("summary.json"), &summary)?;
-    ended.result(summary, &model)
+    ended.result(summary, &model, out)
 }
 
 /// What `efgdem check` prints for a granular scenario.

@@ -1,6 +1,7 @@
 //! Drivers: run a scenario end to end (what `efgdem run` and `check` do),
 //! writing `history.csv`, `summary.json` and ParaView frames.
 
+pub mod checkpoint;
 mod continuum;
 mod coupled;
 mod granular;
@@ -9,6 +10,7 @@ mod session;
 
 use crate::model::{Model, ModelError, System};
 use crate::scenario::{Scenario, ScenarioError};
+use checkpoint::Checkpoint;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicUsize;
@@ -29,6 +31,12 @@ pub struct RunOptions {
     /// SIGINT/SIGTERM handler), the run finishes its step, completes its
     /// outputs and ends with [`RunError::Interrupted`].
     pub stop: Option<Arc<AtomicUsize>>,
+    /// Write `checkpoint.bin` every this many steps (0: only when stopped
+    /// by a signal).
+    pub checkpoint_every: usize,
+    /// Continue the run saved in this checkpoint (written by a run of the
+    /// same scenario into `out_dir`), appending to its outputs.
+    pub restart: Option<PathBuf>,
 }
 
 impl RunOptions {
@@ -40,6 +48,8 @@ impl RunOptions {
             quiet: false,
             overwrite: false,
             stop: None,
+            checkpoint_every: 0,
+            restart: None,
         }
     }
 }
@@ -74,12 +84,25 @@ pub enum RunError {
     /// A stop was requested; the outputs are complete up to `step` and
     /// `summary.json` says `"status": "interrupted"` (exit code 128 +
     /// signal).
-    #[error("interrupted by signal {signal} after step {step}; outputs are complete up to it")]
+    #[error(
+        "interrupted by signal {signal} after step {step}; outputs are complete up to it; continue with --restart {}",
+        checkpoint.display()
+    )]
     Interrupted {
         /// The signal number (2 SIGINT, 15 SIGTERM).
         signal: usize,
         /// Steps taken.
         step: usize,
+        /// The checkpoint written at the stop.
+        checkpoint: PathBuf,
+    },
+    /// A checkpoint cannot be used to restart this scenario (exit code 2).
+    #[error("cannot restart from {}: {message}", path.display())]
+    Restart {
+        /// The checkpoint file.
+        path: PathBuf,
+        /// Why.
+        message: String,
     },
 }
 
@@ -107,15 +130,42 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunErr
     session::prepare_out_dir(opts)?;
     let t0 = Instant::now();
     let spin = progress::spinner("building the model", opts.quiet);
-    let model = sc.build()?;
+    let mut model = sc.build()?;
+    let restart = match &opts.restart {
+        Some(path) => {
+            let ck = Checkpoint::read(path, sc)?;
+            ck.restore(&mut model)?;
+            Some(ck)
+        }
+        None => None,
+    };
     spin.finish_and_clear();
     let build_s = t0.elapsed().as_secs_f64();
     let probes = sc.probes(&model)?;
+    let run = Run {
+        sc,
+        opts,
+        probes,
+        build_s,
+        restart,
+    };
     match model.system {
-        System::Continuum { .. } => continuum::run(sc, model, probes, build_s, opts),
-        System::Granular(_) => granular::run(sc, model, probes, build_s, opts),
-        System::Coupled(_) => coupled::run(sc, model, probes, build_s, opts),
+        System::Continuum { .. } => continuum::run(run, model),
+        System::Granular(_) => granular::run(run, model),
+        System::Coupled(_) => coupled::run(run, model),
     }
+}
+
+/// What a driver gets besides the model.
+struct Run<'a> {
+    sc: &'a Scenario,
+    opts: &'a RunOptions,
+    /// The bound probes, in scenario order.
+    probes: Vec<(String, crate::model::Probe)>,
+    /// Seconds to build the model.
+    build_s: f64,
+    /// The checkpoint the model was restored from.
+    restart: Option<Checkpoint>,
 }
 
 /// What `efgdem check` prints: sizes, coverage, time-step diagnostics.

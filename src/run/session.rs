@@ -2,10 +2,15 @@
 //! directory, the step loop's end (completed, interrupted by a signal,
 //! unstable), progress and checkpoints.
 
+use super::checkpoint::{self, Checkpoint};
 use super::progress::Progress;
-use super::{RunError, RunOptions};
+use super::{Run, RunError, RunOptions};
 use crate::model::{Instability, Model, ModelError};
+use crate::output::csv::HistoryWriter;
+use crate::output::frames::Frames;
+use serde::Serialize;
 use serde_json::{Value, json};
+use std::path::Path;
 use std::sync::atomic::Ordering;
 
 /// Files and directories a run writes into its output directory (the
@@ -20,12 +25,25 @@ const OWN_FILES: [&str; 4] = [
 /// Make the output directory ready: created if missing; a non-empty one is
 /// refused unless `overwrite`, which removes the files a run writes there
 /// (and nothing else).
+/// A restart continues the outputs already there.
 pub(super) fn prepare_out_dir(opts: &RunOptions) -> Result<(), RunError> {
     let dir = &opts.out_dir;
     let io = |source| RunError::OutDir {
         path: dir.clone(),
         source,
     };
+    if opts.restart.is_some() {
+        return match dir.join("history.csv").is_file() {
+            true => Ok(()),
+            false => Err(RunError::OutDir {
+                path: dir.clone(),
+                source: std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    "no history.csv to continue: restart into the directory of the stopped run (-o)",
+                ),
+            }),
+        };
+    }
     std::fs::create_dir_all(dir).map_err(io)?;
     let entries: Vec<_> = std::fs::read_dir(dir)
         .map_err(io)?
@@ -80,37 +98,68 @@ impl Ended {
         });
         match self {
             Ended::Completed => {}
-            Ended::Interrupted(sig) => summary["signal"] = json!(sig),
+            Ended::Interrupted(sig) => {
+                summary["signal"] = json!(sig);
+                summary["checkpoint"] = json!(checkpoint::FILE);
+            }
             Ended::Unstable(i) => summary["instability"] = json!(i),
         }
     }
 
     /// The run's result once its outputs are complete.
-    pub fn result(self, summary: Value, model: &Model) -> Result<Value, RunError> {
+    pub fn result(self, summary: Value, model: &Model, out_dir: &Path) -> Result<Value, RunError> {
         match self {
             Ended::Completed => Ok(summary),
             Ended::Interrupted(signal) => Err(RunError::Interrupted {
                 signal,
                 step: model.step,
+                checkpoint: checkpoint::path(out_dir),
             }),
             Ended::Unstable(i) => Err(RunError::Model(ModelError::Unstable(i))),
         }
     }
 }
 
-/// The step loop's companion: takes steps, shows progress, watches for a
-/// stop request.
+/// The files a time-stepped run streams: `history.csv` and the frames.
+pub(super) struct Outputs {
+    /// `history.csv`.
+    pub hist: HistoryWriter,
+    /// The ParaView frames and their series.
+    pub frames: Frames,
+}
+
+impl Outputs {
+    /// Fresh outputs with history `columns`, or, on a restart, the
+    /// checkpointed ones continued (rows and frames written after the
+    /// checkpoint are dropped: they are written again, identically).
+    pub fn open(run: &Run, model: &Model, columns: &[&str]) -> Result<Self, RunError> {
+        let dir = &run.opts.out_dir;
+        let path = dir.join("history.csv");
+        let mut frames = Frames::new(model, dir)?;
+        let hist = match &run.restart {
+            Some(ck) => {
+                frames.resume(ck.series.clone())?;
+                HistoryWriter::resume(&path, columns, ck.history_bytes)?
+            }
+            None => HistoryWriter::create(&path, columns)?,
+        };
+        Ok(Outputs { hist, frames })
+    }
+}
+
+/// The step loop's companion: takes steps, shows progress, writes
+/// checkpoints, watches for a stop request.
 pub(super) struct Session<'a> {
-    opts: &'a RunOptions,
+    run: &'a Run<'a>,
     progress: Progress,
 }
 
 impl<'a> Session<'a> {
     /// A session for `model` from its present step to `model.steps`.
-    pub fn new(opts: &'a RunOptions, model: &Model) -> Self {
+    pub fn new(run: &'a Run<'a>, model: &Model) -> Self {
         Session {
-            opts,
-            progress: Progress::new(model.step, model.steps, opts.quiet),
+            run,
+            progress: Progress::new(model.step, model.steps, run.opts.quiet),
         }
     }
 
@@ -127,12 +176,34 @@ impl<'a> Session<'a> {
         }
     }
 
-    /// After a step and its outputs: progress; `Some` if a stop was
-    /// requested (the run ends here, with its outputs complete).
-    pub fn after_step(&mut self, model: &Model) -> Option<Ended> {
+    /// After a step and its outputs: progress, a checkpoint when due
+    /// (`driver`: the driver's running values); `Some` if a stop was
+    /// requested — a checkpoint is then written, and the run ends with its
+    /// outputs complete.
+    pub fn after_step(
+        &mut self,
+        model: &Model,
+        out: &mut Outputs,
+        driver: &impl Serialize,
+    ) -> Result<Option<Ended>, RunError> {
         self.progress.update(model.step, model.time());
-        let signal = self.opts.stop.as_ref()?.load(Ordering::Relaxed);
-        (signal != 0).then_some(Ended::Interrupted(signal))
+        let opts = self.run.opts;
+        let signal = opts.stop.as_ref().map_or(0, |s| s.load(Ordering::Relaxed));
+        let every = opts.checkpoint_every;
+        if signal != 0
+            || (every > 0 && model.step.is_multiple_of(every) && model.step < model.steps)
+        {
+            out.hist.flush()?;
+            Checkpoint::new(
+                self.run.sc,
+                model,
+                driver,
+                out.hist.bytes(),
+                out.frames.entries(),
+            )
+            .write(&checkpoint::path(&opts.out_dir))?;
+        }
+        Ok((signal != 0).then_some(Ended::Interrupted(signal)))
     }
 
     /// Clear the progress display.
