@@ -160,7 +160,7 @@ fn a_signalled_run_stops_cleanly_and_restarts_bitwise() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--overwrite"));
     std::fs::write(whole.join("notes.txt"), "mine").unwrap();
-    let o = run(
+    let o = try_run(
         &file,
         &whole,
         &["--overwrite", "--checkpoint-every", "5000"],
