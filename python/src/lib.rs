@@ -18,13 +18,10 @@
 //! step.
 
 use efgdem::dem::Granular;
-use efgdem::efg::assemble::PointShapes;
 use efgdem::geom::Vec2;
 use efgdem::model::body::{At, BodyRef};
 use efgdem::model::{ContactKind, Model, Probe, System};
-use efgdem::output::vtk::PvdSeries;
-use efgdem::output::vtp::write_granular;
-use efgdem::output::vtu::write_body;
+use efgdem::output::frames::Frames;
 use efgdem::scenario::{self, Scenario};
 use numpy::ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyUntypedArray, PyUntypedArrayMethods};
@@ -247,11 +244,9 @@ struct Inner {
     probes: Vec<(String, Probe)>,
     /// Per body: its nodes bound for sampling (on first use).
     node_at: Vec<Option<Vec<At>>>,
-    /// Per body: EFG nodal shape rows for frames (on first use).
-    frame_data: Vec<Option<Option<PointShapes>>>,
-    /// ParaView series per output directory: one for the discs (if any),
-    /// then one per body.
-    series: HashMap<PathBuf, Vec<PvdSeries>>,
+    /// The ParaView frames written per output directory (named as
+    /// `efgdem run` names them).
+    frames: HashMap<PathBuf, Frames>,
     /// Disc buffers as built (address, length): views borrow them.
     buffers: Vec<(usize, usize)>,
 }
@@ -280,8 +275,7 @@ impl Inner {
             pool,
             probes,
             node_at: (0..nb).map(|_| None).collect(),
-            frame_data: (0..nb).map(|_| None).collect(),
-            series: HashMap::new(),
+            frames: HashMap::new(),
             buffers,
         }
     }
@@ -929,72 +923,24 @@ impl From<std::io::Error> for FrameError {
 }
 
 fn write_frame(inner: &mut Inner, dir: &Path) -> Result<Vec<PathBuf>, FrameError> {
-    let static_ = matches!(inner.model.system, System::Continuum { dynamic: false, .. });
-    // the names `efgdem run` gives its frames
-    let width = if matches!(inner.model.system, System::Coupled(_)) {
-        7
-    } else {
-        6
-    };
-    let step = inner.model.step;
-    let names = inner.body_names();
-    for i in 0..names.len() {
-        if inner.frame_data[i].is_none() {
-            let d = inner
-                .model
-                .body(i)
-                .frame_data()
-                .map_err(FrameError::Model)?;
-            inner.frame_data[i] = Some(d);
-        }
-    }
-    std::fs::create_dir_all(dir)?;
-    let mut written = Vec::new();
-    if static_ {
-        for (i, n) in names.iter().enumerate() {
-            let f = dir.join(format!("{n}.vtu"));
-            let shapes = inner.frame_data[i].as_ref().expect("computed").as_ref();
-            write_body(inner.model.body(i), shapes, &f)?;
-            written.push(f);
-        }
-        return Ok(written);
-    }
-    std::fs::create_dir_all(dir.join("frames"))?;
-    let has_discs = inner.model.granular().is_some();
     if let System::Granular(g) = &mut inner.model.system
         && g.step == 0
     {
         // as `efgdem run` does before its first frame: list the contacts
         g.prepare_contacts();
     }
-    let t = inner.model.time();
-    let series = inner.series.entry(dir.to_path_buf()).or_insert_with(|| {
-        let mut s = Vec::new();
-        if has_discs {
-            s.push(PvdSeries::new(&dir.join("discs.pvd")));
-        }
-        s.extend(
-            names
-                .iter()
-                .map(|n| PvdSeries::new(&dir.join(format!("{n}.pvd")))),
-        );
-        s
-    });
-    let mut k = 0;
-    if let Some(gr) = inner.model.granular() {
-        let f = format!("frames/discs_{step:0width$}.vtp");
-        write_granular(gr, &dir.join(&f))?;
-        series[0].add(t, &f)?;
-        written.push(dir.join(f));
-        k = 1;
+    let model = &inner.model;
+    if !inner.frames.contains_key(dir) {
+        let f = Frames::new(model, dir).map_err(FrameError::Model)?;
+        inner.frames.insert(dir.to_path_buf(), f);
     }
-    for (i, n) in names.iter().enumerate() {
-        let f = format!("frames/{n}_{step:0width$}.vtu");
-        let shapes = inner.frame_data[i].as_ref().expect("computed").as_ref();
-        write_body(inner.model.body(i), shapes, &dir.join(&f))?;
-        series[k + i].add(t, &f)?;
-        written.push(dir.join(f));
-    }
+    let frames = inner.frames.get_mut(dir).expect("inserted");
+    std::fs::create_dir_all(dir)?;
+    let written = if matches!(model.system, System::Continuum { dynamic: false, .. }) {
+        frames.write_static(model)?
+    } else {
+        frames.write(model)?
+    };
     inner.check_buffers();
     Ok(written)
 }

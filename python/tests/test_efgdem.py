@@ -396,9 +396,9 @@ def test_write_frame_granular(box_file, tmp_path):
     m.write_frame(tmp_path)
     m.step(10)
     paths = m.write_frame(tmp_path)
-    assert [p.name for p in paths] == ["discs_000010.vtp"]
+    assert [p.name for p in paths] == ["discs_0000010.vtp"]
     text = (tmp_path / "discs.pvd").read_text()
-    assert "frames/discs_000000.vtp" in text and "frames/discs_000010.vtp" in text
+    assert "frames/discs_0000000.vtp" in text and "frames/discs_0000010.vtp" in text
 
 
 # --- the examples ----------------------------------------------------------------
