@@ -61,11 +61,9 @@ impl EntryWatch {
 
     /// Report the discs that entered a body through a non-contact edge since
     /// the last call (at output steps: one pass over the discs, like the
-    /// energy account's) and are not yet marked in `reported` (by disc id);
-    /// returns how many.
-    fn check(&self, m: &CoupledModel, names: &[String], reported: &mut [bool]) -> usize {
+    /// energy account's) and are not yet marked in `reported` (by disc id).
+    fn check(&self, m: &CoupledModel, names: &[String], reported: &mut [bool]) {
         let p = &m.granular.particles;
-        let mut new = 0;
         for w in &self.bodies {
             let b = body(m, w.body);
             let at = w.corners.each_ref().map(|(x, at)| (*x, b.sample_at(at)));
@@ -88,7 +86,6 @@ impl EntryWatch {
                     && !reported[id]
                 {
                     reported[id] = true;
-                    new += 1;
                     eprintln!(
                         "warning: disc {} entered body `{}` through a non-contact edge ({}) at t = {:.6} s (step {}); list the edge in `contact_edges` (default: all four)",
                         id + 1,
@@ -100,7 +97,6 @@ impl EntryWatch {
                 }
             }
         }
-        new
     }
 }
 
