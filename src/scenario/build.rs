@@ -339,6 +339,10 @@ fn coupled(sc: &Scenario) -> Result<CoupledModel, Invalid> {
         bodies.push(match spec.method {
             Method::Efg => {
                 let mut body = EfgBody::new(&p, g).map_err(|e| bad(&at, e))?;
+                if spec.initial.is_some() {
+                    body.solve_static()
+                        .map_err(|e| bad(&format!("{at}.initial"), e))?;
+                }
                 body.start_dynamic(body_dt).map_err(|e| bad(&at, e))?;
                 let mut c = EfgContinuum::new(body, edges, refine)
                     .map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
@@ -347,6 +351,10 @@ fn coupled(sc: &Scenario) -> Result<CoupledModel, Invalid> {
             }
             Method::FemQ4 => {
                 let mut body = FemBody::new(&p, g).map_err(|e| bad(&at, e))?;
+                if spec.initial.is_some() {
+                    body.solve_static()
+                        .map_err(|e| bad(&format!("{at}.initial"), e))?;
+                }
                 body.start_dynamic(body_dt).map_err(|e| bad(&at, e))?;
                 let mut c = FemContinuum::new(body, edges, refine)
                     .map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
