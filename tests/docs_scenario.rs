@@ -666,7 +666,7 @@ elastic = { E = 1.0e7, nu = 0.3, density = 2000.0 }
 
 [[body.bc]]
 edge = "top"
-ux = 0.0
+fixed = true
 
 [[body.bc]]
 name = "load"
