@@ -107,16 +107,18 @@ fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid>
         .ok_or_else(|| bad(path, format!("no [[material]] named `{name}`")))
 }
 
-/// Whether [`model_with`] runs the preparation of a generated packing
-/// (`method = "deposit"` or `"grow"`).
+/// What [`model_with`] builds the model for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Prepare {
-    /// Step the gravity deposit or the radius growth (what `run` does).
+pub enum BuildFor {
+    /// A run: the gravity deposit or radius growth of a generated packing
+    /// (`method = "deposit"` or `"grow"`) is stepped.
     Run,
-    /// No time stepping (what `check` does): the discs stay where the
-    /// generator put them (a deposit's loose packing; a growth's random
-    /// centres with the final radii).
-    Skip,
+    /// `check`: no time stepping — the discs stay where the generator put
+    /// them (a deposit's loose packing; a growth's random centres with the
+    /// final radii) — and a static analysis factors and solves its bodies
+    /// once, so that a stiffness matrix that cannot be factored is reported
+    /// with the body's line.
+    Check,
 }
 
 /// The preparation of a generated packing that a run starts with.
@@ -165,7 +167,7 @@ impl std::fmt::Display for Preparation {
 }
 
 /// The discs the scenario describes (generating or reading them).
-fn disc_rows(sc: &Scenario, prepare: Prepare) -> Result<Vec<DiscRow>, Invalid> {
+fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> {
     let g = spec(sc)?;
     match &g.discs {
         DiscsSpec::Inline(rows) => Ok(rows
@@ -204,9 +206,9 @@ fn disc_rows(sc: &Scenario, prepare: Prepare) -> Result<Vec<DiscRow>, Invalid> {
                 Generator::Random => (Lattice::Hex, 0.1, t.jitter.unwrap_or(1.0)),
             };
             let (lo, hi) = (Vec2::from(a), Vec2::from(b));
-            let steps = match prepare {
-                Prepare::Run => t.settle_steps.unwrap_or(SETTLE_STEPS),
-                Prepare::Skip => 0,
+            let steps = match purpose {
+                BuildFor::Run => t.settle_steps.unwrap_or(SETTLE_STEPS),
+                BuildFor::Check => 0,
             };
             if kind == Generator::Random && t.method == Packing::Grow {
                 let count = t
@@ -275,12 +277,12 @@ fn deposit(
 /// Build the assembly described by the scenario. `dt` is the scenario's,
 /// or [`DT_SAFETY`] × the critical step.
 pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
-    granular_with(sc, Prepare::Run)
+    granular_with(sc, BuildFor::Run)
 }
 
-fn granular_with(sc: &Scenario, prepare: Prepare) -> Result<Granular, Invalid> {
+fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> {
     let g = spec(sc)?;
-    let rows = disc_rows(sc, prepare)?;
+    let rows = disc_rows(sc, purpose)?;
     let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
     let mut p = Particles::default();
@@ -300,6 +302,19 @@ fn granular_with(sc: &Scenario, prepare: Prepare) -> Result<Granular, Invalid> {
         }
         p.push(r.pos, r.r, m.density, g.thickness, mi);
         p.vel[k] = v0;
+        let (mass, inertia) = (p.mass[k], p.inertia[k]);
+        if !(mass.is_finite() && mass > 0.0 && inertia.is_finite() && inertia > 0.0) {
+            return Err(bad(
+                "granular.thickness",
+                format!(
+                    "disc {}: its mass ρπr²t = {mass:e} and moment of inertia m r²/2 = {inertia:e} must be finite and > 0 (ρ = {:e}, r = {:e}, t = {:e})",
+                    k + 1,
+                    m.density,
+                    r.r,
+                    g.thickness
+                ),
+            ));
+        }
     }
     let mut walls = Vec::new();
     for (wi, w) in sc.wall.iter().enumerate() {
@@ -356,8 +371,10 @@ fn steps_of(sc: &Scenario, dt: f64) -> usize {
 }
 
 /// The continuum bodies of a continuum-only scenario, started for a
-/// dynamic analysis at `dt` (after their initial static state, if any).
-fn bodies(sc: &Scenario, dt: Option<f64>) -> Result<Vec<Body>, Invalid> {
+/// dynamic analysis at `dt` (after their initial static state, if any);
+/// for a static analysis with `trial`, solved once (the solution is not
+/// kept by the caller: `check` only wants to know that K̄ factors).
+fn bodies(sc: &Scenario, dt: Option<f64>, trial: bool) -> Result<Vec<Body>, Invalid> {
     let g = sc.simulation.gravity;
     sc.body
         .iter()
@@ -375,6 +392,8 @@ fn bodies(sc: &Scenario, dt: Option<f64>) -> Result<Vec<Body>, Invalid> {
                         .map_err(|e| bad(&format!("{at}.initial"), e))?;
                 }
                 b.start_dynamic(dt).map_err(|e| bad(&at, e))?;
+            } else if trial {
+                b.solve_static().map_err(|e| bad(&at, e))?;
             }
             Ok(b)
         })
@@ -383,8 +402,8 @@ fn bodies(sc: &Scenario, dt: Option<f64>) -> Result<Vec<Body>, Invalid> {
 
 /// The coupled model: discs, walls and bodies (EFG or FE) with each
 /// body's Newmark matrix factored for `dt × substeps`.
-fn coupled(sc: &Scenario, prepare: Prepare) -> Result<CoupledModel, Invalid> {
-    let granular = granular_with(sc, prepare)?;
+fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
+    let granular = granular_with(sc, purpose)?;
     let substeps = sc.simulation.substeps.max(1);
     let body_dt = granular.dt * substeps as f64;
     let mode = match sc.simulation.contact_solve {
@@ -432,14 +451,14 @@ fn coupled(sc: &Scenario, prepare: Prepare) -> Result<CoupledModel, Invalid> {
 
 /// Build the model (see [`Scenario::build`]); problems carry field paths.
 pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
-    model_with(sc, Prepare::Run)
+    model_with(sc, BuildFor::Run)
 }
 
-/// [`model`], with or without the preparation of a generated packing.
+/// [`model`] for a run or for `check` (see [`BuildFor`]).
 /// First of all, a run whose estimated memory
 /// ([`memory_estimate`]) exceeds the machine's is refused, before anything
 /// is allocated.
-pub fn model_with(sc: &Scenario, prepare: Prepare) -> Result<Model, Invalid> {
+pub fn model_with(sc: &Scenario, purpose: BuildFor) -> Result<Model, Invalid> {
     check_memory(sc)?;
     let dynamic = sc.simulation.analysis == Analysis::Dynamic;
     let model = match super::kind(sc) {
@@ -454,7 +473,7 @@ pub fn model_with(sc: &Scenario, prepare: Prepare) -> Result<Model, Invalid> {
             let steps = dt.map_or(0, |dt| steps_of(sc, dt));
             Model {
                 system: System::Continuum {
-                    bodies: bodies(sc, dt)?,
+                    bodies: bodies(sc, dt, purpose == BuildFor::Check)?,
                     dynamic,
                 },
                 dt: dt.unwrap_or(0.0),
@@ -463,7 +482,7 @@ pub fn model_with(sc: &Scenario, prepare: Prepare) -> Result<Model, Invalid> {
             }
         }
         super::Kind::Granular => {
-            let g = granular_with(sc, prepare)?;
+            let g = granular_with(sc, purpose)?;
             Model {
                 dt: g.dt,
                 steps: steps_of(sc, g.dt),
@@ -472,7 +491,7 @@ pub fn model_with(sc: &Scenario, prepare: Prepare) -> Result<Model, Invalid> {
             }
         }
         super::Kind::Coupled => {
-            let m = coupled(sc, prepare)?;
+            let m = coupled(sc, purpose)?;
             Model {
                 dt: m.granular.dt,
                 steps: steps_of(sc, m.granular.dt),
@@ -481,6 +500,9 @@ pub fn model_with(sc: &Scenario, prepare: Prepare) -> Result<Model, Invalid> {
             }
         }
     };
+    if let Some((path, message)) = super::body::absurd_motion(sc, model.steps, model.dt) {
+        return Err(bad(&path, message));
+    }
     if let Some(g) = model.granular() {
         start_state(sc, g)?;
     }
@@ -712,6 +734,66 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
                 DT_WARN * crit
             ),
         ));
+    }
+    // a disc must not fall through a contact in one step: |g| Δt² < r_min
+    let fall = g.gravity.norm() * g.dt * g.dt;
+    let r_min = g
+        .particles
+        .radius
+        .iter()
+        .fold(f64::INFINITY, |a, &r| a.min(r));
+    if !(fall < r_min) {
+        return Err(bad(
+            "simulation.gravity",
+            format!(
+                "|g| Δt² = {fall:e}: a disc would fall by more than the smallest radius ({r_min:e}) in a single step of dt = {:e}, through any contact",
+                g.dt
+            ),
+        ));
+    }
+    // nor a disc or wall cross a disc in its first step: |v| Δt < r_min
+    let step = |v: Vec2| v.norm() * g.dt;
+    let through = |path: String, what: &str, d: f64| {
+        Err(bad(
+            &path,
+            format!(
+                "{what} moves {d:e} in one step of dt = {:e}, more than the smallest disc radius ({r_min:e}): it would pass through discs without touching them",
+                g.dt
+            ),
+        ))
+    };
+    let v0 = spec(sc)?.velocity.map_or(0.0, |v| step(Vec2::from(v)));
+    if !(v0 < r_min) {
+        return through(
+            "granular.velocity".into(),
+            "a disc at the initial velocity",
+            v0,
+        );
+    }
+    for (wi, w) in sc.wall.iter().enumerate() {
+        let fastest = w
+            .velocity
+            .iter()
+            .map(|&v| step(Vec2::from(v)))
+            .chain(
+                w.history
+                    .iter()
+                    .flatten()
+                    .map(|r| step(Vec2::new(r[1], r[2]))),
+            )
+            .fold(0.0, f64::max);
+        if !(fastest < r_min) {
+            let f = if w.velocity.is_some() {
+                "velocity"
+            } else {
+                "history"
+            };
+            return through(
+                format!("wall.{wi}.{f}"),
+                &format!("wall `{}`", w.name),
+                fastest,
+            );
+        }
     }
     let spec = spec(sc)?;
     let settled = matches!(&spec.discs, DiscsSpec::Table(t)
