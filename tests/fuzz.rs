@@ -520,6 +520,28 @@ const KEYS: &[&str] = &[
 
 fn weird_number(rng: &mut Rng, old: Option<f64>) -> Value {
     let x = old.unwrap_or(1.0);
+    if rng.chance(0.35) {
+        // near the old value or small: edge cases of the logic rather
+        // than of the arithmetic (grids of 2 nodes, 1 Gauss point, d_max
+        // near 1, disc 0, a radius as large as the box)
+        let is_int = x.fract() == 0.0 && x.abs() < 1e15;
+        let v = match rng.below(9) {
+            0 => x + 1.0,
+            1 => x - 1.0,
+            2 => x * 2.0,
+            3 => x / 2.0,
+            4 => 1.0,
+            5 => 2.0,
+            6 => 3.0,
+            7 => x * 1.000_000_1,
+            _ => x * 0.999_999_9,
+        };
+        return if is_int && v.fract() == 0.0 {
+            Value::from(v as i64)
+        } else {
+            Value::from(v)
+        };
+    }
     match rng.below(17) {
         0 => Value::from(0i64),
         1 => Value::from(0.0),
@@ -1067,4 +1089,238 @@ fn thousands_of_mutated_scenarios_never_panic() {
         "{} check errors that are not scenario errors",
         other.len()
     );
+}
+
+// ---------------------------------------------------------------------------
+// Regression tests: the minimal reproducers of what the fuzzing (and the
+// hand-made bad inputs of issue 12) found.
+
+/// The message of the located scenario error `check` (through the
+/// library, as `efgdem check` does) gives for `text`; panics if it is
+/// accepted or fails otherwise.
+fn refused(name: &str, text: &str) -> String {
+    let e = match scenario::parse(text, name) {
+        Err(e) => e,
+        Ok(sc) => match efgdem::run::check(&sc) {
+            Err(RunError::Scenario(e)) => e,
+            Err(e) => panic!("{name}: not a scenario error: {e}"),
+            Ok(report) => panic!("{name}: accepted:\n{report}"),
+        },
+    };
+    assert_located(&e, name, text);
+    e.to_string()
+}
+
+/// The Timoshenko cantilever of `examples/timoshenko.toml`, static, with
+/// `size` and the right edge's condition `right`.
+fn cantilever(size: &str, right: &str) -> String {
+    format!(
+        r#"[simulation]
+analysis = "static"
+[[body]]
+name = "beam"
+rectangle = {{ origin = [0.0, -6.0], size = [{size}] }}
+nodes = [33, 9]
+elastic = {{ E = 3.0e7, nu = 0.3 }}
+[[body.bc]]
+edge = "left"
+fixed = true
+[[body.bc]]
+edge = "right"
+{right}
+[[probe]]
+name = "tip_uy"
+point = [0.0, 0.0]
+quantity = "uy"
+"#
+    )
+}
+
+/// A 48 × 1e11 rectangle (issue 12: an index panic in the EFG assembly,
+/// then a silent run with a 6·10⁷ relative energy error): the node
+/// spacings differ by 8·10⁹; refused at the size.
+#[test]
+fn regression_a_48_by_1e11_rectangle_is_refused_at_its_size() {
+    let e = refused(
+        "huge.toml",
+        &cantilever("48.0, 1e11", "parabolic_shear = -1000.0"),
+    );
+    assert!(e.starts_with("huge.toml:5: body[0].rectangle.size: the node spacing is 1.500e0 along x and 1.250e10 along y"), "{e}");
+    // the same 1e11 along x: K̄ could not be factored at run time (exit 1)
+    let e = refused(
+        "long.toml",
+        &cantilever("1e11, 12.0", "parabolic_shear = -1000.0"),
+    );
+    assert!(e.contains("long.toml:5: body[0].rectangle.size:"), "{e}");
+    // sizes beyond 1e30 overflow products of lengths (an FE body of
+    // 48 × 1e300 wrote NaN with exit 0)
+    let e = refused(
+        "fem.toml",
+        &cantilever("48.0, 1e300", "parabolic_shear = -1000.0")
+            .replace("[[body]]\n", "[[body]]\nmethod = \"fem-q4\"\n"),
+    );
+    assert!(
+        e.contains("fem.toml:6: body[0].rectangle: coordinates and sizes must be at most 1e30"),
+        "{e}"
+    );
+}
+
+/// `uy = -1e300` prescribed: `efgdem run` wrote NaN to `history.csv` and
+/// exited 0. Refused (exit 2, file:line: field) before anything is written.
+#[test]
+fn regression_a_prescribed_uy_of_minus_1e300_is_refused_and_writes_no_nan() {
+    let text = cantilever("48.0, 12.0", "uy = -1e300");
+    let e = refused("uy.toml", &text);
+    assert!(
+        e.starts_with("uy.toml:13: body[0].bc[1].uy: a prescribed displacement of 1e300 is more than 1e6 × the body's size"),
+        "{e}"
+    );
+    // through the command line: exit 2 and no history
+    let dir = std::env::temp_dir().join(format!("efgdem-fuzz-uy-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("uy.toml");
+    std::fs::write(&f, &text).unwrap();
+    let out = dir.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
+        .args([
+            "run",
+            f.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("uy.toml:13: body[0].bc[1].uy:"), "{err}");
+    assert!(!out.join("history.csv").exists());
+    // the same field as a linear field, and a motion that runs away
+    let e = refused(
+        "lin.toml",
+        &cantilever("48.0, 12.0", "uy = { linear = [0.0, 1e300, 0.0] }"),
+    );
+    assert!(
+        e.contains("lin.toml:13: body[0].bc[1].uy: a prescribed displacement of"),
+        "{e}"
+    );
+    let dynamic = cantilever("48.0, 12.0", "uy = { velocity = -1e300 }")
+        .replace("analysis = \"static\"", "dt = 1e-3\nsteps = 3")
+        .replace("nu = 0.3 }", "nu = 0.3, density = 1.0 }");
+    let e = refused("motion.toml", &dynamic);
+    assert!(
+        e.contains("motion.toml:14: body[0].bc[1].uy: the edge would move by 3"),
+        "{e}"
+    );
+    // a small or ordinary displacement is fine
+    for ok in ["uy = 1e-300", "uy = -0.1"] {
+        let sc = scenario::parse(&cantilever("48.0, 12.0", ok), "ok.toml").unwrap();
+        efgdem::run::check(&sc).unwrap();
+    }
+}
+
+/// Loads of 1e300 (as a stress, more than 10⁶ × E) gave ±1e296
+/// displacements; a body's thickness of 1e300 wrote NaN energies.
+#[test]
+fn regression_absurd_loads_and_thickness_of_a_body_are_refused() {
+    let e = refused(
+        "t.toml",
+        &cantilever("48.0, 12.0", "traction = [0.0, -1e300]"),
+    );
+    assert!(
+        e.contains(
+            "t.toml:13: body[0].bc[1].traction: a load of 1e300 (as a stress) is more than 1e6 × E"
+        ),
+        "{e}"
+    );
+    let e = refused(
+        "p.toml",
+        &cantilever("48.0, 12.0", "parabolic_shear = -1e300"),
+    );
+    assert!(
+        e.contains("p.toml:13: body[0].bc[1].parabolic_shear:"),
+        "{e}"
+    );
+    let e = refused(
+        "th.toml",
+        &cantilever("48.0, 12.0", "parabolic_shear = -1000.0")
+            .replace("nu = 0.3 }", "nu = 0.3, thickness = 1e300 }"),
+    );
+    assert!(
+        e.contains("th.toml:7: body[0].elastic.thickness: a length: at most 1e30"),
+        "{e}"
+    );
+}
+
+/// A penalty of 1e300 passes the validation, but K̄ cannot be factored: a
+/// static run failed with exit 1 and no line; `check` now solves a static
+/// analysis once and reports it at the body.
+#[test]
+fn regression_a_static_body_that_cannot_be_factored_is_located_by_check() {
+    let text = cantilever("48.0, 12.0", "parabolic_shear = -1000.0")
+        .replace("nu = 0.3 }", "nu = 0.3 }\npenalty = 1e300");
+    let e = refused("pen.toml", &text);
+    assert!(
+        e.contains("pen.toml:4: body[0]: ") && e.contains("not positive definite"),
+        "{e}"
+    );
+}
+
+/// A coupled scenario (the paper's disc on a beam) with `gravity`,
+/// `[granular] thickness` or a disc velocity of 1e300: NaN or inf in
+/// `history.csv` with exit 0.
+#[test]
+fn regression_absurd_gravity_thickness_and_velocities_of_discs_are_refused() {
+    let base = r#"[simulation]
+dt = 1.0e-4
+steps = 5
+gravity = [0.0, -9.81]
+[[material]]
+name = "disc"
+density = 1000.0
+kn = 1.0e6
+ks = 1.0e6
+[granular]
+material = "disc"
+discs = [[0.5, 0.3, 0.05]]
+[[wall]]
+name = "floor"
+from = [0.0, 0.0]
+to = [1.0, 0.0]
+"#;
+    let e = refused("g.toml", &base.replace("[0.0, -9.81]", "[1e300, -9.81]"));
+    assert!(e.contains("g.toml:4: simulation.gravity: |g| Δt² = 1.000e292: a disc would fall by more than the smallest radius"), "{e}");
+    let e = refused(
+        "t.toml",
+        &base.replace(
+            "material = \"disc\"\n",
+            "material = \"disc\"\nthickness = 1e308\n",
+        ),
+    );
+    assert!(
+        e.contains("t.toml:12: granular.thickness: disc 1: its mass ρπr²t = inf"),
+        "{e}"
+    );
+    let e = refused(
+        "v.toml",
+        &base.replace("0.05]]\n", "0.05]]\nvelocity = [0.0, -1e300]\n"),
+    );
+    assert!(e.contains("v.toml:13: granular.velocity: a disc at the initial velocity moves 1.000e296 in one step"), "{e}");
+    let e = refused("w.toml", &format!("{base}velocity = [0.0, 1e300]\n"));
+    assert!(
+        e.contains("w.toml:17: wall[0].velocity: wall `floor` moves 1.000e296 in one step"),
+        "{e}"
+    );
+    let e = refused(
+        "h.toml",
+        &format!("{base}history = [[0.0, 0.0, 0.0], [1.0, 1e300, 0.0]]\n"),
+    );
+    assert!(
+        e.contains("h.toml:17: wall[0].history: wall `floor` moves"),
+        "{e}"
+    );
+    // ordinary values pass
+    let sc = scenario::parse(base, "ok.toml").unwrap();
+    efgdem::run::check(&sc).unwrap();
 }

@@ -252,7 +252,7 @@ fn validate_magnitudes(sc: &Scenario, i: usize, b: &BodySpec, p: &mut Problems) 
     let length = size[0].max(size[1]);
     let (e, rho) = (b.elastic.e, b.elastic.density);
     let g = sc.simulation.gravity;
-    let weight = rho * (g[0] * g[0] + g[1] * g[1]).sqrt() * length;
+    let weight = rho * g[0].hypot(g[1]) * length;
     if b.self_weight && e.is_finite() && e > 0.0 && rho.is_finite() && weight.is_finite() {
         p.check(
             weight <= MAX_RELATIVE_MAGNITUDE * e,

@@ -736,7 +736,7 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
         ));
     }
     // a disc must not fall through a contact in one step: |g| Δt² < r_min
-    let fall = g.gravity.norm() * g.dt * g.dt;
+    let fall = g.gravity.x.hypot(g.gravity.y) * g.dt * g.dt;
     let r_min = g
         .particles
         .radius
@@ -746,18 +746,18 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
         return Err(bad(
             "simulation.gravity",
             format!(
-                "|g| Δt² = {fall:e}: a disc would fall by more than the smallest radius ({r_min:e}) in a single step of dt = {:e}, through any contact",
+                "|g| Δt² = {fall:.3e}: a disc would fall by more than the smallest radius ({r_min:e}) in a single step of dt = {:e}, through any contact",
                 g.dt
             ),
         ));
     }
     // nor a disc or wall cross a disc in its first step: |v| Δt < r_min
-    let step = |v: Vec2| v.norm() * g.dt;
+    let step = |v: Vec2| v.x.hypot(v.y) * g.dt;
     let through = |path: String, what: &str, d: f64| {
         Err(bad(
             &path,
             format!(
-                "{what} moves {d:e} in one step of dt = {:e}, more than the smallest disc radius ({r_min:e}): it would pass through discs without touching them",
+                "{what} moves {d:.3e} in one step of dt = {:e}, more than the smallest disc radius ({r_min:e}): it would pass through discs without touching them",
                 g.dt
             ),
         ))
