@@ -849,16 +849,16 @@ fn mutant(text: &str, rng: &mut Rng) -> String {
     };
     let mut s = text.to_string();
     for _ in 0..k {
-        if rng.chance(0.8) {
-            if let Ok(mut doc) = s.parse::<DocumentMut>() {
-                for _ in 0..4 {
-                    if mutate_doc(&mut doc, rng) {
-                        break;
-                    }
+        if rng.chance(0.8)
+            && let Ok(mut doc) = s.parse::<DocumentMut>()
+        {
+            for _ in 0..4 {
+                if mutate_doc(&mut doc, rng) {
+                    break;
                 }
-                s = doc.to_string();
-                continue;
             }
+            s = doc.to_string();
+            continue;
         }
         s = mutate_text(&s, rng);
     }
@@ -960,10 +960,25 @@ fn check_one(name: &str, dir: &Path, text: &str) -> (Outcome, Option<Scenario>) 
     })
 }
 
-/// A short run of an accepted mutant: a few steps, a short preparation.
-/// `Ok(Some(non-finite history))`, `Ok(None)` for a clean run or a proper
-/// error, `Err(panic)`.
-fn short_run(mut sc: Scenario, out: &Path, steps: usize) -> Result<Option<String>, String> {
+/// What became of a short run.
+enum RunOutcome {
+    /// Finished, every history value finite.
+    Clean,
+    /// Too large for this test (estimated memory above the budget).
+    Skipped,
+    /// Failed with a scenario error (what `check` should have found).
+    Refused(String),
+    /// Failed with a model or i/o error (an instability, a solve).
+    Failed(String),
+    /// Finished with exit 0 but a non-finite value in `history.csv`.
+    NonFinite(String),
+    /// A panic: where and why.
+    Panic(String),
+}
+
+/// A short run of an accepted mutant: `steps` steps, a preparation of at
+/// most 200 steps, frames every 2 steps if any.
+fn short_run(mut sc: Scenario, out: &Path, steps: usize) -> RunOutcome {
     sc.simulation.steps = Some(steps);
     sc.simulation.end_time = None;
     if sc.output.vtk_every > 0 {
@@ -975,7 +990,7 @@ fn short_run(mut sc: Scenario, out: &Path, steps: usize) -> Result<Option<String
         t.settle_steps = Some(t.settle_steps.unwrap_or(200).min(200));
     }
     if scenario::build::memory_estimate(&sc).total() > BUILD_BUDGET {
-        return Ok(None);
+        return RunOutcome::Skipped;
     }
     let _ = std::fs::remove_dir_all(out);
     *LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()) = None;
@@ -985,19 +1000,26 @@ fn short_run(mut sc: Scenario, out: &Path, steps: usize) -> Result<Option<String
     };
     let r = catch_unwind(AssertUnwindSafe(|| efgdem::run::run(&sc, &opts)));
     match r {
-        Err(_) => Err(LAST_PANIC
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .take()
-            .unwrap_or_default()),
-        Ok(Err(_)) => Ok(None),
+        Err(_) => RunOutcome::Panic(
+            LAST_PANIC
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .take()
+                .unwrap_or_default(),
+        ),
+        Ok(Err(RunError::Scenario(e))) => RunOutcome::Refused(e.to_string()),
+        Ok(Err(e)) => {
+            let msg = e.to_string();
+            assert!(!msg.trim().is_empty(), "an error without a message");
+            RunOutcome::Failed(msg)
+        }
         Ok(Ok(_)) => {
             let h = std::fs::read_to_string(out.join("history.csv")).unwrap_or_default();
             let bad = h.lines().skip(1).find(|l| {
                 l.split(',')
                     .any(|f| f.trim().parse::<f64>().is_ok_and(|v| !v.is_finite()))
             });
-            Ok(bad.map(|l| l.to_string()))
+            bad.map_or(RunOutcome::Clean, |l| RunOutcome::NonFinite(l.to_string()))
         }
     }
 }
@@ -1022,6 +1044,9 @@ fn thousands_of_mutated_scenarios_never_panic() {
     let mut other: Vec<(String, String, String)> = Vec::new();
     let mut panics: Vec<(String, String, String)> = Vec::new();
     let (mut runs, mut run_nonfinite) = (0, Vec::new());
+    let (mut runs_clean, mut runs_skipped) = (0, 0);
+    let mut runs_failed: Vec<(String, String)> = Vec::new();
+    let mut runs_refused: Vec<(String, String)> = Vec::new();
     let mut slowest = (0.0, String::new());
     for k in 0..n {
         let (name, dir, text) = &seeds[k % seeds.len()];
@@ -1048,9 +1073,12 @@ fn thousands_of_mutated_scenarios_never_panic() {
             runs += 1;
             let steps = 2 + rng.below(9);
             match short_run(sc, &out_root.join(&file), steps) {
-                Ok(None) => {}
-                Ok(Some(row)) => run_nonfinite.push((file.clone(), row, m.clone())),
-                Err(why) => panics.push((format!("{file} (run)"), why, m.clone())),
+                RunOutcome::Clean => runs_clean += 1,
+                RunOutcome::Skipped => runs_skipped += 1,
+                RunOutcome::Failed(e) => runs_failed.push((file.clone(), e)),
+                RunOutcome::Refused(e) => runs_refused.push((file.clone(), e)),
+                RunOutcome::NonFinite(row) => run_nonfinite.push((file.clone(), row, m.clone())),
+                RunOutcome::Panic(why) => panics.push((format!("{file} (run)"), why, m.clone())),
             }
             let _ = std::fs::remove_dir_all(out_root.join(&file));
         }
@@ -1061,17 +1089,27 @@ fn thousands_of_mutated_scenarios_never_panic() {
         "{n} mutants of {} scenarios in {:.1} s: {refused} refused with located errors \
          ({parse_refused} by parse/validation, {check_refused} by check), {accepted} accepted, \
          {too_large} too large to build here, {} other errors, {} panics; \
-         {runs} short runs ({} wrote non-finite history rows); slowest check {:.2} s ({})",
+         {runs} short runs ({runs_clean} clean, {} failed with a model error, {} refused \
+         what check accepted, {} wrote non-finite history rows with exit 0, {runs_skipped} too \
+         large); slowest check {:.2} s ({})",
         seeds.len(),
         t0.elapsed().as_secs_f64(),
         other.len(),
         panics.len(),
+        runs_failed.len(),
+        runs_refused.len(),
         run_nonfinite.len(),
         slowest.0,
         slowest.1,
     );
     for (f, e, m) in other.iter().take(5) {
         println!("--- {f}: not a scenario error: {e}\n{m}");
+    }
+    for (f, e) in runs_failed.iter().take(5) {
+        println!("--- {f}: run failed (a proper error): {e}");
+    }
+    for (f, e) in runs_refused.iter().take(5) {
+        println!("--- {f}: run refused what check accepted: {e}");
     }
     for (f, row, m) in run_nonfinite.iter().take(5) {
         println!("--- {f}: exit 0 with a non-finite history row: {row}\n{m}");

@@ -575,7 +575,7 @@ mod tests {
             assert_eq!(near, 5, "far = {far}");
             let ncells = g.grid.nx * g.grid.ny;
             assert!(
-                ncells >= 1 && ncells <= 4 * 10 + 16,
+                (1..=4 * 10 + 16).contains(&ncells),
                 "far = {far}: {ncells} cells"
             );
         }

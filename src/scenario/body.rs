@@ -326,7 +326,7 @@ pub fn absurd_motion(sc: &Scenario, steps: usize, dt: f64) -> Option<(String, St
             for (f, v) in [("ux", bc.ux), ("uy", bc.uy)] {
                 if let Some(Prescribed::Motion(m)) = v {
                     let d = m.displacement(steps, dt).abs();
-                    if !(d <= MAX_RELATIVE_MAGNITUDE * length) {
+                    if d.is_nan() || d > MAX_RELATIVE_MAGNITUDE * length {
                         return Some((
                             format!("body.{i}.bc.{k}.{f}"),
                             format!(

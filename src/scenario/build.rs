@@ -742,7 +742,7 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
         .radius
         .iter()
         .fold(f64::INFINITY, |a, &r| a.min(r));
-    if !(fall < r_min) {
+    if fall.is_nan() || fall >= r_min {
         return Err(bad(
             "simulation.gravity",
             format!(
@@ -763,7 +763,7 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
         ))
     };
     let v0 = spec(sc)?.velocity.map_or(0.0, |v| step(Vec2::from(v)));
-    if !(v0 < r_min) {
+    if v0.is_nan() || v0 >= r_min {
         return through(
             "granular.velocity".into(),
             "a disc at the initial velocity",
@@ -782,7 +782,7 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
                     .map(|r| step(Vec2::new(r[1], r[2]))),
             )
             .fold(0.0, f64::max);
-        if !(fastest < r_min) {
+        if fastest.is_nan() || fastest >= r_min {
             let f = if w.velocity.is_some() {
                 "velocity"
             } else {
