@@ -95,6 +95,16 @@ pub enum Plane {
     Strain,
 }
 
+/// As the scenario names it: `stress` or `strain`.
+impl std::fmt::Display for Plane {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Plane::Stress => "stress",
+            Plane::Strain => "strain",
+        })
+    }
+}
+
 /// Everything needed to build a body (EFG or FE) on a rectangle.
 #[derive(Debug, Clone)]
 pub struct BodyParams {

@@ -236,31 +236,49 @@ impl NeighbourGrid {
     }
 
     /// Bin the discs (counting sort, stable in slot order).
+    ///
+    /// The grid spans the finite disc centres; a disc with a non-finite
+    /// centre (an instability) goes to the first cell. However far apart
+    /// the discs are (after an instability: 1e19 and more, up to an extent
+    /// that overflows to infinity), the cell count stays at most ~4 per disc:
+    /// the cell grows by doubling until the grid fits, and a grid that
+    /// cannot fit (infinite extent) is a single cell.
     fn bin(&mut self, p: &Particles) {
         let n = p.len();
         let (mut lo, mut hi) = (
             Vec2::new(f64::INFINITY, f64::INFINITY),
             Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
         );
-        for q in &p.pos {
+        for q in p.pos.iter().filter(|q| q.x.is_finite() && q.y.is_finite()) {
             lo = Vec2::new(lo.x.min(q.x), lo.y.min(q.y));
             hi = Vec2::new(hi.x.max(q.x), hi.y.max(q.y));
         }
-        if n == 0 {
+        if !(lo.x <= hi.x && lo.y <= hi.y) {
+            // no disc, or none with a finite centre
             lo = Vec2::ZERO;
             hi = Vec2::ZERO;
         }
         let mut h = (2.0 * p.max_radius() + self.skin).max(1e-300);
-        let ext = hi - lo;
+        if !h.is_finite() {
+            h = f64::MAX;
+        }
+        let ext = hi - lo; // may overflow to +∞ for centres near ±f64::MAX
         // Cap the number of cells at ~4 per disc (a disc flying far away
-        // must not blow up the grid).
-        let max_cells = 4 * n + 16;
+        // must not blow up the grid). Counted in floating point: an extent
+        // of 1e19 cells must not wrap around in `usize`.
+        let max_cells = (4 * n + 16) as f64;
+        let cells = |e: f64, h: f64| (e / h).floor() + 1.0;
         loop {
-            let nx = (ext.x / h).floor() as usize + 1;
-            let ny = (ext.y / h).floor() as usize + 1;
-            if nx.saturating_mul(ny) <= max_cells {
-                self.nx = nx;
-                self.ny = ny;
+            let (fx, fy) = (cells(ext.x, h), cells(ext.y, h));
+            if fx.is_finite() && fy.is_finite() && fx * fy <= max_cells {
+                self.nx = fx as usize;
+                self.ny = fy as usize;
+                break;
+            }
+            if h >= f64::MAX / 2.0 {
+                // an infinite extent: one cell (every pair is tested)
+                self.nx = 1;
+                self.ny = 1;
                 break;
             }
             h *= 2.0;
@@ -504,6 +522,64 @@ impl NeighbourGrid {
 #[cfg(test)]
 mod tests {
     use super::block_size;
+    use crate::dem::Granular;
+    use crate::dem::contact::ContactLaw;
+    use crate::dem::particles::Particles;
+    use crate::dem::walls::{Wall, WallMotion};
+    use crate::geom::Vec2;
+
+    /// Issue 12: after an instability discs fly ~1e19 apart; the grid's cell
+    /// count was computed in `usize` and wrapped around (index out of bounds
+    /// in `bin`). A disc at 1e19, 1e300, ±∞ or NaN must not break the
+    /// rebuild, and the discs that still touch are still found.
+    #[test]
+    fn a_disc_thrown_far_away_does_not_break_the_grid() {
+        for far in [1e19, -1e19, 1e300, f64::MAX, f64::INFINITY, f64::NAN] {
+            let mut p = Particles::default();
+            for k in 0..10 {
+                p.push(Vec2::new(1.9 * k as f64, 0.0), 1.0, 1.0, 1.0, 0);
+            }
+            let law = ContactLaw {
+                kn: 1e6,
+                ks: 1e6,
+                ..Default::default()
+            };
+            let wall = Wall::new(
+                "floor",
+                Vec2::new(-5.0, -1.0),
+                Vec2::new(50.0, -1.0),
+                WallMotion::Fixed,
+            );
+            let mut g = Granular::new(p, vec![law], vec![wall], 1e-4);
+            g.step();
+            // one disc far away in x, another far away in both directions
+            let (a, b) = (g.slot(3), g.slot(7));
+            g.particles.pos[a] = Vec2::new(far, 0.0);
+            g.particles.pos[b] = Vec2::new(-far, far);
+            g.grid.stale = true;
+            g.prepare_contacts();
+            g.grid.stale = true;
+            g.prepare_contacts(); // a renumbering rebuild too
+            // the chain 0-1-2 and 4-5-6 and 8-9 still touch: 2 + 2 + 1 pairs
+            let near = g
+                .contacts
+                .pairs
+                .iter()
+                .filter(|q| {
+                    let (i, j) = (q.i as usize, q.j as usize);
+                    g.particles.pos[i].x.is_finite()
+                        && g.particles.pos[j].x.is_finite()
+                        && (g.particles.pos[i] - g.particles.pos[j]).norm() < 2.0
+                })
+                .count();
+            assert_eq!(near, 5, "far = {far}");
+            let ncells = g.grid.nx * g.grid.ny;
+            assert!(
+                (1..=4 * 10 + 16).contains(&ncells),
+                "far = {far}: {ncells} cells"
+            );
+        }
+    }
 
     /// Powers of two in [512, 4096], at least 16 blocks once n allows it.
     #[test]

@@ -28,6 +28,30 @@ pub enum Lattice {
     Hex,
 }
 
+/// Number of lattice sites [`lattice_packing`] finds in the box `[lo, hi]`
+/// for discs of largest radius `r_max` (as a float: a huge box holds more
+/// discs than a `usize` counts; 0 if not even one fits). Nothing is
+/// allocated: the memory of a run is estimated from it before generating.
+pub fn lattice_capacity(lattice: Lattice, lo: Vec2, hi: Vec2, r_max: f64, gap: f64) -> f64 {
+    let s = 2.0 * r_max * (1.0 + gap);
+    let (w, h) = (hi.x - lo.x, hi.y - lo.y);
+    if !(w >= 2.0 * r_max && h >= 2.0 * r_max) {
+        return 0.0;
+    }
+    let row_dy = match lattice {
+        Lattice::Square => s,
+        Lattice::Hex => s * 3f64.sqrt() / 2.0,
+    };
+    let ny = ((h - s) / row_dy).floor() + 1.0;
+    let nx = ((w - s) / s).floor() + 1.0;
+    let v = ny * nx;
+    if v.is_nan() {
+        f64::INFINITY
+    } else {
+        v.max(0.0)
+    }
+}
+
 /// Discs on a square or hexagonal lattice filling the box `[lo, hi]`, row
 /// by row from the bottom, at most `count` of them.
 ///
@@ -59,7 +83,9 @@ pub fn lattice_packing(
         Lattice::Hex => s * 3f64.sqrt() / 2.0,
     };
     let half = 0.5 * s;
-    let ny = ((h - s) / row_dy).floor() as usize + 1;
+    // saturating: a radius tiny against the box gives more rows than a
+    // `usize` counts (the rows are only walked up to `count`)
+    let ny = (((h - s) / row_dy).floor() as usize).saturating_add(1);
     let mut rng = oorandom::Rand64::new(seed as u128);
     let mut out = Vec::new();
     let want = count.unwrap_or(usize::MAX);
@@ -69,8 +95,8 @@ pub fn lattice_packing(
         } else {
             0.0
         };
-        let nx = ((w - s - shift) / s).floor() as isize + 1;
-        for i in 0..nx.max(0) as usize {
+        let nx = (((w - s - shift) / s).floor() + 1.0).max(0.0) as usize;
+        for i in 0..nx {
             if out.len() >= want {
                 break 'rows;
             }

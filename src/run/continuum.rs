@@ -190,7 +190,7 @@ pub(super) fn check(sc: &Scenario, model: &Model) -> String {
                 );
                 let _ = writeln!(
                     s,
-                    "  material: E = {}, ν = {}, ρ = {}, t = {}, plane {:?}",
+                    "  material: E = {}, ν = {}, ρ = {}, t = {}, plane {}",
                     b.material.e,
                     b.material.nu,
                     b.material.density,
@@ -225,7 +225,7 @@ pub(super) fn check(sc: &Scenario, model: &Model) -> String {
         );
         let _ = writeln!(
             s,
-            "  material: E = {}, ν = {}, ρ = {}, t = {}, plane {:?}; penalty α = {:e}",
+            "  material: E = {}, ν = {}, ρ = {}, t = {}, plane {}; penalty α = {:e}",
             b.material.e,
             b.material.nu,
             b.material.density,
@@ -251,16 +251,19 @@ pub(super) fn check(sc: &Scenario, model: &Model) -> String {
     }
     let _ = writeln!(
         s,
-        "analysis: {:?}{}; {} probe(s)",
-        sc.simulation.analysis,
+        "analysis: {}{}; {} probe(s)",
+        match sc.simulation.analysis {
+            Analysis::Static => "static",
+            Analysis::Dynamic => "dynamic",
+        },
         match (
             sc.simulation.analysis,
             sc.simulation.dt,
-            sc.simulation.steps
+            sc.simulation.end_time
         ) {
-            (Analysis::Dynamic, Some(dt), Some(n)) => format!(", dt = {dt}, {n} steps"),
-            (Analysis::Dynamic, Some(dt), None) =>
-                format!(", dt = {dt}, end_time = {:?}", sc.simulation.end_time),
+            (Analysis::Dynamic, Some(dt), None) => format!(", dt = {dt}, {} steps", model.steps),
+            (Analysis::Dynamic, Some(dt), Some(t)) =>
+                format!(", dt = {dt}, end_time = {t} ({} steps)", model.steps),
             _ => String::new(),
         },
         sc.probe.len()

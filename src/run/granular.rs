@@ -119,14 +119,13 @@ pub(super) fn check(sc: &Scenario, model: &Model) -> String {
         "granular: {n} discs (radius {rmin:e} … {rmax:e}), {} walls, {} materials\n\
          time step: dt = {:e}, critical 2√(m_min/k_max) = {crit:e} (dt/critical = {:.4}; warn above {DT_WARN})\n\
          steps: {steps} (end time {:e})\n\
-         damping: {:?}, body damping {:?}",
+         damping: {}",
         gr.walls.len(),
         gr.materials.len(),
         gr.dt,
         gr.dt / crit,
         steps as f64 * gr.dt,
-        sc.granular.as_ref().map(|g| g.damping),
-        gr.damping,
+        sc.granular.as_ref().map(|g| g.damping).unwrap_or_default(),
     );
     if let Some(w) = gr.dt_warning() {
         s.push_str(&format!("\nwarning: {w}"));

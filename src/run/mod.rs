@@ -9,7 +9,7 @@ pub mod progress;
 mod session;
 
 use crate::model::{Model, ModelError, System};
-use crate::scenario::{Scenario, ScenarioError};
+use crate::scenario::{Scenario, ScenarioError, build};
 use checkpoint::Checkpoint;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -129,7 +129,11 @@ impl From<crate::coupling::CouplingError> for RunError {
 pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunError> {
     session::prepare_out_dir(opts)?;
     let t0 = Instant::now();
-    let spin = progress::spinner("building the model", opts.quiet);
+    let what = match build::preparation(sc) {
+        Some(p) => format!("building the model: {} ({} DEM steps)", p.what(), p.steps),
+        None => "building the model".to_string(),
+    };
+    let spin = progress::spinner(&what, opts.quiet);
     let mut model = sc.build()?;
     let restart = match &opts.restart {
         Some(path) => {
@@ -168,14 +172,33 @@ struct Run<'a> {
     restart: Option<Checkpoint>,
 }
 
-/// What `efgdem check` prints: sizes, coverage, time-step diagnostics.
+/// What `efgdem check` prints: sizes, coverage, time-step diagnostics, the
+/// memory estimate and the packing preparation `run` will do. No time
+/// stepping: the model is built without the deposit or growth of a
+/// generated packing ([`Scenario::build_unprepared`]), and a run that
+/// would not fit in the machine's memory is refused before anything is
+/// allocated.
 pub fn check(sc: &Scenario) -> Result<String, RunError> {
-    let model = sc.build()?;
-    Ok(match &model.system {
+    let model = sc.build_unprepared()?;
+    let mut s = match &model.system {
         System::Continuum { .. } => continuum::check(sc, &model),
         System::Granular(_) => granular::check(sc, &model),
         System::Coupled(_) => coupled::check(&model),
-    })
+    };
+    if !s.ends_with('\n') {
+        s.push('\n');
+    }
+    if let Some(p) = build::preparation(sc) {
+        s.push_str(&format!(
+            "preparation: {p}; the discs above are the generated ones, before it\n"
+        ));
+    }
+    let machine = build::machine_memory().map_or_else(|| "unknown".to_string(), build::human_bytes);
+    s.push_str(&format!(
+        "memory: {} (estimate; machine: {machine})",
+        build::memory_estimate(sc)
+    ));
+    Ok(s)
 }
 
 /// The model's bodies' names.

@@ -194,6 +194,153 @@ pub fn is_body_probe(pr: &crate::scenario::Probe, continuum_only: bool) -> bool 
         || (POINT_QUANTITIES.contains(&q) && (continuum_only || pr.point.is_some()))
 }
 
+/// Largest magnitude of a body's coordinates (`rectangle.origin` and
+/// `size`): products of several lengths (moments of inertia, the exact
+/// Timoshenko field, energies) must stay finite.
+pub const MAX_COORDINATE: f64 = 1e30;
+
+/// Largest ratio of the node spacings along x and y: beyond it the
+/// stiffness matrix is too ill-conditioned to be trusted (the Timoshenko
+/// cantilever's energy error passes 50 % at a ratio of 10³, and K̄ can no
+/// longer be factored at 10⁵).
+pub const MAX_SPACING_RATIO: f64 = 1e3;
+
+/// Largest prescribed displacement relative to the body's size, and
+/// largest load relative to the stiffness (traction / E): a "strain" of a
+/// million is no linear-elastic state, and the solution overflows long
+/// before ±1e300 (which wrote NaN to `history.csv`).
+pub const MAX_RELATIVE_MAGNITUDE: f64 = 1e6;
+
+/// Checks of absurd magnitudes in a body: coordinates, node spacing,
+/// prescribed displacements and loads (see the constants above).
+fn validate_magnitudes(sc: &Scenario, i: usize, b: &BodySpec, p: &mut Problems) {
+    let at = |f: &str| format!("body.{i}.{f}");
+    let (o, size) = (b.rectangle.origin, b.rectangle.size);
+    let finite = o.iter().chain(&size).all(|v| v.is_finite()) && size.iter().all(|&v| v > 0.0);
+    if !finite {
+        return; // reported by the caller
+    }
+    let t = b.elastic.thickness;
+    p.check(
+        !t.is_finite() || t <= MAX_COORDINATE,
+        at("elastic.thickness"),
+        format!("a length: at most {MAX_COORDINATE:e} (got {t:e})"),
+    );
+    let within = o.iter().chain(&size).all(|v| v.abs() <= MAX_COORDINATE);
+    p.check(
+        within,
+        at("rectangle"),
+        format!(
+            "coordinates and sizes must be at most {MAX_COORDINATE:e} in magnitude (got origin {o:?}, size {size:?}): choose a length unit in which the body is of order 1"
+        ),
+    );
+    if !within {
+        return;
+    }
+    if b.nodes[0] >= 2 && b.nodes[1] >= 2 {
+        let hx = size[0] / (b.nodes[0] - 1) as f64;
+        let hy = size[1] / (b.nodes[1] - 1) as f64;
+        let ratio = (hx / hy).max(hy / hx);
+        p.check(
+            ratio <= MAX_SPACING_RATIO,
+            at("rectangle.size"),
+            format!(
+                "the node spacing is {hx:.3e} along x and {hy:.3e} along y (size / (nodes − 1)), {ratio:.1e} times apart; at most {MAX_SPACING_RATIO:e} is accepted (the stiffness matrix is too ill-conditioned to be trusted beyond): give the nodes in proportion to the sides"
+            ),
+        );
+    }
+    let length = size[0].max(size[1]);
+    let (e, rho) = (b.elastic.e, b.elastic.density);
+    let g = sc.simulation.gravity;
+    let weight = rho * g[0].hypot(g[1]) * length;
+    if b.self_weight && e.is_finite() && e > 0.0 && rho.is_finite() && weight.is_finite() {
+        p.check(
+            weight <= MAX_RELATIVE_MAGNITUDE * e,
+            "simulation.gravity",
+            format!(
+                "the self-weight of body `{}` (ρ |g| × size = {weight:e}, as a stress) is more than {MAX_RELATIVE_MAGNITUDE:e} × E = {e:e}: no linear-elastic state, and the solution overflows",
+                b.name
+            ),
+        );
+    }
+    let corners = [
+        (o[0], o[1]),
+        (o[0] + size[0], o[1]),
+        (o[0], o[1] + size[1]),
+        (o[0] + size[0], o[1] + size[1]),
+    ];
+    for (k, bc) in b.bc.iter().enumerate() {
+        let at = |f: &str| format!("body.{i}.bc.{k}.{f}");
+        for (f, v) in [("ux", bc.ux), ("uy", bc.uy)] {
+            let Some(v) = v.filter(|v| v.finite()) else {
+                continue;
+            };
+            let largest = corners
+                .iter()
+                .map(|&(x, y)| v.at(x, y).abs())
+                .fold(0.0, f64::max);
+            p.check(
+                largest <= MAX_RELATIVE_MAGNITUDE * length,
+                at(f),
+                format!(
+                    "a prescribed displacement of {largest:e} is more than {MAX_RELATIVE_MAGNITUDE:e} × the body's size ({length:e}): no linear-elastic state, and the solution overflows"
+                ),
+            );
+        }
+        if !(e.is_finite() && e > 0.0) {
+            continue;
+        }
+        let stress = |f: &str, s: f64| {
+            (
+                s.abs() <= MAX_RELATIVE_MAGNITUDE * e,
+                at(f),
+                format!(
+                    "a load of {:e} (as a stress) is more than {MAX_RELATIVE_MAGNITUDE:e} × E = {e:e}: no linear-elastic state, and the solution overflows",
+                    s.abs()
+                ),
+            )
+        };
+        let mut loads = Vec::new();
+        if let Some(t) = bc.traction.filter(|t| t.iter().all(|v| v.is_finite())) {
+            loads.push(stress("traction", t[0].abs().max(t[1].abs())));
+        }
+        if let Some(s) = bc.parabolic_shear.filter(|s| s.is_finite()) {
+            loads.push(stress("parabolic_shear", s / length));
+        }
+        if let Some(t) = bc.timoshenko.filter(|t| t.p.is_finite()) {
+            loads.push(stress("timoshenko.P", t.p / length));
+        }
+        for (ok, path, message) in loads {
+            p.check(ok, path, message);
+        }
+    }
+}
+
+/// Prescribed edge motions (`{ velocity = v, until_step = N }`) that move
+/// an edge more than [`MAX_RELATIVE_MAGNITUDE`] × the body's size over a
+/// run of `steps` steps of `dt`: `(path, message)` of the first one.
+pub fn absurd_motion(sc: &Scenario, steps: usize, dt: f64) -> Option<(String, String)> {
+    for (i, b) in sc.body.iter().enumerate() {
+        let length = b.rectangle.size[0].max(b.rectangle.size[1]);
+        for (k, bc) in b.bc.iter().enumerate() {
+            for (f, v) in [("ux", bc.ux), ("uy", bc.uy)] {
+                if let Some(Prescribed::Motion(m)) = v {
+                    let d = m.displacement(steps, dt).abs();
+                    if d.is_nan() || d > MAX_RELATIVE_MAGNITUDE * length {
+                        return Some((
+                            format!("body.{i}.bc.{k}.{f}"),
+                            format!(
+                                "the edge would move by {d:e} over the run ({steps} steps of {dt:e}), more than {MAX_RELATIVE_MAGNITUDE:e} × the body's size ({length:e}); set `until_step` or a smaller velocity"
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    None
+}
+
 /// Semantic checks of every `[[body]]` and of the body probes.
 pub fn validate(sc: &Scenario, p: &mut Problems) {
     let mut names = std::collections::HashSet::new();
@@ -217,6 +364,7 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 b.rectangle.size
             ),
         );
+        validate_magnitudes(sc, i, b, p);
         p.check(
             b.nodes[0] >= 2 && b.nodes[1] >= 2,
             at("nodes"),

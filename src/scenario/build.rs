@@ -19,7 +19,8 @@ use crate::continuum::Continuum;
 use crate::coupling::CoupledModel;
 use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::dem::packing::{
-    DiscRow, Lattice, grow_in_box, lattice_packing, overlapping_pairs, settle_in_box,
+    DiscRow, Lattice, grow_in_box, lattice_capacity, lattice_packing, overlapping_pairs,
+    settle_in_box,
 };
 use crate::dem::particles::Particles;
 use crate::dem::walls::{Wall, WallMotion};
@@ -106,8 +107,74 @@ fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid>
         .ok_or_else(|| bad(path, format!("no [[material]] named `{name}`")))
 }
 
+/// What [`model_with`] builds the model for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BuildFor {
+    /// A run: the gravity deposit or radius growth of a generated packing
+    /// (`method = "deposit"` or `"grow"`) is stepped.
+    Run,
+    /// `check`: no time stepping — the discs stay where the generator put
+    /// them (a deposit's loose packing; a growth's random centres with the
+    /// final radii) — and a static analysis factors and solves its bodies
+    /// once, so that a stiffness matrix that cannot be factored is reported
+    /// with the body's line.
+    Check,
+}
+
+/// The preparation of a generated packing that a run starts with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Preparation {
+    /// [`Packing::Deposit`] or [`Packing::Grow`].
+    pub method: Packing,
+    /// Its DEM steps (`settle_steps`).
+    pub steps: usize,
+    /// Its discs (`count`), when given.
+    pub count: Option<usize>,
+}
+
+/// Default `settle_steps` of a deposit or a growth.
+pub const SETTLE_STEPS: usize = 20_000;
+
+/// The deposit or growth the scenario's discs need before the run, if any.
+pub fn preparation(sc: &Scenario) -> Option<Preparation> {
+    match &sc.granular.as_ref()?.discs {
+        DiscsSpec::Table(t)
+            if t.generate == Some(Generator::Random)
+                && matches!(t.method, Packing::Deposit | Packing::Grow) =>
+        {
+            Some(Preparation {
+                method: t.method,
+                steps: t.settle_steps.unwrap_or(SETTLE_STEPS),
+                count: t.count,
+            })
+        }
+        _ => None,
+    }
+}
+
+impl Preparation {
+    /// `a gravity deposit` or `a radius growth`.
+    pub fn what(&self) -> &'static str {
+        match self.method {
+            Packing::Grow => "a radius growth",
+            _ => "a gravity deposit",
+        }
+    }
+}
+
+impl std::fmt::Display for Preparation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} of {} DEM steps will be run at the start of `run` (not by `check`)",
+            self.what(),
+            self.steps
+        )
+    }
+}
+
 /// The discs the scenario describes (generating or reading them).
-fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, Invalid> {
+fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> {
     let g = spec(sc)?;
     match &g.discs {
         DiscsSpec::Inline(rows) => Ok(rows
@@ -146,7 +213,10 @@ fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, Invalid> {
                 Generator::Random => (Lattice::Hex, 0.1, t.jitter.unwrap_or(1.0)),
             };
             let (lo, hi) = (Vec2::from(a), Vec2::from(b));
-            let steps = t.settle_steps.unwrap_or(20_000);
+            let steps = match purpose {
+                BuildFor::Run => t.settle_steps.unwrap_or(SETTLE_STEPS),
+                BuildFor::Check => 0,
+            };
             if kind == Generator::Random && t.method == Packing::Grow {
                 let count = t
                     .count
@@ -170,7 +240,7 @@ fn disc_rows(sc: &Scenario) -> Result<Vec<DiscRow>, Invalid> {
             }
             let rows = lattice_packing(lat, lo, hi, radius, t.count, gap, jitter, t.seed)
                 .map_err(|e| bad("granular.discs", e))?;
-            if kind == Generator::Random && t.method == Packing::Deposit {
+            if kind == Generator::Random && t.method == Packing::Deposit && steps > 0 {
                 return deposit(sc, rows, lo, hi, steps);
             }
             Ok(rows)
@@ -214,8 +284,12 @@ fn deposit(
 /// Build the assembly described by the scenario. `dt` is the scenario's,
 /// or [`DT_SAFETY`] × the critical step.
 pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
+    granular_with(sc, BuildFor::Run)
+}
+
+fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> {
     let g = spec(sc)?;
-    let rows = disc_rows(sc)?;
+    let rows = disc_rows(sc, purpose)?;
     let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
     let mut p = Particles::default();
@@ -235,6 +309,19 @@ pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
         }
         p.push(r.pos, r.r, m.density, g.thickness, mi);
         p.vel[k] = v0;
+        let (mass, inertia) = (p.mass[k], p.inertia[k]);
+        if !(mass.is_finite() && mass > 0.0 && inertia.is_finite() && inertia > 0.0) {
+            return Err(bad(
+                "granular.thickness",
+                format!(
+                    "disc {}: its mass ρπr²t = {mass:e} and moment of inertia m r²/2 = {inertia:e} must be finite and > 0 (ρ = {:e}, r = {:e}, t = {:e})",
+                    k + 1,
+                    m.density,
+                    r.r,
+                    g.thickness
+                ),
+            ));
+        }
     }
     let mut walls = Vec::new();
     for (wi, w) in sc.wall.iter().enumerate() {
@@ -291,8 +378,10 @@ fn steps_of(sc: &Scenario, dt: f64) -> usize {
 }
 
 /// The continuum bodies of a continuum-only scenario, started for a
-/// dynamic analysis at `dt` (after their initial static state, if any).
-fn bodies(sc: &Scenario, dt: Option<f64>) -> Result<Vec<Body>, Invalid> {
+/// dynamic analysis at `dt` (after their initial static state, if any);
+/// for a static analysis with `trial`, solved once (the solution is not
+/// kept by the caller: `check` only wants to know that K̄ factors).
+fn bodies(sc: &Scenario, dt: Option<f64>, trial: bool) -> Result<Vec<Body>, Invalid> {
     let g = sc.simulation.gravity;
     sc.body
         .iter()
@@ -310,6 +399,8 @@ fn bodies(sc: &Scenario, dt: Option<f64>) -> Result<Vec<Body>, Invalid> {
                         .map_err(|e| bad(&format!("{at}.initial"), e))?;
                 }
                 b.start_dynamic(dt).map_err(|e| bad(&at, e))?;
+            } else if trial {
+                b.solve_static().map_err(|e| bad(&at, e))?;
             }
             Ok(b)
         })
@@ -318,8 +409,8 @@ fn bodies(sc: &Scenario, dt: Option<f64>) -> Result<Vec<Body>, Invalid> {
 
 /// The coupled model: discs, walls and bodies (EFG or FE) with each
 /// body's Newmark matrix factored for `dt × substeps`.
-fn coupled(sc: &Scenario) -> Result<CoupledModel, Invalid> {
-    let granular = granular(sc)?;
+fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
+    let granular = granular_with(sc, purpose)?;
     let substeps = sc.simulation.substeps.max(1);
     let body_dt = granular.dt * substeps as f64;
     let mode = match sc.simulation.contact_solve {
@@ -375,6 +466,15 @@ fn coupled(sc: &Scenario) -> Result<CoupledModel, Invalid> {
 
 /// Build the model (see [`Scenario::build`]); problems carry field paths.
 pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
+    model_with(sc, BuildFor::Run)
+}
+
+/// [`model`] for a run or for `check` (see [`BuildFor`]).
+/// First of all, a run whose estimated memory
+/// ([`memory_estimate`]) exceeds the machine's is refused, before anything
+/// is allocated.
+pub fn model_with(sc: &Scenario, purpose: BuildFor) -> Result<Model, Invalid> {
+    check_memory(sc)?;
     let dynamic = sc.simulation.analysis == Analysis::Dynamic;
     let model = match super::kind(sc) {
         super::Kind::Continuum => {
@@ -388,7 +488,7 @@ pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
             let steps = dt.map_or(0, |dt| steps_of(sc, dt));
             Model {
                 system: System::Continuum {
-                    bodies: bodies(sc, dt)?,
+                    bodies: bodies(sc, dt, purpose == BuildFor::Check)?,
                     dynamic,
                 },
                 dt: dt.unwrap_or(0.0),
@@ -397,7 +497,7 @@ pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
             }
         }
         super::Kind::Granular => {
-            let g = granular(sc)?;
+            let g = granular_with(sc, purpose)?;
             Model {
                 dt: g.dt,
                 steps: steps_of(sc, g.dt),
@@ -406,7 +506,7 @@ pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
             }
         }
         super::Kind::Coupled => {
-            let m = coupled(sc)?;
+            let m = coupled(sc, purpose)?;
             Model {
                 dt: m.granular.dt,
                 steps: steps_of(sc, m.granular.dt),
@@ -415,11 +515,219 @@ pub fn model(sc: &Scenario) -> Result<Model, Invalid> {
             }
         }
     };
+    if let Some((path, message)) = super::body::absurd_motion(sc, model.steps, model.dt) {
+        return Err(bad(&path, message));
+    }
     if let Some(g) = model.granular() {
         start_state(sc, g)?;
     }
     probes(sc, &model)?;
     Ok(model)
+}
+
+/// Bytes per disc assumed by [`memory_estimate`]: the disc arrays (≈ 125
+/// B), the contact list of a dense packing (≈ 2.5 pairs per disc, ≈ 30 B
+/// each), the search grid, and the transient copies of the build (a
+/// `summary.json` reports ≈ 160–250 B per disc in the run itself).
+pub const DISC_BYTES: f64 = 400.0;
+
+/// The memory a run of a scenario needs, estimated from the scenario
+/// alone (nothing is generated or allocated): what `check` prints and what
+/// `check` and `run` compare with the machine's memory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MemoryEstimate {
+    /// Number of discs: inline rows, data lines of the CSV file, `count`,
+    /// or as many as the generator's box holds (a float: a huge box holds
+    /// more than a `usize` counts).
+    pub discs: f64,
+    /// Bytes of the discs, `discs ×` [`DISC_BYTES`].
+    pub disc_bytes: f64,
+    /// Bytes of each body (name, bytes): its sparse operators and their
+    /// Cholesky factor, the EFG shape functions at the Gauss points and, in
+    /// coupled runs with `contact_solve = "boundary"`, the dense boundary
+    /// Green matrix.
+    pub bodies: Vec<(String, f64)>,
+}
+
+impl MemoryEstimate {
+    /// Bytes of the whole run.
+    pub fn total(&self) -> f64 {
+        self.disc_bytes + self.bodies.iter().map(|b| b.1).sum::<f64>()
+    }
+}
+
+/// `b` bytes as `12.3 MiB`.
+pub fn human_bytes(b: f64) -> String {
+    const UNITS: [&str; 6] = ["B", "KiB", "MiB", "GiB", "TiB", "PiB"];
+    let mut v = b;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if v >= 1e4 {
+        format!("{b:.1e} B")
+    } else if u == 0 {
+        format!("{v:.0} B")
+    } else {
+        format!("{v:.1} {}", UNITS[u])
+    }
+}
+
+/// A count that may be astronomically large: an integer up to 1e15.
+fn count_text(n: f64) -> String {
+    if n < 1e15 {
+        format!("{n:.0}")
+    } else {
+        format!("{n:.1e}")
+    }
+}
+
+impl std::fmt::Display for MemoryEstimate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "about {}", human_bytes(self.total()))?;
+        let mut parts = Vec::new();
+        if self.discs > 0.0 {
+            parts.push(format!(
+                "{} discs × ~{DISC_BYTES} B = {}",
+                count_text(self.discs),
+                human_bytes(self.disc_bytes)
+            ));
+        }
+        for (name, b) in &self.bodies {
+            parts.push(format!("body `{name}` {}", human_bytes(*b)));
+        }
+        if !parts.is_empty() {
+            write!(f, " ({})", parts.join("; "))?;
+        }
+        Ok(())
+    }
+}
+
+/// Number of discs the scenario describes, without generating them.
+fn disc_count(sc: &Scenario) -> f64 {
+    let Some(g) = &sc.granular else { return 0.0 };
+    match &g.discs {
+        DiscsSpec::Inline(rows) => rows.len() as f64,
+        DiscsSpec::Table(t) => {
+            if let Some(csv) = &t.csv {
+                // data lines (the build reports a file it cannot read)
+                return std::fs::read_to_string(sc.resolve(csv)).map_or(0.0, |text| {
+                    text.lines()
+                        .filter(|l| !l.trim().is_empty() && !l.trim().starts_with('#'))
+                        .count() as f64
+                });
+            }
+            if let Some(c) = t.count {
+                return c as f64;
+            }
+            let (Some(kind), Some([a, b]), Some(r)) = (t.generate, t.region, t.radius) else {
+                return 0.0;
+            };
+            let (lat, gap) = match kind {
+                Generator::Square => (Lattice::Square, 0.0),
+                Generator::Hex => (Lattice::Hex, 0.0),
+                Generator::Random => (Lattice::Hex, 0.1),
+            };
+            lattice_capacity(lat, Vec2::from(a), Vec2::from(b), r.range().1, gap)
+        }
+    }
+}
+
+/// Estimated bytes of one body (see [`MemoryEstimate::bodies`]), from
+/// measurements of `efgdem check` on EFG and FE bodies of 5 000 to
+/// 40 000 nodes (within ≈ 20 % for `d_max` 1.5–3, `gauss` 2–8).
+fn body_bytes(sc: &Scenario, b: &super::body::BodySpec) -> f64 {
+    let [nx, ny] = b.nodes.map(|n| n as f64);
+    let nodes = nx * ny;
+    let (mut bytes, band) = match b.method {
+        Method::Efg => {
+            let d = b.d_max.clamp(1.0, 10.0);
+            // node pairs whose supports meet: (4 d − 1)² per node, 2 × 2
+            // DOFs each, lower triangle; ≈ 60 B per entry with the factor
+            let nnz = nodes * 2.0 * (4.0 * d - 1.0).powi(2);
+            let cells = b
+                .cells
+                .map_or((nx - 1.0) * (ny - 1.0), |c| c[0] as f64 * c[1] as f64);
+            let points = cells * (b.gauss as f64).powi(2);
+            // shape functions and gradients of (2 d)² nodes per point
+            let shapes = points * (2.0 * d).powi(2) * 40.0;
+            (60.0 * nnz + shapes, d.ceil())
+        }
+        // K, M, the Newmark matrix and the factor: ≈ 3.5 kB per node
+        Method::FemQ4 => (3500.0 * nodes, 1.0),
+    };
+    if sc.granular.is_some() && sc.simulation.contact_solve == ContactSolve::Boundary {
+        // the dense boundary Green matrix (8 B per entry + its index of
+        // significant entries) over the DOFs of the nodes whose support
+        // reaches a contact edge
+        let edge_nodes: f64 = b
+            .contact_edges
+            .iter()
+            .map(|e| match e {
+                super::body::Edge::Left | super::body::Edge::Right => ny,
+                _ => nx,
+            })
+            .sum();
+        let dofs = 2.0 * band * edge_nodes;
+        bytes += 12.0 * dofs * dofs;
+    }
+    bytes
+}
+
+/// The memory a run of `sc` needs (see [`MemoryEstimate`]).
+pub fn memory_estimate(sc: &Scenario) -> MemoryEstimate {
+    let discs = disc_count(sc);
+    MemoryEstimate {
+        discs,
+        disc_bytes: discs * DISC_BYTES,
+        bodies: sc
+            .body
+            .iter()
+            .map(|b| (b.name.clone(), body_bytes(sc, b)))
+            .collect(),
+    }
+}
+
+/// The machine's memory in bytes (`MemTotal` of `/proc/meminfo`); `None`
+/// where that is not available (the memory check is then skipped).
+pub fn machine_memory() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024.0)
+}
+
+/// Refuse a run that would not fit in the machine's memory, naming the
+/// largest consumer: the discs (`granular.discs`, or its `count`) or a
+/// body (`body.i.nodes`).
+fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
+    let Some(machine) = machine_memory() else {
+        return Ok(());
+    };
+    let est = memory_estimate(sc);
+    if est.total() <= machine {
+        return Ok(());
+    }
+    let biggest_body = est
+        .bodies
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.1.total_cmp(&b.1.1));
+    let path = match biggest_body {
+        Some((i, (_, b))) if *b > est.disc_bytes => format!("body.{i}.nodes"),
+        _ => match &sc.granular.as_ref().map(|g| &g.discs) {
+            Some(DiscsSpec::Table(t)) if t.count.is_some() => "granular.discs.count".into(),
+            _ => "granular.discs".into(),
+        },
+    };
+    Err(bad(
+        &path,
+        format!(
+            "the run would need {est} of memory, more than this machine has ({} MemTotal); use fewer discs or nodes",
+            human_bytes(machine)
+        ),
+    ))
 }
 
 /// Overlap accepted at the start, relative to the smaller radius.
@@ -441,6 +749,66 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
                 DT_WARN * crit
             ),
         ));
+    }
+    // a disc must not fall through a contact in one step: |g| Δt² < r_min
+    let fall = g.gravity.x.hypot(g.gravity.y) * g.dt * g.dt;
+    let r_min = g
+        .particles
+        .radius
+        .iter()
+        .fold(f64::INFINITY, |a, &r| a.min(r));
+    if fall.is_nan() || fall >= r_min {
+        return Err(bad(
+            "simulation.gravity",
+            format!(
+                "|g| Δt² = {fall:.3e}: a disc would fall by more than the smallest radius ({r_min:e}) in a single step of dt = {:e}, through any contact",
+                g.dt
+            ),
+        ));
+    }
+    // nor a disc or wall cross a disc in its first step: |v| Δt < r_min
+    let step = |v: Vec2| v.x.hypot(v.y) * g.dt;
+    let through = |path: String, what: &str, d: f64| {
+        Err(bad(
+            &path,
+            format!(
+                "{what} moves {d:.3e} in one step of dt = {:e}, more than the smallest disc radius ({r_min:e}): it would pass through discs without touching them",
+                g.dt
+            ),
+        ))
+    };
+    let v0 = spec(sc)?.velocity.map_or(0.0, |v| step(Vec2::from(v)));
+    if v0.is_nan() || v0 >= r_min {
+        return through(
+            "granular.velocity".into(),
+            "a disc at the initial velocity",
+            v0,
+        );
+    }
+    for (wi, w) in sc.wall.iter().enumerate() {
+        let fastest = w
+            .velocity
+            .iter()
+            .map(|&v| step(Vec2::from(v)))
+            .chain(
+                w.history
+                    .iter()
+                    .flatten()
+                    .map(|r| step(Vec2::new(r[1], r[2]))),
+            )
+            .fold(0.0, f64::max);
+        if fastest.is_nan() || fastest >= r_min {
+            let f = if w.velocity.is_some() {
+                "velocity"
+            } else {
+                "history"
+            };
+            return through(
+                format!("wall.{wi}.{f}"),
+                &format!("wall `{}`", w.name),
+                fastest,
+            );
+        }
     }
     let spec = spec(sc)?;
     let settled = matches!(&spec.discs, DiscsSpec::Table(t)

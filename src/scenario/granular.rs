@@ -194,6 +194,46 @@ pub enum DampingSpec {
     },
 }
 
+/// Human text: the kind as the scenario names it and its parameters.
+impl std::fmt::Display for DampingSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let tension = |no_tension: bool| {
+            if no_tension {
+                "; total normal force clamped at zero (no_tension)"
+            } else {
+                ""
+            }
+        };
+        match *self {
+            DampingSpec::None => write!(f, "none"),
+            DampingSpec::ContactViscous {
+                beta,
+                beta_shear,
+                no_tension,
+            } => write!(
+                f,
+                "contact-viscous: normal dashpot c_n = β k_n with β = {beta}, shear β_s = {beta_shear}{}",
+                tension(no_tension)
+            ),
+            DampingSpec::CriticalRatio {
+                zeta,
+                zeta_shear,
+                no_tension,
+            } => write!(
+                f,
+                "critical-ratio: normal dashpot at ζ = {zeta} of critical, shear ζ_s = {zeta_shear}{}",
+                tension(no_tension)
+            ),
+            DampingSpec::Local { alpha } => {
+                write!(f, "local (Cundall's non-viscous) with α = {alpha}")
+            }
+            DampingSpec::Global { c, c_rot } => {
+                write!(f, "global mass damping c = {c}, c* = {c_rot}")
+            }
+        }
+    }
+}
+
 /// `slip_normal` of a `[[material]]`: which normal force caps the shear
 /// force (and the rolling moment).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

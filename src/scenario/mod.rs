@@ -421,6 +421,20 @@ impl Scenario {
         build::model(self).map_err(|p| self.located(vec![p]))
     }
 
+    /// [`build`](Self::build) without any time stepping, for `efgdem
+    /// check` ([`build::BuildFor::Check`]): a `deposit` or `grow` packing is
+    /// not prepared (its discs stay where the generator put them;
+    /// [`build::preparation`] says what `run` will do), a static analysis
+    /// solves its bodies once; everything else is built and checked as for
+    /// a run, the memory estimate included.
+    pub fn build_unprepared(&self) -> Result<crate::model::Model, ScenarioError> {
+        let problems = self.validate();
+        if !problems.is_empty() {
+            return Err(self.located(problems));
+        }
+        build::model_with(self, build::BuildFor::Check).map_err(|p| self.located(vec![p]))
+    }
+
     /// The `[[probe]]`s bound to their targets in `model` (built from this
     /// scenario), in file order.
     pub fn probes(
