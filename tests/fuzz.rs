@@ -995,8 +995,8 @@ fn short_run(mut sc: Scenario, out: &Path, steps: usize) -> RunOutcome {
     let _ = std::fs::remove_dir_all(out);
     *LAST_PANIC.lock().unwrap_or_else(|e| e.into_inner()) = None;
     let opts = RunOptions {
-        out_dir: out.to_path_buf(),
         quiet: true,
+        ..RunOptions::new(out)
     };
     let r = catch_unwind(AssertUnwindSafe(|| efgdem::run::run(&sc, &opts)));
     match r {
