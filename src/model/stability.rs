@@ -66,8 +66,9 @@ pub fn check(model: &Model) -> Result<(), Instability> {
     })
 }
 
-/// The first disc (by slot) with a non-finite state or moving more than
-/// [`MAX_RADII_PER_STEP`] radii per step, and its symptom.
+/// The worst disc with a non-finite state or moving more than
+/// [`MAX_RADII_PER_STEP`] radii per step (non-finite first, then the most
+/// radii per step; ties to the lowest slot), and its symptom.
 fn disc_culprit(g: &Granular) -> Option<(String, String)> {
     let p = &g.particles;
     let dt = g.dt;
@@ -78,7 +79,22 @@ fn disc_culprit(g: &Granular) -> Option<(String, String)> {
         let (x, v, r) = (p.pos[k], p.vel[k], p.radius[k]);
         !(v.dot(v) <= max_step * r * r && (x.x + x.y + p.omega[k]).is_finite())
     };
-    let k = (0..p.len()).find(|&k| bad(k))?;
+    let first = (0..p.len()).find(|&k| bad(k))?;
+    // report the worst: a non-finite disc, else the most radii per step
+    let k = (first..p.len())
+        .filter(|&k| bad(k))
+        .max_by(|&a, &b| {
+            let key = |k: usize| {
+                let s = p.vel[k].dot(p.vel[k]) / (p.radius[k] * p.radius[k]);
+                if s.is_finite() && (p.pos[k].x + p.pos[k].y).is_finite() {
+                    s
+                } else {
+                    f64::INFINITY
+                }
+            };
+            key(a).total_cmp(&key(b)).then(b.cmp(&a))
+        })
+        .unwrap_or(first);
     let (x, v, r) = (p.pos[k], p.vel[k], p.radius[k]);
     let symptom = if !(x.x.is_finite() && x.y.is_finite()) {
         format!("non-finite position ({:e}, {:e})", x.x, x.y)
@@ -167,6 +183,15 @@ mod tests {
         // critical step 2√(m/k) of the lighter disc, times 0.2
         let crit = 2.0 * (1000.0 * std::f64::consts::PI * 1e-4 / 1e6f64).sqrt();
         assert!((e.suggested_dt - (0.2 * crit).min(0.5e-5)).abs() < 1e-12 * crit);
+        // two too fast: the one with more radii per step is reported
+        let System::Granular(g) = &mut m.system else {
+            unreachable!()
+        };
+        let k0 = g.slot(0);
+        g.particles.vel[k0] = Vec2::new(1500.0, 0.0); // 1.5 radii
+        let e = check(&m).unwrap_err();
+        assert_eq!(e.culprit, "disc 1");
+        assert!(e.symptom.contains("= 1.500e0 radii"), "{}", e.symptom);
     }
 
     #[test]
