@@ -6,9 +6,9 @@
 //! directory is refused (exit 2) unless `--overwrite`.
 #![cfg(unix)]
 
+#[allow(dead_code)]
 mod common;
-use common::{bin, run, summary, tmpdir};
-use std::path::Path;
+use common::{bin, run, run_with, summary, tmpdir};
 use std::time::Duration;
 
 /// ~1000 discs settling for 12 000 steps (a few seconds).
@@ -52,20 +52,6 @@ quantity = "kinetic"
 every = 7
 vtk_every = 1000
 "#;
-
-fn try_run(file: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    bin()
-        .args([
-            "run",
-            file.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .args(extra)
-        .output()
-        .unwrap()
-}
 
 #[test]
 fn a_signalled_run_stops_cleanly_and_restarts_bitwise() {
@@ -156,11 +142,11 @@ fn a_signalled_run_stops_cleanly_and_restarts_bitwise() {
         }
     }
     // the directory of a finished run is refused, then replaced on request
-    let o = try_run(&file, &whole, &[]);
+    let o = run_with(&file, &whole, &[]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--overwrite"));
     std::fs::write(whole.join("notes.txt"), "mine").unwrap();
-    let o = try_run(
+    let o = run_with(
         &file,
         &whole,
         &["--overwrite", "--checkpoint-every", "5000"],

@@ -3,8 +3,9 @@
 //! recording it in `summary.json` (issue 12); the history keeps the rows
 //! before it, never a NaN.
 
+#[allow(dead_code)]
 mod common;
-use common::{bin, summary, tmpdir};
+use common::{run_with, summary, tmpdir};
 
 /// Two discs falling freely under a strong gravity (accepted: one step of
 /// it moves a disc 1e-7 m) with nothing below them: after n steps a disc
@@ -37,16 +38,7 @@ fn an_unphysical_state_stops_the_run_with_exit_3_and_a_diagnosis() {
     let file = root.join("s.toml");
     std::fs::write(&file, FALLING).unwrap();
     let out = root.join("out");
-    let o = bin()
-        .args([
-            "run",
-            file.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let o = run_with(&file, &out, &[]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{stderr}");
     // the step at which n g Δt² first exceeds the radius (rounding decides

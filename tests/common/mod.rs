@@ -17,9 +17,9 @@ pub fn tmpdir(tag: &str) -> PathBuf {
     d
 }
 
-/// `efgdem run FILE -q -o OUT`, which must succeed (stderr shown if not).
-pub fn run(file: &Path, out: &Path) {
-    let o = bin()
+/// `efgdem run FILE -q -o OUT EXTRA…`, whatever its outcome.
+pub fn run_with(file: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    bin()
         .args([
             "run",
             file.to_str().unwrap(),
@@ -27,8 +27,14 @@ pub fn run(file: &Path, out: &Path) {
             "-o",
             out.to_str().unwrap(),
         ])
+        .args(extra)
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+/// `efgdem run FILE -q -o OUT`, which must succeed (stderr shown if not).
+pub fn run(file: &Path, out: &Path) {
+    let o = run_with(file, out, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
