@@ -69,6 +69,8 @@ fn an_unphysical_state_stops_the_run_with_exit_3_and_a_diagnosis() {
         "header, steps 0 … step − 1"
     );
     assert!(!hist.contains("NaN") && !hist.contains("inf"));
+    // the blown-up state is not offered as a disc source
+    assert!(!out.join("discs_final.csv").exists());
     std::fs::remove_dir_all(root).unwrap();
 }
 

@@ -1,7 +1,7 @@
 //! Driver for granular-only scenarios (discs and walls): `efgdem run` and
 //! `efgdem check`.
 
-use super::session::{Outputs, Session, due};
+use super::session::{Ended, Outputs, Session, due};
 use super::{Run, RunError};
 use crate::dem::DT_WARN;
 use crate::model::{Model, System};
@@ -75,7 +75,10 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
     outputs.hist.flush()?;
     let wall_s = t0.elapsed().as_secs_f64();
     let gr = granular(&model);
-    write_discs_csv(gr, &out.join("discs_final.csv"))?;
+    // a disc source for another run: not the state of a blow-up
+    if !matches!(ended, Ended::Unstable(_)) {
+        write_discs_csv(gr, &out.join("discs_final.csv"))?;
+    }
     let n = gr.particles.len();
     let (dd, dw) = gr.touching();
     let e = gr.energies();

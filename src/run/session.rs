@@ -24,8 +24,7 @@ const OWN_FILES: [&str; 4] = [
 
 /// Make the output directory ready: created if missing; a non-empty one is
 /// refused unless `overwrite`, which removes the files a run writes there
-/// (and nothing else).
-/// A restart continues the outputs already there.
+/// (and nothing else). A restart continues the outputs already there.
 pub(super) fn prepare_out_dir(opts: &RunOptions) -> Result<(), RunError> {
     let dir = &opts.out_dir;
     let io = |source| RunError::OutDir {
@@ -35,13 +34,10 @@ pub(super) fn prepare_out_dir(opts: &RunOptions) -> Result<(), RunError> {
     if opts.restart.is_some() {
         return match dir.join("history.csv").is_file() {
             true => Ok(()),
-            false => Err(RunError::OutDir {
-                path: dir.clone(),
-                source: std::io::Error::new(
-                    std::io::ErrorKind::NotFound,
-                    "no history.csv to continue: restart into the directory of the stopped run (-o)",
-                ),
-            }),
+            false => Err(io(std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "no history.csv to continue: restart into the directory of the stopped run (-o)",
+            ))),
         };
     }
     std::fs::create_dir_all(dir).map_err(io)?;
