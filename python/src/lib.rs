@@ -27,7 +27,7 @@ use numpy::ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyIOError, PyIndexError, PyKeyError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, TryLockError};
@@ -517,6 +517,26 @@ impl PyModel {
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
         py.detach(|| inner.run(until)).map_err(model_error)
+    }
+
+    /// The model's whole evolving state as bytes (discs, walls, contact
+    /// histories, bodies' U, U̇, Ü, coupling state; see
+    /// `efgdem::model::state`): restoring it into a model built from the
+    /// same scenario continues bitwise as if never stopped.
+    fn save_state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        let bytes = self.lock()?.model.save_state().to_bytes();
+        Ok(PyBytes::new(py, &bytes))
+    }
+
+    /// Restore bytes of `save_state` (of a model built from the same
+    /// scenario). Raises `ModelError` if they do not fit this model (it is
+    /// then left as it was). Live numpy views stay valid.
+    fn restore_state(&self, state: &[u8]) -> PyResult<()> {
+        let mut g = self.lock()?;
+        let s = efgdem::model::ModelState::from_bytes(state).map_err(model_error)?;
+        g.model.restore_state(&s).map_err(model_error)?;
+        g.check_buffers();
+        Ok(())
     }
 
     /// Solve a static continuum model (`analysis = "static"`).

@@ -414,3 +414,32 @@ def test_examples_run(script, tmp_path):
     assert r.returncode == 0, r.stderr
     assert png.stat().st_size > 10_000
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# --- checkpoints -----------------------------------------------------------------
+
+
+def test_save_and_restore_state_continue_bitwise(box_file):
+    a = efgdem.Model.from_scenario(box_file)
+    a.step(300)
+    b = efgdem.Model.from_scenario(box_file)
+    b.step(120)
+    saved = b.save_state()
+    c = efgdem.Model.from_scenario(box_file)
+    views = c.disc_views()
+    c.restore_state(saved)
+    assert c.step_count == 120
+    c.step(180)
+    assert c.save_state() == a.save_state()
+    assert np.array_equal(c.disc_positions(), a.disc_positions())
+    # live views follow the restored model
+    assert np.array_equal(views["pos"][np.argsort(views["id"])], a.disc_positions())
+
+
+def test_a_state_of_another_model_is_refused(box_file, tmp_path):
+    m = efgdem.Model.from_scenario(box_file)
+    other = efgdem.Model.from_scenario(EXAMPLE1)
+    with pytest.raises(efgdem.ModelError):
+        m.restore_state(other.save_state())
+    with pytest.raises(efgdem.ModelError):
+        m.restore_state(b"not a state")
