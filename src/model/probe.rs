@@ -5,6 +5,7 @@
 use super::body::{At, BodyRef};
 use crate::coupling::CoupledModel;
 use crate::dem::Granular;
+use crate::dem::measure::{self, OuterContact, Quantity, Region};
 use crate::dem::walls::Wall;
 use crate::geom::Vec2;
 
@@ -56,12 +57,23 @@ pub enum Probe {
         /// With the dashpot (`k_n δ + β k_n δ̇`) if true, else `k_n δ`.
         total: bool,
     },
-    /// `wall_fx`, `wall_fy`, `wall_x`, `wall_y` of wall `wall`.
+    /// `wall_fx`, `wall_fy`, `wall_x`, `wall_y`, `wall_stress`,
+    /// `wall_length` of wall `wall`.
     Wall {
         /// Wall index.
         wall: usize,
         /// The quantity's name.
         quantity: String,
+    },
+    /// A quantity of the discs in a region ([`measure`]): stress,
+    /// porosity, coordination number or fabric; each evaluation measures
+    /// the region afresh (porosity: the discs only; the others: one pass
+    /// over the contacts).
+    Measure {
+        /// The region.
+        region: Region,
+        /// The quantity.
+        quantity: Quantity,
     },
     /// An assembly-wide quantity: `kinetic`, `rotational`, `spring`,
     /// `gravity_energy`, `total_energy`, `contacts` (disc–body contacts
@@ -73,12 +85,16 @@ pub enum Probe {
 }
 
 /// A wall quantity: `wall_fx`, `wall_fy` (force of the discs on it),
-/// `wall_x`, `wall_y` (its first end point).
-pub fn wall_quantity(w: &Wall, q: &str) -> f64 {
+/// `wall_x`, `wall_y` (its first end point), `wall_stress` (normal force
+/// along its outward normal per length × `thickness`, compression
+/// positive: [`Wall::normal_stress`]), `wall_length`.
+pub fn wall_quantity(w: &Wall, q: &str, thickness: f64) -> f64 {
     match q {
         "wall_fx" => w.force.x,
         "wall_fy" => w.force.y,
         "wall_x" => w.a.x,
+        "wall_stress" => w.normal_stress(thickness),
+        "wall_length" => w.length(),
         _ => w.a.y,
     }
 }
@@ -155,7 +171,25 @@ pub fn value<'a>(
             let (el, tot) = g.normal_force(g.slot(*a), g.slot(*b));
             if *total { tot } else { el }
         }
-        Probe::Wall { wall, quantity } => wall_quantity(&g().walls[*wall], quantity),
+        Probe::Wall { wall, quantity } => {
+            let g = g();
+            wall_quantity(&g.walls[*wall], quantity, g.thickness)
+        }
+        Probe::Measure { region, quantity } => {
+            let g = g();
+            if *quantity == Quantity::Porosity {
+                return measure::porosity(g, region);
+            }
+            let outer = coupled.into_iter().flat_map(|m| {
+                m.contacts.iter().map(|c| OuterContact {
+                    slot: g.slot(c.disc as usize),
+                    point: c.point,
+                    normal: c.normal,
+                    force: c.force,
+                })
+            });
+            measure::contacts(g, region, outer).get(*quantity)
+        }
         Probe::Global { quantity } => {
             let v = global_quantity(g(), quantity);
             match (quantity.as_str(), coupled) {
