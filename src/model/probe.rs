@@ -66,14 +66,17 @@ pub enum Probe {
         quantity: String,
     },
     /// A quantity of the discs in a region ([`measure`]): stress,
-    /// porosity, coordination number or fabric; each evaluation measures
-    /// the region afresh (porosity: the discs only; the others: one pass
-    /// over the contacts).
+    /// porosity, coordination number or fabric. Porosity is a pass over the
+    /// discs; the other quantities share one pass over the contacts per
+    /// state through `memo` (one per region).
     Measure {
         /// The region.
         region: Region,
         /// The quantity.
         quantity: Quantity,
+        /// The last contact measurement of the region, shared by its
+        /// columns.
+        memo: std::sync::Arc<MeasureMemo>,
     },
     /// An assembly-wide quantity: `kinetic`, `rotational`, `spring`,
     /// `gravity_energy`, `total_energy`, `contacts` (disc–body contacts
@@ -82,6 +85,54 @@ pub enum Probe {
         /// The quantity's name.
         quantity: String,
     },
+}
+
+/// The last [`measure::contacts`] of a region with a key of the state it
+/// was taken from: the columns of one `[[measure]]` read one pass over the
+/// contacts instead of one each. The key mixes the step count, the time,
+/// the neighbour-list rebuild count and every disc's position, velocity
+/// and spin bits (a pass over the discs, a few per cent of the
+/// measurement), so a state changed in any other way is measured afresh.
+#[derive(Debug, Default)]
+pub struct MeasureMemo(std::sync::Mutex<Option<(u64, measure::ContactMeasure)>>);
+
+impl MeasureMemo {
+    /// The measurement of `region` in this state, from the memo if the
+    /// state is the one it was taken from.
+    fn get(
+        &self,
+        g: &Granular,
+        region: &Region,
+        outer: impl IntoIterator<Item = OuterContact>,
+    ) -> measure::ContactMeasure {
+        let key = state_key(g);
+        let mut m = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        match *m {
+            Some((k, c)) if k == key => c,
+            _ => {
+                let c = measure::contacts(g, region, outer);
+                *m = Some((key, c));
+                c
+            }
+        }
+    }
+}
+
+/// A 64-bit key of the discs' state (see [`MeasureMemo`]).
+fn state_key(g: &Granular) -> u64 {
+    let p = &g.particles;
+    let mut h = (g.step as u64)
+        ^ g.time.to_bits().rotate_left(17)
+        ^ (g.grid.rebuilds as u64).rotate_left(41);
+    let mix = |h: u64, x: f64| (h.rotate_left(5) ^ x.to_bits()).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    for k in 0..p.len() {
+        h = mix(h, p.pos[k].x);
+        h = mix(h, p.pos[k].y);
+        h = mix(h, p.vel[k].x);
+        h = mix(h, p.vel[k].y);
+        h = mix(h, p.omega[k]);
+    }
+    h
 }
 
 /// A wall quantity: `wall_fx`, `wall_fy` (force of the discs on it),
@@ -175,7 +226,11 @@ pub fn value<'a>(
             let g = g();
             wall_quantity(&g.walls[*wall], quantity, g.thickness)
         }
-        Probe::Measure { region, quantity } => {
+        Probe::Measure {
+            region,
+            quantity,
+            memo,
+        } => {
             let g = g();
             if *quantity == Quantity::Porosity {
                 return measure::porosity(g, region);
@@ -188,7 +243,7 @@ pub fn value<'a>(
                     force: c.force,
                 })
             });
-            measure::contacts(g, region, outer).get(*quantity)
+            memo.get(g, region, outer).get(*quantity)
         }
         Probe::Global { quantity } => {
             let v = global_quantity(g(), quantity);

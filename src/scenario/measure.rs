@@ -1,7 +1,9 @@
 //! `[[measure]]`: stress, porosity, coordination number and fabric of the
 //! discs in a region ([`crate::dem::measure`]), as `history.csv` columns
 //! `<name>_sxx`, `<name>_syy`, … — one bound [`Probe::Measure`] per column,
-//! so that every driver records them as it records the probes.
+//! so that every driver records them as it records the probes; the columns
+//! of one region share one pass over the contacts per state
+//! ([`MeasureMemo`]).
 //!
 //! ```toml
 //! [[measure]]
@@ -13,6 +15,7 @@
 use super::{Invalid, Problems, Scenario};
 use crate::dem::measure::{Quantity, Region};
 use crate::geom::Vec2;
+use crate::model::probe::MeasureMemo;
 use crate::model::{Model, Probe};
 use serde::Deserialize;
 
@@ -148,12 +151,14 @@ pub fn probes(sc: &Scenario, model: &Model) -> Result<Vec<(String, Probe)>, Inva
             path: format!("measure.{i}.name"),
             message: "needs one region".into(),
         })?;
+        let memo = std::sync::Arc::new(MeasureMemo::default());
         for (q, name) in m.quantities().into_iter().zip(m.columns()) {
             out.push((
                 name,
                 Probe::Measure {
                     region,
                     quantity: q,
+                    memo: memo.clone(),
                 },
             ));
         }
