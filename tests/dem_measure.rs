@@ -498,6 +498,7 @@ quantities = ["syy", "porosity", "coordination"]
     .unwrap();
     let out = dir.join("out");
     common::run(&file, &out);
+    assert_eq!(common::summary(&out)["status"], "completed");
     let csv = std::fs::read_to_string(out.join("history.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(

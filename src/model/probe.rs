@@ -90,9 +90,10 @@ pub enum Probe {
 /// The last [`measure::contacts`] of a region with a key of the state it
 /// was taken from: the columns of one `[[measure]]` read one pass over the
 /// contacts instead of one each. The key mixes the step count, the time,
-/// the neighbour-list rebuild count and every disc's position, velocity
-/// and spin bits (a pass over the discs, a few per cent of the
-/// measurement), so a state changed in any other way is measured afresh.
+/// the neighbour-list rebuild count and sums of every disc's position,
+/// velocity and spin bits (a streaming pass over the discs, a tenth of
+/// the measurement), so a state changed in any other way is measured
+/// afresh.
 #[derive(Debug, Default)]
 pub struct MeasureMemo(std::sync::Mutex<Option<(u64, measure::ContactMeasure)>>);
 
@@ -118,19 +119,26 @@ impl MeasureMemo {
     }
 }
 
-/// A 64-bit key of the discs' state (see [`MeasureMemo`]).
+/// A 64-bit key of the discs' state (see [`MeasureMemo`]): the step,
+/// time and rebuild count mixed with the wrapping sums of the bit patterns
+/// of every position, velocity and spin component (independent sums: a
+/// streaming pass, no dependency chain).
 fn state_key(g: &Granular) -> u64 {
     let p = &g.particles;
-    let mut h = (g.step as u64)
-        ^ g.time.to_bits().rotate_left(17)
-        ^ (g.grid.rebuilds as u64).rotate_left(41);
-    let mix = |h: u64, x: f64| (h.rotate_left(5) ^ x.to_bits()).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    for k in 0..p.len() {
-        h = mix(h, p.pos[k].x);
-        h = mix(h, p.pos[k].y);
-        h = mix(h, p.vel[k].x);
-        h = mix(h, p.vel[k].y);
-        h = mix(h, p.omega[k]);
+    let mut acc = [0u64; 5];
+    for ((x, v), w) in p.pos.iter().zip(&p.vel).zip(&p.omega) {
+        acc[0] = acc[0].wrapping_add(x.x.to_bits());
+        acc[1] = acc[1].wrapping_add(x.y.to_bits());
+        acc[2] = acc[2].wrapping_add(v.x.to_bits());
+        acc[3] = acc[3].wrapping_add(v.y.to_bits());
+        acc[4] = acc[4].wrapping_add(w.to_bits());
+    }
+    let mut h = 0xCBF2_9CE4_8422_2325u64;
+    for x in [g.step as u64, g.time.to_bits(), g.grid.rebuilds as u64]
+        .into_iter()
+        .chain(acc)
+    {
+        h = (h ^ x).wrapping_mul(0x0000_0100_0000_01B3).rotate_left(29);
     }
     h
 }
