@@ -4,6 +4,7 @@
 //! walls' stresses; a packing settled under gravity measures the weight of
 //! the discs above; `[[measure]]` gives history columns in `efgdem run`.
 
+#[allow(dead_code)]
 mod common;
 
 use efgdem::dem::Granular;

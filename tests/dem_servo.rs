@@ -171,7 +171,7 @@ fn four_servo_walls_compress_a_box_isotropically() {
     let mut worst = f64::INFINITY;
     while m.step < m.steps {
         m.step().unwrap();
-        if m.step % 50 == 0 {
+        if m.step.is_multiple_of(50) {
             worst = worst.min(clearance(m.granular().unwrap()));
         }
     }
@@ -310,17 +310,15 @@ damping = {{ kind = "critical-ratio", zeta = 0.2 }}
 "#
     );
     let mut m = build(&src);
-    if !joined {
-        if let efgdem::model::System::Granular(g) = &mut m.system {
-            for w in &mut g.walls {
-                w.joins = [None, None];
-            }
+    if !joined && let efgdem::model::System::Granular(g) = &mut m.system {
+        for w in &mut g.walls {
+            w.joins = [None, None];
         }
     }
     let mut worst = f64::INFINITY;
     while m.step < m.steps {
         m.step().unwrap();
-        if m.step % 50 == 0 {
+        if m.step.is_multiple_of(50) {
             worst = worst.min(clearance(m.granular().unwrap()));
         }
     }

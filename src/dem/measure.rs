@@ -369,7 +369,7 @@ mod tests {
         assert!((a(0.0, 1.0, 0.5) - PI * 0.125).abs() < 1e-15);
         assert!((a(4.0, 2.0, 0.5) - PI * 0.0625).abs() < 1e-15);
         // a chord: segment area r² acos(h/r) − h √(r² − h²) outside
-        let (rad, h) = (0.8, 0.3);
+        let (rad, h) = (0.8f64, 0.3);
         let seg = rad * rad * (h / rad).acos() - h * (rad * rad - h * h).sqrt();
         assert!((a(4.0 - h, 1.0, rad) - (PI * rad * rad - seg)).abs() < 1e-14);
         // a disc larger than the rectangle covers it
