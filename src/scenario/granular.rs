@@ -17,7 +17,17 @@
 //! to = [300.0, 300.0]
 //! velocity = [-0.12, 0.0]
 //! until_step = 40
+//!
+//! [[wall]]
+//! name = "top"
+//! from = [0.0, 300.0]
+//! to = [300.0, 300.0]
+//! servo = { stress = 1.0e5, max_velocity = 0.1 }   # or strain_rate = 0.5
 //! ```
+//!
+//! Servo and strain-rate walls move along their inward normal (towards
+//! the discs' centroid, or the opposite wall); an end of a wall lying on
+//! one of them is joined to it ([`joined_ends`]).
 
 use super::{Invalid, Problems, Scenario};
 use crate::dem::Granular;
