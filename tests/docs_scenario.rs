@@ -655,6 +655,11 @@ discs = [[0.1, 0.1, 0.05], [0.2, 0.1, 0.05]]
 name = "floor"
 from = [0.0, 0.0]
 to = [1.0, 0.0]
+
+[[wall]]
+name = "lid"
+from = [0.0, 1.0]
+to = [1.0, 1.0]
 "#;
 
 const BODY: &str = r#"
@@ -708,6 +713,7 @@ fn with_example(ctx: &str, lines: &[String]) -> Result<toml::Table, String> {
         "probe-continuum" => ("continuum", "probe"),
         "probe-granular" => ("granular", "probe"),
         "probe-coupled" => ("coupled", "probe"),
+        "measure" => ("granular", "measure"),
         _ => return Err(format!("unknown example context `{ctx}`")),
     };
     let mut sc = base(kind);
@@ -772,6 +778,21 @@ fn with_example(ctx: &str, lines: &[String]) -> Result<toml::Table, String> {
                 .as_array_mut()
                 .unwrap()
                 .push(toml::Value::Table(bc));
+        }
+        "measure" => {
+            let mut m = toml::Table::new();
+            m.insert("name".into(), "m".into());
+            merge(&mut m, &ex, &[]);
+            if !m.contains_key("rectangle") && !m.contains_key("centre") {
+                m.insert(
+                    "rectangle".into(),
+                    "[[0.0, 0.0], [0.3, 0.2]]".parse::<toml::Value>().unwrap(),
+                );
+            }
+            sc.insert(
+                "measure".into(),
+                toml::Value::Array(vec![toml::Value::Table(m)]),
+            );
         }
         "probe" => {
             let mut p = toml::Table::new();

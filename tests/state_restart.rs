@@ -94,8 +94,24 @@ fn assert_same(a: &Model, c: &Model) {
 }
 
 /// ~1000 discs settling in a box with friction, rolling resistance, contact
-/// dashpots and a wall pushing in.
-fn packing(rolling: f64) -> String {
+/// dashpots and a wall pushing in; with `servo`, the right wall follows a
+/// strain rate instead and a servo wall presses the bed from above (its
+/// right end joined to the right wall: it shrinks as that one moves in).
+fn packing(rolling: f64, servo: bool) -> String {
+    let (right, top) = if servo {
+        (
+            "strain_rate = 0.07",
+            r#"
+[[wall]]
+name = "top"
+from = [0.0, 0.243]
+to = [0.3, 0.243]
+servo = { stress = 2000.0, max_velocity = 0.6 }
+"#,
+        )
+    } else {
+        ("velocity = [-0.02, 0.0]", "")
+    };
     format!(
         r#"
 [simulation]
@@ -129,15 +145,15 @@ to = [0.0, 0.4]
 name = "right"
 from = [0.3, 0.0]
 to = [0.3, 0.4]
-velocity = [-0.02, 0.0]
-"#
+{right}
+{top}"#
     )
 }
 
 /// The DEM state at the save point is a loaded packing, and the restored
 /// model rebuilds its neighbour list (and renumbers) before the end.
-fn check_packing(rolling: f64) {
-    let src = packing(rolling);
+fn check_packing(rolling: f64, servo: bool) {
+    let src = packing(rolling, servo);
     let (n, k) = (2000, 1300);
     let (a, c, bytes) = restart(&src, n, k);
     let s = ModelState::from_bytes(&bytes).unwrap();
@@ -181,17 +197,40 @@ fn check_packing(rolling: f64) {
         bytes.len() as f64 / discs as f64,
         g.rebuilds
     );
+    if servo {
+        // the servo wall came down onto the bed before the save and holds
+        // it; its joined end followed the right wall in
+        let top = &g.walls[3];
+        let w = c
+            .granular()
+            .unwrap()
+            .walls
+            .iter()
+            .find(|w| w.name == "top")
+            .unwrap();
+        eprintln!(
+            "servo wall at the save: y = {:.5}, length {:.5}, v = {:?}; at the end {} discs under it, σ = {:.1}",
+            top.a.y,
+            (top.b - top.a).norm(),
+            top.vel,
+            w.contacts,
+            w.normal_stress(1.0)
+        );
+        assert!(top.a.y < 0.24 && (top.b - top.a).norm() < 0.299);
+        assert!(w.contacts > 10 && top.vel.y != 0.0);
+    }
     assert_same(&a, &c);
 }
 
 #[test]
 fn granular_packing_restarts_bitwise() {
-    check_packing(0.0);
+    check_packing(0.0, false);
 }
 
+/// With rolling resistance, a servo wall and a strain-rate wall.
 #[test]
 fn granular_packing_with_rolling_resistance_restarts_bitwise() {
-    check_packing(0.1);
+    check_packing(0.1, true);
 }
 
 /// A cantilever (EFG or FE) under self-weight whose right edge is driven
@@ -437,7 +476,11 @@ fn bed_on_fem_plate_substepped_restarts_bitwise() {
 /// list, no Green matrix, the implicit scheme not primed) restarts too.
 #[test]
 fn restarts_from_step_zero() {
-    for src in [packing(0.0), DISC_ON_BEAM.to_string(), cantilever("efg")] {
+    for src in [
+        packing(0.0, false),
+        DISC_ON_BEAM.to_string(),
+        cantilever("efg"),
+    ] {
         let (a, c, _) = restart(&src, 200, 0);
         assert_same(&a, &c);
     }
@@ -453,7 +496,7 @@ fn restarts_across_thread_counts() {
             .build()
             .unwrap()
     };
-    for src in [packing(0.1), bed_on_plate("efg", "")] {
+    for src in [packing(0.1, true), bed_on_plate("efg", "")] {
         let (n, k) = (500, 260);
         let mut whole = Vec::new();
         for threads in [1, 2] {
@@ -493,18 +536,18 @@ fn mismatched_states_are_refused() {
     let mut coupled = build(small);
     run(&mut coupled, 3);
     let before = coupled.save_state();
-    let mut granular = build(&packing(0.0));
+    let mut granular = build(&packing(0.0, false));
     run(&mut granular, 3);
     let g_state = granular.save_state();
     // another kind
     let e = coupled.restore_state(&g_state).unwrap_err().to_string();
     assert!(e.contains("granular") && e.contains("coupled"), "{e}");
     // another disc count
-    let mut fewer = build(&packing(0.0).replace("0.24]]", "0.12]]"));
+    let mut fewer = build(&packing(0.0, false).replace("0.24]]", "0.12]]"));
     let e = fewer.restore_state(&g_state).unwrap_err().to_string();
     assert!(e.contains("discs"), "{e}");
     // rolling resistance switched on
-    let mut rolling = build(&packing(0.1));
+    let mut rolling = build(&packing(0.1, false));
     let e = rolling.restore_state(&g_state).unwrap_err().to_string();
     assert!(e.contains("rolling"), "{e}");
     // a beam of other DOFs: refused after the discs were restored, and
@@ -529,8 +572,8 @@ fn mismatched_states_are_refused() {
     if let SystemState::Granular(g) = &mut bad.system {
         g.id[0] = g.id[1];
     }
-    let fresh = build(&packing(0.0));
-    let mut target = build(&packing(0.0));
+    let fresh = build(&packing(0.0, false));
+    let mut target = build(&packing(0.0, false));
     assert!(target.restore_state(&bad).is_err());
     assert!(target.save_state() == fresh.save_state(), "left as it was");
     // bytes
@@ -711,7 +754,9 @@ fn check_run_restart(tag: &str, src: &str, n: usize, k: usize) {
 
 #[test]
 fn a_granular_run_restarts_with_identical_outputs() {
-    let src = with_outputs(&packing(0.1), "quantity = \"kinetic\"");
+    // with servo and strain-rate walls and a [[measure]]'s columns
+    let src = with_outputs(&packing(0.1, true), "quantity = \"kinetic\"")
+        + "\n[[measure]]\nname = \"bed\"\nrectangle = [[0.05, 0.05], [0.25, 0.2]]\n";
     check_run_restart("granular", &src, 2000, 1301);
 }
 

@@ -184,8 +184,8 @@ pub struct NeighbourGrid {
     pub reorder_every: usize,
     /// Positions at the last rebuild.
     pub ref_pos: Vec<Vec2>,
-    /// Wall first end points at the last rebuild.
-    pub wall_ref: Vec<Vec2>,
+    /// Wall end points `[a, b]` at the last rebuild.
+    pub wall_ref: Vec<[Vec2; 2]>,
     /// Number of rebuilds so far.
     pub rebuilds: usize,
     /// Force a rebuild before the next force computation.
@@ -227,10 +227,19 @@ impl NeighbourGrid {
         if self.stale {
             return true;
         }
+        // a translated wall moved by |Δa| everywhere; a wall whose joined
+        // ends slide along its line, by at most max(|Δa|, |Δb|)
         let wmax = walls
             .iter()
             .zip(&self.wall_ref)
-            .map(|(w, r)| (w.a - *r).norm())
+            .map(|(w, r)| {
+                let da = (w.a - r[0]).norm();
+                if w.is_joined() {
+                    da.max((w.b - r[1]).norm())
+                } else {
+                    da
+                }
+            })
             .fold(0.0, f64::max);
         2.0 * max_disp > self.skin || max_disp + wmax > self.skin
     }
@@ -377,7 +386,7 @@ impl NeighbourGrid {
         self.search_walls(p, walls, list);
         self.ref_pos.clear();
         self.ref_pos.extend_from_slice(&p.pos);
-        self.wall_ref = walls.iter().map(|w| w.a).collect();
+        self.wall_ref = walls.iter().map(|w| [w.a, w.b]).collect();
         self.stale = false;
     }
 

@@ -31,6 +31,7 @@
 pub mod broadphase;
 pub mod contact;
 pub mod integrate;
+pub mod measure;
 pub mod packing;
 pub mod particles;
 pub mod state;
@@ -130,6 +131,9 @@ pub struct Granular {
     pub damping: BodyDamping,
     /// Gravitational acceleration `g` acting on the discs.
     pub gravity: Vec2,
+    /// Disc thickness t (discs are cylinders, default 1): stresses are
+    /// forces per length × t (servo walls, [`measure`]).
+    pub thickness: f64,
     /// Time step Δt of the central difference (ERRATA E11).
     pub dt: f64,
     /// Steps done.
@@ -175,6 +179,7 @@ impl Granular {
             dash: Vec::new(),
             damping: BodyDamping::None,
             gravity: Vec2::ZERO,
+            thickness: 1.0,
             dt,
             step: 0,
             time: 0.0,
@@ -321,13 +326,28 @@ impl Granular {
     }
 
     /// Total force on each wall: minus the sum of its contact forces, in
-    /// the fixed order of the wall-pair list.
+    /// the fixed order of the wall-pair list; for servo and strain-rate
+    /// walls also the number of discs touching it, their `Σ k_n` and
+    /// `Σ c_n` (the servo's stiffness and damping).
     fn wall_totals(&mut self) {
         for w in &mut self.walls {
             w.force = Vec2::ZERO;
+            w.contacts = 0;
+            w.stiffness = 0.0;
+            w.damping = 0.0;
         }
+        let nm = self.materials.len();
+        let p = &self.particles;
         for (q, cf) in self.contacts.walls.iter().zip(&self.contacts.wall_buf) {
-            self.walls[q.wall as usize].force -= cf.f;
+            let (wi, d) = (q.wall as usize, q.disc as usize);
+            let w = &mut self.walls[wi];
+            w.force -= cf.f;
+            if cf.f != Vec2::ZERO && w.motion.follows_state() {
+                let law = &self.wall_laws[wi * nm + p.material[d] as usize];
+                w.contacts += 1;
+                w.stiffness += law.kn;
+                w.damping += law.dashpots(effective_mass(p.inv_mass[d], 0.0)).0;
+            }
         }
     }
 
@@ -363,15 +383,82 @@ impl Granular {
         self.move_walls();
     }
 
-    /// Walls move with their prescribed velocity; the clock advances.
+    /// Walls move: every velocity is found from the state before any wall
+    /// moves ([`wall_velocity`](Self::wall_velocity)), then each wall
+    /// translates by `v Δt` and its joined ends are put back on the lines
+    /// of the walls they follow. The clock advances.
     fn move_walls(&mut self) {
+        for k in 0..self.walls.len() {
+            let v = self.wall_velocity(k);
+            self.walls[k].vel = v;
+        }
+        let mut joined = false;
         for w in &mut self.walls {
-            let v = w.motion.velocity(self.step, self.time, self.dt);
-            w.translate(v * self.dt);
-            w.vel = v;
+            w.translate(w.vel * self.dt);
+            joined |= w.is_joined();
+        }
+        if joined {
+            self.join_walls();
         }
         self.step += 1;
         self.time = self.step as f64 * self.dt;
+    }
+
+    /// Velocity of wall `k` during the present step: the prescribed one,
+    /// the servo's `−inward · G (F − σ L t)` from the force of the step
+    /// just computed ([`walls::Servo`]), or the strain rate's
+    /// `inward · share ε̇ D` from the present distance D to the opposite
+    /// wall.
+    pub fn wall_velocity(&self, k: usize) -> Vec2 {
+        let w = &self.walls[k];
+        match &w.motion {
+            walls::WallMotion::Servo(s) => {
+                let target = s.stress * w.length() * self.thickness;
+                let stiffness = if w.contacts > 0 {
+                    w.stiffness
+                } else {
+                    self.wall_kn_max(k)
+                };
+                w.inward * -s.speed(w.normal_force(), target, stiffness, w.damping, self.dt)
+            }
+            walls::WallMotion::StrainRate {
+                rate,
+                opposite,
+                share,
+            } => {
+                let d = (self.walls[*opposite].a - w.a).dot(w.inward);
+                w.inward * (share * rate * d)
+            }
+            m => m.velocity(self.step, self.time, self.dt),
+        }
+    }
+
+    /// Largest normal stiffness of wall `k` against any disc material.
+    fn wall_kn_max(&self, k: usize) -> f64 {
+        let nm = self.materials.len();
+        self.wall_laws[k * nm..(k + 1) * nm]
+            .iter()
+            .map(|l| l.kn)
+            .fold(0.0, f64::max)
+    }
+
+    /// Put every joined end on the line of the wall it follows (the line
+    /// of this wall through `a` along its fixed direction: the wall
+    /// stretches or shrinks, it does not turn).
+    fn join_walls(&mut self) {
+        for k in 0..self.walls.len() {
+            let w = &self.walls[k];
+            let ends = w
+                .joins
+                .map(|j| j.and_then(|j| w.meet(&self.walls[j as usize])));
+            let w = &mut self.walls[k];
+            if let Some(a) = ends[0] {
+                w.a = a;
+            }
+            if let Some(b) = ends[1] {
+                w.b = b;
+            }
+        }
     }
 
     /// Is every disc state finite?

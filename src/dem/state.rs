@@ -2,8 +2,10 @@
 //!
 //! Saved: the clock; every disc's kinematics and last force in the present
 //! slot order, with the slot → id map; the walls' positions, velocities
-//! and forces; the contact list (pairs in their sorted order, shear and
-//! rolling histories, disc–wall pairs) and the Verlet bookkeeping that
+//! and forces (a servo or strain-rate wall keeps nothing else: its next
+//! velocity follows from the next step's force and the walls' ends); the
+//! contact list (pairs in their sorted order, shear and rolling histories,
+//! disc–wall pairs) and the Verlet bookkeeping that
 //! decides when the list is rebuilt and when the discs are renumbered
 //! (positions at the last rebuild, rebuild counter, largest displacement
 //! since). Restored onto an assembly built from the same scenario, the
@@ -88,8 +90,8 @@ pub struct GranularState {
     pub wall_pairs: Vec<WallPairState>,
     /// Disc positions at the last rebuild (empty before the first).
     pub ref_pos: Vec<Vec2>,
-    /// Walls' first ends at the last rebuild.
-    pub wall_ref: Vec<Vec2>,
+    /// Walls' ends `[a, b]` at the last rebuild.
+    pub wall_ref: Vec<[Vec2; 2]>,
     /// Rebuilds so far (every `reorder_every`-th renumbers the discs).
     pub rebuilds: usize,
     /// A rebuild is due before the next force computation.

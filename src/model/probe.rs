@@ -5,6 +5,7 @@
 use super::body::{At, BodyRef};
 use crate::coupling::CoupledModel;
 use crate::dem::Granular;
+use crate::dem::measure::{self, OuterContact, Quantity, Region};
 use crate::dem::walls::Wall;
 use crate::geom::Vec2;
 
@@ -56,12 +57,26 @@ pub enum Probe {
         /// With the dashpot (`k_n δ + β k_n δ̇`) if true, else `k_n δ`.
         total: bool,
     },
-    /// `wall_fx`, `wall_fy`, `wall_x`, `wall_y` of wall `wall`.
+    /// `wall_fx`, `wall_fy`, `wall_x`, `wall_y`, `wall_stress`,
+    /// `wall_length` of wall `wall`.
     Wall {
         /// Wall index.
         wall: usize,
         /// The quantity's name.
         quantity: String,
+    },
+    /// A quantity of the discs in a region ([`measure`]): stress,
+    /// porosity, coordination number or fabric. Porosity is a pass over the
+    /// discs; the other quantities share one pass over the contacts per
+    /// state through `memo` (one per region).
+    Measure {
+        /// The region.
+        region: Region,
+        /// The quantity.
+        quantity: Quantity,
+        /// The last contact measurement of the region, shared by its
+        /// columns.
+        memo: std::sync::Arc<MeasureMemo>,
     },
     /// An assembly-wide quantity: `kinetic`, `rotational`, `spring`,
     /// `gravity_energy`, `total_energy`, `contacts` (disc–body contacts
@@ -72,13 +87,73 @@ pub enum Probe {
     },
 }
 
+/// The last [`measure::contacts`] of a region with a key of the state it
+/// was taken from: the columns of one `[[measure]]` read one pass over the
+/// contacts instead of one each. The key mixes the step count, the time,
+/// the neighbour-list rebuild count and sums of every disc's position,
+/// velocity and spin bits (a streaming pass over the discs, a tenth of
+/// the measurement), so a state changed in any other way is measured
+/// afresh.
+#[derive(Debug, Default)]
+pub struct MeasureMemo(std::sync::Mutex<Option<(u64, measure::ContactMeasure)>>);
+
+impl MeasureMemo {
+    /// The measurement of `region` in this state, from the memo if the
+    /// state is the one it was taken from.
+    fn get(
+        &self,
+        g: &Granular,
+        region: &Region,
+        outer: impl IntoIterator<Item = OuterContact>,
+    ) -> measure::ContactMeasure {
+        let key = state_key(g);
+        let mut m = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        match *m {
+            Some((k, c)) if k == key => c,
+            _ => {
+                let c = measure::contacts(g, region, outer);
+                *m = Some((key, c));
+                c
+            }
+        }
+    }
+}
+
+/// A 64-bit key of the discs' state (see [`MeasureMemo`]): the step,
+/// time and rebuild count mixed with the wrapping sums of the bit patterns
+/// of every position, velocity and spin component (independent sums: a
+/// streaming pass, no dependency chain).
+fn state_key(g: &Granular) -> u64 {
+    let p = &g.particles;
+    let mut acc = [0u64; 5];
+    for ((x, v), w) in p.pos.iter().zip(&p.vel).zip(&p.omega) {
+        acc[0] = acc[0].wrapping_add(x.x.to_bits());
+        acc[1] = acc[1].wrapping_add(x.y.to_bits());
+        acc[2] = acc[2].wrapping_add(v.x.to_bits());
+        acc[3] = acc[3].wrapping_add(v.y.to_bits());
+        acc[4] = acc[4].wrapping_add(w.to_bits());
+    }
+    let mut h = 0xCBF2_9CE4_8422_2325u64;
+    for x in [g.step as u64, g.time.to_bits(), g.grid.rebuilds as u64]
+        .into_iter()
+        .chain(acc)
+    {
+        h = (h ^ x).wrapping_mul(0x0000_0100_0000_01B3).rotate_left(29);
+    }
+    h
+}
+
 /// A wall quantity: `wall_fx`, `wall_fy` (force of the discs on it),
-/// `wall_x`, `wall_y` (its first end point).
-pub fn wall_quantity(w: &Wall, q: &str) -> f64 {
+/// `wall_x`, `wall_y` (its first end point), `wall_stress` (normal force
+/// along its outward normal per length × `thickness`, compression
+/// positive: [`Wall::normal_stress`]), `wall_length`.
+pub fn wall_quantity(w: &Wall, q: &str, thickness: f64) -> f64 {
     match q {
         "wall_fx" => w.force.x,
         "wall_fy" => w.force.y,
         "wall_x" => w.a.x,
+        "wall_stress" => w.normal_stress(thickness),
+        "wall_length" => w.length(),
         _ => w.a.y,
     }
 }
@@ -155,7 +230,29 @@ pub fn value<'a>(
             let (el, tot) = g.normal_force(g.slot(*a), g.slot(*b));
             if *total { tot } else { el }
         }
-        Probe::Wall { wall, quantity } => wall_quantity(&g().walls[*wall], quantity),
+        Probe::Wall { wall, quantity } => {
+            let g = g();
+            wall_quantity(&g.walls[*wall], quantity, g.thickness)
+        }
+        Probe::Measure {
+            region,
+            quantity,
+            memo,
+        } => {
+            let g = g();
+            if *quantity == Quantity::Porosity {
+                return measure::porosity(g, region);
+            }
+            let outer = coupled.into_iter().flat_map(|m| {
+                m.contacts.iter().map(|c| OuterContact {
+                    slot: g.slot(c.disc as usize),
+                    point: c.point,
+                    normal: c.normal,
+                    force: c.force,
+                })
+            });
+            memo.get(g, region, outer).get(*quantity)
+        }
         Probe::Global { quantity } => {
             let v = global_quantity(g(), quantity);
             match (quantity.as_str(), coupled) {

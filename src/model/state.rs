@@ -31,7 +31,8 @@ use crate::dem::state::GranularState;
 
 /// Version of the byte format of [`ModelState::to_bytes`]; raised whenever
 /// a saved type changes.
-pub const STATE_FORMAT_VERSION: u32 = 1;
+/// (2: walls keep both ends of the Verlet reference, for joined ends.)
+pub const STATE_FORMAT_VERSION: u32 = 2;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -23,7 +23,6 @@ use crate::dem::packing::{
     settle_in_box,
 };
 use crate::dem::particles::Particles;
-use crate::dem::walls::{Wall, WallMotion};
 use crate::dem::{BodyDamping, DT_WARN, Granular};
 use crate::efg::EfgBody;
 use crate::efg::boundary::EfgContinuum;
@@ -323,27 +322,11 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
             ));
         }
     }
-    let mut walls = Vec::new();
-    for (wi, w) in sc.wall.iter().enumerate() {
-        let motion = match (&w.velocity, &w.history) {
-            (Some(v), _) => WallMotion::Constant {
-                velocity: Vec2::from(*v),
-                until_step: w.until_step,
-            },
-            (None, Some(h)) => {
-                WallMotion::Piecewise(h.iter().map(|r| (r[0], Vec2::new(r[1], r[2]))).collect())
-            }
-            (None, None) => WallMotion::Fixed,
-        };
-        let mut wall = Wall::new(&w.name, Vec2::from(w.from), Vec2::from(w.to), motion);
-        if let Some(m) = &w.material {
-            wall.material = Some(material_index(sc, m, &format!("wall.{wi}.material"))?);
-        }
-        walls.push(wall);
-    }
+    let walls = super::granular::walls(sc, &p.pos)?;
     let mut gr = Granular::new(p, mats, walls, 1.0);
     gr.damping = body;
     gr.gravity = Vec2::from(sc.simulation.gravity);
+    gr.thickness = g.thickness;
     gr.dt = sc.simulation.dt.unwrap_or(DT_SAFETY * gr.critical_dt());
     if !gr.dt.is_finite() || gr.dt <= 0.0 {
         return Err(bad(
@@ -351,6 +334,7 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
             "cannot choose a time step: give simulation.dt (no contact stiffness to derive it from)",
         ));
     }
+    super::granular::check_wall_speeds(sc, &gr)?;
     if let Some(s) = g.skin {
         gr.set_skin(s);
     }
@@ -907,7 +891,8 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
 
 /// Bind every `[[probe]]` to its target in `model`, in scenario order.
 pub fn probes(sc: &Scenario, model: &Model) -> Result<Vec<(String, Probe)>, Invalid> {
-    sc.probe
+    let mut out: Vec<(String, Probe)> = sc
+        .probe
         .iter()
         .enumerate()
         .map(|(k, pr)| {
@@ -974,7 +959,10 @@ pub fn probes(sc: &Scenario, model: &Model) -> Result<Vec<(String, Probe)>, Inva
             };
             Ok((pr.name.clone(), probe))
         })
-        .collect()
+        .collect::<Result<_, _>>()?;
+    // then the `[[measure]]` columns
+    out.extend(super::measure::probes(sc, model)?);
+    Ok(out)
 }
 
 fn body_name(model: &Model, i: usize) -> &str {

@@ -17,9 +17,22 @@
 //! to = [300.0, 300.0]
 //! velocity = [-0.12, 0.0]
 //! until_step = 40
+//!
+//! [[wall]]
+//! name = "top"
+//! from = [0.0, 300.0]
+//! to = [300.0, 300.0]
+//! servo = { stress = 1.0e5, max_velocity = 0.1 }   # or strain_rate = 0.5
 //! ```
+//!
+//! Servo and strain-rate walls move along their inward normal (towards
+//! the discs' centroid, or the opposite wall); an end of a wall lying on
+//! one of them is joined to it ([`joined_ends`]).
 
-use super::{Problems, Scenario};
+use super::{Invalid, Problems, Scenario};
+use crate::dem::Granular;
+use crate::dem::walls::{Servo, Wall, WallMotion};
+use crate::geom::Vec2;
 use serde::Deserialize;
 use std::path::PathBuf;
 
@@ -301,6 +314,176 @@ pub struct WallSpec {
     pub until_step: Option<usize>,
     /// Or a piecewise-linear velocity history `[[t, vx, vy], ...]`.
     pub history: Option<Vec<[f64; 3]>>,
+    /// Or hold a normal stress by moving along the normal (servo control).
+    pub servo: Option<ServoSpec>,
+    /// Or move so that the distance to the opposite (parallel) wall
+    /// changes at this true strain rate (1/s, compression positive).
+    pub strain_rate: Option<f64>,
+}
+
+/// `servo = { stress = σ, max_velocity = v, gain = G, relaxation = α }`
+/// of a `[[wall]]` ([`Servo`]).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServoSpec {
+    /// Target normal stress σ (Pa, compression positive).
+    pub stress: f64,
+    /// Largest speed of the wall (m/s).
+    pub max_velocity: f64,
+    /// Gain G (m/s per N); default automatic `α/(Σk_n Δt)`.
+    pub gain: Option<f64>,
+    /// Relaxation factor α of the automatic gain (default 0.5).
+    #[serde(default = "half")]
+    pub relaxation: f64,
+}
+
+fn half() -> f64 {
+    0.5
+}
+
+/// Two walls are parallel when the sine of their angle is below this.
+const PARALLEL: f64 = 1e-9;
+
+fn ends(w: &WallSpec) -> (Vec2, Vec2, Vec2, f64) {
+    let (a, b) = (Vec2::from(w.from), Vec2::from(w.to));
+    let l = (b - a).norm();
+    (a, b, (b - a) * (1.0 / l), l)
+}
+
+/// The wall opposite wall `i`: the nearest wall parallel to it, not on its
+/// line (by the distance between the lines).
+pub fn opposite_wall(sc: &Scenario, i: usize) -> Option<usize> {
+    let (a, _, u, l) = ends(&sc.wall[i]);
+    let mut best: Option<(usize, f64)> = None;
+    for (j, w) in sc.wall.iter().enumerate() {
+        if j == i || w.from == w.to {
+            continue;
+        }
+        let (aj, _, uj, _) = ends(w);
+        let d = (aj - a).dot(u.perp()).abs();
+        if u.cross(uj).abs() <= PARALLEL && d > 1e-9 * l && best.is_none_or(|(_, b)| d < b) {
+            best = Some((j, d));
+        }
+    }
+    best.map(|(j, _)| j)
+}
+
+/// The walls that the ends `from` and `to` of wall `i` are joined to: a
+/// servo or strain-rate wall, not parallel to it, on which the end lies
+/// (within 10⁻⁹ of the two lengths).
+pub fn joined_ends(sc: &Scenario, i: usize) -> [Option<u32>; 2] {
+    let (a, b, u, l) = ends(&sc.wall[i]);
+    let on = |p: Vec2| {
+        sc.wall.iter().enumerate().position(|(j, w)| {
+            if j == i || w.from == w.to || (w.servo.is_none() && w.strain_rate.is_none()) {
+                return false;
+            }
+            let (aj, bj, uj, lj) = ends(w);
+            u.cross(uj).abs() > PARALLEL
+                && (crate::geom::closest_on_segment(p, aj, bj).1 - p).norm() <= 1e-9 * (l + lj)
+        })
+    };
+    [on(a).map(|j| j as u32), on(b).map(|j| j as u32)]
+}
+
+/// The walls of the scenario, with their motions, inward normals (towards
+/// the centroid of `discs`, or the opposite wall of a strain-rate wall)
+/// and joined ends.
+pub fn walls(sc: &Scenario, discs: &[Vec2]) -> Result<Vec<Wall>, Invalid> {
+    let centroid = if discs.is_empty() {
+        Vec2::ZERO
+    } else {
+        discs.iter().fold(Vec2::ZERO, |s, &x| s + x) * (1.0 / discs.len() as f64)
+    };
+    let mut out = Vec::new();
+    for (wi, w) in sc.wall.iter().enumerate() {
+        let at = |f: &str| format!("wall.{wi}.{f}");
+        let mut inward_to = centroid;
+        let motion = if let Some(s) = &w.servo {
+            WallMotion::Servo(Servo {
+                stress: s.stress,
+                gain: s.gain,
+                relaxation: s.relaxation,
+                max_velocity: s.max_velocity,
+            })
+        } else if let Some(rate) = w.strain_rate {
+            let opposite = opposite_wall(sc, wi).ok_or_else(|| Invalid {
+                path: at("strain_rate"),
+                message: "needs a parallel wall opposite this one".into(),
+            })?;
+            inward_to = Vec2::from(sc.wall[opposite].from);
+            let both =
+                sc.wall[opposite].strain_rate.is_some() && opposite_wall(sc, opposite) == Some(wi);
+            WallMotion::StrainRate {
+                rate,
+                opposite,
+                share: if both { 0.5 } else { 1.0 },
+            }
+        } else {
+            match (&w.velocity, &w.history) {
+                (Some(v), _) => WallMotion::Constant {
+                    velocity: Vec2::from(*v),
+                    until_step: w.until_step,
+                },
+                (None, Some(h)) => {
+                    WallMotion::Piecewise(h.iter().map(|r| (r[0], Vec2::new(r[1], r[2]))).collect())
+                }
+                (None, None) => WallMotion::Fixed,
+            }
+        };
+        let mut wall = Wall::new(&w.name, Vec2::from(w.from), Vec2::from(w.to), motion);
+        if (inward_to - wall.a).dot(wall.inward) < 0.0 {
+            wall.inward = -wall.inward;
+        }
+        wall.joins = joined_ends(sc, wi);
+        if let Some(m) = &w.material {
+            wall.material = Some(
+                sc.material
+                    .iter()
+                    .position(|x| &x.name == m)
+                    .ok_or_else(|| Invalid {
+                        path: at("material"),
+                        message: format!("no [[material]] named `{m}`"),
+                    })? as u16,
+            );
+        }
+        out.push(wall);
+    }
+    Ok(out)
+}
+
+/// Fraction of the smallest radius a servo or strain-rate wall may move in
+/// one step (faster, it could pass through a disc).
+pub const WALL_STEP_LIMIT: f64 = 0.1;
+
+/// Servo walls at `max_velocity` and strain-rate walls at their starting
+/// speed must move less than [`WALL_STEP_LIMIT`] × the smallest radius per
+/// step.
+pub fn check_wall_speeds(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
+    let rmin = g
+        .particles
+        .radius
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    for (wi, w) in g.walls.iter().enumerate() {
+        let (speed, field) = match &w.motion {
+            WallMotion::Servo(s) => (s.max_velocity, "servo.max_velocity"),
+            WallMotion::StrainRate { .. } => (g.wall_velocity(wi).norm(), "strain_rate"),
+            _ => continue,
+        };
+        let step = speed * g.dt;
+        if step > WALL_STEP_LIMIT * rmin {
+            return Err(Invalid {
+                path: format!("wall.{wi}.{field}"),
+                message: format!(
+                    "wall `{}` would move {step:e} per step (speed {speed:e} × dt {:e}), more than {WALL_STEP_LIMIT} × the smallest radius {rmin:e}: lower it (or dt)",
+                    sc.wall[wi].name, g.dt
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 // Probe quantities a granular run knows, and what each needs.
@@ -309,7 +492,14 @@ pub struct WallSpec {
 /// the dashpot.
 pub const CONTACT_QUANTITIES: &[&str] = &["normal_elastic", "normal_total"];
 /// Force of the discs on a wall and its first end point (`wall = "name"`).
-pub const WALL_QUANTITIES: &[&str] = &["wall_fx", "wall_fy", "wall_x", "wall_y"];
+pub const WALL_QUANTITIES: &[&str] = &[
+    "wall_fx",
+    "wall_fy",
+    "wall_x",
+    "wall_y",
+    "wall_stress",
+    "wall_length",
+];
 /// State of one disc (`disc = k`, 1-based).
 pub const DISC_QUANTITIES: &[&str] = &["x", "y", "vx", "vy", "theta", "omega"];
 /// Assembly-wide energies and the number of touching contacts (no target).
@@ -449,6 +639,7 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             at("until_step"),
             "`until_step` needs a `velocity`",
         );
+        validate_servo(sc, i, w, p);
         if let Some(h) = &w.history {
             p.check(
                 w.velocity.is_none(),
@@ -469,6 +660,72 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
         }
     }
     validate_probes(sc, p);
+}
+
+/// `servo` and `strain_rate` of wall `i`: one motion only, sensible
+/// numbers, a strain-rate wall with a wall opposite it (and the same rate
+/// if that one follows a strain rate too).
+fn validate_servo(sc: &Scenario, i: usize, w: &WallSpec, p: &mut Problems) {
+    let at = |f: &str| format!("wall.{i}.{f}");
+    let kinds = [
+        w.velocity.is_some(),
+        w.history.is_some(),
+        w.servo.is_some(),
+        w.strain_rate.is_some(),
+    ];
+    if kinds.iter().filter(|&&k| k).count() > 1 && (w.servo.is_some() || w.strain_rate.is_some()) {
+        p.push(
+            at(if w.servo.is_some() {
+                "servo"
+            } else {
+                "strain_rate"
+            }),
+            "give one motion: `velocity`, `history`, `servo` or `strain_rate`",
+        );
+    }
+    if let Some(s) = &w.servo {
+        p.non_negative(s.stress, at("servo.stress"));
+        p.positive(s.max_velocity, at("servo.max_velocity"));
+        if let Some(g) = s.gain {
+            p.positive(g, at("servo.gain"));
+        }
+        p.check(
+            s.relaxation.is_finite() && s.relaxation > 0.0 && s.relaxation <= 1.0,
+            at("servo.relaxation"),
+            format!("must be in (0, 1] (got {})", s.relaxation),
+        );
+    }
+    if let Some(rate) = w.strain_rate {
+        p.check(
+            rate.is_finite(),
+            at("strain_rate"),
+            format!("must be a finite number (got {rate})"),
+        );
+        if w.from == w.to {
+            return;
+        }
+        match opposite_wall(sc, i) {
+            None => p.push(
+                at("strain_rate"),
+                "needs a wall parallel to this one, opposite it: the rate is of the distance between the two",
+            ),
+            Some(j) => {
+                let o = &sc.wall[j];
+                if let Some(r) = o.strain_rate
+                    && opposite_wall(sc, j) == Some(i)
+                {
+                    p.check(
+                        r == rate,
+                        at("strain_rate"),
+                        format!(
+                            "the opposite wall `{}` has strain_rate = {r}: two facing strain-rate walls share one rate (give both the same)",
+                            o.name
+                        ),
+                    );
+                }
+            }
+        }
+    }
 }
 
 fn validate_table(t: &DiscsTable, p: &mut Problems) {

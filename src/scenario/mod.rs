@@ -12,6 +12,7 @@ pub mod build;
 pub mod builder;
 pub mod generate;
 pub mod granular;
+pub mod measure;
 
 use serde::Deserialize;
 use std::fmt;
@@ -38,6 +39,10 @@ pub struct Scenario {
     /// History outputs, one `history.csv` column each.
     #[serde(default)]
     pub probe: Vec<Probe>,
+    /// Stress / fabric measurement regions, several `history.csv` columns
+    /// each (after the probes).
+    #[serde(default)]
+    pub measure: Vec<measure::MeasureSpec>,
     /// `[output]`: history and frame intervals.
     #[serde(default)]
     pub output: Output,
@@ -532,6 +537,7 @@ impl Scenario {
         );
         body::validate(self, &mut p);
         granular::validate(self, &mut p);
+        measure::validate(self, &mut p);
         p.0
     }
 
