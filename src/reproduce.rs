@@ -1501,3 +1501,47 @@ fn fig17(job: &mut Job) -> Result<()> {
     );
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_fields_keep_quoted_commas_and_quotes() {
+        assert_eq!(
+            csv_fields(r#"a,"b, c","say ""x""",,"#),
+            ["a", "b, c", r#"say "x""#, "", ""]
+        );
+    }
+
+    #[test]
+    fn paper_values_parse_with_a_source_each() {
+        let v = paper_values().unwrap();
+        assert!(v.len() > 20);
+        for r in &v {
+            assert!(
+                ["vline", "point", "time", "setting", "none"].contains(&r.kind.as_str()),
+                "{r:?}"
+            );
+            assert_eq!(r.kind != "none", r.x.is_some(), "{r:?}");
+            assert!(!r.label.is_empty(), "{r:?}");
+        }
+    }
+
+    #[test]
+    fn a_scenario_unlike_the_papers_set_up_is_refused() {
+        let job = Job {
+            out: std::env::temp_dir(),
+            quiet: true,
+            report: String::new(),
+            paper: paper_values().unwrap(),
+            figures: Vec::new(),
+        };
+        let mut sc = parse(NINE_DISC_RIGID[0], "test1").unwrap();
+        job.check_setup("fig14_test1", &sc).unwrap();
+        // Test 2's set-up is not Test 1's
+        assert!(job.check_setup("fig14_test2", &sc).is_err());
+        sc.simulation.dt = Some(0.02);
+        assert!(job.check_setup("fig14_test1", &sc).is_err());
+    }
+}

@@ -563,4 +563,79 @@ mod tests {
         }
         std::fs::remove_dir_all(dir).unwrap();
     }
+
+    #[test]
+    fn ticks_show_their_differences() {
+        assert_eq!(tick_decimals(0.22), 2);
+        assert_eq!(tick_decimals(16.0), 0);
+        assert_eq!(tick_decimals(0.0013), 4);
+        assert_eq!(tick(-0.0001, 2), "0.00");
+        assert_eq!(tick(-1.5, 1), "-1.5");
+    }
+
+    #[test]
+    fn colours_follow_the_palette_unless_given() {
+        let chart = Chart {
+            series: vec![
+                Series::new("a", vec![], Mark::Line),
+                Series::paper("p", vec![], Mark::Diamonds),
+                Series::new("b", vec![], Mark::Line),
+            ],
+            lower: Some(Panel {
+                series: vec![Series::new("d", vec![], Mark::Line).with_color(palette(0))],
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        let (up, low) = colors(&chart);
+        assert_eq!(up, [palette(0), PAPER_COLOR, palette(1)]);
+        assert_eq!(low, [palette(0)]);
+    }
+
+    #[test]
+    fn draws_two_panels_with_reference_lines_and_notes() {
+        let dir = std::env::temp_dir().join(format!("efgdem-plot2-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("two.png");
+        let a: Vec<(f64, f64)> = (0..200)
+            .map(|i| (i as f64 * 0.01, (i as f64 * 0.01).sin()))
+            .collect();
+        let b: Vec<(f64, f64)> = a.iter().map(|&(x, y)| (x, y * 1.001)).collect();
+        let dev: Vec<(f64, f64)> = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p.0, (q.1 - p.1) * 1e3))
+            .collect();
+        let chart = Chart {
+            title: "Two panels".into(),
+            x_label: "t (s)".into(),
+            y_label: "u (m)".into(),
+            series: vec![
+                Series::new("ours, a", a, Mark::Line),
+                Series::new("ours, b", b, Mark::Dashed),
+                Series::vlines("paper (text): instants", &[0.5, 1.5])
+                    .with_color(PAPER_COLOR)
+                    .with_tags(["(a)", "(b)"]),
+                Series::paper("paper (text): a value", vec![(1.0, 0.8)], Mark::Diamonds),
+            ],
+            lower: Some(Panel {
+                y_label: "b − a (mm)".into(),
+                series: vec![Series::new("b − a", dev, Mark::Line).with_color(palette(1))],
+                y_range: None,
+            }),
+            notes: vec![
+                "A note long enough to be wrapped over more than one line of the legend column."
+                    .into(),
+            ],
+            ..Default::default()
+        };
+        line_chart(&p, &chart, 1200, 820).unwrap();
+        let bytes = std::fs::read(&p).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG");
+        assert!(bytes.len() > 10_000);
+        if std::env::var_os("EFGDEM_KEEP_PLOT").is_some() {
+            std::fs::copy(&p, "/tmp/efgdem-plot-test2.png").unwrap();
+        }
+        std::fs::remove_dir_all(dir).unwrap();
+    }
 }
