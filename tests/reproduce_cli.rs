@@ -1,7 +1,22 @@
 //! `efgdem reproduce` end to end: every figure, data file and the report
-//! are written, and the report carries the numbers the README quotes.
+//! are written, and the report carries the numbers the README quotes;
+//! the paper's values are shipped with their sources, every run behind a
+//! figure is saved, and the report's numbers come from the figures' data.
 
+use efgdem::output::csv::read;
+use efgdem::reproduce::{PAPER_VALUES, paper_values};
+use std::path::Path;
 use std::process::Command;
+
+/// A column of a CSV file.
+fn col(path: &Path, name: &str) -> Vec<f64> {
+    let (cols, rows) = read(path).unwrap();
+    let i = cols
+        .iter()
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("{} has no column {name}", path.display()));
+    rows.iter().map(|r| r[i]).collect()
+}
 
 #[test]
 fn reproduce_writes_every_figure_and_the_report() {
@@ -16,7 +31,7 @@ fn reproduce_writes_every_figure_and_the_report() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    for f in [
+    let figures = [
         "fig09_displacements.png",
         "fig10_axial_stress.png",
         "fig11_deflection.png",
@@ -27,7 +42,8 @@ fn reproduce_writes_every_figure_and_the_report() {
         "fig15_test1.png",
         "fig15_test2.png",
         "fig17_plate_displacement.png",
-    ] {
+    ];
+    for f in figures {
         let bytes = std::fs::read(dir.join(f)).unwrap();
         assert_eq!(&bytes[1..4], b"PNG", "{f}");
         assert!(
@@ -42,27 +58,119 @@ fn reproduce_writes_every_figure_and_the_report() {
         "fig14_15_test1.csv",
         "fig14_15_test2.csv",
         "fig17_plate_displacement.csv",
-        "runs/ex1_paper/history.csv",
+        "paper_values.csv",
+        "runs/ex1_newmark_1.5_0.8/history.csv",
         "runs/nine_disc_efg_test2_E1.0e10/summary.json",
     ] {
         assert!(dir.join(f).is_file(), "{f}");
     }
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
     for needle in [
-        "| `ex1_paper`",
+        "| `ex1_newmark_1.5_0.8`",
+        "| `ex1_newmark_0.5_0.25`",
         "| `ex1_thin_disc`",
         "EFG, E = 1.0e10",
         "### Fig. 17",
+        "## Figures, their runs and the paper's values",
     ] {
         assert!(report.contains(needle), "report lacks {needle}");
     }
     // Fig. 14 data: the stiff plate follows the rigid plates (validation 4)
-    let (cols, rows) = efgdem::output::csv::read(&dir.join("fig14_15_test1.csv")).unwrap();
+    let (cols, rows) = read(&dir.join("fig14_15_test1.csv")).unwrap();
     let (r, e) = (
         cols.iter().position(|c| c == "rigid").unwrap(),
         cols.iter().position(|c| c == "efg_E2.1e14").unwrap(),
     );
     let last = rows.last().unwrap();
     assert!((last[e] - last[r]).abs() < 0.01 * last[r]);
+
+    // the paper's values: shipped as built in, with a source for each
+    assert_eq!(
+        std::fs::read_to_string(dir.join("paper_values.csv")).unwrap(),
+        PAPER_VALUES
+    );
+    let paper = paper_values().unwrap();
+    let xs = |fig: &str, kind: &str| -> Vec<f64> {
+        paper
+            .iter()
+            .filter(|v| v.figure == fig && v.kind == kind)
+            .filter_map(|v| v.x)
+            .collect()
+    };
+    assert_eq!(xs("fig12", "vline"), [0.001, 0.05, 0.1, 0.143]);
+    assert_eq!(xs("fig12", "point"), [0.05]);
+    assert!(xs("fig09", "vline").contains(&0.1431));
+    assert_eq!(xs("fig14_test1", "vline"), [40.0, 80.0]);
+    assert_eq!(xs("fig14_test2", "vline"), [120.0, 20.0]);
+    for v in &paper {
+        if v.figure != "fig12_thin_disc" {
+            assert!(
+                v.source.contains("wang2020-efg-de.md l"),
+                "{} {}: no line in the source",
+                v.figure,
+                v.label
+            );
+        }
+    }
+
+    // every figure is in the report's table, and every run it names is saved
+    let mut seen = 0;
+    for line in report.lines().filter(|l| l.starts_with("| `fig")) {
+        let cells: Vec<&str> = line.split(" | ").collect();
+        let fig = cells[0].trim_start_matches("| `").trim_end_matches('`');
+        assert!(figures.contains(&fig), "{fig}");
+        let stem = fig.trim_end_matches(".png");
+        assert!(
+            paper.iter().any(|v| stem.starts_with(&v.figure)),
+            "{fig}: no row in paper_values.csv (not even `none`)"
+        );
+        let runs: Vec<&str> = cells[2].split(", ").map(|r| r.trim_matches('`')).collect();
+        assert!(!runs.is_empty() && !runs[0].is_empty(), "{fig}: no run");
+        for r in runs {
+            for f in ["history.csv", "summary.json"] {
+                assert!(
+                    dir.join("runs").join(r).join(f).is_file(),
+                    "{fig}: runs/{r}/{f}"
+                );
+            }
+        }
+        seen += 1;
+    }
+    assert_eq!(
+        seen,
+        figures.len(),
+        "figures missing from the report's table"
+    );
+
+    // the report's numbers are the figures' data: Example 1 histories have
+    // every step, and the thin disc's peak in the table is its history's
+    let ex1 = dir.join("runs/ex1_thin_disc/history.csv");
+    let steps = col(&ex1, "step");
+    assert_eq!(steps.len(), 2001, "Example 1 history at every step");
+    let peak = col(&ex1, "contact_fn")
+        .into_iter()
+        .fold(f64::NEG_INFINITY, f64::max);
+    let row = report
+        .lines()
+        .find(|l| l.starts_with("| `ex1_thin_disc`"))
+        .unwrap();
+    let quoted: f64 = row.split(" | ").nth(2).unwrap().trim().parse().unwrap();
+    assert!(
+        (quoted - peak).abs() < 0.005 + 1e-12,
+        "thin disc: report {quoted} N, history {peak} N"
+    );
+
+    // Fig. 17 is the row of cycle 40 of a saved run's history
+    let run17 = dir.join("runs/nine_disc_efg_test1_E1.0e12/history.csv");
+    let (cols, rows) = read(&run17).unwrap();
+    let row40 = rows.iter().find(|r| r[0] == 40.0).unwrap();
+    let ux = col(&dir.join("fig17_plate_displacement.csv"), "ux");
+    let probes: Vec<f64> = cols
+        .iter()
+        .zip(row40)
+        .filter(|(c, _)| c.starts_with("edge_ux_"))
+        .map(|(_, v)| *v)
+        .collect();
+    assert_eq!(probes, ux);
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -63,12 +63,12 @@ def main():
     model = efgdem.Model.from_scenario(args.scenario)
     t_end = 0.04 if fast else model.end_time
     r = model.disc_radii()[0]
-    runs.append(("γ = 1.5, β = 0.8 (paper)", history(model, t_end)))
+    runs.append(("ours, Newmark γ = 1.5, β = 0.8 (the paper's parameters)", history(model, t_end)))
     d = load_dict(args.scenario)
     if d is not None:
         d["body"][0]["newmark"] = {"gamma": 0.5, "beta": 0.25}
         avg = efgdem.Model.from_dict(d, base_dir=str(Path(args.scenario).parent))
-        runs.append(("γ = ½, β = ¼", history(avg, t_end)))
+        runs.append(("ours, Newmark γ = ½, β = ¼", history(avg, t_end)))
 
     # the disc's weight: m g with m = ρ π r² t (density and thickness of the scenario)
     sc = d if d is not None else {}
