@@ -3,6 +3,7 @@
 //! recording it in `summary.json` (issue 12); the history keeps the rows
 //! before it, never a NaN.
 
+#[allow(dead_code)]
 mod common;
 use common::{bin, summary, tmpdir};
 

@@ -115,8 +115,8 @@ if "discs" in pvd:
     d.SetScaleArray = ["POINTS", "radius"]
     d.UseScaleFunction = 0
     d.GaussianRadius = 1.0
-    ColorBy(d, ("POINTS", "speed"))
-    lut = GetColorTransferFunction("speed")
+    ColorBy(d, ("POINTS", "velocity", "Magnitude"))
+    lut = GetColorTransferFunction("velocity")
     lut.ApplyPreset("Cool to Warm", True)
     bars.append((d, lut, "disc speed [m/s]"))
 
@@ -172,12 +172,13 @@ if "contacts" in pvd:
 for b in behind:
     b.Transform.Translate = [0.0, 0.0, -0.01 * extent]
 
-title = AnnotateTime(registrationName="time")
-title.Format = "t = {time:.6g} s"
-td = Show(title, view)
-td.Color = BLACK
-td.FontSize = 20
-td.WindowLocation = "Upper Left Corner"
+if pvd:  # a static analysis has no time
+    title = AnnotateTime(registrationName="time")
+    title.Format = "t = {time:.6g} s"
+    td = Show(title, view)
+    td.Color = BLACK
+    td.FontSize = 20
+    td.WindowLocation = "Upper Left Corner"
 
 # colour bars along the bottom; speed from 0
 for k, (d, lut, name) in enumerate(bars):

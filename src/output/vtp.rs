@@ -1,7 +1,7 @@
 //! `.vtp` (VTK PolyData) frames of a granular assembly, three datasets:
 //! - discs: one vertex per disc at its centre, in scenario order (`id`,
 //!   1-based, is the `GlobalIds` array), with `radius`, `diameter`,
-//!   `velocity`, `speed`, `spin`, `force`, `torque`, `coordination`;
+//!   `velocity`, `spin`, `force`, `torque`, `coordination`;
 //! - contacts of every kind (disc–disc, disc–wall, disc–body): one line
 //!   each, from the disc's centre to the other disc's centre or to the
 //!   contact point, with the forces on the disc as cell data;
@@ -39,8 +39,8 @@ fn points(f: &mut VtkFile, xyz: &[f64]) {
 /// points of cell `k` being `per·k … per·k + per − 1`.
 fn cells(f: &mut VtkFile, tag: &str, n: usize, per: usize) {
     f.open(tag, "");
-    let conn: Vec<i64> = (0..(n * per) as i64).collect();
-    let offs: Vec<i64> = (1..=n as i64).map(|k| per as i64 * k).collect();
+    let conn: Vec<i32> = (0..(n * per) as i32).collect();
+    let offs: Vec<i32> = (1..=n as i32).map(|k| per as i32 * k).collect();
     f.array("connectivity", 1, "", &conn);
     f.array("offsets", 1, "", &offs);
     f.close(tag);
@@ -90,8 +90,6 @@ pub fn write_discs(
         &r.iter().map(|r| 2.0 * r).collect::<Vec<_>>(),
     );
     f.array("velocity", 3, "", &by_id2(&p.vel));
-    let speed: Vec<f64> = order.iter().map(|&s| p.vel[s].norm()).collect();
-    f.array("speed", 1, "", &speed);
     f.array("spin", 1, "", &by_id(&p.omega));
     f.array("force", 3, "", &by_id2(&p.force));
     f.array("torque", 1, "", &by_id(&p.torque));
@@ -112,11 +110,10 @@ pub fn write_discs(
 /// centre; the other disc's centre or the contact point on the wall or
 /// body) and a line, with cell data `kind` (0 disc–disc, 1 disc–wall,
 /// 2 disc–body), `disc` (1-based), `other` (a disc: 1-based; a wall or a
-/// body: 0-based index in scenario order), `normal` (unit, from the disc),
-/// `normal_force` and `tangential_force` (vectors, on the disc; elastic
-/// normal part `k_n δ` and shear spring), `fn` (`k_n δ`, compression
-/// positive), `ft` (|shear force|), `fn_total` (with the normal dashpot),
-/// `overlap`.
+/// body: 0-based index in scenario order), `normal_force` and
+/// `tangential_force` (vectors, on the disc; elastic normal part `k_n δ`
+/// and shear spring), `fn` (`k_n δ`, compression positive), `ft` (|shear
+/// force|), `overlap`.
 pub fn write_contacts(
     g: &Granular,
     contacts: &[ContactView],
@@ -151,8 +148,6 @@ pub fn write_contacts(
         "",
         &vec3(contacts.iter().map(|c| c.normal.perp() * c.shear)),
     );
-    f.array("normal", 3, "", &vec3(contacts.iter().map(|c| c.normal)));
-    f.array("fn_total", 1, "", &col(|c| c.normal_total));
     f.array("overlap", 1, "", &col(|c| c.overlap));
     f.array(
         "kind",
@@ -166,7 +161,7 @@ pub fn write_contacts(
         "",
         &contacts
             .iter()
-            .map(|c| c.disc as i64 + 1)
+            .map(|c| c.disc as i32 + 1)
             .collect::<Vec<_>>(),
     );
     f.array(
@@ -175,7 +170,7 @@ pub fn write_contacts(
         "",
         &contacts
             .iter()
-            .map(|c| c.other as i64 + (c.kind == ContactKind::DiscDisc) as i64)
+            .map(|c| c.other as i32 + (c.kind == ContactKind::DiscDisc) as i32)
             .collect::<Vec<_>>(),
     );
     f.close("CellData");

@@ -118,17 +118,17 @@ pub fn write_grid(
     }
     w.close("PointData");
     w.open("Cells", "");
-    let conn: Vec<i64> = (0..ny.saturating_sub(1))
+    let conn: Vec<i32> = (0..ny.saturating_sub(1))
         .flat_map(|j| {
             (0..nx - 1).flat_map(move |i| {
-                let a = (j * nx + i) as i64;
-                let n = nx as i64;
+                let a = (j * nx + i) as i32;
+                let n = nx as i32;
                 [a, a + 1, a + n + 1, a + n]
             })
         })
         .collect();
     w.array("connectivity", 1, "", &conn);
-    let offs: Vec<i64> = (1..=ncells as i64).map(|c| 4 * c).collect();
+    let offs: Vec<i32> = (1..=ncells as i32).map(|c| 4 * c).collect();
     w.array("offsets", 1, "", &offs);
     w.array("types", 1, "", &vec![9u8; ncells]);
     w.close("Cells");
