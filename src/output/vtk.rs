@@ -71,14 +71,17 @@ impl PvdSeries {
 
     /// Replace the entries (a restart continues the series it checkpointed)
     /// and write the file whole with them — the same bytes as the series
-    /// had when it held these entries. No entries: no file, as before the
-    /// first frame.
+    /// had when it held these entries. No entries: no file (one left by
+    /// the stopped run is removed), as before the first frame.
     pub fn resume(&mut self, entries: Vec<(f64, String)>) -> std::io::Result<()> {
         self.entries = entries;
         self.file = None;
-        match self.entries.is_empty() {
-            true => Ok(()),
-            false => self.write_whole(),
+        if !self.entries.is_empty() {
+            return self.write_whole();
+        }
+        match std::fs::remove_file(&self.path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(e),
+            _ => Ok(()),
         }
     }
 
