@@ -78,6 +78,18 @@ enum Cmd {
         #[arg(long, default_value_t = 0.02)]
         tol: f64,
     },
+    /// Open a run's results in ParaView, ready to look at: writes
+    /// OUT/view.py (discs as true-size circles coloured by speed, bodies
+    /// deformed and coloured by von Mises stress, force chains, walls, the
+    /// time) and runs `paraview --script=OUT/view.py` if ParaView is on
+    /// PATH. `pvbatch OUT/view.py --screenshot FILE.png` renders an image.
+    View {
+        /// The output directory of `efgdem run`.
+        out: PathBuf,
+        /// Only write OUT/view.py; do not start ParaView.
+        #[arg(long)]
+        no_open: bool,
+    },
     /// Validate a scenario without running it; print sizes and time-step diagnostics.
     Check {
         /// The scenario (TOML).
@@ -218,11 +230,45 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 None => println!("no bounded dt found down to 1e-4 × the scenario's dt"),
             }
         }
+        Cmd::View { out, no_open } => view(&out, no_open)?,
         Cmd::Check { file } => {
             let sc = scenario::load(&file)?;
             let report = efgdem::run::check(&sc)?;
             println!("{}: ok\n{report}", file.display());
         }
+    }
+    Ok(())
+}
+
+/// `efgdem view OUT`: write OUT/view.py and open it in ParaView.
+fn view(out: &std::path::Path, no_open: bool) -> anyhow::Result<()> {
+    use efgdem::output::view;
+    let found = view::has_frames(out).with_context(|| format!("reading {}", out.display()))?;
+    if !found {
+        anyhow::bail!(
+            "{}: no ParaView files (*.pvd, *.vtu); run with `[output] vtk_every = N` first",
+            out.display()
+        );
+    }
+    let script =
+        view::write_script(out).with_context(|| format!("writing into {}", out.display()))?;
+    println!("wrote {}", script.display());
+    let how = format!(
+        "open it with `paraview --script={0}`, or render an image with `pvbatch {0} --screenshot view.png` (headless: `xvfb-run pvbatch …`)",
+        script.display()
+    );
+    match (no_open, view::on_path("paraview")) {
+        (false, Some(pv)) => {
+            let status = std::process::Command::new(&pv)
+                .arg(format!("--script={}", script.display()))
+                .status()
+                .with_context(|| format!("starting {}", pv.display()))?;
+            if !status.success() {
+                anyhow::bail!("{} exited with {status}; {how}", pv.display());
+            }
+        }
+        (false, None) => println!("ParaView (`paraview`) is not on PATH; {how}"),
+        (true, _) => println!("{how}"),
     }
     Ok(())
 }

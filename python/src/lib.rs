@@ -22,6 +22,7 @@ use efgdem::geom::Vec2;
 use efgdem::model::body::{At, BodyRef};
 use efgdem::model::{ContactKind, Model, Probe, System};
 use efgdem::output::frames::Frames;
+use efgdem::output::vtk::VtkFormat;
 use efgdem::scenario::{self, Scenario};
 use numpy::ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyUntypedArray, PyUntypedArrayMethods};
@@ -247,6 +248,9 @@ struct Inner {
     /// The ParaView frames written per output directory (named as
     /// `efgdem run` names them).
     frames: HashMap<PathBuf, Frames>,
+    /// How the frames store their arrays (the scenario's
+    /// `output.vtk_format`).
+    vtk_format: VtkFormat,
     /// Disc buffers as built (address, length): views borrow them.
     buffers: Vec<(usize, usize)>,
 }
@@ -267,7 +271,12 @@ fn granular_buffers(g: Option<&Granular>) -> Vec<(usize, usize)> {
 }
 
 impl Inner {
-    fn new(model: Model, probes: Vec<(String, Probe)>, pool: rayon::ThreadPool) -> Inner {
+    fn new(
+        model: Model,
+        probes: Vec<(String, Probe)>,
+        pool: rayon::ThreadPool,
+        vtk_format: VtkFormat,
+    ) -> Inner {
         let nb = model.n_bodies();
         let buffers = granular_buffers(model.granular());
         Inner {
@@ -276,6 +285,7 @@ impl Inner {
             probes,
             node_at: (0..nb).map(|_| None).collect(),
             frames: HashMap::new(),
+            vtk_format,
             buffers,
         }
     }
@@ -442,7 +452,7 @@ fn build(py: Python<'_>, sc: Scenario, threads: Option<usize>, dict: bool) -> Py
         .flatten();
     let (model, probes) = built.map_err(|e| scenario_error(py, e, text))?;
     Ok(PyModel {
-        inner: Mutex::new(Inner::new(model, probes, pool)),
+        inner: Mutex::new(Inner::new(model, probes, pool, sc.output.vtk_format)),
     })
 }
 
@@ -899,10 +909,12 @@ impl PyModel {
     }
 
     /// Write a ParaView frame of the present state into `dir`, the files
-    /// `efgdem run` writes: `frames/discs_<step>.vtp` and
-    /// `frames/<body>_<step>.vtu`, with the series `discs.pvd` and
-    /// `<body>.pvd` in `dir` updated (a static model: `<body>.vtu` in
-    /// `dir`). Returns the paths written.
+    /// `efgdem run` writes (binary): `frames/discs_<step>.vtp`,
+    /// `frames/contacts_<step>.vtp`, `frames/walls_<step>.vtp` (if there
+    /// are walls) and `frames/<body>_<step>.vtu`, with the series
+    /// `discs.pvd`, `contacts.pvd`, `walls.pvd` and `<body>.pvd` in `dir`
+    /// updated (a static model: `<body>.vtu` in `dir`). Returns the paths
+    /// written.
     fn write_frame(&self, py: Python<'_>, dir: PathBuf) -> PyResult<Vec<PathBuf>> {
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
@@ -951,7 +963,9 @@ fn write_frame(inner: &mut Inner, dir: &Path) -> Result<Vec<PathBuf>, FrameError
     }
     let model = &inner.model;
     if !inner.frames.contains_key(dir) {
-        let f = Frames::new(model, dir).map_err(FrameError::Model)?;
+        let f = Frames::new(model, dir)
+            .map_err(FrameError::Model)?
+            .with_format(inner.vtk_format);
         inner.frames.insert(dir.to_path_buf(), f);
     }
     let frames = inner.frames.get_mut(dir).expect("inserted");

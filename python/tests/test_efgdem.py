@@ -383,11 +383,13 @@ def test_write_frame_writes_what_the_cli_writes(tmp_path):
     m = efgdem.Model.from_scenario(sc)
     out = tmp_path / "py"
     first = m.write_frame(out)
-    assert [p.name for p in first] == ["discs_0000000.vtp", "beam_0000000.vtu"]
+    assert [p.name for p in first] == ["discs_0000000.vtp", "contacts_0000000.vtp",
+                                       "beam_0000000.vtu"]
     m.step(100)
     m.write_frame(out)
-    for f in ("frames/discs_0000100.vtp", "frames/beam_0000100.vtu", "frames/beam_0000000.vtu",
-              "discs.pvd", "beam.pvd"):
+    for f in ("frames/discs_0000100.vtp", "frames/contacts_0000100.vtp",
+              "frames/beam_0000100.vtu", "frames/beam_0000000.vtu",
+              "discs.pvd", "contacts.pvd", "beam.pvd"):
         assert (out / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
 
 
@@ -396,9 +398,11 @@ def test_write_frame_granular(box_file, tmp_path):
     m.write_frame(tmp_path)
     m.step(10)
     paths = m.write_frame(tmp_path)
-    assert [p.name for p in paths] == ["discs_0000010.vtp"]
-    text = (tmp_path / "discs.pvd").read_text()
-    assert "frames/discs_0000000.vtp" in text and "frames/discs_0000010.vtp" in text
+    assert [p.name for p in paths] == ["discs_0000010.vtp", "contacts_0000010.vtp",
+                                       "walls_0000010.vtp"]
+    for d in ("discs", "contacts", "walls"):
+        text = (tmp_path / f"{d}.pvd").read_text()
+        assert f"frames/{d}_0000000.vtp" in text and f"frames/{d}_0000010.vtp" in text
 
 
 # --- the examples ----------------------------------------------------------------

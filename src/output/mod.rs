@@ -5,6 +5,7 @@
 pub mod csv;
 pub mod frames;
 pub mod plot;
+pub mod view;
 pub mod vtk;
 pub mod vtp;
 pub mod vtu;

@@ -1,151 +1,198 @@
-//! ParaView `.vtp` (VTK PolyData) frames of a granular assembly: discs as
-//! vertices with point data (radius, velocity, spin, force), contacts as
-//! lines between the centres with their normal force as cell data, walls
-//! as lines.
+//! `.vtp` (VTK PolyData) frames of a granular assembly, three datasets:
+//! - discs: one vertex per disc at its centre, in scenario order (`id`,
+//!   1-based, is the `GlobalIds` array), with `radius`, `diameter`,
+//!   `velocity`, `spin`, `force`, `torque`, `coordination`;
+//! - contacts of every kind (disc–disc, disc–wall, disc–body): one line
+//!   each, from the disc's centre to the other disc's centre or to the
+//!   contact point, with the forces on the disc as cell data;
+//! - walls: one line each, with the force of the discs on it.
+//!
+//! Vectors have 3 components (z = 0).
 
-use super::vtk::{data_array_f64, data_array_i64};
+use super::vtk::{VtkFile, VtkFormat, vec3};
 use crate::dem::Granular;
 use crate::geom::Vec2;
-use std::io::Write;
+use crate::model::contacts::{ContactKind, ContactView};
 use std::path::Path;
 
-/// What one frame shows.
-pub struct DiscFrame<'a> {
-    /// Disc centres (by slot).
-    pub pos: &'a [Vec2],
-    /// Disc radii.
-    pub radius: &'a [f64],
-    /// Disc velocities (at the half step, see
-    /// [`Particles::vel`](crate::dem::particles::Particles::vel)).
-    pub vel: &'a [Vec2],
-    /// Spins ω, counter-clockwise positive.
-    pub omega: &'a [f64],
-    /// Resultant contact (and external) force of the last step, without
-    /// gravity.
-    pub force: &'a [Vec2],
-    /// Scenario id (0-based) of each disc; written 1-based to the file.
-    pub id: &'a [u32],
-    /// Touching disc pairs (indices into `pos`) and their normal force.
-    pub contacts: &'a [(u32, u32, f64)],
-    /// Wall segments.
-    pub walls: &'a [(Vec2, Vec2)],
+const POLY: &str = "PolyData";
+
+/// Open a PolyData piece of `npts` points, `nverts` vertices and `nlines`
+/// lines.
+fn piece(f: &mut VtkFile, npts: usize, nverts: usize, nlines: usize) {
+    f.open(
+        "Piece",
+        &format!(
+            "NumberOfPoints=\"{npts}\" NumberOfVerts=\"{nverts}\" NumberOfLines=\"{nlines}\" NumberOfStrips=\"0\" NumberOfPolys=\"0\""
+        ),
+    );
 }
 
-/// Write `frame` to `path` (ASCII XML PolyData).
-pub fn write_discs<'a>(path: &Path, frame: &DiscFrame<'a>) -> std::io::Result<()> {
-    let n = frame.pos.len();
-    let nw = frame.walls.len();
-    let npts = n + 2 * nw;
-    let nlines = frame.contacts.len() + nw;
-    let tmp = path.with_extension("vtp.tmp");
-    {
-        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
-        writeln!(w, "<?xml version=\"1.0\"?>")?;
-        writeln!(
-            w,
-            "<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n<PolyData>"
-        )?;
-        writeln!(
-            w,
-            "<Piece NumberOfPoints=\"{npts}\" NumberOfVerts=\"{n}\" NumberOfLines=\"{nlines}\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">"
-        )?;
-        writeln!(w, "<Points>")?;
-        let pts = frame
-            .pos
-            .iter()
-            .copied()
-            .chain(frame.walls.iter().flat_map(|&(a, b)| [a, b]));
-        data_array_f64(&mut w, "Points", 3, pts.flat_map(|p| [p.x, p.y, 0.0]))?;
-        writeln!(w, "</Points>")?;
-        writeln!(w, "<PointData Scalars=\"radius\" Vectors=\"velocity\">")?;
-        let pad = |v: &'a [f64]| v.iter().copied().chain(std::iter::repeat_n(0.0, 2 * nw));
-        data_array_f64(&mut w, "radius", 1, pad(frame.radius))?;
-        let vec3 = |v: &'a [Vec2]| {
-            v.iter()
-                .flat_map(|p| [p.x, p.y, 0.0])
-                .chain(std::iter::repeat_n(0.0, 6 * nw))
-        };
-        data_array_f64(&mut w, "velocity", 3, vec3(frame.vel))?;
-        data_array_f64(&mut w, "spin", 1, pad(frame.omega))?;
-        data_array_f64(&mut w, "force", 3, vec3(frame.force))?;
-        data_array_i64(
-            &mut w,
-            "disc",
-            "Int64",
-            frame
-                .id
-                .iter()
-                .map(|&i| i as i64 + 1)
-                .chain(std::iter::repeat_n(0, 2 * nw)),
-        )?;
-        writeln!(w, "</PointData>")?;
-        // cell data: verts first, then lines (contacts, then walls)
-        writeln!(w, "<CellData Scalars=\"normal_force\">")?;
-        data_array_f64(
-            &mut w,
-            "normal_force",
-            1,
-            std::iter::repeat_n(0.0, n)
-                .chain(frame.contacts.iter().map(|c| c.2))
-                .chain(std::iter::repeat_n(0.0, nw)),
-        )?;
-        data_array_i64(
-            &mut w,
-            "kind",
-            "Int32",
-            std::iter::repeat_n(0, n)
-                .chain(std::iter::repeat_n(1, frame.contacts.len()))
-                .chain(std::iter::repeat_n(2, nw)),
-        )?;
-        writeln!(w, "</CellData>")?;
-        writeln!(w, "<Verts>")?;
-        data_array_i64(&mut w, "connectivity", "Int64", 0..n as i64)?;
-        data_array_i64(&mut w, "offsets", "Int64", 1..=n as i64)?;
-        writeln!(w, "</Verts>")?;
-        writeln!(w, "<Lines>")?;
-        let conn = frame
-            .contacts
-            .iter()
-            .flat_map(|c| [c.0 as i64, c.1 as i64])
-            .chain((0..2 * nw as i64).map(|k| n as i64 + k));
-        data_array_i64(&mut w, "connectivity", "Int64", conn)?;
-        data_array_i64(
-            &mut w,
-            "offsets",
-            "Int64",
-            (1..=nlines as i64).map(|k| 2 * k),
-        )?;
-        writeln!(w, "</Lines>")?;
-        writeln!(w, "</Piece>\n</PolyData>\n</VTKFile>")?;
-        w.flush()?;
+/// The `<Points>` element.
+fn points(f: &mut VtkFile, xyz: &[f64]) {
+    f.open("Points", "");
+    f.array("Points", 3, "", xyz);
+    f.close("Points");
+}
+
+/// A `<Verts>` or `<Lines>` element of cells of `per` points each, the
+/// points of cell `k` being `per·k … per·k + per − 1`.
+fn cells(f: &mut VtkFile, tag: &str, n: usize, per: usize) {
+    f.open(tag, "");
+    let conn: Vec<i32> = (0..(n * per) as i32).collect();
+    let offs: Vec<i32> = (1..=n as i32).map(|k| per as i32 * k).collect();
+    f.array("connectivity", 1, "", &conn);
+    f.array("offsets", 1, "", &offs);
+    f.close(tag);
+}
+
+/// Closed contacts of every kind per disc (by slot), from `contacts`.
+pub fn coordination(g: &Granular, contacts: &[ContactView]) -> Vec<i32> {
+    let mut z = vec![0i32; g.particles.len()];
+    for c in contacts {
+        z[g.slot(c.disc)] += 1;
+        if c.kind == ContactKind::DiscDisc {
+            z[g.slot(c.other)] += 1;
+        }
     }
-    std::fs::rename(tmp, path)
+    z
 }
 
-/// Write a ParaView frame of the present state.
-pub fn write_granular(gr: &Granular, path: &std::path::Path) -> std::io::Result<()> {
-    let p = &gr.particles;
-    let contacts: Vec<(u32, u32, f64)> = gr
-        .contacts
-        .pairs
-        .iter()
-        .filter_map(|q| {
-            let (el, _) = gr.normal_force(q.i as usize, q.j as usize);
-            (el > 0.0).then_some((q.i, q.j, el))
-        })
-        .collect();
-    let walls: Vec<_> = gr.walls.iter().map(|w| (w.a, w.b)).collect();
-    write_discs(
-        path,
-        &DiscFrame {
-            pos: &p.pos,
-            radius: &p.radius,
-            vel: &p.vel,
-            omega: &p.omega,
-            force: &p.force,
-            id: &p.id,
-            contacts: &contacts,
-            walls: &walls,
-        },
-    )
+/// Write the discs of `g` at `path` (`contacts`: the present contacts of
+/// every kind, for the coordination numbers).
+pub fn write_discs(
+    g: &Granular,
+    contacts: &[ContactView],
+    format: VtkFormat,
+    path: &Path,
+) -> std::io::Result<()> {
+    let p = &g.particles;
+    let n = p.len();
+    // slots in id order
+    let order: Vec<usize> = (0..n).map(|id| g.slot(id)).collect();
+    let by_id = |v: &[f64]| order.iter().map(|&s| v[s]).collect::<Vec<f64>>();
+    let by_id2 = |v: &[Vec2]| vec3(order.iter().map(|&s| v[s]));
+    let mut f = VtkFile::new(POLY, format);
+    piece(&mut f, n, n, 0);
+    points(&mut f, &by_id2(&p.pos));
+    f.open(
+        "PointData",
+        "GlobalIds=\"id\" Scalars=\"radius\" Vectors=\"velocity\"",
+    );
+    let ids: Vec<i64> = order.iter().map(|&s| p.id[s] as i64 + 1).collect();
+    f.array("id", 1, "IdType=\"1\"", &ids);
+    let r = by_id(&p.radius);
+    f.array("radius", 1, "", &r);
+    f.array(
+        "diameter",
+        1,
+        "",
+        &r.iter().map(|r| 2.0 * r).collect::<Vec<_>>(),
+    );
+    f.array("velocity", 3, "", &by_id2(&p.vel));
+    f.array("spin", 1, "", &by_id(&p.omega));
+    f.array("force", 3, "", &by_id2(&p.force));
+    f.array("torque", 1, "", &by_id(&p.torque));
+    let z = coordination(g, contacts);
+    f.array(
+        "coordination",
+        1,
+        "",
+        &order.iter().map(|&s| z[s]).collect::<Vec<_>>(),
+    );
+    f.close("PointData");
+    cells(&mut f, "Verts", n, 1);
+    f.close("Piece");
+    f.write(POLY, path)
+}
+
+/// Write the contacts at `path`: per contact two points (the disc's
+/// centre; the other disc's centre or the contact point on the wall or
+/// body) and a line, with cell data `kind` (0 disc–disc, 1 disc–wall,
+/// 2 disc–body), `disc` (1-based), `other` (a disc: 1-based; a wall or a
+/// body: 0-based index in scenario order), `normal_force` and
+/// `tangential_force` (vectors, on the disc; elastic normal part `k_n δ`
+/// and shear spring), `fn` (`k_n δ`, compression positive), `ft` (|shear
+/// force|), `overlap`.
+pub fn write_contacts(
+    g: &Granular,
+    contacts: &[ContactView],
+    format: VtkFormat,
+    path: &Path,
+) -> std::io::Result<()> {
+    let p = &g.particles;
+    let m = contacts.len();
+    let mut f = VtkFile::new(POLY, format);
+    piece(&mut f, 2 * m, 0, m);
+    let pts = vec3(contacts.iter().flat_map(|c| {
+        let end = match c.kind {
+            ContactKind::DiscDisc => p.pos[g.slot(c.other)],
+            _ => c.point,
+        };
+        [p.pos[g.slot(c.disc)], end]
+    }));
+    points(&mut f, &pts);
+    f.open("CellData", "Scalars=\"fn\" Vectors=\"normal_force\"");
+    let col = |q: fn(&ContactView) -> f64| contacts.iter().map(q).collect::<Vec<f64>>();
+    f.array("fn", 1, "", &col(|c| c.normal_elastic));
+    f.array("ft", 1, "", &col(|c| c.shear.abs()));
+    f.array(
+        "normal_force",
+        3,
+        "",
+        &vec3(contacts.iter().map(|c| c.normal * -c.normal_elastic)),
+    );
+    f.array(
+        "tangential_force",
+        3,
+        "",
+        &vec3(contacts.iter().map(|c| c.normal.perp() * c.shear)),
+    );
+    f.array("overlap", 1, "", &col(|c| c.overlap));
+    f.array(
+        "kind",
+        1,
+        "",
+        &contacts.iter().map(|c| c.kind as i32).collect::<Vec<_>>(),
+    );
+    f.array(
+        "disc",
+        1,
+        "",
+        &contacts
+            .iter()
+            .map(|c| c.disc as i32 + 1)
+            .collect::<Vec<_>>(),
+    );
+    f.array(
+        "other",
+        1,
+        "",
+        &contacts
+            .iter()
+            .map(|c| c.other as i32 + (c.kind == ContactKind::DiscDisc) as i32)
+            .collect::<Vec<_>>(),
+    );
+    f.close("CellData");
+    cells(&mut f, "Lines", m, 2);
+    f.close("Piece");
+    f.write(POLY, path)
+}
+
+/// Write the walls of `g` at `path`: one line each (its two end points),
+/// with cell data `wall` (0-based index in scenario order), `force` (of
+/// the discs on the wall in the last step) and `velocity`.
+pub fn write_walls(g: &Granular, format: VtkFormat, path: &Path) -> std::io::Result<()> {
+    let w = &g.walls;
+    let mut f = VtkFile::new(POLY, format);
+    piece(&mut f, 2 * w.len(), 0, w.len());
+    points(&mut f, &vec3(w.iter().flat_map(|w| [w.a, w.b])));
+    f.open("CellData", "Vectors=\"force\"");
+    f.array("wall", 1, "", &(0..w.len() as i32).collect::<Vec<_>>());
+    f.array("force", 3, "", &vec3(w.iter().map(|w| w.force)));
+    f.array("velocity", 3, "", &vec3(w.iter().map(|w| w.vel)));
+    f.close("CellData");
+    cells(&mut f, "Lines", w.len(), 2);
+    f.close("Piece");
+    f.write(POLY, path)
 }

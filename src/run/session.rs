@@ -131,7 +131,7 @@ impl Outputs {
     pub fn open(run: &Run, model: &Model, columns: &[&str]) -> Result<Self, RunError> {
         let dir = &run.opts.out_dir;
         let path = dir.join("history.csv");
-        let mut frames = Frames::new(model, dir)?;
+        let mut frames = Frames::new(model, dir)?.with_format(run.sc.output.vtk_format);
         let hist = match &run.restart {
             Some(ck) => {
                 frames.resume(ck.series.clone())?;

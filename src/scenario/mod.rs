@@ -258,6 +258,23 @@ pub struct Output {
     /// A ParaView frame every this many steps; 0 = none.
     #[serde(default)]
     pub vtk_every: usize,
+    /// How the frames' arrays are stored.
+    #[serde(default)]
+    pub vtk_format: VtkFormat,
+}
+
+/// How the arrays of the ParaView frames are stored.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VtkFormat {
+    /// Binary, appended raw after the XML, each array zlib-compressed
+    /// (VTK's `vtkZLibDataCompressor` blocks).
+    #[default]
+    Binary,
+    /// Binary, appended raw, not compressed (fastest to write, largest).
+    BinaryUncompressed,
+    /// Text inside the XML (largest and slowest; readable by eye).
+    Ascii,
 }
 
 fn one() -> usize {
@@ -269,6 +286,7 @@ impl Default for Output {
         Output {
             every: 1,
             vtk_every: 0,
+            vtk_format: VtkFormat::default(),
         }
     }
 }
