@@ -145,3 +145,28 @@ fn a_probe_naming_a_missing_disc_is_found_by_check() {
         "{err}"
     );
 }
+
+/// A body's name becomes file names: one that collides with the disc
+/// series or is not a file name is refused at its line.
+#[test]
+fn body_names_that_are_not_file_names_or_collide_with_series_are_refused() {
+    let body = |name: &str| {
+        format!(
+            "[simulation]\nanalysis = \"static\"\n[[body]]\nname = \"{name}\"\nrectangle = {{ origin = [0.0, 0.0], size = [2.0, 1.0] }}\nnodes = [5, 3]\nelastic = {{ E = 1e6, nu = 0.3 }}\n[[body.bc]]\nedge = \"left\"\nfixed = true\n"
+        )
+    };
+    for (name, why) in [
+        ("walls", "series"),
+        ("discs", "series"),
+        ("a/b", "file name"),
+        ("", "file name"),
+    ] {
+        let (code, err) = check("bodyname", &body(name));
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(
+            err.contains(":4: body[0].name:") && err.contains(why),
+            "{name}: {err}"
+        );
+    }
+    assert_eq!(check("bodyname", &body("beam_1.a")).0, 0);
+}

@@ -341,6 +341,10 @@ pub fn absurd_motion(sc: &Scenario, steps: usize, dt: f64) -> Option<(String, St
     None
 }
 
+/// Names of the granular ParaView series (`discs.pvd`, …): a body may not
+/// take them.
+const RESERVED_NAMES: [&str; 3] = ["discs", "contacts", "walls"];
+
 /// Semantic checks of every `[[body]]` and of the body probes.
 pub fn validate(sc: &Scenario, p: &mut Problems) {
     let mut names = std::collections::HashSet::new();
@@ -350,6 +354,27 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             names.insert(b.name.as_str()),
             at("name"),
             format!("body `{}` is defined twice", b.name),
+        );
+        // the name becomes file names (`<name>.pvd`, `frames/<name>_…`)
+        p.check(
+            !b.name.is_empty()
+                && b.name
+                    .chars()
+                    .all(|c| c.is_alphanumeric() || "_-.".contains(c))
+                && !b.name.starts_with('.'),
+            at("name"),
+            format!(
+                "`{}` is not usable as a file name: use letters, digits, `_`, `-`, `.`",
+                b.name
+            ),
+        );
+        p.check(
+            !RESERVED_NAMES.contains(&b.name.as_str()),
+            at("name"),
+            format!(
+                "`{}` is the name of the disc frames' series; choose another",
+                b.name
+            ),
         );
         p.check(
             b.rectangle.origin.iter().all(|v| v.is_finite()),
