@@ -121,14 +121,17 @@ fn print_summary(label: &str, sc: &Scenario, s: &Summary) {
         100.0 * s.epsv_end
     );
     println!(
-        "  σ₃ of the side walls: within {:.3} % (mean {:+.4} %); whole-sample Love–Weber stress vs walls: {}",
+        "  σ₃ of the side walls: within {:.3} % ({:.2} % of the rows within 1 %, mean {:+.4} %); whole-sample Love–Weber stress vs walls: {}",
         100.0 * s.sigma3_error,
+        100.0 * s.sigma3_within_1pc,
         100.0 * s.sigma3_bias,
         match (s.love_weber_error, s.love_weber_error_rows) {
             (Some(e), Some(r)) => format!(
-                "within {:.2} % (moving averages over 1 % of ε₁; single rows {:.2} %)",
+                "within {:.2} % (moving averages over 1 % of ε₁; single rows {:.2} %; {} of {} rows inside the measure)",
                 100.0 * e,
-                100.0 * r
+                100.0 * r,
+                s.love_weber_rows,
+                s.rows
             ),
             _ => "(no whole-sample measure)".to_string(),
         }
@@ -179,11 +182,11 @@ fn sweep(file: &Path, out: &Path, mus: &[f64], threads: Option<usize>) -> Result
     biaxial::plot(out, &runs).map_err(|e| e.to_string())?;
     let setup = Setup::from_scenario(&base)?;
     let mut md = String::from(
-        "| μ_r | φ_peak | ε₁ at peak | φ_cs (ε₁ ≥ ⅔ ε₁,end) | dε_v/dε₁ there | ψ_max | ψ at peak | ε_v end | σ₃ error (max) | Love–Weber vs walls (averaged; rows) | run time |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| μ_r | φ_peak | ε₁ at peak | φ_cs (ε₁ ≥ ⅔ ε₁,end) | dε_v/dε₁ there | ψ_max | ψ at peak | ε_v end | σ₃ error: max; rows within 1 % | Love–Weber vs walls: averaged; rows | run time |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for (mu, s, secs) in &rows {
         md += &format!(
-            "| {mu} | {:.1}° | {:.1} % | {:.1}° ± {:.1}° | {:+.3} | {:.1}° | {:.1}° | {:+.2} % | {:.2} % | {} | {:.0} s |\n",
+            "| {mu} | {:.1}° | {:.1} % | {:.1}° ± {:.1}° | {:+.3} | {:.1}° | {:.1}° | {:+.2} % | {:.2} %; {:.2} % | {} | {:.0} s |\n",
             s.phi_peak,
             100.0 * s.eps1_peak,
             s.phi_cs,
@@ -193,6 +196,7 @@ fn sweep(file: &Path, out: &Path, mus: &[f64], threads: Option<usize>) -> Result
             s.psi_peak,
             100.0 * s.epsv_end,
             100.0 * s.sigma3_error,
+            100.0 * s.sigma3_within_1pc,
             match (s.love_weber_error, s.love_weber_error_rows) {
                 (Some(e), Some(r)) => format!("{:.2} %; {:.2} %", 100.0 * e, 100.0 * r),
                 _ => "—".into(),

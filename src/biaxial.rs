@@ -16,7 +16,9 @@
 //! the whole sample (the walls' box at t = 0 and every later one) with
 //! `sxx` and `syy` columns gives the whole sample's Love–Weber stress: its
 //! columns times (its area)/(the walls' box), which equals the walls'
-//! stresses in equilibrium ([`Point::love_weber`]).
+//! stresses in equilibrium ([`Point::love_weber`]), in the rows where the
+//! walls' box is inside it (a sample between frictionless platens may
+//! drift sideways).
 //!
 //! **Conventions** (compression positive, as the walls' stresses):
 //! - axial strain `ε₁ = (H₀ − H)/H₀`, lateral `ε₃ = (W₀ − W)/W₀`,
@@ -115,8 +117,9 @@ pub struct Setup {
     pub lateral_stress: [String; 2],
     /// History columns of the lateral walls' `wall_x` (left, right).
     pub lateral_position: [String; 2],
-    /// A `[[measure]]` rectangle around the whole sample: its name and area.
-    pub whole: Option<(String, f64)>,
+    /// A `[[measure]]` rectangle around the whole sample: its name and
+    /// `[[x0, y0], [x1, y1]]`.
+    pub whole: Option<(String, [[f64; 2]; 2])>,
     /// Mean disc diameter d̄, when the scenario gives the radii (a
     /// generated packing: uniform radii; inline discs).
     pub mean_diameter: Option<f64>,
@@ -233,7 +236,7 @@ impl Setup {
                 && b[1] >= y1
                 && has("sxx")
                 && has("syy"))
-            .then(|| (m.name.clone(), (b[0] - a[0]) * (b[1] - a[1])))
+            .then(|| (m.name.clone(), [a, b]))
         });
         Ok(Setup {
             shear_from,
@@ -294,7 +297,8 @@ pub struct Point {
     /// `sin φ = (σ₁ − σ₃)/(σ₁ + σ₃)`.
     pub sin_phi: f64,
     /// The whole sample's Love–Weber stress `[axial (σ_yy), lateral
-    /// (σ_xx)]`: the whole-sample measure's columns × (its area)/(H W).
+    /// (σ_xx)]`: the whole-sample measure's columns × (its area)/(H W);
+    /// `None` when the walls' box is not inside that measure's rectangle.
     pub love_weber: Option<[f64; 2]>,
 }
 
@@ -307,10 +311,10 @@ pub fn curve(setup: &Setup, h: &History) -> Result<Vec<Point>, String> {
     let (sa, ya) = (pair(&setup.axial_stress)?, pair(&setup.axial_position)?);
     let (sl, xl) = (pair(&setup.lateral_stress)?, pair(&setup.lateral_position)?);
     let whole = match &setup.whole {
-        Some((name, area)) => Some((
+        Some((name, rect)) => Some((
             col(&format!("{name}_syy"))?,
             col(&format!("{name}_sxx"))?,
-            *area,
+            *rect,
         )),
         None => None,
     };
@@ -345,9 +349,15 @@ pub fn curve(setup: &Setup, h: &History) -> Result<Vec<Point>, String> {
                 lateral: [r[sl[0]], r[sl[1]]],
                 q: sigma1 - sigma3,
                 sin_phi: (sigma1 - sigma3) / (sigma1 + sigma3),
-                love_weber: whole.map(|(yy, xx, area)| {
-                    let s = area / (hh * ww);
-                    [r[yy] * s, r[xx] * s]
+                love_weber: whole.and_then(|(yy, xx, [a, b])| {
+                    // only while the walls' box is inside the rectangle
+                    // (the sample may drift sideways)
+                    let inside = r[xl[0]] >= a[0]
+                        && r[xl[1]] <= b[0]
+                        && r[ya[0]] >= a[1]
+                        && r[ya[1]] <= b[1];
+                    let s = (b[0] - a[0]) * (b[1] - a[1]) / (hh * ww);
+                    inside.then(|| [r[yy] * s, r[xx] * s])
                 }),
             }
         })
@@ -411,6 +421,9 @@ pub struct Summary {
     pub sigma3_error: f64,
     /// Mean `(σ_wall − σ₃)/σ₃` of the lateral walls over the shearing.
     pub sigma3_bias: f64,
+    /// Fraction of the lateral walls' stresses (two per row) within 1 %
+    /// of σ₃.
+    pub sigma3_within_1pc: f64,
     /// Largest relative difference between the whole sample's Love–Weber
     /// stress and the walls' (σ₁ and σ₃), both as moving averages over the
     /// window `smooth` of ε₁ (what is left is the inertia of the discs,
@@ -418,6 +431,9 @@ pub struct Summary {
     pub love_weber_error: Option<f64>,
     /// The same row by row (a rearrangement's inertia shows in single rows).
     pub love_weber_error_rows: Option<f64>,
+    /// Rows whose walls' box was inside the whole-sample measure (the
+    /// Love–Weber comparison uses these).
+    pub love_weber_rows: usize,
     /// Rows of the shearing.
     pub rows: usize,
 }
@@ -466,14 +482,17 @@ pub fn summarize(setup: &Setup, p: &[Point], o: &Options) -> Summary {
             .collect()
     };
     let smooth = average(&|x| x.sin_phi);
+    // over the rows whose whole window has the Love–Weber stress
     let love_weber_error = p.first().and_then(|x| x.love_weber).map(|_| {
         let lw = |k: usize| move |x: &Point| x.love_weber.map_or(f64::NAN, |l| l[k]);
         let (a1, a3) = (average(&lw(0)), average(&lw(1)));
         let (w1, w3) = (average(&|x| x.sigma1), average(&|x| x.sigma3));
-        (0..n).fold(0.0f64, |e, i| {
-            e.max(((a1[i] - w1[i]) / w1[i]).abs())
-                .max(((a3[i] - w3[i]) / w3[i]).abs())
-        })
+        (0..n)
+            .filter(|&i| a1[i].is_finite() && a3[i].is_finite())
+            .fold(0.0f64, |e, i| {
+                e.max(((a1[i] - w1[i]) / w1[i]).abs())
+                    .max(((a3[i] - w3[i]) / w3[i]).abs())
+            })
     });
     let ipk = (0..n)
         .max_by(|&a, &b| smooth[a].total_cmp(&smooth[b]))
@@ -516,13 +535,18 @@ pub fn summarize(setup: &Setup, p: &[Point], o: &Options) -> Summary {
         epsv_end: p.last().map_or(0.0, |x| x.epsv),
         sigma3_error: errors().fold(0.0, |m, e| m.max(e.abs())),
         sigma3_bias: errors().sum::<f64>() / (2 * n).max(1) as f64,
+        sigma3_within_1pc: errors().filter(|e| e.abs() <= 0.01).count() as f64
+            / (2 * n).max(1) as f64,
         love_weber_error,
-        love_weber_error_rows: p.iter().try_fold(0.0f64, |e, x| {
-            x.love_weber.map(|[a, l]| {
-                e.max(((a - x.sigma1) / x.sigma1).abs())
-                    .max(((l - x.sigma3) / x.sigma3).abs())
-            })
+        love_weber_error_rows: love_weber_error.map(|_| {
+            p.iter()
+                .filter_map(|x| x.love_weber.map(|l| (x, l)))
+                .fold(0.0f64, |e, (x, [a, l])| {
+                    e.max(((a - x.sigma1) / x.sigma1).abs())
+                        .max(((l - x.sigma3) / x.sigma3).abs())
+                })
         }),
+        love_weber_rows: p.iter().filter(|x| x.love_weber.is_some()).count(),
         rows: n,
     }
 }
