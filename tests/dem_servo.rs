@@ -483,10 +483,10 @@ fn wall_phases_are_checked() {
         "{e}"
     );
     let e = err(&base(
-        "phases = [{ until_step = 10, servo = { stress = 1.0, max_velocity = 0.1, integral = 2.0 } }]",
+        "phases = [{ until_step = 10, servo = { stress = 1.0, max_velocity = 0.1, integral = 1.0 } }]",
     ));
     assert!(
-        e.contains("wall[1].phases[0].servo.integral: must be in [0, 1]"),
+        e.contains("wall[1].phases[0].servo.integral: must be in [0, 1)"),
         "{e}"
     );
     // facing strain-rate phases over steps that only partly overlap

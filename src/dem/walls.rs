@@ -61,7 +61,10 @@ pub struct Servo {
     /// velocity `G (F − F_target)` is added to an integral velocity
     /// ([`Wall::integral`]) that the wall keeps and adds to its speed.
     /// It removes the steady lag `F − F_target = v/G` of a wall that must
-    /// keep moving (a dilating sample's side walls).
+    /// keep moving (a dilating sample's side walls). Against held discs
+    /// (no dashpots, `a = G K Δt`) the force error follows
+    /// `e_{n+1} = (2 − a) e_n − (1 − a + βa) e_{n−1}`: it settles for
+    /// β < 1.
     pub integral: f64,
 }
 

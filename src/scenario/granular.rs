@@ -862,10 +862,10 @@ fn validate_motion(sc: &Scenario, i: usize, phase: &str, f: MotionFields, p: &mu
             format!("must be in (0, 1] (got {})", s.relaxation),
         );
         p.check(
-            s.integral.is_finite() && (0.0..=1.0).contains(&s.integral),
+            s.integral.is_finite() && (0.0..1.0).contains(&s.integral),
             at("servo.integral"),
             format!(
-                "must be in [0, 1] (the fraction of the proportional velocity added to the integral per step; got {})",
+                "must be in [0, 1) (the fraction of the proportional velocity added to the integral per step; 1 and above do not settle; got {})",
                 s.integral
             ),
         );
