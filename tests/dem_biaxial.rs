@@ -331,10 +331,10 @@ fn history_is_the_same_on_one_and_two_threads_and_post_processes() {
 }
 
 /// The full example, `examples/biaxial.toml` (5 000 discs, 272 000 steps,
-/// ~2 min on 2 cores): σ₃ within 1 % (99 % of the rows; the rest within
+/// 75 s on 2 cores): σ₃ within 1 % (99 % of the rows; the rest within
 /// 3 %, at rearrangements), the whole sample's Love–Weber
 /// stress = the walls' within 2 %, a peak above the critical state; and
-/// the same history on 1 thread (another ~3 min).
+/// the same history on 1 thread (145 s for both here).
 #[test]
 #[ignore]
 fn full_biaxial_example() {
