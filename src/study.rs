@@ -3,7 +3,7 @@
 //! needed 1.525e-5).
 //!
 //! A run at Δt covers the scenario's physical time: its step counts
-//! (`steps`, walls' and edges' `until_step`) are rescaled from the
+//! (`steps`, walls', wall phases' and edges' `until_step`) are rescaled from the
 //! scenario's Δt. It is **bounded** when it completes with a finite state
 //! and the stored energy (kinetic + strain + contact) never exceeds
 //! [`ENERGY_FACTOR`] times the largest of the external work so far, the
@@ -55,6 +55,9 @@ pub fn with_dt(sc: &Scenario, dt: f64) -> Scenario {
     }
     for w in &mut s.wall {
         w.until_step = w.until_step.map(scale);
+        for ph in w.phases.iter_mut().flatten() {
+            ph.until_step = ph.until_step.map(scale);
+        }
     }
     for b in &mut s.body {
         for bc in &mut b.bc {

@@ -395,3 +395,148 @@ fn servo_and_strain_rate_fields_are_checked() {
     .concat());
     assert!(e.contains("share one rate"), "{e}");
 }
+
+/// `phases`: a servo wall (no disc touches it: it runs in at
+/// `max_velocity`) that follows a strain rate from step 1000 on, then
+/// stops at step 1500: the distance is `D₀ − v N Δt`, then
+/// `D_N (1 − ε̇Δt)^(n − N)`, then constant.
+#[test]
+fn a_wall_changes_its_motion_at_the_steps_of_its_phases() {
+    let (dt, v, rate) = (1e-5, 0.5, 2.0);
+    let top = format!(
+        "phases = [{{ until_step = 1000, servo = {{ stress = 1.0e6, max_velocity = {v} }} }}, {{ until_step = 1500, strain_rate = {rate} }}]"
+    );
+    let mut m = build(&two_walls(&top, "", dt, 2000));
+    let d = |m: &Model| {
+        let g = m.granular().unwrap();
+        wall(g, "top").a.y - wall(g, "floor").a.y
+    };
+    for _ in 0..1000 {
+        m.step().unwrap();
+    }
+    let dn = d(&m);
+    assert!((dn - (1.0 - v * 1000.0 * dt)).abs() < 1e-12, "{dn}");
+    for _ in 0..500 {
+        m.step().unwrap();
+    }
+    let exact = dn * (1.0 - rate * dt).powi(500);
+    assert!((d(&m) / exact - 1.0).abs() < 1e-12, "{} {exact}", d(&m));
+    let stop = d(&m);
+    for _ in 0..500 {
+        m.step().unwrap();
+    }
+    assert_eq!(d(&m), stop, "at rest after the last phase");
+    eprintln!(
+        "servo phase: D = {dn:.6}; strain-rate phase: D = {stop:.9} (exact {exact:.9}); then at rest"
+    );
+}
+
+#[test]
+fn wall_phases_are_checked() {
+    let err = |walls: &str| {
+        scenario::parse(&boxed(0.01, walls), "w.toml")
+            .and_then(|s| s.build().map(|_| ()))
+            .unwrap_err()
+            .to_string()
+    };
+    let base = |motion: &str| {
+        [
+            wall_toml("floor", [0.0, 0.0], [0.1, 0.0], ""),
+            wall_toml("top", [0.0, 0.1], [0.1, 0.1], motion),
+        ]
+        .concat()
+    };
+    let servo = "servo = { stress = 1.0, max_velocity = 0.1 }";
+    let e = err(&base(&format!(
+        "{servo}\nphases = [{{ until_step = 10, {servo} }}, {{ strain_rate = 1.0 }}]"
+    )));
+    assert!(
+        e.contains("wall[1].phases: give the motion either in `phases`"),
+        "{e}"
+    );
+    let e = err(&base(&format!(
+        "phases = [{{ {servo} }}, {{ strain_rate = 1.0 }}]"
+    )));
+    assert!(
+        e.contains("wall[1].phases[0].until_step: every phase but the last needs `until_step`"),
+        "{e}"
+    );
+    let e = err(&base(&format!(
+        "phases = [{{ until_step = 10, {servo} }}, {{ until_step = 10, strain_rate = 1.0 }}]"
+    )));
+    assert!(
+        e.contains("wall[1].phases[1].until_step: must be greater than 10"),
+        "{e}"
+    );
+    let e = err(&base(&format!(
+        "phases = [{{ until_step = 10, {servo}, velocity = [0.0, 1.0] }}]"
+    )));
+    assert!(
+        e.contains("wall[1].phases[0].servo: give one motion"),
+        "{e}"
+    );
+    let e = err(&base(
+        "phases = [{ until_step = 10, servo = { stress = 1.0, max_velocity = 100.0 } }]",
+    ));
+    assert!(
+        e.contains("wall[1].phases[0].servo.max_velocity: wall `top` would move"),
+        "{e}"
+    );
+    let e = err(&base(
+        "phases = [{ until_step = 10, servo = { stress = 1.0, max_velocity = 0.1, integral = 1.0 } }]",
+    ));
+    assert!(
+        e.contains("wall[1].phases[0].servo.integral: must be in [0, 1)"),
+        "{e}"
+    );
+    // facing strain-rate phases over steps that only partly overlap
+    let e = err(&[
+        wall_toml(
+            "floor",
+            [0.0, 0.0],
+            [0.1, 0.0],
+            "phases = [{ until_step = 10 }, { strain_rate = 1.0 }]",
+        ),
+        wall_toml(
+            "top",
+            [0.0, 0.1],
+            [0.1, 0.1],
+            "phases = [{ until_step = 20 }, { strain_rate = 1.0 }]",
+        ),
+    ]
+    .concat());
+    assert!(
+        e.contains("wall[0].phases[1].strain_rate: the opposite wall `top` has strain_rate = 1 over steps 20.., this wall 1 over steps 10..: two facing strain-rate walls share one rate"),
+        "{e}"
+    );
+    // the same steps: fine, half each
+    let ok = [
+        wall_toml(
+            "floor",
+            [0.0, 0.0],
+            [0.1, 0.0],
+            "phases = [{ until_step = 10 }, { strain_rate = 1.0 }]",
+        ),
+        wall_toml(
+            "top",
+            [0.0, 0.1],
+            [0.1, 0.1],
+            "phases = [{ until_step = 10 }, { strain_rate = 1.0 }]",
+        ),
+    ]
+    .concat();
+    let m = build(&boxed(0.01, &ok));
+    for w in &m.granular().unwrap().walls {
+        let efgdem::dem::walls::WallMotion::Phases(p) = &w.motion else {
+            panic!("phases")
+        };
+        assert_eq!(
+            p[1].motion,
+            efgdem::dem::walls::WallMotion::StrainRate {
+                rate: 1.0,
+                opposite: 1 - (w.name == "top") as usize,
+                share: 0.5
+            }
+        );
+    }
+}

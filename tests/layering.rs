@@ -14,7 +14,7 @@ const LAYERS: &[&[&str]] = &[
     &["scenario"],
     &["output"],
     &["run"],
-    &["study", "reproduce"],
+    &["study", "reproduce", "biaxial"],
 ];
 
 fn layer_of(module: &str) -> usize {

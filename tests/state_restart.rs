@@ -233,6 +233,80 @@ fn granular_packing_with_rolling_resistance_restarts_bitwise() {
     check_packing(0.1, true);
 }
 
+/// A small biaxial test (issue 13 §5): four servo walls (top and bottom
+/// with integral action) consolidate a grown packing; from step 600 the
+/// top and bottom walls follow a strain rate (wall `phases`) while the
+/// side servos hold, now with integral action.
+fn biaxial() -> String {
+    let servo = "servo = { stress = 1.0e5, max_velocity = 0.1, relaxation = 1.0, integral = 0.1 }";
+    let axial = format!("phases = [{{ until_step = 600, {servo} }}, {{ strain_rate = 2.0 }}]");
+    let lateral = format!(
+        "phases = [{{ until_step = 600, servo = {{ stress = 1.0e5, max_velocity = 0.1 }} }}, {{ {servo} }}]"
+    );
+    let wall = |name: &str, from: &str, to: &str, motion: &str| {
+        format!(
+            "[[wall]]\nname = \"{name}\"\nfrom = {from}\nto = {to}\nmaterial = \"smooth\"\n{motion}\n\n"
+        )
+    };
+    format!(
+        r#"[simulation]
+dt = 1.4e-6
+steps = 1500
+
+[[material]]
+name = "grain"
+density = 2650.0
+kn = 1.0e8
+ks = 5.0e7
+friction = 0.5
+rolling_friction = 0.1
+
+[[material]]
+name = "smooth"
+kn = 1.0e8
+
+[granular]
+material = "grain"
+discs = {{ generate = "random", method = "grow", box = [[0.0, 0.0], [0.012, 0.024]], radius = [0.0005, 0.001], count = 120, seed = 4, settle_steps = 3000, settle_material = "smooth" }}
+damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+
+{}{}{}{}"#,
+        wall("bottom", "[0.0, 0.0]", "[0.012, 0.0]", &axial),
+        wall("top", "[0.0, 0.024]", "[0.012, 0.024]", &axial),
+        wall("left", "[0.0, 0.0]", "[0.0, 0.024]", &lateral),
+        wall("right", "[0.012, 0.0]", "[0.012, 0.024]", &lateral),
+    )
+}
+
+/// Saved during the consolidation and during the shearing (servos'
+/// integral velocities in the state), restored, continued across the
+/// change of phases: bitwise the run in one go.
+#[test]
+fn biaxial_test_with_wall_phases_restarts_bitwise() {
+    let src = biaxial();
+    for k in [400, 900] {
+        let (a, c, bytes) = restart(&src, 1500, k);
+        assert_same(&a, &c);
+        let s = ModelState::from_bytes(&bytes).unwrap();
+        let SystemState::Granular(g) = &s.system else {
+            panic!("a granular state")
+        };
+        // the servos' integral velocities are part of the state
+        let moving = g.walls.iter().filter(|w| w.integral != 0.0).count();
+        // (consolidation: top and bottom with integral action, the
+        // sides without; shearing: the sides with it)
+        assert_eq!(moving, 2, "at step {k}");
+        let w = &a.granular().unwrap().walls;
+        eprintln!(
+            "saved at {k}: {} bytes; at the end the top wall at y = {:.6}, sides at x = {:.6}, {:.6}",
+            bytes.len(),
+            w[1].a.y,
+            w[2].a.x,
+            w[3].a.x
+        );
+    }
+}
+
 /// A cantilever (EFG or FE) under self-weight whose right edge is driven
 /// down for part of the run (penalty refinement, work of moving edges, FE
 /// support reactions).

@@ -389,8 +389,9 @@ impl Granular {
     /// of the walls they follow. The clock advances.
     fn move_walls(&mut self) {
         for k in 0..self.walls.len() {
-            let v = self.wall_velocity(k);
+            let (v, integral) = self.wall_motion(k);
             self.walls[k].vel = v;
+            self.walls[k].integral = integral;
         }
         let mut joined = false;
         for w in &mut self.walls {
@@ -404,14 +405,22 @@ impl Granular {
         self.time = self.step as f64 * self.dt;
     }
 
-    /// Velocity of wall `k` during the present step: the prescribed one,
+    /// Velocity of wall `k` during the present step (the motion of its
+    /// phase at this step, [`walls::WallMotion::at`]): the prescribed one,
     /// the servo's `−inward · G (F − σ L t)` from the force of the step
     /// just computed ([`walls::Servo`]), or the strain rate's
     /// `inward · share ε̇ D` from the present distance D to the opposite
     /// wall.
     pub fn wall_velocity(&self, k: usize) -> Vec2 {
+        self.wall_motion(k).0
+    }
+
+    /// [`wall_velocity`](Self::wall_velocity) and the servo's integral
+    /// velocity for the next step ([`walls::Servo::speed_integral`]; 0
+    /// when the wall is not a servo at this step).
+    fn wall_motion(&self, k: usize) -> (Vec2, f64) {
         let w = &self.walls[k];
-        match &w.motion {
+        let v = match w.motion.at(self.step) {
             walls::WallMotion::Servo(s) => {
                 let target = s.stress * w.length() * self.thickness;
                 let stiffness = if w.contacts > 0 {
@@ -419,7 +428,15 @@ impl Granular {
                 } else {
                     self.wall_kn_max(k)
                 };
-                w.inward * -s.speed(w.normal_force(), target, stiffness, w.damping, self.dt)
+                let (v, integral) = s.speed_integral(
+                    w.normal_force(),
+                    target,
+                    stiffness,
+                    w.damping,
+                    self.dt,
+                    w.integral,
+                );
+                return (w.inward * -v, integral);
             }
             walls::WallMotion::StrainRate {
                 rate,
@@ -430,7 +447,8 @@ impl Granular {
                 w.inward * (share * rate * d)
             }
             m => m.velocity(self.step, self.time, self.dt),
-        }
+        };
+        (v, 0.0)
     }
 
     /// Largest normal stiffness of wall `k` against any disc material.

@@ -3,7 +3,8 @@
 //! Saved: the clock; every disc's kinematics and last force in the present
 //! slot order, with the slot → id map; the walls' positions, velocities
 //! and forces (a servo or strain-rate wall keeps nothing else: its next
-//! velocity follows from the next step's force and the walls' ends); the
+//! velocity follows from the next step's force and the walls' ends, and
+//! a servo with integral action its integral velocity); the
 //! contact list (pairs in their sorted order, shear and rolling histories,
 //! disc–wall pairs) and the Verlet bookkeeping that
 //! decides when the list is rebuilt and when the discs are renumbered
@@ -38,6 +39,8 @@ pub struct WallState {
     pub vel: Vec2,
     /// Force of the discs in the last step.
     pub force: Vec2,
+    /// Integral velocity of a servo with integral action.
+    pub integral: f64,
 }
 
 /// A disc–wall pair with its histories (as [`WallPair`]).
@@ -127,6 +130,7 @@ impl Granular {
                     b: w.b,
                     vel: w.vel,
                     force: w.force,
+                    integral: w.integral,
                 })
                 .collect(),
             pairs: c.pairs.iter().map(|q| [q.i, q.j]).collect(),
@@ -173,7 +177,7 @@ impl Granular {
         p.force.copy_from_slice(&s.force);
         p.torque.copy_from_slice(&s.torque);
         for (w, ws) in self.walls.iter_mut().zip(&s.walls) {
-            (w.a, w.b, w.vel, w.force) = (ws.a, ws.b, ws.vel, ws.force);
+            (w.a, w.b, w.vel, w.force, w.integral) = (ws.a, ws.b, ws.vel, ws.force, ws.integral);
         }
         self.step = s.step;
         self.time = s.time;

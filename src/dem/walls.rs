@@ -11,6 +11,12 @@
 //! wall is *joined* to it ([`Wall::joins`]): after every move it is put
 //! back on that wall's line, so the wall stretches or shrinks with the box
 //! and no gap opens at the corner.
+//!
+//! A wall may change its motion during a run: [`WallMotion::Phases`] runs
+//! one motion after another, each until a step number (e.g. a servo for
+//! the isotropic consolidation of a biaxial test, then a strain rate for
+//! its shearing). The motion is a function of the step, so a checkpoint
+//! needs nothing more than the walls' positions.
 
 use crate::geom::{Vec2, closest_on_segment};
 
@@ -50,6 +56,16 @@ pub struct Servo {
     pub relaxation: f64,
     /// Largest speed of the wall.
     pub max_velocity: f64,
+    /// Integral action β (0: none, the plain proportional servo): each
+    /// step that the wall is not at `max_velocity`, β × the proportional
+    /// velocity `G (F − F_target)` is added to an integral velocity
+    /// ([`Wall::integral`]) that the wall keeps and adds to its speed.
+    /// It removes the steady lag `F − F_target = v/G` of a wall that must
+    /// keep moving (a dilating sample's side walls). Against held discs
+    /// (no dashpots, `a = G K Δt`) the force error follows
+    /// `e_{n+1} = (2 − a) e_n − (1 − a + βa) e_{n−1}`: it settles for
+    /// β < 1.
+    pub integral: f64,
 }
 
 impl Servo {
@@ -66,6 +82,43 @@ impl Servo {
             0.0
         } else {
             v.clamp(-self.max_velocity, self.max_velocity)
+        }
+    }
+
+    /// [`speed`](Self::speed) with the integral action: the outward speed
+    /// `G (F − F_target) + I` clamped to `±max_velocity`, and the integral
+    /// velocity I of the next step, `I + β G (F − F_target)` (clamped to
+    /// `±max_velocity`) when the speed is within the limit, else I
+    /// unchanged (no wind-up while the wall runs at its largest speed,
+    /// e.g. towards a sample it does not touch yet). With β = 0 it is
+    /// `(speed, I)`, bitwise.
+    pub fn speed_integral(
+        &self,
+        measured: f64,
+        target: f64,
+        stiffness: f64,
+        damping: f64,
+        dt: f64,
+        integral: f64,
+    ) -> (f64, f64) {
+        if self.integral == 0.0 {
+            return (
+                self.speed(measured, target, stiffness, damping, dt),
+                integral,
+            );
+        }
+        let g = self
+            .gain
+            .unwrap_or(self.relaxation / (stiffness * dt + 2.0 * damping));
+        let p = g * (measured - target);
+        let v = p + integral;
+        if v.is_nan() {
+            (0.0, integral)
+        } else if v.abs() < self.max_velocity {
+            let i = (integral + self.integral * p).clamp(-self.max_velocity, self.max_velocity);
+            (v, i)
+        } else {
+            (v.clamp(-self.max_velocity, self.max_velocity), integral)
         }
     }
 }
@@ -103,7 +156,28 @@ pub enum WallMotion {
         /// wall is a strain-rate wall too).
         share: f64,
     },
+    /// One motion after another: phase k moves the wall during the steps
+    /// (0-based, counted from the start of the run) from the previous
+    /// phase's `until_step` (0 for the first) up to its own `until_step`
+    /// (excluded); after the last phase's `until_step` the wall is at
+    /// rest. A phase's motion is not itself phased.
+    Phases(Vec<WallPhase>),
 }
+
+/// One phase of a [`WallMotion::Phases`] wall.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WallPhase {
+    /// The phase moves the wall during the steps before this one (0-based
+    /// step index, from the start of the run); `None`: to the end of the
+    /// run.
+    pub until_step: Option<usize>,
+    /// The motion during the phase (a [`Piecewise`](WallMotion::Piecewise)
+    /// history keeps the run's time, not the phase's).
+    pub motion: WallMotion,
+}
+
+/// The motion of a wall whose phases are over.
+static AT_REST: WallMotion = WallMotion::Fixed;
 
 impl WallMotion {
     /// Velocity during step `step` (0-based), which runs from `t` to `t + dt`,
@@ -114,6 +188,7 @@ impl WallMotion {
     /// (central difference).
     pub fn velocity(&self, step: usize, t: f64, dt: f64) -> Vec2 {
         match self {
+            WallMotion::Phases(_) => self.at(step).velocity(step, t, dt),
             WallMotion::Fixed | WallMotion::Servo(_) | WallMotion::StrainRate { .. } => Vec2::ZERO,
             WallMotion::Constant {
                 velocity,
@@ -138,10 +213,27 @@ impl WallMotion {
         }
     }
 
+    /// The motion during step `step` (0-based): the phase that holds then
+    /// ([`WallMotion::Phases`]; at rest after the last), or `self`.
+    pub fn at(&self, step: usize) -> &WallMotion {
+        match self {
+            WallMotion::Phases(phases) => phases
+                .iter()
+                .find(|p| p.until_step.is_none_or(|n| step < n))
+                .map_or(&AT_REST, |p| p.motion.at(step)),
+            m => m,
+        }
+    }
+
     /// Does the wall move along its normal by a law of the state (servo or
-    /// strain rate)? The ends of other walls lying on it are joined to it.
+    /// strain rate), in some phase? The ends of other walls lying on it
+    /// are joined to it.
     pub fn follows_state(&self) -> bool {
-        matches!(self, WallMotion::Servo(_) | WallMotion::StrainRate { .. })
+        match self {
+            WallMotion::Servo(_) | WallMotion::StrainRate { .. } => true,
+            WallMotion::Phases(phases) => phases.iter().any(|p| p.motion.follows_state()),
+            _ => false,
+        }
     }
 }
 
@@ -180,6 +272,10 @@ pub struct Wall {
     pub stiffness: f64,
     /// `Σ c_n` of their normal dashpots (per-step scratch; the servo's C).
     pub damping: f64,
+    /// The integral velocity of a servo with integral action
+    /// ([`Servo::integral`]), outward positive; 0 otherwise (evolving
+    /// state: saved in checkpoints).
+    pub integral: f64,
 }
 
 impl Wall {
@@ -207,6 +303,7 @@ impl Wall {
             contacts: 0,
             stiffness: 0.0,
             damping: 0.0,
+            integral: 0.0,
         }
     }
 
@@ -268,6 +365,7 @@ mod tests {
             gain: None,
             relaxation: 0.5,
             max_velocity: 10.0,
+            integral: 0.0,
         };
         // too much force: outward, α (F − F_t)/(K Δt)
         assert_eq!(
@@ -287,6 +385,90 @@ mod tests {
             ..s
         };
         assert_eq!(g.speed(1.5, 1.0, 100.0, 7.0, 0.01), 1.0);
+    }
+
+    #[test]
+    fn servo_integral_action() {
+        let p = Servo {
+            stress: 1.0,
+            gain: Some(0.5),
+            relaxation: 0.5,
+            max_velocity: 10.0,
+            integral: 0.0,
+        };
+        // β = 0: the proportional speed, the integral left as it is
+        assert_eq!(
+            p.speed_integral(3.0, 1.0, 7.0, 1.0, 0.1, 0.25),
+            (p.speed(3.0, 1.0, 7.0, 1.0, 0.1), 0.25)
+        );
+        let pi = Servo { integral: 0.1, ..p };
+        // G e + I, and I grows by β G e
+        assert_eq!(
+            pi.speed_integral(3.0, 1.0, 7.0, 1.0, 0.1, 0.25),
+            (1.25, 0.35)
+        );
+        // at the largest speed: clamped, no wind-up
+        assert_eq!(
+            pi.speed_integral(100.0, 1.0, 7.0, 1.0, 0.1, 0.25),
+            (10.0, 0.25)
+        );
+        assert_eq!(
+            pi.speed_integral(-100.0, 1.0, 7.0, 1.0, 0.1, 0.25),
+            (-10.0, 0.25)
+        );
+        // a steady error builds the integral until it carries the speed
+        let (mut i, mut v) = (0.0, 0.0);
+        for _ in 0..200 {
+            (v, i) = pi.speed_integral(1.0 + 1e-3, 1.0, 7.0, 1.0, 0.1, i);
+        }
+        assert!((i - 200.0 * 0.1 * 0.5e-3).abs() < 1e-12 && v > i);
+    }
+
+    #[test]
+    fn phases_follow_the_step() {
+        let servo = WallMotion::Servo(Servo {
+            stress: 1.0,
+            gain: None,
+            relaxation: 0.5,
+            max_velocity: 1.0,
+            integral: 0.0,
+        });
+        let v = Vec2::new(0.0, -2.0);
+        let m = WallMotion::Phases(vec![
+            WallPhase {
+                until_step: Some(3),
+                motion: servo.clone(),
+            },
+            WallPhase {
+                until_step: Some(5),
+                motion: WallMotion::Constant {
+                    velocity: v,
+                    until_step: None,
+                },
+            },
+        ]);
+        assert!(m.follows_state());
+        assert_eq!(m.at(0), &servo);
+        assert_eq!(m.at(2), &servo);
+        assert_eq!(m.velocity(2, 0.0, 0.1), Vec2::ZERO);
+        assert_eq!(m.velocity(3, 0.0, 0.1), v);
+        assert_eq!(m.velocity(4, 0.0, 0.1), v);
+        assert_eq!(m.at(5), &WallMotion::Fixed);
+        assert_eq!(m.velocity(5, 0.0, 0.1), Vec2::ZERO);
+        let rest_then_move = WallMotion::Phases(vec![
+            WallPhase {
+                until_step: Some(1),
+                motion: WallMotion::Fixed,
+            },
+            WallPhase {
+                until_step: None,
+                motion: WallMotion::Piecewise(vec![(0.0, v), (1.0, v * 2.0)]),
+            },
+        ]);
+        assert!(!rest_then_move.follows_state());
+        assert_eq!(rest_then_move.velocity(0, 0.0, 0.1), Vec2::ZERO);
+        // the history keeps the run's time
+        assert_eq!(rest_then_move.velocity(1000, 0.45, 0.1), v * 1.5);
     }
 
     #[test]

@@ -31,8 +31,9 @@ use crate::dem::state::GranularState;
 
 /// Version of the byte format of [`ModelState::to_bytes`]; raised whenever
 /// a saved type changes.
-/// (2: walls keep both ends of the Verlet reference, for joined ends.)
-pub const STATE_FORMAT_VERSION: u32 = 2;
+/// (2: walls keep both ends of the Verlet reference, for joined ends;
+/// 3: walls keep the integral velocity of a servo with integral action.)
+pub const STATE_FORMAT_VERSION: u32 = 3;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -10,8 +10,8 @@ use super::body::{
 };
 use super::generate::discs_from_csv;
 use super::granular::{
-    CONTACT_QUANTITIES, DISC_QUANTITIES, DampingSpec, DiscsSpec, GLOBAL_QUANTITIES, Generator,
-    GranularSpec, Packing, SlipNormalSpec, WALL_QUANTITIES, slip_normal,
+    CONTACT_QUANTITIES, DISC_QUANTITIES, DampingSpec, DiscsSpec, DiscsTable, GLOBAL_QUANTITIES,
+    Generator, GranularSpec, Packing, SlipNormalSpec, WALL_QUANTITIES, slip_normal,
 };
 use super::{Analysis, ContactSolve, CouplingScheme, Invalid, Scenario};
 use crate::continuum::ComplianceMode;
@@ -231,7 +231,7 @@ fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> 
                     count,
                     t.seed,
                     steps,
-                    mats[mi],
+                    mats[settle_material(sc, t)?.unwrap_or(mi)],
                     density,
                     g.thickness,
                 )
@@ -240,22 +240,32 @@ fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> 
             let rows = lattice_packing(lat, lo, hi, radius, t.count, gap, jitter, t.seed)
                 .map_err(|e| bad("granular.discs", e))?;
             if kind == Generator::Random && t.method == Packing::Deposit && steps > 0 {
-                return deposit(sc, rows, lo, hi, steps);
+                return deposit(sc, rows, lo, hi, steps, settle_material(sc, t)?);
             }
             Ok(rows)
         }
     }
 }
 
+/// The index of a packing's `settle_material`, if it names one.
+fn settle_material(sc: &Scenario, t: &DiscsTable) -> Result<Option<usize>, Invalid> {
+    t.settle_material
+        .as_ref()
+        .map(|m| material_index(sc, m, "granular.discs.settle_material").map(|i| i as usize))
+        .transpose()
+}
+
 /// Gravity deposition: settle a loose packing inside the box under gravity
-/// (the scenario's, or −9.81 ŷ if it has none). Returns the settled
-/// positions (velocities are dropped).
+/// (the scenario's, or −9.81 ŷ if it has none), with the contact law of
+/// material `settle` (default: the discs'). Returns the settled positions
+/// (velocities are dropped).
 fn deposit(
     sc: &Scenario,
     rows: Vec<DiscRow>,
     lo: Vec2,
     hi: Vec2,
     steps: usize,
+    settle: Option<usize>,
 ) -> Result<Vec<DiscRow>, Invalid> {
     let g = spec(sc)?;
     let mi = material_index(sc, &g.material, "granular.material")?;
@@ -271,7 +281,7 @@ fn deposit(
         &rows,
         lo,
         hi,
-        mats[mi as usize],
+        mats[settle.unwrap_or(mi as usize)],
         m.density,
         g.thickness,
         grav,
@@ -770,28 +780,37 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
         );
     }
     for (wi, w) in sc.wall.iter().enumerate() {
-        let fastest = w
-            .velocity
+        // the wall's own motion, then each phase's
+        let own = std::iter::once((String::new(), w.velocity, w.history.as_ref()));
+        let phases = w
+            .phases
             .iter()
-            .map(|&v| step(Vec2::from(v)))
-            .chain(
-                w.history
-                    .iter()
-                    .flatten()
-                    .map(|r| step(Vec2::new(r[1], r[2]))),
-            )
-            .fold(0.0, f64::max);
-        if fastest.is_nan() || fastest >= r_min {
-            let f = if w.velocity.is_some() {
-                "velocity"
-            } else {
-                "history"
-            };
-            return through(
-                format!("wall.{wi}.{f}"),
-                &format!("wall `{}`", w.name),
-                fastest,
-            );
+            .flatten()
+            .enumerate()
+            .map(|(k, p)| (format!("phases.{k}."), p.velocity, p.history.as_ref()));
+        for (at, velocity, history) in own.chain(phases) {
+            let fastest = velocity
+                .iter()
+                .map(|&v| step(Vec2::from(v)))
+                .chain(
+                    history
+                        .into_iter()
+                        .flatten()
+                        .map(|r| step(Vec2::new(r[1], r[2]))),
+                )
+                .fold(0.0, f64::max);
+            if fastest.is_nan() || fastest >= r_min {
+                let f = if velocity.is_some() {
+                    "velocity"
+                } else {
+                    "history"
+                };
+                return through(
+                    format!("wall.{wi}.{at}{f}"),
+                    &format!("wall `{}`", w.name),
+                    fastest,
+                );
+            }
         }
     }
     let spec = spec(sc)?;

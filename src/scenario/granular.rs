@@ -31,7 +31,7 @@
 
 use super::{Invalid, Problems, Scenario};
 use crate::dem::Granular;
-use crate::dem::walls::{Servo, Wall, WallMotion};
+use crate::dem::walls::{Servo, Wall, WallMotion, WallPhase};
 use crate::geom::Vec2;
 use serde::Deserialize;
 use std::path::PathBuf;
@@ -109,6 +109,11 @@ pub struct DiscsTable {
     pub jitter: Option<f64>,
     /// `deposit` / `grow`: DEM steps of the settling or growth (default 20 000).
     pub settle_steps: Option<usize>,
+    /// `deposit` / `grow`: the `[[material]]` whose contact law the
+    /// preparation uses (default: the discs' own, `[granular] material`);
+    /// e.g. a frictionless one for a dense packing that does not depend on
+    /// the friction of the run.
+    pub settle_material: Option<String>,
 }
 
 fn seed1() -> u64 {
@@ -319,6 +324,97 @@ pub struct WallSpec {
     /// Or move so that the distance to the opposite (parallel) wall
     /// changes at this true strain rate (1/s, compression positive).
     pub strain_rate: Option<f64>,
+    /// Or one motion after another, each until a step number.
+    pub phases: Option<Vec<PhaseSpec>>,
+}
+
+/// One entry of a wall's `phases = [{ until_step = N, servo = {…} }, …]`:
+/// a motion (`velocity`, `history`, `servo`, `strain_rate`, or none: at
+/// rest) during the steps up to `until_step` ([`WallPhase`]).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhaseSpec {
+    /// The phase lasts while fewer steps than this have been done (from
+    /// the start of the run); required on every phase but the last.
+    pub until_step: Option<usize>,
+    /// Constant velocity during the phase.
+    pub velocity: Option<[f64; 2]>,
+    /// Or a piecewise-linear velocity history `[[t, vx, vy], ...]` (t the
+    /// run's time).
+    pub history: Option<Vec<[f64; 3]>>,
+    /// Or a servo holding a normal stress.
+    pub servo: Option<ServoSpec>,
+    /// Or a true strain rate of the distance to the opposite wall.
+    pub strain_rate: Option<f64>,
+}
+
+/// The motion fields of a wall or of one of its phases.
+#[derive(Clone, Copy)]
+struct MotionFields<'a> {
+    velocity: Option<[f64; 2]>,
+    /// `until_step` of a constant velocity (a wall's own field; a phase's
+    /// bounds the phase instead).
+    until_step: Option<usize>,
+    history: Option<&'a Vec<[f64; 3]>>,
+    servo: Option<&'a ServoSpec>,
+    strain_rate: Option<f64>,
+}
+
+impl<'a> MotionFields<'a> {
+    fn of_wall(w: &'a WallSpec) -> Self {
+        MotionFields {
+            velocity: w.velocity,
+            until_step: w.until_step,
+            history: w.history.as_ref(),
+            servo: w.servo.as_ref(),
+            strain_rate: w.strain_rate,
+        }
+    }
+
+    fn of_phase(p: &'a PhaseSpec) -> Self {
+        MotionFields {
+            velocity: p.velocity,
+            until_step: None,
+            history: p.history.as_ref(),
+            servo: p.servo.as_ref(),
+            strain_rate: p.strain_rate,
+        }
+    }
+
+    /// Servo or strain rate: moves by a law of the state.
+    fn follows_state(&self) -> bool {
+        self.servo.is_some() || self.strain_rate.is_some()
+    }
+}
+
+impl WallSpec {
+    /// Does the wall move by a servo or a strain rate, in some phase?
+    pub fn follows_state(&self) -> bool {
+        MotionFields::of_wall(self).follows_state()
+            || self
+                .phases
+                .iter()
+                .flatten()
+                .any(|p| MotionFields::of_phase(p).follows_state())
+    }
+
+    /// The steps `[from, until)` (`None`: to the end) during which the
+    /// wall follows a strain rate, with the rate and the field path of
+    /// that rate below `wall.i.`.
+    pub fn strain_rate_spans(&self) -> Vec<(usize, Option<usize>, f64, String)> {
+        let mut out = vec![];
+        if let Some(r) = self.strain_rate {
+            out.push((0, None, r, "strain_rate".to_string()));
+        }
+        let mut from = 0;
+        for (k, p) in self.phases.iter().flatten().enumerate() {
+            if let Some(r) = p.strain_rate {
+                out.push((from, p.until_step, r, format!("phases.{k}.strain_rate")));
+            }
+            from = p.until_step.unwrap_or(usize::MAX);
+        }
+        out
+    }
 }
 
 /// `servo = { stress = σ, max_velocity = v, gain = G, relaxation = α }`
@@ -335,6 +431,9 @@ pub struct ServoSpec {
     /// Relaxation factor α of the automatic gain (default 0.5).
     #[serde(default = "half")]
     pub relaxation: f64,
+    /// Integral action β (default 0: proportional only).
+    #[serde(default)]
+    pub integral: f64,
 }
 
 fn half() -> f64 {
@@ -375,7 +474,7 @@ pub fn joined_ends(sc: &Scenario, i: usize) -> [Option<u32>; 2] {
     let (a, b, u, l) = ends(&sc.wall[i]);
     let on = |p: Vec2| {
         sc.wall.iter().enumerate().position(|(j, w)| {
-            if j == i || w.from == w.to || (w.servo.is_none() && w.strain_rate.is_none()) {
+            if j == i || w.from == w.to || !w.follows_state() {
                 return false;
             }
             let (aj, bj, uj, lj) = ends(w);
@@ -398,39 +497,37 @@ pub fn walls(sc: &Scenario, discs: &[Vec2]) -> Result<Vec<Wall>, Invalid> {
     let mut out = Vec::new();
     for (wi, w) in sc.wall.iter().enumerate() {
         let at = |f: &str| format!("wall.{wi}.{f}");
-        let mut inward_to = centroid;
-        let motion = if let Some(s) = &w.servo {
-            WallMotion::Servo(Servo {
-                stress: s.stress,
-                gain: s.gain,
-                relaxation: s.relaxation,
-                max_velocity: s.max_velocity,
-            })
-        } else if let Some(rate) = w.strain_rate {
-            let opposite = opposite_wall(sc, wi).ok_or_else(|| Invalid {
-                path: at("strain_rate"),
-                message: "needs a parallel wall opposite this one".into(),
-            })?;
-            inward_to = Vec2::from(sc.wall[opposite].from);
-            let both =
-                sc.wall[opposite].strain_rate.is_some() && opposite_wall(sc, opposite) == Some(wi);
-            WallMotion::StrainRate {
-                rate,
-                opposite,
-                share: if both { 0.5 } else { 1.0 },
-            }
-        } else {
-            match (&w.velocity, &w.history) {
-                (Some(v), _) => WallMotion::Constant {
-                    velocity: Vec2::from(*v),
-                    until_step: w.until_step,
-                },
-                (None, Some(h)) => {
-                    WallMotion::Piecewise(h.iter().map(|r| (r[0], Vec2::new(r[1], r[2]))).collect())
+        let (motion, facing) = match &w.phases {
+            None => motion(
+                sc,
+                wi,
+                MotionFields::of_wall(w),
+                (0, None),
+                &at("strain_rate"),
+            )?,
+            Some(phases) => {
+                let mut out = Vec::with_capacity(phases.len());
+                let mut facing = None;
+                let mut from = 0;
+                for (k, p) in phases.iter().enumerate() {
+                    let (m, f) = motion(
+                        sc,
+                        wi,
+                        MotionFields::of_phase(p),
+                        (from, p.until_step),
+                        &at(&format!("phases.{k}.strain_rate")),
+                    )?;
+                    facing = facing.or(f);
+                    out.push(WallPhase {
+                        until_step: p.until_step,
+                        motion: m,
+                    });
+                    from = p.until_step.unwrap_or(usize::MAX);
                 }
-                (None, None) => WallMotion::Fixed,
+                (WallMotion::Phases(out), facing)
             }
         };
+        let inward_to = facing.unwrap_or(centroid);
         let mut wall = Wall::new(&w.name, Vec2::from(w.from), Vec2::from(w.to), motion);
         if (inward_to - wall.a).dot(wall.inward) < 0.0 {
             wall.inward = -wall.inward;
@@ -452,6 +549,62 @@ pub fn walls(sc: &Scenario, discs: &[Vec2]) -> Result<Vec<Wall>, Invalid> {
     Ok(out)
 }
 
+/// The motion of wall `wi` given by `f`, during the steps `span` (for a
+/// phase; `(0, None)` otherwise), and the point its inward normal must
+/// face when the motion decides it (a strain-rate wall: its opposite
+/// wall). `rate_at`: the path of the strain rate, for errors. Two facing
+/// walls that follow a strain rate over the same steps take half each.
+fn motion(
+    sc: &Scenario,
+    wi: usize,
+    f: MotionFields,
+    span: (usize, Option<usize>),
+    rate_at: &str,
+) -> Result<(WallMotion, Option<Vec2>), Invalid> {
+    if let Some(s) = f.servo {
+        return Ok((
+            WallMotion::Servo(Servo {
+                stress: s.stress,
+                gain: s.gain,
+                relaxation: s.relaxation,
+                max_velocity: s.max_velocity,
+                integral: s.integral,
+            }),
+            None,
+        ));
+    }
+    if let Some(rate) = f.strain_rate {
+        let opposite = opposite_wall(sc, wi).ok_or_else(|| Invalid {
+            path: rate_at.to_string(),
+            message: "needs a parallel wall opposite this one".into(),
+        })?;
+        let both = opposite_wall(sc, opposite) == Some(wi)
+            && sc.wall[opposite]
+                .strain_rate_spans()
+                .iter()
+                .any(|&(a, b, _, _)| (a, b) == span);
+        return Ok((
+            WallMotion::StrainRate {
+                rate,
+                opposite,
+                share: if both { 0.5 } else { 1.0 },
+            },
+            Some(Vec2::from(sc.wall[opposite].from)),
+        ));
+    }
+    let m = match (f.velocity, f.history) {
+        (Some(v), _) => WallMotion::Constant {
+            velocity: Vec2::from(v),
+            until_step: f.until_step,
+        },
+        (None, Some(h)) => {
+            WallMotion::Piecewise(h.iter().map(|r| (r[0], Vec2::new(r[1], r[2]))).collect())
+        }
+        (None, None) => WallMotion::Fixed,
+    };
+    Ok((m, None))
+}
+
 /// Fraction of the smallest radius a servo or strain-rate wall may move in
 /// one step (faster, it could pass through a disc).
 pub const WALL_STEP_LIMIT: f64 = 0.1;
@@ -467,20 +620,38 @@ pub fn check_wall_speeds(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
         .copied()
         .fold(f64::INFINITY, f64::min);
     for (wi, w) in g.walls.iter().enumerate() {
-        let (speed, field) = match &w.motion {
-            WallMotion::Servo(s) => (s.max_velocity, "servo.max_velocity"),
-            WallMotion::StrainRate { .. } => (g.wall_velocity(wi).norm(), "strain_rate"),
-            _ => continue,
+        let motions: Vec<(&WallMotion, String)> = match &w.motion {
+            WallMotion::Phases(phases) => phases
+                .iter()
+                .enumerate()
+                .map(|(k, p)| (&p.motion, format!("phases.{k}.")))
+                .collect(),
+            m => vec![(m, String::new())],
         };
-        let step = speed * g.dt;
-        if step > WALL_STEP_LIMIT * rmin {
-            return Err(Invalid {
-                path: format!("wall.{wi}.{field}"),
-                message: format!(
-                    "wall `{}` would move {step:e} per step (speed {speed:e} × dt {:e}), more than {WALL_STEP_LIMIT} × the smallest radius {rmin:e}: lower it (or dt)",
-                    sc.wall[wi].name, g.dt
-                ),
-            });
+        for (m, phase) in motions {
+            let (speed, field) = match m {
+                WallMotion::Servo(s) => (s.max_velocity, "servo.max_velocity"),
+                WallMotion::StrainRate {
+                    rate,
+                    opposite,
+                    share,
+                } => {
+                    // at the distance of the start (a phase: of t = 0)
+                    let d = (g.walls[*opposite].a - w.a).dot(w.inward);
+                    ((share * rate * d).abs(), "strain_rate")
+                }
+                _ => continue,
+            };
+            let step = speed * g.dt;
+            if step > WALL_STEP_LIMIT * rmin {
+                return Err(Invalid {
+                    path: format!("wall.{wi}.{phase}{field}"),
+                    message: format!(
+                        "wall `{}` would move {step:e} per step (speed {speed:e} × dt {:e}), more than {WALL_STEP_LIMIT} × the smallest radius {rmin:e}: lower it (or dt)",
+                        sc.wall[wi].name, g.dt
+                    ),
+                });
+            }
         }
     }
     Ok(())
@@ -574,7 +745,16 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 );
             }
         }
-        DiscsSpec::Table(t) => validate_table(t, p),
+        DiscsSpec::Table(t) => {
+            validate_table(t, p);
+            if let Some(m) = &t.settle_material {
+                p.check(
+                    sc.material(m).is_some(),
+                    "granular.discs.settle_material",
+                    format!("no [[material]] named `{m}`"),
+                );
+            }
+        }
     }
     match g.damping {
         DampingSpec::None => {}
@@ -627,55 +807,42 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 format!("no [[material]] named `{m}`"),
             );
         }
-        if let Some(v) = w.velocity {
-            p.check(
-                v.iter().all(|x| x.is_finite()),
-                at("velocity"),
-                "must be two finite numbers",
-            );
-        }
         p.check(
             w.until_step.is_none() || w.velocity.is_some(),
             at("until_step"),
             "`until_step` needs a `velocity`",
         );
-        validate_servo(sc, i, w, p);
-        if let Some(h) = &w.history {
-            p.check(
-                w.velocity.is_none(),
-                at("history"),
-                "give either `velocity` or `history`, not both",
-            );
-            p.check(
-                !h.is_empty(),
-                at("history"),
-                "needs at least one [t, vx, vy] point",
-            );
-            p.check(
-                h.iter().all(|r| r.iter().all(|x| x.is_finite()))
-                    && h.windows(2).all(|w| w[1][0] >= w[0][0]),
-                at("history"),
-                "points [t, vx, vy] must be finite with t non-decreasing",
-            );
+        validate_motion(sc, i, "", MotionFields::of_wall(w), p);
+        if let Some(phases) = &w.phases {
+            validate_phases(sc, i, w, phases, p);
         }
     }
     validate_probes(sc, p);
 }
 
-/// `servo` and `strain_rate` of wall `i`: one motion only, sensible
-/// numbers, a strain-rate wall with a wall opposite it (and the same rate
-/// if that one follows a strain rate too).
-fn validate_servo(sc: &Scenario, i: usize, w: &WallSpec, p: &mut Problems) {
-    let at = |f: &str| format!("wall.{i}.{f}");
+/// The motion fields `f` of wall `i` (`phase`: `""`, or `"phases.k."`
+/// for a phase): one motion only, sensible numbers, a strain-rate wall
+/// with a wall opposite it (and the same rate over the same steps if that
+/// one follows a strain rate too).
+fn validate_motion(sc: &Scenario, i: usize, phase: &str, f: MotionFields, p: &mut Problems) {
+    let at = |x: &str| format!("wall.{i}.{phase}{x}");
+    let w = &sc.wall[i];
+    if let Some(v) = f.velocity {
+        p.check(
+            v.iter().all(|x| x.is_finite()),
+            at("velocity"),
+            "must be two finite numbers",
+        );
+    }
     let kinds = [
-        w.velocity.is_some(),
-        w.history.is_some(),
-        w.servo.is_some(),
-        w.strain_rate.is_some(),
+        f.velocity.is_some(),
+        f.history.is_some(),
+        f.servo.is_some(),
+        f.strain_rate.is_some(),
     ];
-    if kinds.iter().filter(|&&k| k).count() > 1 && (w.servo.is_some() || w.strain_rate.is_some()) {
+    if kinds.iter().filter(|&&k| k).count() > 1 && f.follows_state() {
         p.push(
-            at(if w.servo.is_some() {
+            at(if f.servo.is_some() {
                 "servo"
             } else {
                 "strain_rate"
@@ -683,7 +850,7 @@ fn validate_servo(sc: &Scenario, i: usize, w: &WallSpec, p: &mut Problems) {
             "give one motion: `velocity`, `history`, `servo` or `strain_rate`",
         );
     }
-    if let Some(s) = &w.servo {
+    if let Some(s) = f.servo {
         p.non_negative(s.stress, at("servo.stress"));
         p.positive(s.max_velocity, at("servo.max_velocity"));
         if let Some(g) = s.gain {
@@ -694,8 +861,34 @@ fn validate_servo(sc: &Scenario, i: usize, w: &WallSpec, p: &mut Problems) {
             at("servo.relaxation"),
             format!("must be in (0, 1] (got {})", s.relaxation),
         );
+        p.check(
+            s.integral.is_finite() && (0.0..1.0).contains(&s.integral),
+            at("servo.integral"),
+            format!(
+                "must be in [0, 1) (the fraction of the proportional velocity added to the integral per step; 1 and above do not settle; got {})",
+                s.integral
+            ),
+        );
     }
-    if let Some(rate) = w.strain_rate {
+    if let Some(h) = f.history {
+        p.check(
+            f.velocity.is_none(),
+            at("history"),
+            "give either `velocity` or `history`, not both",
+        );
+        p.check(
+            !h.is_empty(),
+            at("history"),
+            "needs at least one [t, vx, vy] point",
+        );
+        p.check(
+            h.iter().all(|r| r.iter().all(|x| x.is_finite()))
+                && h.windows(2).all(|w| w[1][0] >= w[0][0]),
+            at("history"),
+            "points [t, vx, vy] must be finite with t non-decreasing",
+        );
+    }
+    if let Some(rate) = f.strain_rate {
         p.check(
             rate.is_finite(),
             at("strain_rate"),
@@ -709,20 +902,78 @@ fn validate_servo(sc: &Scenario, i: usize, w: &WallSpec, p: &mut Problems) {
                 at("strain_rate"),
                 "needs a wall parallel to this one, opposite it: the rate is of the distance between the two",
             ),
-            Some(j) => {
+            Some(j) if opposite_wall(sc, j) == Some(i) => {
+                // this motion's steps
+                let mine = w
+                    .strain_rate_spans()
+                    .into_iter()
+                    .find(|s| s.3 == format!("{phase}strain_rate"));
                 let o = &sc.wall[j];
-                if let Some(r) = o.strain_rate
-                    && opposite_wall(sc, j) == Some(i)
-                {
+                for (a, b, r, _) in o.strain_rate_spans() {
+                    let Some((a0, b0, _, _)) = mine else { break };
+                    let overlap = a < b0.unwrap_or(usize::MAX) && a0 < b.unwrap_or(usize::MAX);
+                    if !overlap {
+                        continue;
+                    }
+                    let steps = |a: usize, b: Option<usize>| match b {
+                        Some(b) => format!("steps {a}..{b}"),
+                        None => format!("steps {a}.."),
+                    };
                     p.check(
-                        r == rate,
+                        r == rate && (a, b) == (a0, b0),
                         at("strain_rate"),
                         format!(
-                            "the opposite wall `{}` has strain_rate = {r}: two facing strain-rate walls share one rate (give both the same)",
-                            o.name
+                            "the opposite wall `{}` has strain_rate = {r} over {}, this wall {rate} over {}: two facing strain-rate walls share one rate (give both the same, over the same steps)",
+                            o.name,
+                            steps(a, b),
+                            steps(a0, b0)
                         ),
                     );
                 }
+            }
+            Some(_) => {}
+        }
+    }
+}
+
+/// `phases` of wall `i`: instead of the wall's own motion fields, each
+/// phase a valid motion, `until_step` on every phase but the last and
+/// increasing.
+fn validate_phases(sc: &Scenario, i: usize, w: &WallSpec, phases: &[PhaseSpec], p: &mut Problems) {
+    let at = |x: &str| format!("wall.{i}.{x}");
+    let own = MotionFields::of_wall(w);
+    p.check(
+        own.velocity.is_none()
+            && own.until_step.is_none()
+            && own.history.is_none()
+            && !own.follows_state(),
+        at("phases"),
+        "give the motion either in `phases` or as the wall's own `velocity`, `until_step`, `history`, `servo` or `strain_rate`, not both",
+    );
+    p.check(
+        !phases.is_empty(),
+        at("phases"),
+        "needs at least one phase, e.g. [{ until_step = 1000, servo = { stress = 1.0e5, max_velocity = 0.1 } }, { strain_rate = 0.5 }]",
+    );
+    let mut from = 0;
+    for (k, ph) in phases.iter().enumerate() {
+        let pre = format!("phases.{k}.");
+        validate_motion(sc, i, &pre, MotionFields::of_phase(ph), p);
+        match ph.until_step {
+            None => p.check(
+                k + 1 == phases.len(),
+                at(&format!("{pre}until_step")),
+                "every phase but the last needs `until_step` (the step at which the next phase begins)",
+            ),
+            Some(n) => {
+                p.check(
+                    n > from,
+                    at(&format!("{pre}until_step")),
+                    format!(
+                        "must be greater than {from} (the step at which this phase begins; got {n})"
+                    ),
+                );
+                from = n;
             }
         }
     }
@@ -782,6 +1033,11 @@ fn validate_table(t: &DiscsTable, p: &mut Problems) {
                 t.method == Packing::Loose || gen_kind == Generator::Random,
                 at("method"),
                 "`method` applies to `generate = \"random\"` only",
+            );
+            p.check(
+                t.settle_material.is_none() || t.method != Packing::Loose,
+                at("settle_material"),
+                "applies to `method = \"deposit\"` or `\"grow\"` only (the material of the preparation)",
             );
         }
     }
