@@ -41,7 +41,7 @@
 //! [`OuterContact`]s. With no disc inside, Z and F are 0.
 
 use super::Granular;
-use super::contact::{effective_mass, normal_between, normal_force};
+use super::contact::normal_between;
 use crate::geom::Vec2;
 
 /// The region of a measurement.
@@ -315,23 +315,15 @@ pub fn contacts(
             add(-f, xc - p.pos[j], n);
         }
     }
-    let nm = g.materials.len();
     for q in &g.contacts.walls {
-        let (d, w) = (q.disc as usize, q.wall as usize);
+        let d = q.disc as usize;
         if !region.contains(p.pos[d]) {
             continue;
         }
-        let wall = &g.walls[w];
-        let c = wall.closest(p.pos[d]);
-        let dist = (c - p.pos[d]).norm();
-        let delta = p.radius[d] - dist;
-        if delta <= 0.0 || dist == 0.0 {
+        let Some(wc) = g.wall_contact(q) else {
             continue;
-        }
-        let n = (c - p.pos[d]) * (1.0 / dist);
-        let law = &g.wall_laws[w * nm + p.material[d] as usize];
-        let vn = (p.vel[d] - wall.vel).dot(n);
-        let (_, fn_tot) = normal_force(law, delta, vn, effective_mass(p.inv_mass[d], 0.0));
+        };
+        let (c, n, fn_tot) = (wc.point, wc.normal, wc.total);
         add(n * (-fn_tot) + n.perp() * q.fs, c - p.pos[d], n);
     }
     for o in outer {

@@ -68,6 +68,21 @@ pub enum DemError {
     },
 }
 
+/// A closed disc–wall contact ([`Granular::wall_contact`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WallContact {
+    /// Contact point on the wall.
+    pub point: Vec2,
+    /// Unit normal from the disc's centre towards the wall.
+    pub normal: Vec2,
+    /// Overlap δ.
+    pub overlap: f64,
+    /// Elastic normal force `k_n δ`.
+    pub elastic: f64,
+    /// Total normal force with the dashpot (clamped at zero).
+    pub total: f64,
+}
+
 /// Damping that acts on each disc's motion rather than in the contacts.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum BodyDamping {
@@ -522,6 +537,34 @@ impl Granular {
         let vn = (p.vel[a] - p.vel[b]).dot(n);
         let m_eff = effective_mass(p.inv_mass[a], p.inv_mass[b]);
         contact::normal_force(self.law(a, b), delta, vn, m_eff)
+    }
+
+    /// The disc–wall contact `q` of the present state, if closed: the
+    /// contact point on the wall, the unit normal from the disc towards
+    /// it, the overlap and the normal force (elastic `k_n δ`, total with
+    /// the dashpot), as for [`normal_force`](Self::normal_force).
+    pub fn wall_contact(&self, q: &broadphase::WallPair) -> Option<WallContact> {
+        let p = &self.particles;
+        let (d, w) = (q.disc as usize, q.wall as usize);
+        let wall = &self.walls[w];
+        let point = wall.closest(p.pos[d]);
+        let dist = (point - p.pos[d]).norm();
+        let overlap = p.radius[d] - dist;
+        if overlap <= 0.0 || dist == 0.0 {
+            return None;
+        }
+        let normal = (point - p.pos[d]) * (1.0 / dist);
+        let law = &self.wall_laws[w * self.materials.len() + p.material[d] as usize];
+        let vn = (p.vel[d] - wall.vel).dot(normal);
+        let (elastic, total) =
+            contact::normal_force(law, overlap, vn, effective_mass(p.inv_mass[d], 0.0));
+        Some(WallContact {
+            point,
+            normal,
+            overlap,
+            elastic,
+            total,
+        })
     }
 
     /// Energies from the present positions, the given velocities and spins,

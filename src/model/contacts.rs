@@ -3,7 +3,7 @@
 
 use crate::coupling::CoupledModel;
 use crate::dem::Granular;
-use crate::dem::contact::{effective_mass, normal_between, normal_force};
+use crate::dem::contact::normal_between;
 use crate::geom::Vec2;
 
 /// What a disc touches.
@@ -76,27 +76,19 @@ pub fn all(g: Option<&Granular>, m: Option<&CoupledModel>) -> Vec<ContactView> {
             });
         }
         for q in &g.contacts.walls {
-            let (d, w) = (q.disc as usize, q.wall as usize);
-            let wall = &g.walls[w];
-            let c = wall.closest(p.pos[d]);
-            let dist = (c - p.pos[d]).norm();
-            let delta = p.radius[d] - dist;
-            if delta <= 0.0 || dist == 0.0 {
+            let Some(wc) = g.wall_contact(q) else {
                 continue;
-            }
-            let n = (c - p.pos[d]) * (1.0 / dist);
-            let law = &g.wall_laws[w * g.materials.len() + p.material[d] as usize];
-            let vn = (p.vel[d] - wall.vel).dot(n);
-            let (el, tot) = normal_force(law, delta, vn, effective_mass(p.inv_mass[d], 0.0));
+            };
+            let (d, w) = (q.disc as usize, q.wall as usize);
             out.push(ContactView {
                 kind: ContactKind::DiscWall,
                 disc: p.id[d] as usize,
                 other: w,
-                point: c,
-                normal: n,
-                overlap: delta,
-                normal_elastic: el,
-                normal_total: tot,
+                point: wc.point,
+                normal: wc.normal,
+                overlap: wc.overlap,
+                normal_elastic: wc.elastic,
+                normal_total: wc.total,
                 shear: q.fs,
             });
         }
