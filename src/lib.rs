@@ -65,7 +65,7 @@
 //! 5. [`model`]: the [`model::Model`] users step and read.
 //! 6. [`scenario`]: the TOML format — parse, validate, build a `Model`.
 //! 7. [`output`]: history CSV, ParaView files, JSON, plots, progress.
-//! 8. [`run`], then [`study`], [`reproduce`] and [`biaxial`]: drivers and
+//! 8. [`run`], then [`study`], [`reproduce`], [`biaxial`] and [`geotech`]: drivers and
 //!    post-processing.
 
 #![warn(missing_docs)]
@@ -76,6 +76,7 @@ pub mod coupling;
 pub mod dem;
 pub mod efg;
 pub mod fem;
+pub mod geotech;
 pub mod geom;
 pub mod model;
 pub mod output;

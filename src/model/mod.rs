@@ -9,6 +9,7 @@ pub mod body;
 pub mod contacts;
 pub mod probe;
 pub mod stability;
+pub mod traction;
 pub mod state;
 
 use crate::coupling::{CoupledModel, CouplingError};

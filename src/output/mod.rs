@@ -5,6 +5,7 @@
 pub mod csv;
 pub mod frames;
 pub mod plot;
+pub mod traction;
 pub mod view;
 pub mod vtk;
 pub mod vtp;

@@ -1,0 +1,209 @@
+//! Geotechnical examples of issue 15 (`examples/silo.toml`,
+//! `examples/retaining_wall.toml`): drivers that run a coupled scenario
+//! through the library, average what a geotechnical engineer reads (the
+//! earth pressure on a wall from the disc–body contacts, the stress and
+//! density of the grains in horizontal bands) over the last part of the
+//! run, and compare it with the classical theories (Janssen; Jaky and
+//! beam theory). The shared pieces live here: horizontal measurement
+//! bands ([`Bands`]), the free surface of a fill ([`surface`]), the weight
+//! of the grains, and the scale knob ([`scale_lengths`]).
+
+pub mod retaining;
+pub mod silo;
+
+use crate::dem::Granular;
+use crate::dem::measure::{self, OuterContact, Quantity, Region};
+use crate::geom::Vec2;
+use crate::model::Model;
+use crate::scenario::Scenario;
+
+/// Time-averaged Love–Weber stress and porosity of horizontal bands of
+/// the grains (the `[[measure]]` quantities of `dem::measure`, computed
+/// over regions set once the fill has settled).
+#[derive(Debug, Clone)]
+pub struct Bands {
+    /// The band rectangles, bottom to top.
+    pub regions: Vec<Region>,
+    /// Σ of (σ_xx, σ_yy, σ_xy, porosity) over the states added.
+    sums: Vec<[f64; 4]>,
+    /// States added.
+    samples: usize,
+}
+
+/// The averaged state of one band.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct BandMean {
+    /// Bottom of the band (m).
+    pub y_lo: f64,
+    /// Top of the band (m).
+    pub y_hi: f64,
+    /// Love–Weber σ_xx, compression positive (Pa).
+    pub sxx: f64,
+    /// σ_yy (Pa).
+    pub syy: f64,
+    /// σ_xy (Pa).
+    pub sxy: f64,
+    /// Porosity.
+    pub porosity: f64,
+}
+
+impl Bands {
+    /// `n` bands of equal height between `y0` and `y1`, spanning
+    /// `x0 … x1`.
+    pub fn new(x0: f64, x1: f64, y0: f64, y1: f64, n: usize) -> Self {
+        let h = (y1 - y0) / n as f64;
+        let regions = (0..n)
+            .map(|k| Region::Rectangle {
+                lo: Vec2::new(x0, y0 + k as f64 * h),
+                hi: Vec2::new(x1, y0 + (k + 1) as f64 * h),
+            })
+            .collect();
+        Bands {
+            regions,
+            sums: vec![[0.0; 4]; n],
+            samples: 0,
+        }
+    }
+
+    /// Add the present state of `model`.
+    pub fn add(&mut self, model: &Model) {
+        let Some(g) = model.granular() else { return };
+        for (r, s) in self.regions.iter().zip(&mut self.sums) {
+            let outer = model.coupled().into_iter().flat_map(|m| {
+                m.contacts.iter().map(|c| OuterContact {
+                    slot: g.slot(c.disc as usize),
+                    point: c.point,
+                    normal: c.normal,
+                    force: c.force,
+                })
+            });
+            let c = measure::contacts(g, r, outer);
+            s[0] += c.get(Quantity::Sxx);
+            s[1] += c.get(Quantity::Syy);
+            s[2] += c.get(Quantity::Sxy);
+            s[3] += measure::porosity(g, r);
+        }
+        self.samples += 1;
+    }
+
+    /// The averages, bottom to top.
+    pub fn means(&self) -> Vec<BandMean> {
+        let per = 1.0 / self.samples.max(1) as f64;
+        self.regions
+            .iter()
+            .zip(&self.sums)
+            .map(|(r, s)| {
+                let (lo, hi) = match r {
+                    Region::Rectangle { lo, hi } => (lo.y, hi.y),
+                    Region::Circle { centre, radius } => (centre.y - radius, centre.y + radius),
+                };
+                BandMean {
+                    y_lo: lo,
+                    y_hi: hi,
+                    sxx: s[0] * per,
+                    syy: s[1] * per,
+                    sxy: s[2] * per,
+                    porosity: s[3] * per,
+                }
+            })
+            .collect()
+    }
+}
+
+/// Height of the free surface of the grains between `x0` and `x1`: the
+/// mean over `columns` equal columns of the highest disc top (`y + r`)
+/// whose centre is in the column (empty columns are skipped).
+pub fn surface(g: &Granular, x0: f64, x1: f64, columns: usize) -> f64 {
+    let p = &g.particles;
+    let w = (x1 - x0) / columns as f64;
+    let mut top = vec![f64::NEG_INFINITY; columns];
+    for (x, r) in p.pos.iter().zip(&p.radius) {
+        if x.x < x0 || x.x >= x1 {
+            continue;
+        }
+        let k = (((x.x - x0) / w) as usize).min(columns - 1);
+        top[k] = top[k].max(x.y + r);
+    }
+    let full: Vec<f64> = top.into_iter().filter(|t| t.is_finite()).collect();
+    full.iter().sum::<f64>() / full.len().max(1) as f64
+}
+
+/// Weight of all the grains, `Σ m |g|` (N per the disc length t).
+pub fn weight(g: &Granular, gravity: [f64; 2]) -> f64 {
+    let gn = (gravity[0] * gravity[0] + gravity[1] * gravity[1]).sqrt();
+    g.particles.mass.iter().sum::<f64>() * gn
+}
+
+/// Density of the grains' material `ρ_s` (kg/m³): of `[granular]
+/// material`.
+pub fn grain_density(sc: &Scenario) -> Result<f64, String> {
+    let g = sc.granular.as_ref().ok_or("the scenario has no [granular]")?;
+    sc.material(&g.material)
+        .map(|m| m.density)
+        .ok_or_else(|| format!("no material `{}`", g.material))
+}
+
+/// The scale knob of the examples: multiply every length of the scenario
+/// by `s` except the grains' radii — body rectangles (and their node
+/// counts along each side, so the node spacing stays), walls, the disc
+/// generation box (and its disc count by `s²`), probe points and
+/// `[[measure]]` rectangles — so a larger `s` is a larger structure in the
+/// same grains. The deposit's `settle_steps` grow by `√s` (the fall time).
+pub fn scale_lengths(sc: &mut Scenario, s: f64) -> Result<(), String> {
+    if !(s > 0.0) || !s.is_finite() {
+        return Err(format!("scale must be > 0 (got {s})"));
+    }
+    for b in &mut sc.body {
+        for k in 0..2 {
+            b.rectangle.origin[k] *= s;
+            b.rectangle.size[k] *= s;
+            let n = b.nodes[k];
+            b.nodes[k] = (((n - 1) as f64 * s).round() as usize).max(2) + 1;
+        }
+        if let Some(c) = &mut b.cells {
+            for v in c.iter_mut() {
+                *v = ((*v as f64 * s).round() as usize).max(1);
+            }
+        }
+    }
+    for w in &mut sc.wall {
+        for k in 0..2 {
+            w.from[k] *= s;
+            w.to[k] *= s;
+        }
+    }
+    for p in &mut sc.probe {
+        if let Some(pt) = &mut p.point {
+            for v in pt.iter_mut() {
+                *v *= s;
+            }
+        }
+    }
+    for m in &mut sc.measure {
+        if let Some(r) = &mut m.rectangle {
+            for c in r.iter_mut() {
+                for v in c.iter_mut() {
+                    *v *= s;
+                }
+            }
+        }
+    }
+    if let Some(g) = &mut sc.granular
+        && let crate::scenario::granular::DiscsSpec::Table(t) = &mut g.discs
+    {
+        if let Some(r) = &mut t.region {
+            for c in r.iter_mut() {
+                for v in c.iter_mut() {
+                    *v *= s;
+                }
+            }
+        }
+        if let Some(c) = &mut t.count {
+            *c = (*c as f64 * s * s).round() as usize;
+        }
+        if let Some(n) = &mut t.settle_steps {
+            *n = (*n as f64 * s.sqrt()).round() as usize;
+        }
+    }
+    Ok(())
+}

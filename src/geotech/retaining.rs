@@ -1,0 +1,1 @@
+//! A flexible retaining wall at rest (issue 15 §1): see [`super`].

@@ -1,0 +1,390 @@
+//! A silo with flexible walls against Janssen (issue 15 §3;
+//! `examples/silo.toml`, `examples/silo.rs`, README "Silo (Janssen)").
+//!
+//! **The scenario** ([`Silo::from_scenario`]): a coupled run with two
+//! rectangular bodies side by side (the walls; the one on the left
+//! touched on its right edge, the other on its left edge), grains between
+//! them and a `[[wall]]` named `floor`. The inner faces are `x0 < x1`, the
+//! silo width `W = x1 − x0`.
+//!
+//! **What is measured** ([`run`]), averaged over the states every
+//! `every` steps from `average_from` to the end:
+//! - the wall tractions `σ_h` (normal) and `τ` (shear, +y) per depth bin
+//!   on both inner faces ([`EdgeTraction`]);
+//! - the mobilised wall friction `μ_w = −Σ τ / Σ σ_h` over both walls
+//!   (the grains drag the walls down: `τ < 0`);
+//! - Love–Weber σ_xx, σ_yy and the porosity n of full-width horizontal
+//!   bands ([`Bands`]); the lateral stress ratio `K = Σ σ_xx / Σ σ_yy`
+//!   over the bands below the top one (the top band holds the rough
+//!   surface);
+//! - the bulk density `ρ_b = ρ_s (1 − n̄)` with the same bands' mean n;
+//! - the free surface `z = 0` ([`super::surface`]) at the start of the
+//!   window; depths `z = surface − y`.
+//!
+//! **Janssen** (2D, a slice of width W between two walls):
+//! `σ_v(z) = ρ_b g W / (2 μ_w K) (1 − exp(−2 μ_w K z / W))`, and the wall
+//! pressure `σ_h = K σ_v` — no free parameter once `ρ_b`, `μ_w` and `K`
+//! are measured. Compared at the bins deeper than W.
+//!
+//! **Weight balance**: the weight of the grains `Σ m g` against the floor's
+//! reaction plus the walls' vertical resultant (averaged).
+
+use super::{BandMean, Bands, grain_density, surface, weight};
+use crate::continuum::Edge;
+use crate::model::probe::{global_quantity, wall_quantity};
+use crate::model::traction::{EdgeTraction, TractionBin};
+use crate::output::plot::{Chart, Mark, PlotError, REFERENCE_COLOR, Series, line_chart, palette};
+use crate::scenario::Scenario;
+use std::ops::ControlFlow;
+use std::path::Path;
+
+/// The silo a scenario describes.
+#[derive(Debug, Clone)]
+pub struct Silo {
+    /// Body index of the left wall.
+    pub left: usize,
+    /// Body index of the right wall.
+    pub right: usize,
+    /// Index of the `floor` wall.
+    pub floor: usize,
+    /// x of the left wall's inner (right) face.
+    pub x0: f64,
+    /// x of the right wall's inner (left) face.
+    pub x1: f64,
+    /// Bottom and top of the walls (y).
+    pub y_range: (f64, f64),
+    /// Thickness t of the bodies (the forces are per t).
+    pub thickness: f64,
+    /// Density of the grains' material ρ_s (kg/m³).
+    pub rho_s: f64,
+    /// Gravity `|g|` (m/s²).
+    pub g: f64,
+    /// End time of the run (s).
+    pub end_time: f64,
+}
+
+impl Silo {
+    /// Read the silo from `sc` (see the module docs).
+    pub fn from_scenario(sc: &Scenario) -> Result<Silo, String> {
+        if sc.body.len() != 2 {
+            return Err(format!("a silo has two wall bodies; the scenario has {}", sc.body.len()));
+        }
+        let (l, r) = if sc.body[0].rectangle.origin[0] <= sc.body[1].rectangle.origin[0] {
+            (0, 1)
+        } else {
+            (1, 0)
+        };
+        let floor = sc
+            .wall
+            .iter()
+            .position(|w| w.name == "floor")
+            .ok_or("a silo needs a [[wall]] named `floor`")?;
+        let bl = &sc.body[l].rectangle;
+        let br = &sc.body[r].rectangle;
+        let x0 = bl.origin[0] + bl.size[0];
+        let x1 = br.origin[0];
+        if x1 <= x0 {
+            return Err("the walls overlap".into());
+        }
+        let g = sc.simulation.gravity;
+        let dt = sc.simulation.dt.ok_or("the scenario needs [simulation] dt")?;
+        let end_time = sc
+            .simulation
+            .end_time
+            .or(sc.simulation.steps.map(|n| n as f64 * dt))
+            .ok_or("the scenario needs [simulation] end_time or steps")?;
+        Ok(Silo {
+            left: l,
+            right: r,
+            floor,
+            x0,
+            x1,
+            y_range: (bl.origin[1], bl.origin[1] + bl.size[1]),
+            thickness: sc.body[l].elastic.thickness,
+            rho_s: grain_density(sc)?,
+            g: (g[0] * g[0] + g[1] * g[1]).sqrt(),
+            end_time,
+        })
+    }
+
+    /// The silo width W (m).
+    pub fn width(&self) -> f64 {
+        self.x1 - self.x0
+    }
+}
+
+/// How the run is averaged.
+#[derive(Debug, Clone, Copy)]
+pub struct Options {
+    /// Start of the averaging window (s).
+    pub average_from: f64,
+    /// Steps between the states averaged.
+    pub every: usize,
+    /// Depth bins on each wall (over the wall's height).
+    pub bins: usize,
+    /// Measurement bands between the floor and the surface.
+    pub bands: usize,
+}
+
+/// One depth of the Janssen comparison.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Compared {
+    /// Depth of the bin's middle below the surface (m).
+    pub depth: f64,
+    /// Wall pressure, mean of the two walls (Pa).
+    pub measured: f64,
+    /// Janssen's `K σ_v(z)` (Pa).
+    pub janssen: f64,
+    /// `K ρ_b g z`: the pressure without wall friction (Pa).
+    pub hydrostatic: f64,
+}
+
+/// Everything [`run`] measures.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SiloResult {
+    /// Silo width W (m).
+    pub width: f64,
+    /// Free surface (y, m) at the start of the averaging window.
+    pub surface: f64,
+    /// Fill height (surface − floor) over W.
+    pub height_over_width: f64,
+    /// States averaged.
+    pub samples: usize,
+    /// Mean kinetic energy of the grains over the window (J).
+    pub kinetic: f64,
+    /// Left wall's profile (bottom to top).
+    #[serde(skip)]
+    pub left: Vec<TractionBin>,
+    /// Right wall's profile.
+    #[serde(skip)]
+    pub right: Vec<TractionBin>,
+    /// Bands (bottom to top).
+    pub bands: Vec<BandMean>,
+    /// Mean porosity of the bands below the top one.
+    pub porosity: f64,
+    /// Bulk density ρ_b = ρ_s (1 − n) (kg/m³).
+    pub rho_b: f64,
+    /// Mobilised wall friction μ_w (both walls, whole height).
+    pub mu_w: f64,
+    /// μ_w of the left and right walls.
+    pub mu_w_walls: [f64; 2],
+    /// Lateral stress ratio K (bands below the top one).
+    pub k: f64,
+    /// K of each band (bottom to top).
+    pub k_bands: Vec<f64>,
+    /// Weight of the grains (N per t).
+    pub weight: f64,
+    /// Floor reaction (N per t).
+    pub floor: f64,
+    /// Vertical force of the grains on the two walls, downward positive
+    /// (N per t).
+    pub walls_vertical: [f64; 2],
+    /// (floor + walls − weight) / weight.
+    pub balance_error: f64,
+    /// Horizontal forces of the grains on the walls (N per t; outward
+    /// positive).
+    pub walls_horizontal: [f64; 2],
+    /// Janssen comparison at the bins deeper than W.
+    pub compared: Vec<Compared>,
+    /// Largest |measured/janssen − 1| over `compared`.
+    pub max_deviation: f64,
+    /// Mean of measured/janssen − 1 over `compared`.
+    pub mean_deviation: f64,
+    /// Σ measured / Σ janssen − 1 over `compared`: the wall's thrust below
+    /// z = W against Janssen's.
+    pub thrust_deviation: f64,
+    /// Janssen's σ_v asymptote ρ_b g W/(2 μ_w K) (Pa).
+    pub sigma_v_infinity: f64,
+}
+
+/// Janssen's vertical stress at depth z in a 2D silo of width `w`.
+pub fn janssen(rho_b: f64, g: f64, w: f64, mu_w: f64, k: f64, z: f64) -> f64 {
+    let a = 2.0 * mu_w * k / w;
+    if a.abs() < 1e-300 {
+        return rho_b * g * z;
+    }
+    rho_b * g / a * (1.0 - (-a * z).exp())
+}
+
+/// Run the silo scenario `sc` to its end time, averaging as `opts` says;
+/// `progress(t)` is called every 1000 steps.
+pub fn run(sc: &Scenario, opts: &Options, mut progress: impl FnMut(f64)) -> Result<SiloResult, String> {
+    let silo = Silo::from_scenario(sc)?;
+    let mut model = sc.build().map_err(|e| e.to_string())?;
+    let (y0, y1) = silo.y_range;
+    let mut left = EdgeTraction::new(silo.left, Edge::Right, y0, y1, opts.bins, silo.thickness)
+        .map_err(|e| e.to_string())?;
+    let mut right = EdgeTraction::new(silo.right, Edge::Left, y0, y1, opts.bins, silo.thickness)
+        .map_err(|e| e.to_string())?;
+    let mut bands: Option<Bands> = None;
+    let mut surf = f64::NAN;
+    let (mut floor, mut kin, mut n) = (0.0, 0.0, 0usize);
+    let t_disc = sc.granular.as_ref().map_or(1.0, |g| g.thickness);
+    let every = opts.every.max(1);
+    let mut step = 0usize;
+    let mut err = None;
+    model
+        .run_until(silo.end_time, |m| {
+            step += 1;
+            if step.is_multiple_of(1000) {
+                progress(m.time());
+            }
+            if m.time() < opts.average_from || !step.is_multiple_of(every) {
+                return ControlFlow::Continue(());
+            }
+            let (Some(g), Some(c)) = (m.granular(), m.coupled()) else {
+                err = Some("the silo is not a coupled run".to_string());
+                return ControlFlow::Break(());
+            };
+            let b = bands.get_or_insert_with(|| {
+                surf = surface(g, silo.x0, silo.x1, 8);
+                Bands::new(silo.x0, silo.x1, y0, surf, opts.bands)
+            });
+            b.add(m);
+            left.add(&c.contacts);
+            right.add(&c.contacts);
+            floor += -wall_quantity(&g.walls[silo.floor], "wall_fy", t_disc);
+            kin += global_quantity(g, "kinetic");
+            n += 1;
+            ControlFlow::Continue(())
+        })
+        .map_err(|e| e.to_string())?;
+    if let Some(e) = err {
+        return Err(e);
+    }
+    let bands = bands.ok_or("no state in the averaging window")?;
+    let g = model.granular().ok_or("no grains")?;
+    let weight = weight(g, sc.simulation.gravity);
+    let per = 1.0 / n as f64;
+    let means = bands.means();
+    let bulk = &means[..means.len().saturating_sub(1).max(1)];
+    let porosity = bulk.iter().map(|b| b.porosity).sum::<f64>() / bulk.len() as f64;
+    let rho_b = silo.rho_s * (1.0 - porosity);
+    let k = bulk.iter().map(|b| b.sxx).sum::<f64>() / bulk.iter().map(|b| b.syy).sum::<f64>();
+    let k_bands = means.iter().map(|b| b.sxx / b.syy).collect();
+    let (rl, rr) = (left.resultant(), right.resultant());
+    let mu_l = rl.y / rl.x;
+    let mu_r = -rr.y / rr.x;
+    // resultants: left (−P_l, S_l), right (P_r, S_r) with P the normal
+    // forces and S the shear forces along +y (< 0: dragged down)
+    let mu_w = -(rl.y + rr.y) / (rr.x - rl.x);
+    let floor = floor * per;
+    let walls_vertical = [-rl.y, -rr.y];
+    let balance_error = (floor + walls_vertical[0] + walls_vertical[1] - weight) / weight;
+    let w = silo.width();
+    let (pl, pr) = (left.profile(), right.profile());
+    let compared: Vec<Compared> = pl
+        .iter()
+        .zip(&pr)
+        .filter_map(|(a, b)| {
+            let z = surf - a.mid();
+            (z >= w).then(|| Compared {
+                depth: z,
+                measured: 0.5 * (a.normal + b.normal),
+                janssen: k * janssen(rho_b, silo.g, w, mu_w, k, z),
+                hydrostatic: k * rho_b * silo.g * z,
+            })
+        })
+        .collect();
+    let dev: Vec<f64> = compared.iter().map(|c| c.measured / c.janssen - 1.0).collect();
+    Ok(SiloResult {
+        width: w,
+        surface: surf,
+        height_over_width: (surf - y0) / w,
+        samples: n,
+        kinetic: kin * per,
+        left: pl,
+        right: pr,
+        bands: means.clone(),
+        porosity,
+        rho_b,
+        mu_w,
+        mu_w_walls: [mu_l, mu_r],
+        k,
+        k_bands,
+        weight,
+        floor,
+        walls_vertical,
+        balance_error,
+        walls_horizontal: [-rl.x, rr.x],
+        max_deviation: dev.iter().fold(0.0f64, |a, d| a.max(d.abs())),
+        mean_deviation: dev.iter().sum::<f64>() / dev.len().max(1) as f64,
+        thrust_deviation: compared.iter().map(|c| c.measured).sum::<f64>()
+            / compared.iter().map(|c| c.janssen).sum::<f64>()
+            - 1.0,
+        compared,
+        sigma_v_infinity: rho_b * silo.g * w / (2.0 * mu_w * k),
+    })
+}
+
+/// `silo.png` in `dir`: the wall pressure of both walls against depth
+/// (kPa), Janssen's `K σ_v(z)` and the frictionless `K ρ_b g z`; and
+/// `silo_vertical.png`: the bands' σ_yy against Janssen's σ_v and
+/// `ρ_b g z`.
+pub fn plot(dir: &Path, r: &SiloResult, g: f64) -> Result<(), PlotError> {
+    let depth = |b: &TractionBin| 1e3 * (r.surface - b.mid());
+    let walls = |p: &[TractionBin]| -> Vec<(f64, f64)> {
+        p.iter()
+            .filter(|b| b.mid() < r.surface)
+            .map(|b| (depth(b), 1e-3 * b.normal))
+            .collect()
+    };
+    let zmax = r.height_over_width * r.width;
+    let curve = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
+        (0..=100)
+            .map(|i| {
+                let z = zmax * i as f64 / 100.0;
+                (1e3 * z, 1e-3 * f(z))
+            })
+            .collect()
+    };
+    let jan = |z: f64| janssen(r.rho_b, g, r.width, r.mu_w, r.k, z);
+    let chart = Chart {
+        title: "Silo: wall pressure against depth".into(),
+        x_label: "depth below the surface z (mm)".into(),
+        y_label: "wall normal stress σ_h (kPa)".into(),
+        series: vec![
+            Series::new("left wall (measured)", walls(&r.left), Mark::Points).with_color(palette(0)),
+            Series::new("right wall (measured)", walls(&r.right), Mark::Points).with_color(palette(1)),
+            Series::new("Janssen K σ_v(z)", curve(&|z| r.k * jan(z)), Mark::Line).with_color(palette(2)),
+            Series::new("no wall friction K ρ_b g z", curve(&|z| r.k * r.rho_b * g * z), Mark::Dashed)
+                .with_color(REFERENCE_COLOR),
+            Series::vlines("z = W", &[1e3 * r.width]),
+        ],
+        notes: vec![
+            format!(
+                "measured: μ_w = {:.3}, K = {:.3}, ρ_b = {:.0} kg/m³, W = {:.0} mm",
+                r.mu_w,
+                r.k,
+                r.rho_b,
+                1e3 * r.width
+            ),
+            format!(
+                "below z = W: thrust {:+.1} %, bins: max |dev| {:.1} %",
+                100.0 * r.thrust_deviation,
+                100.0 * r.max_deviation
+            ),
+        ],
+        ..Chart::default()
+    };
+    line_chart(&dir.join("silo.png"), &chart, 1000, 600)?;
+    let bands: Vec<(f64, f64)> = r
+        .bands
+        .iter()
+        .filter(|b| b.y_hi <= r.surface)
+        .map(|b| (1e3 * (r.surface - 0.5 * (b.y_lo + b.y_hi)), 1e-3 * b.syy))
+        .collect();
+    let v = Chart {
+        title: "Silo: vertical stress in the grains against depth".into(),
+        x_label: "depth below the surface z (mm)".into(),
+        y_label: "σ_yy (kPa)".into(),
+        series: vec![
+            Series::new("bands σ_yy (Love–Weber)", bands, Mark::Points).with_color(palette(0)),
+            Series::new("Janssen σ_v(z)", curve(&jan), Mark::Line).with_color(palette(2)),
+            Series::new("no wall friction ρ_b g z", curve(&|z| r.rho_b * g * z), Mark::Dashed)
+                .with_color(REFERENCE_COLOR),
+        ],
+        ..Chart::default()
+    };
+    line_chart(&dir.join("silo_vertical.png"), &v, 1000, 600)
+}
