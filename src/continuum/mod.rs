@@ -4,6 +4,7 @@
 //! bilinear FE body, so the coupling never knows which one it talks to.
 
 pub mod body_params;
+pub mod cantilever;
 pub mod compliance;
 pub mod conditions;
 pub mod material;

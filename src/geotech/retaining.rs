@@ -1,1 +1,303 @@
-//! A flexible retaining wall at rest (issue 15 §1): see [`super`].
+//! A flexible cantilever retaining wall at rest (issue 15 §1;
+//! `examples/retaining_wall.toml`, `examples/retaining_wall.rs`, README
+//! "Flexible retaining wall").
+//!
+//! **The scenario** ([`Wall::from_scenario`]): a coupled run with one
+//! rectangular body (the wall, clamped on its bottom edge, the backfill
+//! against its right edge) and grains to its right.
+//!
+//! **What is measured** ([`run`]), averaged over the states every
+//! `every` steps from `average_from` to the end:
+//! - the earth pressure σ_h and shear τ per height bin on the wall's right
+//!   face ([`EdgeTraction`]), the thrust `P = Σ σ_h Δy t` and its height;
+//! - the wall's deflection `u_x` at the top of its centre line
+//!   ([`BodyRef::sample`](crate::model::body::BodyRef::sample));
+//! - Love–Weber σ_xx, σ_yy and porosity of horizontal bands of the
+//!   backfill away from the wall ([`Bands`]), their `K = σ_xx/σ_yy`;
+//! - the free surface of the backfill.
+//!
+//! **Theory**: Jaky's `K₀ = 1 − sin φ` (φ of the biaxial test on the same
+//! grains, peak or critical) gives the thrust `K₀ ρ_b g H²/2`; beam
+//! theory ([`tip_deflection`]) under the *measured* binned pressure
+//! (and the moment `τ h/2` of the shear traction on the face about the
+//! wall's centre line) gives the top deflection, with `EI = E' h³/12`,
+//! `κGA = 5/6 G h` (plane strain: `E' = E/(1 − ν²)`).
+
+use super::{BandMean, Bands, grain_density, surface};
+use crate::continuum::cantilever::{LoadBin, tip_deflection};
+use crate::continuum::{Edge, Plane};
+use crate::geom::Vec2;
+use crate::model::probe::global_quantity;
+use crate::model::traction::{EdgeTraction, TractionBin};
+use crate::output::plot::{Chart, Mark, PlotError, REFERENCE_COLOR, Series, line_chart, palette};
+use crate::scenario::Scenario;
+use std::ops::ControlFlow;
+use std::path::Path;
+
+/// The wall a scenario describes.
+#[derive(Debug, Clone)]
+pub struct Wall {
+    /// Left edge x, face (right edge) x.
+    pub x: (f64, f64),
+    /// Base and top y.
+    pub y: (f64, f64),
+    /// Thickness t of the body (out of plane).
+    pub thickness: f64,
+    /// Bending stiffness E' I per t (N m²).
+    pub ei: f64,
+    /// Shear stiffness κ G A per t (N).
+    pub kga: f64,
+    /// Far end of the backfill (x): the first `[[wall]]` right of the face
+    /// that is vertical, or face + 3 × height.
+    pub x_far: f64,
+    /// Grain material density ρ_s.
+    pub rho_s: f64,
+    /// |g|.
+    pub g: f64,
+    /// End time of the run.
+    pub end_time: f64,
+}
+
+impl Wall {
+    /// Read the wall from `sc` (see the module docs).
+    pub fn from_scenario(sc: &Scenario) -> Result<Wall, String> {
+        let [b] = sc.body.as_slice() else {
+            return Err(format!("a retaining wall scenario has one body; it has {}", sc.body.len()));
+        };
+        let r = &b.rectangle;
+        let e = &b.elastic;
+        let h = r.size[0];
+        let (ep, nu) = match e.plane {
+            Plane::Strain => (e.e / (1.0 - e.nu * e.nu), e.nu / (1.0 - e.nu)),
+            Plane::Stress => (e.e, e.nu),
+        };
+        let gmod = ep / (2.0 * (1.0 + nu));
+        let face = r.origin[0] + h;
+        let top = r.origin[1] + r.size[1];
+        let x_far = sc
+            .wall
+            .iter()
+            .filter(|w| (w.from[0] - w.to[0]).abs() < 1e-12 && w.from[0] > face)
+            .map(|w| w.from[0])
+            .fold(f64::INFINITY, f64::min);
+        let g = sc.simulation.gravity;
+        let dt = sc.simulation.dt.ok_or("the scenario needs [simulation] dt")?;
+        let end_time = sc
+            .simulation
+            .end_time
+            .or(sc.simulation.steps.map(|n| n as f64 * dt))
+            .ok_or("the scenario needs [simulation] end_time or steps")?;
+        Ok(Wall {
+            x: (r.origin[0], face),
+            y: (r.origin[1], top),
+            thickness: e.thickness,
+            ei: ep * e.thickness * h.powi(3) / 12.0,
+            kga: 5.0 / 6.0 * gmod * e.thickness * h,
+            x_far: if x_far.is_finite() { x_far } else { face + 3.0 * r.size[1] },
+            rho_s: grain_density(sc)?,
+            g: (g[0] * g[0] + g[1] * g[1]).sqrt(),
+            end_time,
+        })
+    }
+}
+
+/// How the run is averaged.
+#[derive(Debug, Clone, Copy)]
+pub struct Options {
+    /// Start of the averaging window (s).
+    pub average_from: f64,
+    /// Steps between the states averaged.
+    pub every: usize,
+    /// Height bins on the face (over the wall's height).
+    pub bins: usize,
+    /// Measurement bands of the backfill (floor to surface).
+    pub bands: usize,
+}
+
+/// Everything [`run`] measures.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct WallResult {
+    /// Free surface of the backfill (y) at the start of the window.
+    pub surface: f64,
+    /// Backfill height H (surface − base).
+    pub height: f64,
+    /// States averaged.
+    pub samples: usize,
+    /// Mean kinetic energy of the grains over the window (J).
+    pub kinetic: f64,
+    /// The face's profile (bottom to top).
+    #[serde(skip)]
+    pub profile: Vec<TractionBin>,
+    /// Bands of the backfill (bottom to top).
+    pub bands: Vec<BandMean>,
+    /// Mean porosity of the bands below the top one.
+    pub porosity: f64,
+    /// ρ_b = ρ_s (1 − n).
+    pub rho_b: f64,
+    /// Thrust on the wall (N per t).
+    pub thrust: f64,
+    /// Height of the thrust above the base over H.
+    pub thrust_height_over_h: f64,
+    /// Vertical force of the grains on the face, downward positive.
+    pub drag: f64,
+    /// K of the wall: thrust / (ρ_b g H² t/2).
+    pub k_wall: f64,
+    /// K = Σσ_xx/Σσ_yy of the bands below the top one.
+    pub k_bands: f64,
+    /// Averaged top deflection u_x at the centre line (m).
+    pub deflection: f64,
+    /// Beam theory's top deflection under the measured load: bending,
+    /// shear (m; signed like u_x).
+    pub beam: [f64; 2],
+    /// deflection / (bending + shear) − 1.
+    pub beam_error: f64,
+    /// Largest |u_x(top)| change over the window relative to its mean
+    /// (quasi-static check).
+    pub deflection_spread: f64,
+}
+
+/// Run the scenario `sc` to its end time, averaging as `opts` says;
+/// `progress(t)` every 1000 steps.
+pub fn run(sc: &Scenario, opts: &Options, mut progress: impl FnMut(f64)) -> Result<WallResult, String> {
+    let w = Wall::from_scenario(sc)?;
+    let mut model = sc.build().map_err(|e| e.to_string())?;
+    let mut face = EdgeTraction::new(0, Edge::Right, w.y.0, w.y.1, opts.bins, w.thickness)
+        .map_err(|e| e.to_string())?;
+    let top = Vec2::new(0.5 * (w.x.0 + w.x.1), w.y.1);
+    let mut bands: Option<Bands> = None;
+    let mut surf = f64::NAN;
+    let (mut kin, mut n) = (0.0, 0usize);
+    let mut ux = vec![];
+    let every = opts.every.max(1);
+    let mut step = 0usize;
+    let mut err = None;
+    let height = w.y.1 - w.y.0;
+    model
+        .run_until(w.end_time, |m| {
+            step += 1;
+            if step.is_multiple_of(1000) {
+                progress(m.time());
+            }
+            if m.time() < opts.average_from || !step.is_multiple_of(every) {
+                return ControlFlow::Continue(());
+            }
+            let (Some(g), Some(c)) = (m.granular(), m.coupled()) else {
+                err = Some("the retaining wall is not a coupled run".to_string());
+                return ControlFlow::Break(());
+            };
+            let b = bands.get_or_insert_with(|| {
+                // the backfill away from the wall: from one wall height
+                // beside it (or its middle third if it is narrower)
+                let x_lo = (w.x.1 + height).min(w.x.1 + (w.x_far - w.x.1) / 3.0);
+                let x_hi = w.x_far.min(x_lo + height).max(x_lo + (w.x_far - w.x.1) / 3.0).min(w.x_far);
+                surf = surface(g, w.x.1, w.x_far, 8);
+                Bands::new(x_lo, x_hi, w.y.0, surf, opts.bands)
+            });
+            b.add(m);
+            face.add(&c.contacts);
+            kin += global_quantity(g, "kinetic");
+            match m.body(0).sample(top) {
+                Ok(s) => ux.push(s.u.x),
+                Err(e) => {
+                    err = Some(e.to_string());
+                    return ControlFlow::Break(());
+                }
+            }
+            n += 1;
+            ControlFlow::Continue(())
+        })
+        .map_err(|e| e.to_string())?;
+    if let Some(e) = err {
+        return Err(e);
+    }
+    let bands = bands.ok_or("no state in the averaging window")?;
+    let means = bands.means();
+    let bulk = &means[..means.len().saturating_sub(1).max(1)];
+    let porosity = bulk.iter().map(|b| b.porosity).sum::<f64>() / bulk.len() as f64;
+    let rho_b = w.rho_s * (1.0 - porosity);
+    let k_bands = bulk.iter().map(|b| b.sxx).sum::<f64>() / bulk.iter().map(|b| b.syy).sum::<f64>();
+    let profile = face.profile();
+    let res = face.resultant();
+    let thrust = -res.x;
+    let moment: f64 = profile
+        .iter()
+        .map(|b| b.normal * (b.to - b.from) * w.thickness * (b.mid() - w.y.0))
+        .sum();
+    let h = surf - w.y.0;
+    let hw = w.x.1 - w.x.0;
+    // the grains push the wall towards −x: q along −x; the shear τ (+y) on
+    // the face at +h/2 from the centre line is a moment τ h/2 (ccw), which
+    // bends it towards +x: in the sense of the deflection (−x) it is −τ h/2
+    let loads: Vec<LoadBin> = profile
+        .iter()
+        .map(|b| LoadBin {
+            from: b.from - w.y.0,
+            to: b.to - w.y.0,
+            q: b.normal * w.thickness,
+            m: b.shear * w.thickness * 0.5 * hw,
+        })
+        .collect();
+    let (bend, shear) = tip_deflection(height, &loads, w.ei, w.kga);
+    let mean_ux = ux.iter().sum::<f64>() / ux.len() as f64;
+    let spread = ux.iter().fold(0.0f64, |a, u| a.max((u - mean_ux).abs())) / mean_ux.abs();
+    let beam = [-bend, -shear];
+    Ok(WallResult {
+        surface: surf,
+        height: h,
+        samples: n,
+        kinetic: kin / n as f64,
+        bands: means.clone(),
+        porosity,
+        rho_b,
+        thrust,
+        thrust_height_over_h: moment / thrust / h,
+        drag: -res.y,
+        k_wall: thrust / (0.5 * rho_b * w.g * h * h * w.thickness),
+        k_bands,
+        deflection: mean_ux,
+        beam,
+        beam_error: mean_ux / (beam[0] + beam[1]) - 1.0,
+        deflection_spread: spread,
+        profile,
+    })
+}
+
+/// `retaining_wall.png` in `dir`: the measured earth pressure against
+/// depth (kPa) with Jaky's `K₀ ρ_b g z` for φ_peak and φ_cs.
+pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), PlotError> {
+    let pts: Vec<(f64, f64)> = r
+        .profile
+        .iter()
+        .filter(|b| b.mid() < r.surface)
+        .map(|b| (1e3 * (r.surface - b.mid()), 1e-3 * b.normal))
+        .collect();
+    let line = |k: f64| -> Vec<(f64, f64)> {
+        vec![(0.0, 0.0), (1e3 * r.height, 1e-3 * k * r.rho_b * g * r.height)]
+    };
+    let k0 = |p: f64| 1.0 - p.to_radians().sin();
+    let chart = Chart {
+        title: "Retaining wall at rest: earth pressure against depth".into(),
+        x_label: "depth below the backfill surface z (mm)".into(),
+        y_label: "earth pressure σ_h (kPa)".into(),
+        series: vec![
+            Series::new("measured (contact forces, binned)", pts, Mark::Points).with_color(palette(0)),
+            Series::new(format!("Jaky K₀ = {:.3} (φ_peak = {}°)", k0(phi[0]), phi[0]), line(k0(phi[0])), Mark::Line)
+                .with_color(palette(2)),
+            Series::new(format!("Jaky K₀ = {:.3} (φ_cs = {}°)", k0(phi[1]), phi[1]), line(k0(phi[1])), Mark::Dashed)
+                .with_color(palette(1)),
+            Series::new(format!("K = {:.3} of the backfill (bands)", r.k_bands), line(r.k_bands), Mark::Dashed)
+                .with_color(REFERENCE_COLOR),
+        ],
+        notes: vec![
+            format!("thrust {:.1} N/m: K_wall = {:.3}, at {:.2} H", r.thrust, r.k_wall, r.thrust_height_over_h),
+            format!(
+                "top deflection {:.2} µm; beam theory under the measured load {:.2} µm ({:+.1} %)",
+                1e6 * r.deflection,
+                1e6 * (r.beam[0] + r.beam[1]),
+                100.0 * r.beam_error
+            ),
+        ],
+        ..Chart::default()
+    };
+    line_chart(&dir.join("retaining_wall.png"), &chart, 1000, 600)
+}
