@@ -48,7 +48,11 @@ fn main_() -> Result<(), String> {
     let phi: Vec<f64> = value("--phi")
         .unwrap_or("23.7,21.4".into())
         .split(',')
-        .map(|p| p.trim().parse::<f64>().map_err(|e| format!("--phi {p}: {e}")))
+        .map(|p| {
+            p.trim()
+                .parse::<f64>()
+                .map_err(|e| format!("--phi {p}: {e}"))
+        })
         .collect::<Result<_, _>>()?;
     let [phi_peak, phi_cs] = phi[..] else {
         return Err("--phi takes two angles: peak,critical".into());
@@ -64,16 +68,39 @@ fn main_() -> Result<(), String> {
     };
     std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
     let t0 = Instant::now();
-    let r = retaining::run(&sc, &opts, |t| eprint!("\rt = {t:.4} s of {:.4} s", w.end_time))?;
+    let r = retaining::run(&sc, &opts, |t| {
+        eprint!("\rt = {t:.4} s of {:.4} s", w.end_time)
+    })?;
     let secs = t0.elapsed().as_secs_f64();
     eprintln!();
     let e = |e: std::io::Error| e.to_string();
-    let win = format!("wall face; averaged over t = {} … {} s", opts.average_from, w.end_time);
-    write_traction_csv(&out.join("wall_face.csv"), &win, &r.profile, Some(r.surface)).map_err(e)?;
+    let win = format!(
+        "wall face; averaged over t = {} … {} s",
+        opts.average_from, w.end_time
+    );
+    write_traction_csv(
+        &out.join("wall_face.csv"),
+        &win,
+        &r.profile,
+        Some(r.surface),
+    )
+    .map_err(e)?;
     let mut f = std::fs::File::create(out.join("bands.csv")).map_err(e)?;
     writeln!(f, "y_lo,y_hi,depth_mid,sxx,syy,sxy,porosity,K").map_err(e)?;
     for b in &r.bands {
-        writeln!(f, "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}", b.y_lo, b.y_hi, r.surface - 0.5 * (b.y_lo + b.y_hi), b.sxx, b.syy, b.sxy, b.porosity, b.sxx / b.syy).map_err(e)?;
+        writeln!(
+            f,
+            "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+            b.y_lo,
+            b.y_hi,
+            r.surface - 0.5 * (b.y_lo + b.y_hi),
+            b.sxx,
+            b.syy,
+            b.sxy,
+            b.porosity,
+            b.sxx / b.syy
+        )
+        .map_err(e)?;
     }
     let k0 = |p: f64| 1.0 - p.to_radians().sin();
     let mut json = serde_json::to_value(&r).map_err(|e| e.to_string())?;
@@ -86,9 +113,35 @@ fn main_() -> Result<(), String> {
     json["k0_cs"] = k0(phi_cs).into();
     efgdem::output::write_json(&out.join("retaining_wall.json"), &json).map_err(e)?;
     retaining::plot(&out, &r, w.g, [phi_peak, phi_cs]).map_err(|e| e.to_string())?;
-    println!("backfill H = {:.1} mm, {} states averaged, mean kinetic energy {:.2e} J; run {secs:.1} s", 1e3 * r.height, r.samples, r.kinetic);
-    println!("ρ_b = {:.0} kg/m³ (porosity {:.3}); K of the backfill (bands) {:.3}", r.rho_b, r.porosity, r.k_bands);
-    println!("thrust {:.2} N/m at {:.3} H: K_wall = {:.3}; Jaky K₀ = {:.3} (φ_peak {phi_peak}°: {:+.1} %), {:.3} (φ_cs {phi_cs}°: {:+.1} %); wall drag {:.2} N/m", r.thrust, r.thrust_height_over_h, r.k_wall, k0(phi_peak), 100.0 * (r.k_wall / k0(phi_peak) - 1.0), k0(phi_cs), 100.0 * (r.k_wall / k0(phi_cs) - 1.0), r.drag);
-    println!("top deflection {:.4} µm (spread over the window {:.2} %); beam theory {:.4} µm (bending {:.4}, shear {:.4}): {:+.2} %", 1e6 * r.deflection, 100.0 * r.deflection_spread, 1e6 * (r.beam[0] + r.beam[1]), 1e6 * r.beam[0], 1e6 * r.beam[1], 100.0 * r.beam_error);
+    println!(
+        "backfill H = {:.1} mm, {} states averaged, mean kinetic energy {:.2e} J; run {secs:.1} s",
+        1e3 * r.height,
+        r.samples,
+        r.kinetic
+    );
+    println!(
+        "ρ_b = {:.0} kg/m³ (porosity {:.3}); K of the backfill (bands) {:.3}",
+        r.rho_b, r.porosity, r.k_bands
+    );
+    println!(
+        "thrust {:.2} N/m at {:.3} H: K_wall = {:.3}; Jaky K₀ = {:.3} (φ_peak {phi_peak}°: {:+.1} %), {:.3} (φ_cs {phi_cs}°: {:+.1} %); wall drag {:.2} N/m",
+        r.thrust,
+        r.thrust_height_over_h,
+        r.k_wall,
+        k0(phi_peak),
+        100.0 * (r.k_wall / k0(phi_peak) - 1.0),
+        k0(phi_cs),
+        100.0 * (r.k_wall / k0(phi_cs) - 1.0),
+        r.drag
+    );
+    println!(
+        "top deflection {:.4} µm (spread over the window {:.2} %); beam theory {:.4} µm (bending {:.4}, shear {:.4}): {:+.2} %",
+        1e6 * r.deflection,
+        100.0 * r.deflection_spread,
+        1e6 * (r.beam[0] + r.beam[1]),
+        1e6 * r.beam[0],
+        1e6 * r.beam[1],
+        100.0 * r.beam_error
+    );
     Ok(())
 }

@@ -37,9 +37,20 @@ fn silo_half_size() {
     let r = silo::run(&sc, &opts, |_| {}).unwrap();
     eprintln!(
         "W {:.3}, H/W {:.2}, ρ_b {:.0}, μ_w {:.3}, K {:.3}, balance {:+.2e}, thrust dev {:+.3}, kinetic {:.2e}",
-        r.width, r.height_over_width, r.rho_b, r.mu_w, r.k, r.balance_error, r.thrust_deviation, r.kinetic
+        r.width,
+        r.height_over_width,
+        r.rho_b,
+        r.mu_w,
+        r.k,
+        r.balance_error,
+        r.thrust_deviation,
+        r.kinetic
     );
-    assert!(r.balance_error.abs() < 0.01, "weight balance {}", r.balance_error);
+    assert!(
+        r.balance_error.abs() < 0.01,
+        "weight balance {}",
+        r.balance_error
+    );
     assert!(r.walls_vertical[0] + r.walls_vertical[1] > 0.05 * r.weight);
     assert!(r.mu_w > 0.0 && r.mu_w < 0.5, "μ_w = {}", r.mu_w);
     assert!(r.rho_b > 1800.0 && r.rho_b < 2300.0);
@@ -61,20 +72,37 @@ fn silo_half_size() {
     let (deep, shallow) = filled.split_at(h);
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     assert!(mean(deep) > mean(shallow), "{filled:?}");
-    assert!(r.thrust_deviation.abs() < 0.3, "thrust vs Janssen {}", r.thrust_deviation);
+    assert!(
+        r.thrust_deviation.abs() < 0.3,
+        "thrust vs Janssen {}",
+        r.thrust_deviation
+    );
 
     // the profile's resultant is the body's contact force (one state)
     let mut model = sc.build().unwrap();
     let probes = sc.probes(&model).unwrap();
-    model.run_until(0.002, |_| ControlFlow::Continue(())).unwrap();
+    model
+        .run_until(0.002, |_| ControlFlow::Continue(()))
+        .unwrap();
     let s = silo::Silo::from_scenario(&sc).unwrap();
     let mut p = EdgeTraction::new(s.left, Edge::Right, s.y_range.0, s.y_range.1, 7, 1.0).unwrap();
     p.add(&model.coupled().unwrap().contacts);
-    let fx = probes.iter().find(|(n, _)| n == "left_fx").map(|(_, p)| model.probe(p)).unwrap();
-    let fy = probes.iter().find(|(n, _)| n == "left_fy").map(|(_, p)| model.probe(p)).unwrap();
+    let fx = probes
+        .iter()
+        .find(|(n, _)| n == "left_fx")
+        .map(|(_, p)| model.probe(p))
+        .unwrap();
+    let fy = probes
+        .iter()
+        .find(|(n, _)| n == "left_fy")
+        .map(|(_, p)| model.probe(p))
+        .unwrap();
     let r = p.resultant();
     assert!(fx.abs() > 1.0);
-    assert!((r.x - fx).abs() < 1e-12 * fx.abs() && (r.y - fy).abs() < 1e-12 * fx.abs(), "{r:?} vs {fx}, {fy}");
+    assert!(
+        (r.x - fx).abs() < 1e-12 * fx.abs() && (r.y - fy).abs() < 1e-12 * fx.abs(),
+        "{r:?} vs {fx}, {fy}"
+    );
     let sum: f64 = p.profile().iter().map(|b| b.normal * (b.to - b.from)).sum();
     assert!((sum + fx).abs() < 1e-12 * fx.abs());
 }
@@ -97,7 +125,15 @@ fn retaining_wall_half_size() {
     let r = retaining::run(&sc, &opts, |_| {}).unwrap();
     eprintln!(
         "H {:.4}, ρ_b {:.0}, K_wall {:.3}, K bands {:.3}, u {:.3e}, beam {:.3e} {:.3e}, error {:+.3}, spread {:.3}",
-        r.height, r.rho_b, r.k_wall, r.k_bands, r.deflection, r.beam[0], r.beam[1], r.beam_error, r.deflection_spread
+        r.height,
+        r.rho_b,
+        r.k_wall,
+        r.k_bands,
+        r.deflection,
+        r.beam[0],
+        r.beam[1],
+        r.beam_error,
+        r.deflection_spread
     );
     assert!(r.deflection < 0.0, "the wall leans away from the backfill");
     assert!(r.beam_error.abs() < 0.10, "beam theory {}", r.beam_error);

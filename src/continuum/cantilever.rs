@@ -81,7 +81,12 @@ mod tests {
         // uniform q in 7 bins: qL⁴/(8EI), qL²/(2κGA)
         let q = 10.0;
         let bins: Vec<LoadBin> = (0..7)
-            .map(|k| LoadBin { from: k as f64 * l / 7.0, to: (k + 1) as f64 * l / 7.0, q, m: 0.0 })
+            .map(|k| LoadBin {
+                from: k as f64 * l / 7.0,
+                to: (k + 1) as f64 * l / 7.0,
+                q,
+                m: 0.0,
+            })
             .collect();
         let (b, s) = tip_deflection(l, &bins, ei, kga);
         assert!((b / (q * l.powi(4) / (8.0 * ei)) - 1.0).abs() < 1e-12);
@@ -89,10 +94,30 @@ mod tests {
         // a point load P at the tip as a thin bin: PL³/(3EI)
         let p = 5.0;
         let e = 1e-7;
-        let (b, _) = tip_deflection(l, &[LoadBin { from: l - e, to: l, q: p / e, m: 0.0 }], ei, f64::INFINITY);
+        let (b, _) = tip_deflection(
+            l,
+            &[LoadBin {
+                from: l - e,
+                to: l,
+                q: p / e,
+                m: 0.0,
+            }],
+            ei,
+            f64::INFINITY,
+        );
         assert!((b / (p * l.powi(3) / (3.0 * ei)) - 1.0).abs() < 1e-6);
         // a uniform moment m: M(s) = m (L − s), w = m L³/(3EI)
-        let (b, s) = tip_deflection(l, &[LoadBin { from: 0.0, to: l, q: 0.0, m: 2.0 }], ei, kga);
+        let (b, s) = tip_deflection(
+            l,
+            &[LoadBin {
+                from: 0.0,
+                to: l,
+                q: 0.0,
+                m: 2.0,
+            }],
+            ei,
+            kga,
+        );
         assert!((b / (2.0 * l.powi(3) / (3.0 * ei)) - 1.0).abs() < 1e-12 && s == 0.0);
         // triangular q = q0 (1 − s/L) (earth pressure, max at the clamp) in
         // many bins: q0 L⁴/(30 EI) to O(1/n²)
@@ -100,7 +125,12 @@ mod tests {
         let bins: Vec<LoadBin> = (0..n)
             .map(|k| {
                 let (a, c) = (k as f64 * l / n as f64, (k + 1) as f64 * l / n as f64);
-                LoadBin { from: a, to: c, q: q * (1.0 - 0.5 * (a + c) / l), m: 0.0 }
+                LoadBin {
+                    from: a,
+                    to: c,
+                    q: q * (1.0 - 0.5 * (a + c) / l),
+                    m: 0.0,
+                }
             })
             .collect();
         let (b, _) = tip_deflection(l, &bins, ei, f64::INFINITY);

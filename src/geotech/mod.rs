@@ -137,7 +137,10 @@ pub fn weight(g: &Granular, gravity: [f64; 2]) -> f64 {
 /// Density of the grains' material `ρ_s` (kg/m³): of `[granular]
 /// material`.
 pub fn grain_density(sc: &Scenario) -> Result<f64, String> {
-    let g = sc.granular.as_ref().ok_or("the scenario has no [granular]")?;
+    let g = sc
+        .granular
+        .as_ref()
+        .ok_or("the scenario has no [granular]")?;
     sc.material(&g.material)
         .map(|m| m.density)
         .ok_or_else(|| format!("no material `{}`", g.material))
@@ -150,7 +153,7 @@ pub fn grain_density(sc: &Scenario) -> Result<f64, String> {
 /// `[[measure]]` rectangles — so a larger `s` is a larger structure in the
 /// same grains. The deposit's `settle_steps` grow by `√s` (the fall time).
 pub fn scale_lengths(sc: &mut Scenario, s: f64) -> Result<(), String> {
-    if !(s > 0.0) || !s.is_finite() {
+    if s.is_nan() || s <= 0.0 || !s.is_finite() {
         return Err(format!("scale must be > 0 (got {s})"));
     }
     for b in &mut sc.body {

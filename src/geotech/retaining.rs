@@ -62,7 +62,10 @@ impl Wall {
     /// Read the wall from `sc` (see the module docs).
     pub fn from_scenario(sc: &Scenario) -> Result<Wall, String> {
         let [b] = sc.body.as_slice() else {
-            return Err(format!("a retaining wall scenario has one body; it has {}", sc.body.len()));
+            return Err(format!(
+                "a retaining wall scenario has one body; it has {}",
+                sc.body.len()
+            ));
         };
         let r = &b.rectangle;
         let e = &b.elastic;
@@ -81,7 +84,10 @@ impl Wall {
             .map(|w| w.from[0])
             .fold(f64::INFINITY, f64::min);
         let g = sc.simulation.gravity;
-        let dt = sc.simulation.dt.ok_or("the scenario needs [simulation] dt")?;
+        let dt = sc
+            .simulation
+            .dt
+            .ok_or("the scenario needs [simulation] dt")?;
         let end_time = sc
             .simulation
             .end_time
@@ -93,7 +99,11 @@ impl Wall {
             thickness: e.thickness,
             ei: ep * e.thickness * h.powi(3) / 12.0,
             kga: 5.0 / 6.0 * gmod * e.thickness * h,
-            x_far: if x_far.is_finite() { x_far } else { face + 3.0 * r.size[1] },
+            x_far: if x_far.is_finite() {
+                x_far
+            } else {
+                face + 3.0 * r.size[1]
+            },
             rho_s: grain_density(sc)?,
             g: (g[0] * g[0] + g[1] * g[1]).sqrt(),
             end_time,
@@ -158,7 +168,11 @@ pub struct WallResult {
 
 /// Run the scenario `sc` to its end time, averaging as `opts` says;
 /// `progress(t)` every 1000 steps.
-pub fn run(sc: &Scenario, opts: &Options, mut progress: impl FnMut(f64)) -> Result<WallResult, String> {
+pub fn run(
+    sc: &Scenario,
+    opts: &Options,
+    mut progress: impl FnMut(f64),
+) -> Result<WallResult, String> {
     let w = Wall::from_scenario(sc)?;
     let mut model = sc.build().map_err(|e| e.to_string())?;
     let mut face = EdgeTraction::new(0, Edge::Right, w.y.0, w.y.1, opts.bins, w.thickness)
@@ -189,7 +203,11 @@ pub fn run(sc: &Scenario, opts: &Options, mut progress: impl FnMut(f64)) -> Resu
                 // the backfill away from the wall: from one wall height
                 // beside it (or its middle third if it is narrower)
                 let x_lo = (w.x.1 + height).min(w.x.1 + (w.x_far - w.x.1) / 3.0);
-                let x_hi = w.x_far.min(x_lo + height).max(x_lo + (w.x_far - w.x.1) / 3.0).min(w.x_far);
+                let x_hi = w
+                    .x_far
+                    .min(x_lo + height)
+                    .max(x_lo + (w.x_far - w.x.1) / 3.0)
+                    .min(w.x_far);
                 surf = surface(g, w.x.1, w.x_far, 8);
                 Bands::new(x_lo, x_hi, w.y.0, surf, opts.bands)
             });
@@ -272,7 +290,10 @@ pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), Plo
         .map(|b| (1e3 * (r.surface - b.mid()), 1e-3 * b.normal))
         .collect();
     let line = |k: f64| -> Vec<(f64, f64)> {
-        vec![(0.0, 0.0), (1e3 * r.height, 1e-3 * k * r.rho_b * g * r.height)]
+        vec![
+            (0.0, 0.0),
+            (1e3 * r.height, 1e-3 * k * r.rho_b * g * r.height),
+        ]
     };
     let k0 = |p: f64| 1.0 - p.to_radians().sin();
     let chart = Chart {
@@ -280,16 +301,32 @@ pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), Plo
         x_label: "depth below the backfill surface z (mm)".into(),
         y_label: "earth pressure σ_h (kPa)".into(),
         series: vec![
-            Series::new("measured (contact forces, binned)", pts, Mark::Points).with_color(palette(0)),
-            Series::new(format!("Jaky K₀ = {:.3} (φ_peak = {}°)", k0(phi[0]), phi[0]), line(k0(phi[0])), Mark::Line)
-                .with_color(palette(2)),
-            Series::new(format!("Jaky K₀ = {:.3} (φ_cs = {}°)", k0(phi[1]), phi[1]), line(k0(phi[1])), Mark::Dashed)
-                .with_color(palette(1)),
-            Series::new(format!("K = {:.3} of the backfill (bands)", r.k_bands), line(r.k_bands), Mark::Dashed)
-                .with_color(REFERENCE_COLOR),
+            Series::new("measured (contact forces, binned)", pts, Mark::Points)
+                .with_color(palette(0)),
+            Series::new(
+                format!("Jaky K₀ = {:.3} (φ_peak = {}°)", k0(phi[0]), phi[0]),
+                line(k0(phi[0])),
+                Mark::Line,
+            )
+            .with_color(palette(2)),
+            Series::new(
+                format!("Jaky K₀ = {:.3} (φ_cs = {}°)", k0(phi[1]), phi[1]),
+                line(k0(phi[1])),
+                Mark::Dashed,
+            )
+            .with_color(palette(1)),
+            Series::new(
+                format!("K = {:.3} of the backfill (bands)", r.k_bands),
+                line(r.k_bands),
+                Mark::Dashed,
+            )
+            .with_color(REFERENCE_COLOR),
         ],
         notes: vec![
-            format!("thrust {:.1} N/m: K_wall = {:.3}, at {:.2} H", r.thrust, r.k_wall, r.thrust_height_over_h),
+            format!(
+                "thrust {:.1} N/m: K_wall = {:.3}, at {:.2} H",
+                r.thrust, r.k_wall, r.thrust_height_over_h
+            ),
             format!(
                 "top deflection {:.2} µm; beam theory under the measured load {:.2} µm ({:+.1} %)",
                 1e6 * r.deflection,

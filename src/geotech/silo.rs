@@ -67,7 +67,10 @@ impl Silo {
     /// Read the silo from `sc` (see the module docs).
     pub fn from_scenario(sc: &Scenario) -> Result<Silo, String> {
         if sc.body.len() != 2 {
-            return Err(format!("a silo has two wall bodies; the scenario has {}", sc.body.len()));
+            return Err(format!(
+                "a silo has two wall bodies; the scenario has {}",
+                sc.body.len()
+            ));
         }
         let (l, r) = if sc.body[0].rectangle.origin[0] <= sc.body[1].rectangle.origin[0] {
             (0, 1)
@@ -87,7 +90,10 @@ impl Silo {
             return Err("the walls overlap".into());
         }
         let g = sc.simulation.gravity;
-        let dt = sc.simulation.dt.ok_or("the scenario needs [simulation] dt")?;
+        let dt = sc
+            .simulation
+            .dt
+            .ok_or("the scenario needs [simulation] dt")?;
         let end_time = sc
             .simulation
             .end_time
@@ -208,7 +214,11 @@ pub fn janssen(rho_b: f64, g: f64, w: f64, mu_w: f64, k: f64, z: f64) -> f64 {
 
 /// Run the silo scenario `sc` to its end time, averaging as `opts` says;
 /// `progress(t)` is called every 1000 steps.
-pub fn run(sc: &Scenario, opts: &Options, mut progress: impl FnMut(f64)) -> Result<SiloResult, String> {
+pub fn run(
+    sc: &Scenario,
+    opts: &Options,
+    mut progress: impl FnMut(f64),
+) -> Result<SiloResult, String> {
     let silo = Silo::from_scenario(sc)?;
     let mut model = sc.build().map_err(|e| e.to_string())?;
     let (y0, y1) = silo.y_range;
@@ -286,7 +296,10 @@ pub fn run(sc: &Scenario, opts: &Options, mut progress: impl FnMut(f64)) -> Resu
             })
         })
         .collect();
-    let dev: Vec<f64> = compared.iter().map(|c| c.measured / c.janssen - 1.0).collect();
+    let dev: Vec<f64> = compared
+        .iter()
+        .map(|c| c.measured / c.janssen - 1.0)
+        .collect();
     Ok(SiloResult {
         width: w,
         surface: surf,
@@ -344,11 +357,18 @@ pub fn plot(dir: &Path, r: &SiloResult, g: f64) -> Result<(), PlotError> {
         x_label: "depth below the surface z (mm)".into(),
         y_label: "wall normal stress σ_h (kPa)".into(),
         series: vec![
-            Series::new("left wall (measured)", walls(&r.left), Mark::Points).with_color(palette(0)),
-            Series::new("right wall (measured)", walls(&r.right), Mark::Points).with_color(palette(1)),
-            Series::new("Janssen K σ_v(z)", curve(&|z| r.k * jan(z)), Mark::Line).with_color(palette(2)),
-            Series::new("no wall friction K ρ_b g z", curve(&|z| r.k * r.rho_b * g * z), Mark::Dashed)
-                .with_color(REFERENCE_COLOR),
+            Series::new("left wall (measured)", walls(&r.left), Mark::Points)
+                .with_color(palette(0)),
+            Series::new("right wall (measured)", walls(&r.right), Mark::Points)
+                .with_color(palette(1)),
+            Series::new("Janssen K σ_v(z)", curve(&|z| r.k * jan(z)), Mark::Line)
+                .with_color(palette(2)),
+            Series::new(
+                "no wall friction K ρ_b g z",
+                curve(&|z| r.k * r.rho_b * g * z),
+                Mark::Dashed,
+            )
+            .with_color(REFERENCE_COLOR),
             Series::vlines("z = W", &[1e3 * r.width]),
         ],
         notes: vec![
@@ -381,8 +401,12 @@ pub fn plot(dir: &Path, r: &SiloResult, g: f64) -> Result<(), PlotError> {
         series: vec![
             Series::new("bands σ_yy (Love–Weber)", bands, Mark::Points).with_color(palette(0)),
             Series::new("Janssen σ_v(z)", curve(&jan), Mark::Line).with_color(palette(2)),
-            Series::new("no wall friction ρ_b g z", curve(&|z| r.rho_b * g * z), Mark::Dashed)
-                .with_color(REFERENCE_COLOR),
+            Series::new(
+                "no wall friction ρ_b g z",
+                curve(&|z| r.rho_b * g * z),
+                Mark::Dashed,
+            )
+            .with_color(REFERENCE_COLOR),
         ],
         ..Chart::default()
     };

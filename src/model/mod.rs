@@ -9,8 +9,8 @@ pub mod body;
 pub mod contacts;
 pub mod probe;
 pub mod stability;
-pub mod traction;
 pub mod state;
+pub mod traction;
 
 use crate::coupling::{CoupledModel, CouplingError};
 use crate::dem::{DemError, Granular};

@@ -34,7 +34,9 @@ use crate::geom::Vec2;
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum TractionError {
     /// No bins, or an empty or reversed range.
-    #[error("a traction profile needs bins ≥ 1 and a range from < to (got {bins} bins on [{from}, {to}])")]
+    #[error(
+        "a traction profile needs bins ≥ 1 and a range from < to (got {bins} bins on [{from}, {to}])"
+    )]
     Range {
         /// Bins asked for.
         bins: usize,
@@ -138,10 +140,16 @@ impl EdgeTraction {
         bins: usize,
         thickness: f64,
     ) -> Result<Self, TractionError> {
-        if bins == 0 || !(from < to) || !from.is_finite() || !to.is_finite() {
+        if bins == 0
+            || from.is_nan()
+            || to.is_nan()
+            || from >= to
+            || !from.is_finite()
+            || !to.is_finite()
+        {
             return Err(TractionError::Range { bins, from, to });
         }
-        if !(thickness > 0.0) || !thickness.is_finite() {
+        if thickness.is_nan() || thickness <= 0.0 || !thickness.is_finite() {
             return Err(TractionError::Thickness(thickness));
         }
         Ok(EdgeTraction {
@@ -267,7 +275,12 @@ mod tests {
     use super::*;
     use crate::coupling::interface::Feature;
 
-    fn contact(body: u16, point: [f64; 2], normal: [f64; 2], force_on_disc: [f64; 2]) -> BodyContact {
+    fn contact(
+        body: u16,
+        point: [f64; 2],
+        normal: [f64; 2],
+        force_on_disc: [f64; 2],
+    ) -> BodyContact {
         BodyContact {
             disc: 0,
             body,
