@@ -199,6 +199,10 @@ pub struct SiloResult {
     /// Σ measured / Σ janssen − 1 over `compared`: the wall's thrust below
     /// z = W against Janssen's.
     pub thrust_deviation: f64,
+    /// Σ σ_yy / Σ σ_v(z) − 1 over the bands whose middle is deeper than
+    /// W (the top band excluded): the grains' vertical stress against
+    /// Janssen's.
+    pub sigma_v_deviation: f64,
     /// Janssen's σ_v asymptote ρ_b g W/(2 μ_w K) (Pa).
     pub sigma_v_infinity: f64,
 }
@@ -300,7 +304,16 @@ pub fn run(
         .iter()
         .map(|c| c.measured / c.janssen - 1.0)
         .collect();
+    let (mut sy, mut sj) = (0.0, 0.0);
+    for b in bulk {
+        let z = surf - 0.5 * (b.y_lo + b.y_hi);
+        if z >= w {
+            sy += b.syy;
+            sj += janssen(rho_b, silo.g, w, mu_w, k, z);
+        }
+    }
     Ok(SiloResult {
+        sigma_v_deviation: sy / sj - 1.0,
         width: w,
         surface: surf,
         height_over_width: (surf - y0) / w,
