@@ -8,6 +8,9 @@
 //!
 //!     cargo run --release --example retaining_wall -- [SCENARIO] [-o out/retaining_wall] [--scale S] [--phi 23.7,21.4]
 //!
+//! With `examples/retaining_wall_active.toml` (the wall translated away
+//! from the backfill) it also compares the thrust with Rankine's K_a.
+//!
 //! `--scale S` multiplies every length but the grains' radii
 //! (`efgdem::geotech::scale_lengths`); `--phi` the friction angles (peak,
 //! critical) of the grains from the biaxial test (README "Biaxial test",
@@ -111,6 +114,9 @@ fn main_() -> Result<(), String> {
     json["phi_cs"] = phi_cs.into();
     json["k0_peak"] = k0(phi_peak).into();
     json["k0_cs"] = k0(phi_cs).into();
+    let ka = |p: f64| (1.0 - p.to_radians().sin()) / (1.0 + p.to_radians().sin());
+    json["ka_peak"] = ka(phi_peak).into();
+    json["ka_cs"] = ka(phi_cs).into();
     efgdem::output::write_json(&out.join("retaining_wall.json"), &json).map_err(e)?;
     retaining::plot(&out, &r, w.g, [phi_peak, phi_cs]).map_err(|e| e.to_string())?;
     println!(
@@ -135,7 +141,15 @@ fn main_() -> Result<(), String> {
         r.drag
     );
     println!(
-        "top deflection {:.4} µm (spread over the window {:.2} %); beam theory {:.4} µm (bending {:.4}, shear {:.4}): {:+.2} %",
+        "Rankine K_a = {:.3} (φ_peak: K_wall {:+.1} %), {:.3} (φ_cs: {:+.1} %); base displacement u_x = {:.4} mm",
+        ka(phi_peak),
+        100.0 * (r.k_wall / ka(phi_peak) - 1.0),
+        ka(phi_cs),
+        100.0 * (r.k_wall / ka(phi_cs) - 1.0),
+        1e3 * r.base_displacement
+    );
+    println!(
+        "top deflection relative to the base {:.4} µm (spread over the window {:.2} %); beam theory {:.4} µm (bending {:.4}, shear {:.4}): {:+.2} %",
         1e6 * r.deflection,
         100.0 * r.deflection_spread,
         1e6 * (r.beam[0] + r.beam[1]),

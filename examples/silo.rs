@@ -135,7 +135,10 @@ fn main_() -> Result<(), String> {
         r.compared.len(),
         r.sigma_v_infinity
     );
-    println!("grains' σ_yy (bands) against Janssen's σ_v below z = W: {:+.1} %", 100.0 * r.sigma_v_deviation);
+    println!(
+        "grains' σ_yy (bands) against Janssen's σ_v below z = W: {:+.1} %",
+        100.0 * r.sigma_v_deviation
+    );
     for c in &r.compared {
         println!(
             "  z = {:6.1} mm: wall {:7.1} Pa, K σ_v {:7.1} Pa ({:+.1} %), K ρ_b g z {:7.1} Pa",

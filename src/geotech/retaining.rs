@@ -1,6 +1,7 @@
-//! A flexible cantilever retaining wall at rest (issue 15 §1;
-//! `examples/retaining_wall.toml`, `examples/retaining_wall.rs`, README
-//! "Flexible retaining wall").
+//! A flexible cantilever retaining wall, at rest or translated away from
+//! its backfill (issue 15 §1; `examples/retaining_wall.toml`,
+//! `examples/retaining_wall_active.toml`, `examples/retaining_wall.rs`,
+//! README "Flexible retaining wall").
 //!
 //! **The scenario** ([`Wall::from_scenario`]): a coupled run with one
 //! rectangular body (the wall, clamped on its bottom edge, the backfill
@@ -10,14 +11,18 @@
 //! `every` steps from `average_from` to the end:
 //! - the earth pressure σ_h and shear τ per height bin on the wall's right
 //!   face ([`EdgeTraction`]), the thrust `P = Σ σ_h Δy t` and its height;
-//! - the wall's deflection `u_x` at the top of its centre line
+//! - the wall's deflection at the top of its centre line relative to
+//!   its base, `u_x(top) − u_x(base)`, and the base's `u_x` (a translated
+//!   wall: its clamp is a moving edge)
 //!   ([`BodyRef::sample`](crate::model::body::BodyRef::sample));
 //! - Love–Weber σ_xx, σ_yy and porosity of horizontal bands of the
 //!   backfill away from the wall ([`Bands`]), their `K = σ_xx/σ_yy`;
 //! - the free surface of the backfill.
 //!
 //! **Theory**: Jaky's `K₀ = 1 − sin φ` (φ of the biaxial test on the same
-//! grains, peak or critical) gives the thrust `K₀ ρ_b g H²/2`; beam
+//! grains, peak or critical) gives the thrust `K₀ ρ_b g H²/2` at rest,
+//! Rankine's `K_a = (1 − sin φ)/(1 + sin φ)` once the wall has moved
+//! away far enough; beam
 //! theory ([`tip_deflection`]) under the *measured* binned pressure
 //! (and the moment `τ h/2` of the shear traction on the face about the
 //! wall's centre line) gives the top deflection, with `EI = E' h³/12`,
@@ -154,8 +159,12 @@ pub struct WallResult {
     pub k_wall: f64,
     /// K = Σσ_xx/Σσ_yy of the bands below the top one.
     pub k_bands: f64,
-    /// Averaged top deflection u_x at the centre line (m).
+    /// Averaged top deflection at the centre line relative to the base,
+    /// `u_x(top) − u_x(base)` (m).
     pub deflection: f64,
+    /// Averaged `u_x` of the base centre (m): the wall's translation (0
+    /// for a wall at rest).
+    pub base_displacement: f64,
     /// Beam theory's top deflection under the measured load: bending,
     /// shear (m; signed like u_x).
     pub beam: [f64; 2],
@@ -178,10 +187,12 @@ pub fn run(
     let mut face = EdgeTraction::new(0, Edge::Right, w.y.0, w.y.1, opts.bins, w.thickness)
         .map_err(|e| e.to_string())?;
     let top = Vec2::new(0.5 * (w.x.0 + w.x.1), w.y.1);
+    let base = Vec2::new(0.5 * (w.x.0 + w.x.1), w.y.0);
     let mut bands: Option<Bands> = None;
     let mut surf = f64::NAN;
     let (mut kin, mut n) = (0.0, 0usize);
     let mut ux = vec![];
+    let mut ux_base = 0.0;
     let every = opts.every.max(1);
     let mut step = 0usize;
     let mut err = None;
@@ -214,9 +225,12 @@ pub fn run(
             b.add(m);
             face.add(&c.contacts);
             kin += global_quantity(g, "kinetic");
-            match m.body(0).sample(top) {
-                Ok(s) => ux.push(s.u.x),
-                Err(e) => {
+            match (m.body(0).sample(top), m.body(0).sample(base)) {
+                (Ok(s), Ok(b)) => {
+                    ux.push(s.u.x - b.u.x);
+                    ux_base += b.u.x;
+                }
+                (Err(e), _) | (_, Err(e)) => {
                     err = Some(e.to_string());
                     return ControlFlow::Break(());
                 }
@@ -273,6 +287,7 @@ pub fn run(
         k_wall: thrust / (0.5 * rho_b * w.g * h * h * w.thickness),
         k_bands,
         deflection: mean_ux,
+        base_displacement: ux_base / n as f64,
         beam,
         beam_error: mean_ux / (beam[0] + beam[1]) - 1.0,
         deflection_spread: spread,
@@ -281,7 +296,9 @@ pub fn run(
 }
 
 /// `retaining_wall.png` in `dir`: the measured earth pressure against
-/// depth (kPa) with Jaky's `K₀ ρ_b g z` for φ_peak and φ_cs.
+/// depth (kPa) with Jaky's `K₀ ρ_b g z` for φ_peak and φ_cs, or, for a
+/// wall that has moved away (base displacement below −10⁻⁴ H),
+/// Rankine's `K_a ρ_b g z`.
 pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), PlotError> {
     let pts: Vec<(f64, f64)> = r
         .profile
@@ -295,22 +312,38 @@ pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), Plo
             (1e3 * r.height, 1e-3 * k * r.rho_b * g * r.height),
         ]
     };
-    let k0 = |p: f64| 1.0 - p.to_radians().sin();
+    let active = r.base_displacement < -1e-4 * r.height;
+    let k0 = |p: f64| {
+        let s = p.to_radians().sin();
+        if active {
+            (1.0 - s) / (1.0 + s)
+        } else {
+            1.0 - s
+        }
+    };
+    let name = if active { "Rankine K_a" } else { "Jaky K₀" };
     let chart = Chart {
-        title: "Retaining wall at rest: earth pressure against depth".into(),
+        title: if active {
+            format!(
+                "Retaining wall, active (translated {:.2} mm): earth pressure against depth",
+                -1e3 * r.base_displacement
+            )
+        } else {
+            "Retaining wall at rest: earth pressure against depth".into()
+        },
         x_label: "depth below the backfill surface z (mm)".into(),
         y_label: "earth pressure σ_h (kPa)".into(),
         series: vec![
             Series::new("measured (contact forces, binned)", pts, Mark::Points)
                 .with_color(palette(0)),
             Series::new(
-                format!("Jaky K₀ = {:.3} (φ_peak = {}°)", k0(phi[0]), phi[0]),
+                format!("{name} = {:.3} (φ_peak = {}°)", k0(phi[0]), phi[0]),
                 line(k0(phi[0])),
                 Mark::Line,
             )
             .with_color(palette(2)),
             Series::new(
-                format!("Jaky K₀ = {:.3} (φ_cs = {}°)", k0(phi[1]), phi[1]),
+                format!("{name} = {:.3} (φ_cs = {}°)", k0(phi[1]), phi[1]),
                 line(k0(phi[1])),
                 Mark::Dashed,
             )
@@ -328,7 +361,7 @@ pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), Plo
                 r.thrust, r.k_wall, r.thrust_height_over_h
             ),
             format!(
-                "top deflection {:.2} µm; beam theory under the measured load {:.2} µm ({:+.1} %)",
+                "top deflection (rel. to the base) {:.2} µm; beam theory under the measured load {:.2} µm ({:+.1} %)",
                 1e6 * r.deflection,
                 1e6 * (r.beam[0] + r.beam[1]),
                 100.0 * r.beam_error
