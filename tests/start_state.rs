@@ -170,3 +170,47 @@ fn body_names_that_are_not_file_names_or_collide_with_series_are_refused() {
     }
     assert_eq!(check("bodyname", &body("beam_1.a")).0, 0);
 }
+
+#[test]
+fn a_settled_packing_must_not_overlap_a_body() {
+    // the preparation (growth) never sees the bodies: a body placed across
+    // the packing's box would start with discs inside it
+    let discs = r#"discs = { generate = "random", method = "grow", box = [[0.0, 0.0], [1.0, 0.5]], radius = 0.04, count = 60, seed = 1, settle_steps = 200 }"#;
+    let body = r#"
+[[body]]
+name = "footing"
+rectangle = { origin = [0.3, 0.3], size = [0.4, 0.3] }
+nodes = [5, 4]
+elastic = { E = 1.0e8, nu = 0.3, density = 2000.0 }
+[[body.bc]]
+edge = "top"
+fixed = true
+"#;
+    for cmd in ["check", "run"] {
+        let dir = common::tmpdir(&format!("start-settled-{cmd}"));
+        let f = dir.join("settled.toml");
+        std::fs::write(&f, with_discs(discs) + body).unwrap();
+        let out = common::bin()
+            .arg(cmd)
+            .arg(&f)
+            .args(if cmd == "run" {
+                vec!["-o".into(), dir.join("out"), "-q".into()]
+            } else {
+                vec![]
+            })
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{cmd}: {err}");
+        assert!(
+            err.contains("settled.toml:17: body[0]:") && err.contains("overlap body `footing`"),
+            "{cmd}: {err}"
+        );
+    }
+    // above the box it is accepted
+    let (code, err) = check(
+        "settled_ok",
+        &(with_discs(discs) + &body.replace("[0.3, 0.3]", "[0.3, 0.55]")),
+    );
+    assert_eq!(code, 0, "{err}");
+}
