@@ -513,7 +513,7 @@ pub fn model_with(sc: &Scenario, purpose: BuildFor) -> Result<Model, Invalid> {
         return Err(bad(&path, message));
     }
     if let Some(g) = model.granular() {
-        start_state(sc, g)?;
+        start_state(sc, g, purpose)?;
     }
     probes(sc, &model)?;
     Ok(model)
@@ -730,9 +730,9 @@ pub const START_OVERLAP_TOL: f64 = 1e-3;
 /// Impossible start states: discs overlapping each other, a wall or a body
 /// (reference configuration) by more than [`START_OVERLAP_TOL`] of the
 /// smaller radius (unless `allow_overlap`; a packing efgdem settled is
-/// checked against the bodies only), and a time step above the DEM
-/// critical step.
-fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
+/// checked against the bodies only, by `run`, once settled), and a time
+/// step above the DEM critical step.
+fn start_state(sc: &Scenario, g: &Granular, purpose: BuildFor) -> Result<(), Invalid> {
     let crit = g.critical_dt();
     if g.dt > crit {
         return Err(bad(
@@ -817,7 +817,9 @@ fn start_state(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
     let spec = spec(sc)?;
     let settled = matches!(&spec.discs, DiscsSpec::Table(t)
         if t.generate.is_some() && matches!(t.method, Packing::Deposit | Packing::Grow));
-    if spec.allow_overlap {
+    // `check` does not settle the packing: its discs are not where the run
+    // will start them
+    if spec.allow_overlap || (settled && purpose == BuildFor::Check) {
         return Ok(());
     }
     let p = &g.particles;
