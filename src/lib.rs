@@ -70,6 +70,7 @@
 
 #![warn(missing_docs)]
 
+pub mod bearing;
 pub mod biaxial;
 pub mod continuum;
 pub mod coupling;

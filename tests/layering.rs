@@ -14,7 +14,7 @@ const LAYERS: &[&[&str]] = &[
     &["scenario"],
     &["output"],
     &["run"],
-    &["study", "reproduce", "biaxial"],
+    &["study", "reproduce", "biaxial", "bearing"],
 ];
 
 fn layer_of(module: &str) -> usize {
