@@ -109,7 +109,7 @@ fn post(sc: &Scenario, dir: &Path, phi_peak: f64, phi_cs: f64) -> Result<String,
     let uy = h.values("settlement")?;
     let f = h.values("reaction")?;
     let n = h.values("bed_porosity")?;
-    let k0 = bearing::first_contact(&f, 0.0).ok_or("the footing never touches the bed")?;
+    let k0 = bearing::first_contact(&f).ok_or("the footing never touches the bed")?;
     if k0 == 0 {
         return Err(
             "the footing touches the bed in the first row: no row measures the bed alone".into(),

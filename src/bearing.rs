@@ -91,20 +91,28 @@ pub struct CurvePoint {
     pub rows: usize,
 }
 
-/// Where the footing first touches: the first row whose reaction is above
-/// `threshold` (the travel down is then `-(uy − uy[k])`).
-pub fn first_contact(reaction: &[f64], threshold: f64) -> Option<usize> {
-    reaction.iter().position(|&f| f > threshold)
+/// Rows over which a contact must last to count ([`first_contact`]).
+pub const CONTACT_ROWS: usize = 20;
+
+/// Where the footing touches the bed for good: the first row from which
+/// the reaction is positive in at least half of the next
+/// [`CONTACT_ROWS`] rows (a single disc bouncing off the footing before it
+/// reaches the bed does not count).
+pub fn first_contact(reaction: &[f64]) -> Option<usize> {
+    (0..reaction.len()).find(|&k| {
+        let w = &reaction[k..(k + CONTACT_ROWS).min(reaction.len())];
+        reaction[k] > 0.0 && 2 * w.iter().filter(|&&f| f > 0.0).count() >= CONTACT_ROWS
+    })
 }
 
 /// The load–settlement curve from rows of the footing's vertical
 /// displacement `uy` (down negative) and its reaction (up positive): the
-/// rows from the first contact on, binned by penetration `-(uy − uy₀)` in
+/// rows from the first contact ([`first_contact`]) on, binned by penetration `-(uy − uy₀)` in
 /// bins of width `bin` from 0; empty bins are left out. Rows whose
 /// penetration decreases again (a footing lifted) fall into their bins like
 /// the others.
 pub fn curve(uy: &[f64], reaction: &[f64], bin: f64) -> Vec<CurvePoint> {
-    let Some(k0) = first_contact(reaction, 0.0) else {
+    let Some(k0) = first_contact(reaction) else {
         return Vec::new();
     };
     let mut bins: Vec<Option<CurvePoint>> = Vec::new();
@@ -174,28 +182,30 @@ mod tests {
 
     #[test]
     fn curve_bins_from_the_first_contact() {
-        // the footing falls 1 mm before touching, then sinks 0.4 mm per row
-        // with a reaction of 10 N per 0.1 mm, ±1 N alternately
+        // the footing falls 1 mm before touching (a disc bounces off it on
+        // the way: one row), then sinks 0.04 mm per row with a reaction of
+        // 1 N per 0.001 mm, ±1 N alternately
         let mut uy = Vec::new();
         let mut f = Vec::new();
-        for k in 0..5 {
-            uy.push(-2e-4 * k as f64);
-            f.push(0.0);
+        for k in 0..40 {
+            uy.push(-2.5e-5 * k as f64);
+            f.push(if k == 2 { 5.0 } else { 0.0 });
         }
-        for k in 0..10 {
-            let s = 4e-4 * k as f64;
+        for k in 0..100 {
+            let s = 4e-5 * k as f64;
             uy.push(-1e-3 - s);
-            f.push(1e5 * s + if k % 2 == 0 { 1.0 } else { -1.0 } + 1e-9);
+            f.push(1e6 * s + if k % 2 == 0 { 1.0 } else { -1.0 } + 1e-9);
         }
+        assert_eq!(first_contact(&f), Some(40));
         let c = curve(&uy, &f, 1e-3);
         assert_eq!(c.len(), 4);
-        // bin 0: rows at 0, 0.4, 0.8 mm
-        assert_eq!(c[0].rows, 3);
-        assert!((c[0].penetration - 4e-4).abs() < 1e-15);
-        assert!((c[0].mean - (40.0 + 1.0 / 3.0)).abs() < 1e-6);
-        assert!((c[0].min - 1.0).abs() < 1e-6 && (c[0].max - 81.0).abs() < 1e-6);
-        assert_eq!(c.iter().map(|b| b.rows).sum::<usize>(), 10);
+        // bin 0: rows at 0, 0.04, …, 0.96 mm
+        assert_eq!(c[0].rows, 25);
+        assert!((c[0].penetration - 4.8e-4).abs() < 1e-15);
+        assert!((c[0].mean - (480.0 + 1.0 / 25.0)).abs() < 1e-6);
+        assert!((c[0].min - 1.0).abs() < 1e-6 && (c[0].max - 961.0).abs() < 1e-6);
+        assert_eq!(c.iter().map(|b| b.rows).sum::<usize>(), 100);
         // no contact, no curve
-        assert!(curve(&uy[..5], &f[..5], 1e-3).is_empty());
+        assert!(curve(&uy[..40], &f[..40], 1e-3).is_empty());
     }
 }
