@@ -39,6 +39,13 @@ pub struct BodyState {
     pub f_point: Vec<f64>,
     /// Work done by the moving edges since t = 0 (energy account).
     pub motion_work: f64,
+    /// The running state of each drive (prescribed components that change
+    /// in time: position, velocity, servo integral, measured force), in
+    /// the body's drive order.
+    pub drives: Vec<super::drive::DriveState>,
+    /// Work done since t = 0 by the loads that change in time (tractions
+    /// and point loads with a `table`), trapezoidal in time.
+    pub load_work: f64,
     /// FE: the support reaction of each prescribed DOF at the last step
     /// (the trapezoidal work of moving edges uses it); empty for EFG.
     pub reactions: Vec<f64>,
@@ -65,6 +72,7 @@ impl BodyState {
     /// Check that this state fits a body named `name` with `dofs` unknowns
     /// and `reactions` prescribed DOFs with reactions.
     pub fn check(&self, name: &str, dofs: usize, reactions: usize) -> Result<(), StateError> {
+        self.check_drives(name, None)?;
         if self.name != name {
             return Err(StateError::new(format!(
                 "the saved body `{}` is restored onto body `{name}`",
@@ -91,5 +99,16 @@ impl BodyState {
             )));
         }
         Ok(())
+    }
+
+    /// Check that this state has `drives` drives (when given).
+    pub fn check_drives(&self, name: &str, drives: Option<usize>) -> Result<(), StateError> {
+        match drives {
+            Some(n) if n != self.drives.len() => Err(StateError::new(format!(
+                "body `{name}`: {} saved drives, the body has {n}",
+                self.drives.len()
+            ))),
+            _ => Ok(()),
+        }
     }
 }

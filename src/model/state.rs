@@ -32,8 +32,9 @@ use crate::dem::state::GranularState;
 /// Version of the byte format of [`ModelState::to_bytes`]; raised whenever
 /// a saved type changes.
 /// (2: walls keep both ends of the Verlet reference, for joined ends;
-/// 3: walls keep the integral velocity of a servo with integral action.)
-pub const STATE_FORMAT_VERSION: u32 = 3;
+/// 3: walls keep the integral velocity of a servo with integral action;
+/// 4: bodies keep their drives' state and the work of timed loads.)
+pub const STATE_FORMAT_VERSION: u32 = 4;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
