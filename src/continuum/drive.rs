@@ -81,10 +81,15 @@ pub enum Measure {
 
 /// `servo = { force, gain, max_velocity, integral, measure }`: move the
 /// edge so that the measured force on the body along the component
-/// reaches `force` (force per unit thickness times the thickness, N, like
-/// `contact_fy`: the resultant, not a stress).
+/// reaches `force` (the resultant on the body's thickness, N, like
+/// `contact_fy`; not a stress). With `measure = "edge"` the measured
+/// force is the edge's own force on the body (a top edge pressing a
+/// block down: negative); with `"contacts"` the discs' force on the body
+/// (grains pushing a footing up: positive).
 ///
-/// Each body step the drive's velocity is `v = G (F_target − F) + I`,
+/// Each body step the drive's velocity is `v = G (F_target − F) + I`
+/// (`"edge"`; `v = G (F − F_target) + I` for `"contacts"`, whose force
+/// falls as the edge moves along the component),
 /// clamped to `±max_velocity`, and when within the limit the integral
 /// velocity `I` grows by `β G (F_target − F)` (clamped too): the DEM servo
 /// walls' PI law ([`crate::dem::walls::Servo::speed_integral`]) with the
@@ -233,7 +238,8 @@ impl Drive {
     /// Place a law of time at `step` (positions at `step` and `step + 1`);
     /// a law of the state keeps its state.
     pub fn set_step(&mut self, step: usize, dt: f64) {
-        if let (Some(d), Some(d1)) = (self.law.position(step, dt), self.law.position(step + 1, dt)) {
+        if let (Some(d), Some(d1)) = (self.law.position(step, dt), self.law.position(step + 1, dt))
+        {
             self.state.d = d;
             self.state.d_next = d1;
         }
@@ -244,6 +250,12 @@ impl Drive {
     /// edge's reaction).
     pub fn decide(&mut self, step: usize, dt: f64, measured: f64) {
         let s = &mut self.state;
+        // the servo acts on the mean of the last two measurements: it
+        // cannot feed the step-to-step (Nyquist) ringing of the stiff
+        // penalty springs and of Newmark's prescribed-edge velocities
+        // (2v, 0, 2v, … after a change of speed), which γ = ½ never damps
+        let previous = if step == 0 { measured } else { s.measured };
+        let mean = 0.5 * (measured + previous);
         s.measured = measured;
         if let Some(d1) = self.law.position(step + 1, dt) {
             s.d_next = d1;
@@ -253,13 +265,20 @@ impl Drive {
         let t1 = (step + 1) as f64 * dt;
         let servo_velocity = |sv: &ServoSpec, s: &mut DriveState| {
             let target = sv.force.as_ref().map_or(0.0, |f| f.at(t1));
-            let (v, i) = sv.velocity(measured, target, s.integral);
+            // the edge's own force on the body grows along the component as
+            // the edge moves along it; the discs' force on the body falls
+            // (they push back): the law acts on minus the latter
+            let (v, i) = match sv.measure {
+                Measure::Edge => sv.velocity(mean, target, s.integral),
+                Measure::Contacts => sv.velocity(-mean, -target, s.integral),
+            };
             s.integral = i;
             v
         };
         let v = match &self.law {
             DriveLaw::Servo(sv) => servo_velocity(sv, s),
-            DriveLaw::Phases(ps) => match ps.iter().find(|p| p.until_step.is_none_or(|n| step < n)) {
+            DriveLaw::Phases(ps) => match ps.iter().find(|p| p.until_step.is_none_or(|n| step < n))
+            {
                 Some(DrivePhase {
                     servo: Some(sv), ..
                 }) => servo_velocity(sv, s),
@@ -306,7 +325,11 @@ mod tests {
                 d.decide(n, dt, f);
                 d.advance();
             }
-            assert!((k * d.state.d + 100.0).abs() < 1e-9, "{beta}: {}", k * d.state.d);
+            assert!(
+                (k * d.state.d + 100.0).abs() < 1e-9,
+                "{beta}: {}",
+                k * d.state.d
+            );
         }
         // the velocity is clamped
         let mut d = Drive::new(DriveLaw::Servo(servo(-1e9, 1.0, 0.0)));

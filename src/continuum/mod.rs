@@ -19,9 +19,9 @@ pub use conditions::{
     Edge, EdgeCondition, LinearField, MotionField, PointLoad, Prescribed, TimoshenkoSpec,
 };
 pub use drive::{Drive, DriveLaw, DrivePhase, DriveState, Measure, ServoSpec, Target};
-pub use table::{Table, TimedLoad};
 pub use material::{Material, Sample};
 pub use state::{BodyState, BoundaryState, StateError};
+pub use table::{Table, TimedLoad};
 
 use crate::continuum::compliance::{BoundaryGreen, Compliance, PointRows};
 use crate::continuum::newmark::{Newmark, State, pair_values};

@@ -41,7 +41,8 @@ impl Table {
                 self.points[k]
             ));
         }
-        if let Some(k) = (1..self.points.len()).find(|&k| self.points[k][0] < self.points[k - 1][0]) {
+        if let Some(k) = (1..self.points.len()).find(|&k| self.points[k][0] < self.points[k - 1][0])
+        {
             return Some(format!(
                 "the times must be non-decreasing: point {k} (t = {}) comes after t = {}",
                 self.points[k][0],

@@ -43,7 +43,10 @@ pub use crate::continuum::drive::When;
 impl MovingEdge {
     /// The scale at point `g` (of `points`).
     fn scale_at(&self, g: usize) -> f64 {
-        self.scale.get(g - self.points.start).copied().unwrap_or(1.0)
+        self.scale
+            .get(g - self.points.start)
+            .copied()
+            .unwrap_or(1.0)
     }
     /// The drive's position `d`.
     pub fn position(&self, when: When) -> f64 {
@@ -264,10 +267,10 @@ impl Penalty {
 
 #[cfg(test)]
 mod tests {
+    use super::When;
     use crate::continuum::{
         BodyParams, Edge, EdgeCondition, Elastic, LinearField, MotionField, Prescribed, Rectangle,
     };
-    use super::When;
     use crate::efg::EfgBody;
 
     /// A 2 × 1 block, 6 × 4 nodes, with a small penalty α = 2E (so that

@@ -40,11 +40,11 @@ use super::q4;
 use crate::continuum::conditions::{
     constrained, edge_ends, prescribed, timoshenko_of, traction_at,
 };
+use crate::continuum::drive::When;
 use crate::continuum::material::energy_error_of;
 use crate::continuum::newmark::{Newmark, NewmarkParams, State};
 use crate::continuum::quadrature::{self, QuadPoint};
 use crate::continuum::timoshenko::Timoshenko;
-use crate::continuum::drive::When;
 use crate::continuum::{BodyParams, Drive, Edge, MassKind, Measure, TimedLoad};
 use crate::continuum::{BodyState, Material, Sample, StateError};
 use crate::geom::Vec2;
@@ -493,7 +493,12 @@ impl FemBody {
                 target[2 * i + 1] += material.density * gravity[1] * s;
             }
         }
-        impose(&body.constraints, &body.drives, &mut body.state.u, When::Now);
+        impose(
+            &body.constraints,
+            &body.drives,
+            &mut body.state.u,
+            When::Now,
+        );
         body.info = FemInfo {
             nodes: n,
             dofs: ndof,
@@ -655,7 +660,11 @@ impl FemBody {
             let mut applied = self.f_permanent[c.dof] + self.f_point[c.dof];
             for l in &self.timed {
                 applied += l.table.value(self.step as f64 * dt)
-                    * l.dofs.iter().filter(|e| e.0 == c.dof).map(|e| e.1).sum::<f64>();
+                    * l.dofs
+                        .iter()
+                        .filter(|e| e.0 == c.dof)
+                        .map(|e| e.1)
+                        .sum::<f64>();
             }
             let r = self.reaction(c, applied);
             self.constraints[i].reaction = r;
@@ -725,7 +734,12 @@ impl FemBody {
         let nm = self.newmark.as_mut().ok_or(FemError::NotStarted)?;
         nm.predict(&self.state, &rhs);
         self.rhs = rhs;
-        impose(&self.constraints, &self.drives, nm.solution_mut(), When::Next);
+        impose(
+            &self.constraints,
+            &self.drives,
+            nm.solution_mut(),
+            When::Next,
+        );
         Ok(nm)
     }
 
@@ -737,7 +751,12 @@ impl FemBody {
         let (step, dt) = (self.step, self.params.dt);
         let (t0, t1) = (step as f64 * dt, (step + 1) as f64 * dt);
         let nm = self.newmark.as_mut().ok_or(FemError::NotStarted)?;
-        impose(&self.constraints, &self.drives, nm.solution_mut(), When::Next);
+        impose(
+            &self.constraints,
+            &self.drives,
+            nm.solution_mut(),
+            When::Next,
+        );
         let loads0 = TimedLoad::half_sum(&self.timed, &self.state.u, t0, t1);
         nm.commit(&mut self.state);
         if !self.timed.is_empty() {

@@ -380,7 +380,10 @@ fn validate_drive(sc: &Scenario, v: &Prescribed, at: &str, p: &mut Problems) {
             Some(g) => p.check(g.is_finite() && g > 0.0, format!("{at}.gain"), format!("must be > 0 (got {g})")),
         }
         match sv.max_velocity {
-            None => p.push(format!("{at}.max_velocity"), "a servo needs a `max_velocity` (m/s)"),
+            None => p.push(
+                format!("{at}.max_velocity"),
+                "a servo needs a `max_velocity` (m/s)",
+            ),
             Some(v) => p.check(
                 v.is_finite() && v > 0.0,
                 format!("{at}.max_velocity"),
@@ -403,7 +406,11 @@ fn validate_drive(sc: &Scenario, v: &Prescribed, at: &str, p: &mut Problems) {
         Some(DriveLaw::VelocityTable(tb)) => check_table(&tb, &format!("{at}.velocity_table"), p),
         Some(DriveLaw::Servo(sv)) => servo(&sv, &format!("{at}.servo"), p),
         Some(DriveLaw::Phases(ps)) => {
-            p.check(!ps.is_empty(), format!("{at}.phases"), "give at least one phase");
+            p.check(
+                !ps.is_empty(),
+                format!("{at}.phases"),
+                "give at least one phase",
+            );
             let mut last = 0;
             for (k, ph) in ps.iter().enumerate() {
                 let pat = format!("{at}.phases.{k}");
@@ -780,9 +787,7 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             let c = if q.ends_with('x') { "ux" } else { "uy" };
             let has = b.bc.iter().any(|bc| {
                 let pr = if c == "ux" { &bc.ux } else { &bc.uy };
-                !bc.is_load()
-                    && !bc.fixed
-                    && pr.as_ref().is_some_and(|v| v.drive_law().is_some())
+                !bc.is_load() && !bc.fixed && pr.as_ref().is_some_and(|v| v.drive_law().is_some())
             });
             p.check(
                 has,

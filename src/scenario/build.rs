@@ -6,7 +6,8 @@
 //! scenario reports it as `file:line: field: message`.
 
 use super::body::{
-    BODY_QUANTITIES, CONTACT_FORCE_QUANTITIES, DRIVE_QUANTITIES, Method, POINT_QUANTITIES, is_body_probe,
+    BODY_QUANTITIES, CONTACT_FORCE_QUANTITIES, DRIVE_QUANTITIES, Method, POINT_QUANTITIES,
+    is_body_probe,
 };
 use super::generate::discs_from_csv;
 use super::granular::{
