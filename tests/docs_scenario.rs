@@ -412,7 +412,7 @@ fn scenario_names() -> Names {
     // (rectangle, elastic, edge conditions, prescribed motions) — not the
     // continuum's saved state (checkpoints), which is serde too
     rust_files(&root().join("src/scenario"), &mut files);
-    for f in ["body_params.rs", "conditions.rs"] {
+    for f in ["body_params.rs", "conditions.rs", "drive.rs"] {
         files.push(root().join("src/continuum").join(f));
     }
     files.sort();

@@ -21,6 +21,7 @@
 //! whatever the sequence `d(n)` ([`crate::efg::penalty`]).
 
 use super::conditions::MotionField;
+pub use super::state::DriveState;
 use super::table::Table;
 use serde::Deserialize;
 
@@ -32,16 +33,6 @@ pub enum When {
     Now,
     /// At the next step.
     Next,
-}
-
-impl DriveState {
-    /// The position now or at the next step.
-    pub fn position(&self, when: When) -> f64 {
-        match when {
-            When::Now => self.d,
-            When::Next => self.d_next,
-        }
-    }
 }
 
 /// The target resultant of a servo: a number, or a table in time (load
@@ -187,23 +178,6 @@ impl DriveLaw {
             _ => None,
         }
     }
-}
-
-/// The running state of a drive (checkpointed).
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct DriveState {
-    /// Position `d(n)` at the body's present step.
-    pub d: f64,
-    /// Position `d(n+1)` decided for the step under way (equal to `d`
-    /// between steps until [`Drive::decide`]).
-    pub d_next: f64,
-    /// Velocity of the last decided step, `(d(n+1) − d(n))/Δt`.
-    pub velocity: f64,
-    /// Integral velocity of a servo with integral action.
-    pub integral: f64,
-    /// The force measured when the last step was decided (the servo's
-    /// measure, or the edge's reaction for a drive without servo).
-    pub measured: f64,
 }
 
 /// A drive: its law and running state.

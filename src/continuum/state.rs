@@ -42,7 +42,7 @@ pub struct BodyState {
     /// The running state of each drive (prescribed components that change
     /// in time: position, velocity, servo integral, measured force), in
     /// the body's drive order.
-    pub drives: Vec<super::drive::DriveState>,
+    pub drives: Vec<DriveState>,
     /// Work done since t = 0 by the loads that change in time (tractions
     /// and point loads with a `table`), trapezoidal in time.
     pub load_work: f64,
@@ -53,6 +53,33 @@ pub struct BodyState {
     /// drives ([`WithBoundary`](super::WithBoundary)); `None` for a body
     /// of a continuum-only model.
     pub boundary: Option<BoundaryState>,
+}
+
+/// The running state of a drive (checkpointed).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DriveState {
+    /// Position `d(n)` at the body's present step.
+    pub d: f64,
+    /// Position `d(n+1)` decided for the step under way (equal to `d`
+    /// between steps until [`Drive::decide`](super::Drive::decide)).
+    pub d_next: f64,
+    /// Velocity of the last decided step, `(d(n+1) − d(n))/Δt`.
+    pub velocity: f64,
+    /// Integral velocity of a servo with integral action.
+    pub integral: f64,
+    /// The force measured when the last step was decided (the servo's
+    /// measure, or the edge's reaction for a drive without servo).
+    pub measured: f64,
+}
+
+impl DriveState {
+    /// The position now or at the next step.
+    pub fn position(&self, when: super::drive::When) -> f64 {
+        match when {
+            super::drive::When::Now => self.d,
+            super::drive::When::Next => self.d_next,
+        }
+    }
 }
 
 /// The compliance state of a body's contact boundary.

@@ -9,7 +9,9 @@
 //!   histories, the Verlet bookkeeping (reference positions, rebuild
 //!   counter, stale flag, largest displacement), clock;
 //! - continuum: each body's [`BodyState`] — `U`, `U̇`, `Ü`, clock, pending
-//!   point loads, work of moving edges, FE support reactions;
+//!   point loads, work of moving edges, drives (position, velocity, servo
+//!   integral, last measurement), work of timed loads, FE support
+//!   reactions;
 //! - coupled: [`CoupledState`] — the granular state, each body's state with
 //!   its boundary Green matrix's DOFs (batch by batch), the disc–body
 //!   contacts with their histories and forces, the scheme's counters.
