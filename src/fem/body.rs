@@ -329,7 +329,9 @@ impl FemBody {
         }
         let timoshenko = timoshenko_of(spec);
         // prescribed DOFs: the nodes on the edge take ū at their position
-        let mut fixed: Vec<Option<(f64, Option<(usize, f64)>)>> = vec![None; ndof];
+        // per DOF: its value at t = 0 and its drive (index, scale)
+        type Fixed = (f64, Option<(usize, f64)>);
+        let mut fixed: Vec<Option<Fixed>> = vec![None; ndof];
         let mut drives: Vec<(usize, Drive)> = Vec::new();
         let edge_nodes = |e: Edge| -> Vec<usize> {
             match e {
