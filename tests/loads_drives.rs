@@ -534,6 +534,28 @@ fn a_servo_footing_holds_its_force_on_the_grains() {
     assert!((mean - target).abs() < 0.02 * target, "{mean}");
 }
 
+/// The servo footing on 1 and 2 threads: bitwise the same state.
+#[test]
+fn a_servo_footing_is_thread_count_independent() {
+    let src = footing(300.0, 800);
+    let bytes: Vec<Vec<u8>> = [1, 2]
+        .iter()
+        .map(|&n| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let mut m = build(&src);
+                    run(&mut m, 800);
+                    assert!(m.body(0).drives()[0].1.measured > 0.0, "touching");
+                    m.save_state().to_bytes()
+                })
+        })
+        .collect();
+    assert!(bytes[0] == bytes[1], "1 and 2 threads differ");
+}
+
 #[test]
 fn a_servo_footing_restarts_bitwise() {
     restart(&footing(300.0, 1200), 1200, 700);
@@ -563,7 +585,8 @@ fn bad_loads_and_drives_are_located_errors() {
     assert_eq!(code, Some(0), "{err}");
     // the line of the bottom bc's `uy`
     let line = good.lines().position(|l| l.starts_with("uy =")).unwrap() + 1;
-    let cases: [(&str, &str, &str); 7] = [
+    let cases: [(&str, &str, &str); 8] = [
+        ("huge", "{ table = [[0.0, -1e300]] }", "would move by up to"),
         (
             "unsorted",
             "{ table = [[0.0, 0.0], [0.2, -0.002], [0.1, 0.0]] }",

@@ -312,8 +312,13 @@ fn validate_magnitudes(sc: &Scenario, i: usize, b: &BodySpec, p: &mut Problems) 
             )
         };
         let mut loads = Vec::new();
+        let times = bc
+            .table
+            .as_ref()
+            .filter(|tb| tb.problem().is_none())
+            .map_or(1.0, |tb| tb.max_abs());
         if let Some(t) = bc.traction.filter(|t| t.iter().all(|v| v.is_finite())) {
-            loads.push(stress("traction", t[0].abs().max(t[1].abs())));
+            loads.push(stress("traction", t[0].abs().max(t[1].abs()) * times));
         }
         if let Some(s) = bc.parabolic_shear.filter(|s| s.is_finite()) {
             loads.push(stress("parabolic_shear", s / length));
@@ -323,6 +328,24 @@ fn validate_magnitudes(sc: &Scenario, i: usize, b: &BodySpec, p: &mut Problems) 
         }
         for (ok, path, message) in loads {
             p.check(ok, path, message);
+        }
+    }
+    if e.is_finite() && e > 0.0 && t.is_finite() && t > 0.0 {
+        for (k, pl) in b.load.iter().enumerate() {
+            let times = pl
+                .table
+                .as_ref()
+                .filter(|tb| tb.problem().is_none())
+                .map_or(1.0, |tb| tb.max_abs());
+            // as a stress over the body's size and thickness
+            let s = pl.force[0].abs().max(pl.force[1].abs()) * times / (length * t);
+            p.check(
+                !s.is_finite() || s <= MAX_RELATIVE_MAGNITUDE * e,
+                format!("body.{i}.load.{k}.force"),
+                format!(
+                    "a load of {s:e} (as a stress over the body's size and thickness) is more than {MAX_RELATIVE_MAGNITUDE:e} × E = {e:e}: no linear-elastic state, and the solution overflows"
+                ),
+            );
         }
     }
 }
@@ -335,13 +358,46 @@ pub fn absurd_motion(sc: &Scenario, steps: usize, dt: f64) -> Option<(String, St
         let length = b.rectangle.size[0].max(b.rectangle.size[1]);
         for (k, bc) in b.bc.iter().enumerate() {
             for (f, v) in [("ux", &bc.ux), ("uy", &bc.uy)] {
-                if let Some(Prescribed::Motion(m)) = v {
-                    let d = m.displacement(steps, dt).abs();
+                let Some(law) = v.as_ref().and_then(|v| v.drive_law()) else {
+                    continue;
+                };
+                // a bound of the drive's travel over the run
+                let t = steps as f64 * dt;
+                let servo_speed = |s: &ServoSpec| s.max_velocity.unwrap_or(0.0).abs();
+                let scale = match v {
+                    Some(Prescribed::ScaledLinear(l)) => {
+                        l.linear[0].abs() + (l.linear[1].abs() + l.linear[2].abs()) * length * 2.0
+                    }
+                    _ => 1.0,
+                };
+                let d = match &law {
+                    DriveLaw::Velocity(m) => m.displacement(steps, dt).abs(),
+                    DriveLaw::Table(tb) => tb.max_abs() * scale,
+                    DriveLaw::VelocityTable(tb) => tb.max_abs() * t.max(tb.end()),
+                    DriveLaw::Servo(s) => servo_speed(s) * t,
+                    DriveLaw::Phases(ps) => {
+                        ps.iter()
+                            .map(|p| {
+                                p.velocity
+                                    .unwrap_or(0.0)
+                                    .abs()
+                                    .max(p.servo.as_ref().map_or(0.0, servo_speed))
+                            })
+                            .fold(0.0, f64::max)
+                            * t
+                    }
+                };
+                {
                     if d.is_nan() || d > MAX_RELATIVE_MAGNITUDE * length {
                         return Some((
                             format!("body.{i}.bc.{k}.{f}"),
                             format!(
-                                "the edge would move by {d:e} over the run ({steps} steps of {dt:e}), more than {MAX_RELATIVE_MAGNITUDE:e} × the body's size ({length:e}); set `until_step` or a smaller velocity"
+                                "the edge would move by {}{d:e} over the run ({steps} steps of {dt:e}), more than {MAX_RELATIVE_MAGNITUDE:e} × the body's size ({length:e}); set `until_step`, a smaller velocity or smaller table values",
+                                if matches!(law, DriveLaw::Velocity(_)) {
+                                    ""
+                                } else {
+                                    "up to "
+                                }
                             ),
                         ));
                     }
