@@ -561,6 +561,47 @@ fn a_servo_footing_restarts_bitwise() {
     restart(&footing(300.0, 1200), 1200, 700);
 }
 
+/// `efgdem run` of the manual's servo scenario writes the drive probes to
+/// `history.csv`, and the last row holds the target.
+#[test]
+fn the_drive_probes_reach_history_csv() {
+    let d = std::env::temp_dir().join(format!("efgdem-loads-run-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let f = d.join("servo.toml");
+    let src = pressed(
+        "efg",
+        "force = -2.0e4, gain = 1.0e-6, max_velocity = 0.01, integral = 0.2",
+    );
+    std::fs::write(&f, src).unwrap();
+    let out = d.join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_efgdem"))
+        .args([
+            "run",
+            f.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let h = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let mut lines = h.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(head, ["step", "t", "f", "d"]);
+    let last: Vec<f64> = h
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(last[0], 1500.0);
+    assert!((last[2] + 2.0e4).abs() < 1.0, "{last:?}");
+    assert!(last[3] < -1.0e-3, "{last:?}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 // ---------------------------------------------------------------------------
 // bad input: located errors, exit 2
 
