@@ -626,8 +626,13 @@ fn bad_loads_and_drives_are_located_errors() {
     assert_eq!(code, Some(0), "{err}");
     // the line of the bottom bc's `uy`
     let line = good.lines().position(|l| l.starts_with("uy =")).unwrap() + 1;
-    let cases: [(&str, &str, &str); 8] = [
+    let cases: [(&str, &str, &str); 9] = [
         ("huge", "{ table = [[0.0, -1e300]] }", "would move by up to"),
+        (
+            "gamma",
+            "{ servo = { force = -10.0, gain = 1.0e-6, max_velocity = 0.01 } }",
+            "dissipative Newmark",
+        ),
         (
             "unsorted",
             "{ table = [[0.0, 0.0], [0.2, -0.002], [0.1, 0.0]] }",

@@ -417,9 +417,16 @@ fn check_table(tb: &Table, at: &str, p: &mut Problems) {
 
 /// Checks of a prescribed component that changes in time (tables, servo,
 /// phases) at `at` (e.g. `body.0.bc.1.uy`).
-fn validate_drive(sc: &Scenario, v: &Prescribed, at: &str, p: &mut Problems) {
+fn validate_drive(sc: &Scenario, v: &Prescribed, gamma: f64, at: &str, p: &mut Problems) {
     let coupled = sc.granular.is_some();
     let servo = |sv: &ServoSpec, at: &str, p: &mut Problems| {
+        p.check(
+            gamma > 0.5,
+            at,
+            format!(
+                "a servo drive needs a dissipative Newmark, γ > ½ (got γ = {gamma}), e.g. `newmark = {{ gamma = 0.6, beta = 0.3025 }}`: with γ = ½ the driven edge rings at the step frequency undamped (the accelerations of a prescribed edge grow after every change of speed) and the servo feeds the ringing (README, \"Loads and drives\")"
+            ),
+        );
         match &sv.force {
             None => p.push(
                 format!("{at}.force"),
@@ -717,7 +724,7 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             for (f, v) in [("ux", &bc.ux), ("uy", &bc.uy)] {
                 if let Some(v) = v {
                     p.check(v.finite(), at(f), "must be finite");
-                    validate_drive(sc, v, &at(f), p);
+                    validate_drive(sc, v, b.newmark.gamma, &at(f), p);
                 }
             }
             if let Some(tb) = &bc.table {
