@@ -534,6 +534,42 @@ fn a_servo_footing_holds_its_force_on_the_grains() {
     assert!((mean - target).abs() < 0.02 * target, "{mean}");
 }
 
+/// The strip-footing recipe: push at constant velocity into the bed, then
+/// hold a force with the servo (`phases`); the position carries over.
+#[test]
+fn a_footing_pushed_then_held_by_phases() {
+    let src: String = footing(300.0, 3000)
+        .lines()
+        .map(|l| match l.strip_prefix("uy = { servo = ") {
+            Some(servo) => format!(
+                "uy = {{ phases = [{{ until_step = 300, velocity = -0.02 }}, {{ servo = {} }}] }}\n",
+                servo.strip_suffix(" }").unwrap()
+            ),
+            None => format!("{l}\n"),
+        })
+        .collect();
+    assert!(src.contains("phases"));
+    let sc = scenario::parse(&src, "x").unwrap();
+    let mut m = sc.build().unwrap();
+    let probes = sc.probes(&m).unwrap();
+    run(&mut m, 300);
+    // 300 steps of 5e-5 s at 2 cm/s: 0.3 mm, exactly
+    let d = m.body(0).drives()[0].1.d;
+    assert!((d + 3.0e-4).abs() < 1e-15, "{d}");
+    let pushed = m.probe(&probes[0].1);
+    let mut fy = Vec::new();
+    for n in 300..3000 {
+        m.step().unwrap();
+        if n >= 1500 {
+            fy.push(m.probe(&probes[0].1));
+        }
+    }
+    let mean = fy.iter().sum::<f64>() / fy.len() as f64;
+    eprintln!("phases: {pushed:.1} N after the push, {mean:.2} N held (target 300)");
+    assert!(pushed > 0.0, "the push reached the bed");
+    assert!((mean - 300.0).abs() < 0.02 * 300.0, "{mean}");
+}
+
 /// The servo footing on 1 and 2 threads: bitwise the same state.
 #[test]
 fn a_servo_footing_is_thread_count_independent() {
