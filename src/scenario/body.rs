@@ -364,10 +364,14 @@ pub fn absurd_motion(sc: &Scenario, steps: usize, dt: f64) -> Option<(String, St
                 // a bound of the drive's travel over the run
                 let t = steps as f64 * dt;
                 let servo_speed = |s: &ServoSpec| s.max_velocity.unwrap_or(0.0).abs();
+                // the largest scale over the rectangle's corners
+                let (o, sz) = (b.rectangle.origin, b.rectangle.size);
                 let scale = match v {
-                    Some(Prescribed::ScaledLinear(l)) => {
-                        l.linear[0].abs() + (l.linear[1].abs() + l.linear[2].abs()) * length * 2.0
-                    }
+                    Some(pr @ Prescribed::ScaledLinear(_)) => [0.0, 1.0]
+                        .iter()
+                        .flat_map(|&i| [0.0, 1.0].map(move |j| (i, j)))
+                        .map(|(i, j)| pr.drive_scale(o[0] + i * sz[0], o[1] + j * sz[1]).abs())
+                        .fold(0.0, f64::max),
                     _ => 1.0,
                 };
                 let d = match &law {
