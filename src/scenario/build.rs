@@ -6,7 +6,8 @@
 //! scenario reports it as `file:line: field: message`.
 
 use super::body::{
-    BODY_QUANTITIES, CONTACT_FORCE_QUANTITIES, Method, POINT_QUANTITIES, is_body_probe,
+    BODY_QUANTITIES, CONTACT_FORCE_QUANTITIES, DRIVE_QUANTITIES, Method, POINT_QUANTITIES,
+    is_body_probe,
 };
 use super::generate::discs_from_csv;
 use super::granular::{
@@ -938,7 +939,24 @@ pub fn probes(sc: &Scenario, model: &Model) -> Result<Vec<(String, Probe)>, Inva
                     .bind(Vec2::from(p))
                     .map_err(|e| bad(&at("point"), e))
             };
+            let drive = |body: usize| {
+                let c = usize::from(!q.ends_with('x'));
+                model
+                    .body(body)
+                    .drives()
+                    .iter()
+                    .position(|d| d.0 == c)
+                    .map(|index| Probe::Drive {
+                        body,
+                        index,
+                        quantity: q.clone(),
+                    })
+                    .ok_or_else(|| bad(&at("quantity"), format!("body {body} has no drive on that component")))
+            };
             let probe = match &model.system {
+                System::Continuum { .. } if DRIVE_QUANTITIES.contains(&q.as_str()) => {
+                    drive(body_index()?)?
+                }
                 System::Continuum { .. } => {
                     let body = body_index()?;
                     match pr.point {
@@ -954,7 +972,9 @@ pub fn probes(sc: &Scenario, model: &Model) -> Result<Vec<(String, Probe)>, Inva
                 System::Coupled(m) => {
                     if is_body_probe(pr, false) {
                         let body = body_index()?;
-                        if CONTACT_FORCE_QUANTITIES.contains(&q.as_str()) {
+                        if DRIVE_QUANTITIES.contains(&q.as_str()) {
+                            drive(body)?
+                        } else if CONTACT_FORCE_QUANTITIES.contains(&q.as_str()) {
                             Probe::BodyForce {
                                 body,
                                 y: q == "contact_fy",
