@@ -40,64 +40,11 @@
 //! the same range, which is 0 at the critical state; the largest
 //! dilatancy angle and the one at the stress peak.
 
+pub use crate::output::csv::History;
 use crate::output::plot::{Chart, Mark, PlotError, Series, line_chart};
 use crate::scenario::Scenario;
 use crate::scenario::granular::{DiscsSpec, Radius, ServoSpec, WallSpec};
 use std::path::Path;
-
-/// A `history.csv`: its column names and rows of numbers.
-#[derive(Debug, Clone, Default)]
-pub struct History {
-    /// Column names, in order (`step`, `t`, probes, measures).
-    pub columns: Vec<String>,
-    /// The rows.
-    pub rows: Vec<Vec<f64>>,
-}
-
-impl History {
-    /// Parse the text of a `history.csv` (a header line, then numbers).
-    pub fn parse(text: &str) -> Result<History, String> {
-        let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-        let columns: Vec<String> = lines
-            .next()
-            .ok_or("empty history")?
-            .split(',')
-            .map(|s| s.trim().to_string())
-            .collect();
-        let mut rows = Vec::new();
-        for (k, l) in lines.enumerate() {
-            let row = l
-                .split(',')
-                .map(|s| s.trim().parse::<f64>())
-                .collect::<Result<Vec<f64>, _>>()
-                .map_err(|e| format!("history row {}: {e}", k + 1))?;
-            if row.len() != columns.len() {
-                return Err(format!(
-                    "history row {}: {} values for {} columns",
-                    k + 1,
-                    row.len(),
-                    columns.len()
-                ));
-            }
-            rows.push(row);
-        }
-        Ok(History { columns, rows })
-    }
-
-    /// Read and parse a `history.csv` file.
-    pub fn read(path: &Path) -> Result<History, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        History::parse(&text).map_err(|e| format!("{}: {e}", path.display()))
-    }
-
-    /// Index of the column `name`.
-    pub fn column(&self, name: &str) -> Result<usize, String> {
-        self.columns
-            .iter()
-            .position(|c| c == name)
-            .ok_or_else(|| format!("history.csv has no column `{name}`"))
-    }
-}
 
 /// Where a biaxial test's quantities are (module docs).
 #[derive(Debug, Clone)]

@@ -412,7 +412,7 @@ fn scenario_names() -> Names {
     // (rectangle, elastic, edge conditions, prescribed motions) — not the
     // continuum's saved state (checkpoints), which is serde too
     rust_files(&root().join("src/scenario"), &mut files);
-    for f in ["body_params.rs", "conditions.rs"] {
+    for f in ["body_params.rs", "conditions.rs", "drive.rs"] {
         files.push(root().join("src/continuum").join(f));
     }
     files.sort();
@@ -668,6 +668,8 @@ name = "block"
 rectangle = { origin = [0.0, 0.15], size = [0.4, 0.1] }
 nodes = [9, 3]
 elastic = { E = 1.0e7, nu = 0.3, density = 2000.0 }
+# dissipative, so that the examples of servo drives pass `check`
+newmark = { gamma = 0.6, beta = 0.3025 }
 
 [[body.bc]]
 edge = "top"

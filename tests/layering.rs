@@ -14,7 +14,7 @@ const LAYERS: &[&[&str]] = &[
     &["scenario"],
     &["output"],
     &["run"],
-    &["study", "reproduce", "biaxial", "geotech"],
+    &["study", "reproduce", "biaxial", "bearing", "geotech"],
 ];
 
 fn layer_of(module: &str) -> usize {

@@ -170,3 +170,55 @@ fn body_names_that_are_not_file_names_or_collide_with_series_are_refused() {
     }
     assert_eq!(check("bodyname", &body("beam_1.a")).0, 0);
 }
+
+#[test]
+fn a_settled_packing_must_not_overlap_a_body() {
+    // the preparation (growth) never sees the bodies: a body placed across
+    // the packing's box would start with discs inside it
+    let discs = r#"discs = { generate = "random", method = "grow", box = [[0.0, 0.0], [1.0, 0.5]], radius = 0.04, count = 60, seed = 1, settle_steps = 200 }"#;
+    let body = r#"
+[[body]]
+name = "footing"
+rectangle = { origin = [0.3, 0.3], size = [0.4, 0.3] }
+nodes = [5, 4]
+elastic = { E = 1.0e8, nu = 0.3, density = 2000.0 }
+[[body.bc]]
+edge = "top"
+fixed = true
+"#;
+    // `check` does not settle the packing (its discs are not where the run
+    // starts them): only `run` can tell, once settled
+    let (code, err) = check("settled_check", &(with_discs(discs) + body));
+    assert_eq!(code, 0, "{err}");
+    let dir = common::tmpdir("start-settled-run");
+    let f = dir.join("settled.toml");
+    std::fs::write(&f, with_discs(discs) + body).unwrap();
+    let out = common::bin()
+        .arg("run")
+        .arg(&f)
+        .arg("-q")
+        .arg("-o")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("settled.toml:17: body[0]:") && err.contains("overlap body `footing`"),
+        "{err}"
+    );
+    // above the box it is accepted
+    let ok = with_discs(discs) + &body.replace("[0.3, 0.3]", "[0.3, 0.55]");
+    std::fs::write(&f, ok).unwrap();
+    let out = common::bin()
+        .args(["run", "-q", "--overwrite", "-o"])
+        .arg(dir.join("out"))
+        .arg(&f)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -175,8 +175,11 @@ def test_granular_run_files_match_history(tmp_path):
     steps = [e[0] for e in sets["discs"]]
     assert steps[0] == 0 and steps[-1] == last and all(s % 500 == 0 for s in steps[:-1])
     n = summary["discs"]
+    xyz0 = read_vtk(sets["discs"][0][2])[0]
     for (step, t, disc_f), (_, _, con_f), (_, _, wall_f) in zip(*sets.values()):
         xyz, pd, _, gid, _ = read_vtk(disc_f)
+        # displacement since t = 0 (the first frame), by id
+        assert np.array_equal(pd["displacement"], xyz - xyz0)
         assert gid == "id" and np.array_equal(pd["id"], np.arange(1, n + 1))
         assert np.all((pd["radius"] >= 0.004) & (pd["radius"] <= 0.006))
         assert np.array_equal(pd["diameter"], 2 * pd["radius"])

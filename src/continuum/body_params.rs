@@ -4,7 +4,7 @@
 //! value types derive serde's `Deserialize` so that the scenario can embed
 //! them, but nothing here knows the file).
 
-use super::conditions::{Edge, EdgeCondition};
+use super::conditions::{Edge, EdgeCondition, PointLoad};
 use serde::Deserialize;
 
 fn one() -> f64 {
@@ -137,6 +137,8 @@ pub struct BodyParams {
     pub static_under: Vec<String>,
     /// Apply gravity to the body's own mass.
     pub self_weight: bool,
+    /// Point loads at material points (`[[body.load]]`).
+    pub loads: Vec<PointLoad>,
 }
 
 impl BodyParams {
@@ -160,6 +162,7 @@ impl BodyParams {
             bc: Vec::new(),
             static_under: Vec::new(),
             self_weight: true,
+            loads: Vec::new(),
         }
     }
 

@@ -2,6 +2,8 @@
 //! displacements (fixed, values, linear fields, motions, the Timoshenko
 //! field) and loads (uniform or parabolic-shear tractions).
 
+use super::drive::{DriveLaw, DrivePhase, ServoSpec};
+use super::table::Table;
 use super::timoshenko::Timoshenko;
 use crate::geom::Vec2;
 use serde::Deserialize;
@@ -59,14 +61,36 @@ pub struct EdgeCondition {
     /// Parabolic shear traction with resultant `P` (force per unit thickness)
     /// along the edge, `τ = 3P/(2D)·(1 − 4s²/D²)`, s from the edge centre.
     pub parabolic_shear: Option<f64>,
+    /// A load's multiplier in time (`traction` or `parabolic_shear` times
+    /// `table(t)`, [`Table`]); `None`: constant.
+    pub table: Option<Table>,
 }
 
-/// A prescribed displacement component: a number, or `{ linear = [a, b, c] }`
-/// for `a + b x + c y`.
-#[derive(Debug, Clone, Copy, Deserialize)]
+/// `[[body.load]]`: a point load at a material point (reference
+/// coordinates), optionally times a table in time.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointLoad {
+    /// Optional name (messages; `initial.static_under` does not take
+    /// point loads).
+    pub name: Option<String>,
+    /// The material point `[x, y]` (reference configuration, inside the
+    /// body).
+    pub point: [f64; 2],
+    /// The force `[fx, fy]` (N: the resultant on the body's thickness, as
+    /// the disc–body contact forces).
+    pub force: [f64; 2],
+    /// Multiplier in time; `None`: constant.
+    pub table: Option<Table>,
+}
+
+/// A prescribed displacement component: a number, `{ linear = [a, b, c] }`
+/// for `a + b x + c y`, or a drive that changes in time
+/// ([`super::drive`]).
+#[derive(Debug, Clone, Deserialize)]
 #[serde(
     untagged,
-    expecting = "a number, { linear = [a, b, c] } (a + b x + c y) or { velocity = v, until_step = N } (no other keys)"
+    expecting = "a number, { linear = [a, b, c] } (a + b x + c y), { linear = [a, b, c], table = [[t, s], …] }, { velocity = v, until_step = N }, { table = [[t, u], …] }, { velocity_table = [[t, v], …] }, { servo = { force, gain, max_velocity, … } } or { phases = [ … ] } (no other keys)"
 )]
 pub enum Prescribed {
     /// A constant ū.
@@ -76,12 +100,65 @@ pub enum Prescribed {
     /// An edge moving at constant velocity for `until_step` steps: `ū` is
     /// [`MotionField::displacement`], zero at t = 0.
     Motion(MotionField),
+    /// `ū = (a + b x + c y) · table(t)`: a linear field scaled in time
+    /// (e.g. a base rotating about its toe).
+    ScaledLinear(ScaledLinear),
+    /// `ū = table(t)` along the edge.
+    Table(TableField),
+    /// `ū = ∫₀ᵗ table`: a prescribed velocity, integrated exactly.
+    VelocityTable(VelocityTableField),
+    /// A servo holding a target force on the body.
+    Servo(ServoField),
+    /// One motion after another (constant velocity, servo, rest).
+    Phases(PhasesField),
+}
+
+/// `{ linear = [a, b, c], table = [[t, s], …] }`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScaledLinear {
+    /// Coefficients `[a, b, c]` of `a + b x + c y`.
+    pub linear: [f64; 3],
+    /// The multiplier `s(t)`.
+    pub table: Table,
+}
+
+/// `{ table = [[t, u], …] }`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TableField {
+    /// The displacement in time.
+    pub table: Table,
+}
+
+/// `{ velocity_table = [[t, v], …] }`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VelocityTableField {
+    /// The velocity in time.
+    pub velocity_table: Table,
+}
+
+/// `{ servo = { … } }`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServoField {
+    /// The servo.
+    pub servo: ServoSpec,
+}
+
+/// `{ phases = [ { until_step, velocity | servo }, … ] }`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhasesField {
+    /// The phases, in order.
+    pub phases: Vec<DrivePhase>,
 }
 
 /// `{ velocity = v, until_step = N }`: the edge moves with velocity `v`
 /// (displacement `v t`) during the first `N` steps (all steps if absent),
 /// then stays where it is — e.g. an edge following a rigid plate.
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MotionField {
     /// Velocity `v` of the prescribed component (length per time; sign
@@ -115,15 +192,39 @@ impl Prescribed {
         match *self {
             Prescribed::Value(v) => v,
             Prescribed::Linear(LinearField { linear: [a, b, c] }) => a + b * x + c * y,
-            Prescribed::Motion(_) => 0.0,
+            _ => 0.0,
         }
     }
-    /// All numbers finite.
+    /// All numbers finite (tables are checked by [`Table::problem`]).
     pub fn finite(&self) -> bool {
         match self {
             Prescribed::Value(v) => v.is_finite(),
             Prescribed::Linear(l) => l.linear.iter().all(|v| v.is_finite()),
             Prescribed::Motion(m) => m.velocity.is_finite(),
+            Prescribed::ScaledLinear(l) => l.linear.iter().all(|v| v.is_finite()),
+            _ => true,
+        }
+    }
+    /// The drive of a component that changes in time, if it is one.
+    pub fn drive_law(&self) -> Option<DriveLaw> {
+        match self {
+            Prescribed::Value(_) | Prescribed::Linear(_) => None,
+            Prescribed::Motion(m) => Some(DriveLaw::Velocity(*m)),
+            Prescribed::ScaledLinear(l) => Some(DriveLaw::Table(l.table.clone())),
+            Prescribed::Table(t) => Some(DriveLaw::Table(t.table.clone())),
+            Prescribed::VelocityTable(t) => Some(DriveLaw::VelocityTable(t.velocity_table.clone())),
+            Prescribed::Servo(s) => Some(DriveLaw::Servo(s.servo.clone())),
+            Prescribed::Phases(p) => Some(DriveLaw::Phases(p.phases.clone())),
+        }
+    }
+    /// The scale `s(x, y)` of the drive at a point: `a + b x + c y` for a
+    /// scaled linear field, 1 otherwise (a rigid translation).
+    pub fn drive_scale(&self, x: f64, y: f64) -> f64 {
+        match self {
+            Prescribed::ScaledLinear(ScaledLinear {
+                linear: [a, b, c], ..
+            }) => a + b * x + c * y,
+            _ => 1.0,
         }
     }
 }
@@ -151,6 +252,7 @@ impl EdgeCondition {
             timoshenko: None,
             traction: None,
             parabolic_shear: None,
+            table: None,
         }
     }
 
@@ -203,8 +305,8 @@ pub fn prescribed(bc: &EdgeCondition, x: Vec2, tim: Option<&Timoshenko>) -> [f64
         return t.displacement(x);
     }
     [
-        bc.ux.map_or(0.0, |v| v.at(x.x, x.y)),
-        bc.uy.map_or(0.0, |v| v.at(x.x, x.y)),
+        bc.ux.as_ref().map_or(0.0, |v| v.at(x.x, x.y)),
+        bc.uy.as_ref().map_or(0.0, |v| v.at(x.x, x.y)),
     ]
 }
 

@@ -7,16 +7,22 @@ pub mod body_params;
 pub mod cantilever;
 pub mod compliance;
 pub mod conditions;
+pub mod drive;
 pub mod material;
 pub mod newmark;
 pub mod quadrature;
 pub mod state;
+pub mod table;
 pub mod timoshenko;
 
 pub use body_params::{BodyParams, Elastic, MassKind, Plane, Rectangle};
-pub use conditions::{Edge, EdgeCondition, LinearField, MotionField, Prescribed, TimoshenkoSpec};
+pub use conditions::{
+    Edge, EdgeCondition, LinearField, MotionField, PointLoad, Prescribed, TimoshenkoSpec,
+};
+pub use drive::{Drive, DriveLaw, DrivePhase, DriveState, Measure, ServoSpec, Target};
 pub use material::{Material, Sample};
 pub use state::{BodyState, BoundaryState, StateError};
+pub use table::{Table, TimedLoad};
 
 use crate::continuum::compliance::{BoundaryGreen, Compliance, PointRows};
 use crate::continuum::newmark::{Newmark, State, pair_values};
@@ -217,6 +223,9 @@ pub trait Continuum: Send {
     }
     /// Kinetic and strain energy of the present state.
     fn energies(&self) -> BodyEnergies;
+    /// The total force of the discs on the body at the present state, set
+    /// by the coupling before each step (servo drives measure it).
+    fn set_contact_force(&mut self, _f: Vec2) {}
     /// DOFs and bytes of the boundary Green matrix, once built
     /// ([`crate::continuum::compliance`]); `(0, 0)` if none.
     fn green_size(&self) -> (usize, usize) {
@@ -273,6 +282,10 @@ pub trait ContactBody: Send + Sync + 'static {
     /// `F[i] += c · g` over `row = [(DOF, c)]` for the next step (a
     /// generalised force booked as a load).
     fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64);
+    /// The total force of the discs on the body at the present state, set
+    /// before each step (what a servo drive with `measure = "contacts"`
+    /// measures); bodies without such a drive ignore it.
+    fn set_contact_force(&mut self, _f: Vec2) {}
     /// Accept the step, clear the point loads.
     fn commit(&mut self) -> Result<(), Self::Error>;
     /// Kinetic, strain and penalty energy and load work of the present
@@ -564,6 +577,9 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     }
     fn energies(&self) -> BodyEnergies {
         self.body.energies()
+    }
+    fn set_contact_force(&mut self, f: Vec2) {
+        self.body.set_contact_force(f);
     }
     fn green_size(&self) -> (usize, usize) {
         self.green.as_ref().map_or((0, 0), |g| (g.len(), g.bytes()))

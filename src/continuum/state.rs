@@ -39,6 +39,13 @@ pub struct BodyState {
     pub f_point: Vec<f64>,
     /// Work done by the moving edges since t = 0 (energy account).
     pub motion_work: f64,
+    /// The running state of each drive (prescribed components that change
+    /// in time: position, velocity, servo integral, measured force), in
+    /// the body's drive order.
+    pub drives: Vec<DriveState>,
+    /// Work done since t = 0 by the loads that change in time (tractions
+    /// and point loads with a `table`), trapezoidal in time.
+    pub load_work: f64,
     /// FE: the support reaction of each prescribed DOF at the last step
     /// (the trapezoidal work of moving edges uses it); empty for EFG.
     pub reactions: Vec<f64>,
@@ -46,6 +53,33 @@ pub struct BodyState {
     /// drives ([`WithBoundary`](super::WithBoundary)); `None` for a body
     /// of a continuum-only model.
     pub boundary: Option<BoundaryState>,
+}
+
+/// The running state of a drive (checkpointed).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DriveState {
+    /// Position `d(n)` at the body's present step.
+    pub d: f64,
+    /// Position `d(n+1)` decided for the step under way (equal to `d`
+    /// between steps until [`Drive::decide`](super::Drive::decide)).
+    pub d_next: f64,
+    /// Velocity of the last decided step, `(d(n+1) − d(n))/Δt`.
+    pub velocity: f64,
+    /// Integral velocity of a servo with integral action.
+    pub integral: f64,
+    /// The force measured when the last step was decided (the servo's
+    /// measure, or the edge's reaction for a drive without servo).
+    pub measured: f64,
+}
+
+impl DriveState {
+    /// The position now or at the next step.
+    pub fn position(&self, when: super::drive::When) -> f64 {
+        match when {
+            super::drive::When::Now => self.d,
+            super::drive::When::Next => self.d_next,
+        }
+    }
 }
 
 /// The compliance state of a body's contact boundary.
@@ -65,6 +99,7 @@ impl BodyState {
     /// Check that this state fits a body named `name` with `dofs` unknowns
     /// and `reactions` prescribed DOFs with reactions.
     pub fn check(&self, name: &str, dofs: usize, reactions: usize) -> Result<(), StateError> {
+        self.check_drives(name, None)?;
         if self.name != name {
             return Err(StateError::new(format!(
                 "the saved body `{}` is restored onto body `{name}`",
@@ -91,5 +126,16 @@ impl BodyState {
             )));
         }
         Ok(())
+    }
+
+    /// Check that this state has `drives` drives (when given).
+    pub fn check_drives(&self, name: &str, drives: Option<usize>) -> Result<(), StateError> {
+        match drives {
+            Some(n) if n != self.drives.len() => Err(StateError::new(format!(
+                "body `{name}`: {} saved drives, the body has {n}",
+                self.drives.len()
+            ))),
+            _ => Ok(()),
+        }
     }
 }

@@ -263,6 +263,7 @@ impl CoupledModel {
             self.timing.transfer += (t1 - t0).as_secs_f64();
             self.timing.dem += (t2 - t1).as_secs_f64();
             self.check_finite()?;
+            self.set_contact_forces();
             let r = self.implicit_contacts(true);
             self.timing.transfer += t2.elapsed().as_secs_f64();
             return r;
@@ -279,12 +280,27 @@ impl CoupledModel {
         self.sub += 1;
         if self.sub == self.substeps {
             self.sub = 0;
+            self.set_contact_forces();
             for b in &mut self.bodies {
                 b.advance()?;
             }
         }
         self.timing.body += t3.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    /// Tell each body the total force of the discs on it at the present
+    /// state (`Σ −f` over its contacts, in contact order: the same sum on
+    /// any number of threads), for servo drives that measure it.
+    fn set_contact_forces(&mut self) {
+        for (b, body) in self.bodies.iter_mut().enumerate() {
+            let f = self
+                .contacts
+                .iter()
+                .filter(|c| c.body as usize == b)
+                .fold(Vec2::ZERO, |s, c| s - c.force);
+            body.set_contact_force(f);
+        }
     }
 
     fn check_finite(&self) -> Result<(), CouplingError> {

@@ -170,6 +170,10 @@ pub struct Granular {
     /// External forces of the next [`step`](Self::step): `(slot, force,
     /// moment)`, sorted by slot ([`set_external`](Self::set_external)).
     external: Vec<(u32, Vec2, f64)>,
+    /// Each disc's position when the assembly was made (by id): the
+    /// reference of [`displacement`](Self::displacement). Not part of the
+    /// saved state: a restart rebuilds the assembly, which sets it again.
+    start: Vec<Vec2>,
 }
 
 impl Granular {
@@ -185,6 +189,10 @@ impl Granular {
         let mut particles = particles;
         particles.shrink_to_fit();
         let skin = 0.1 * particles.max_radius().max(f64::MIN_POSITIVE);
+        let mut start = vec![Vec2::ZERO; particles.len()];
+        for (s, &id) in particles.id.iter().enumerate() {
+            start[id as usize] = particles.pos[s];
+        }
         let mut g = Granular {
             particles,
             walls,
@@ -203,9 +211,17 @@ impl Granular {
             max_disp: 0.0,
             store_forces: true,
             external: Vec::new(),
+            start,
         };
         g.update_laws();
         g
+    }
+
+    /// Displacement of the disc in `slot` since the assembly was made (for a
+    /// scenario: since t = 0, after any preparation).
+    pub fn displacement(&self, slot: usize) -> Vec2 {
+        let p = &self.particles;
+        p.pos[slot] - self.start[p.id[slot] as usize]
     }
 
     /// Recompute the pair tables after changing `materials` or wall materials.

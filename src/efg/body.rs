@@ -5,7 +5,7 @@
 
 use super::EfgError;
 use super::assemble::{self, Operators, PointRole, PointShapes};
-use super::penalty::MovingEdge;
+use super::penalty::{MovingEdge, When};
 use super::shape::{ShapeRow, shape_functions};
 use super::support::Support;
 use crate::continuum::conditions::{
@@ -15,7 +15,10 @@ use crate::continuum::material::energy_error_of;
 use crate::continuum::newmark::{Newmark, NewmarkParams, State};
 use crate::continuum::quadrature::{self, QuadPoint};
 use crate::continuum::timoshenko::Timoshenko;
-use crate::continuum::{BodyParams, BodyState, Edge, Material, Prescribed, Sample, StateError};
+use crate::continuum::{
+    BodyParams, BodyState, Drive, DriveState, Edge, Material, Measure, Sample, StateError,
+    TimedLoad,
+};
 use crate::geom::Vec2;
 use crate::sparse::{Cholesky, RowSelection};
 use std::time::Instant;
@@ -76,6 +79,15 @@ pub struct EfgBody {
     pub f_released: Vec<f64>,
     /// Point loads accumulated for the next step (Eq. 46), cleared by `advance`.
     pub f_point: Vec<f64>,
+    /// Loads that change in time (tractions and point loads with a
+    /// `table`): `F(t) = f_permanent + Σ_k s_k(t) F_k`.
+    pub timed: Vec<TimedLoad>,
+    /// Work of the timed loads since t = 0 (trapezoidal in time).
+    pub load_work: f64,
+    /// Total force of the discs on the body at the present state (set by
+    /// the coupling before each step; what a servo with `measure =
+    /// "contacts"` measures).
+    pub contact_force: Vec2,
     /// Scratch of [`refine_residual`](Self::refine_residual): loads without `F^α`, `U₊`, a
     /// work vector.
     refine_work: [Vec<f64>; 3],
@@ -175,12 +187,23 @@ impl EfgBody {
             ) else {
                 continue;
             };
-            for (component, pr) in [(0, bc.ux), (1, bc.uy)] {
-                if let Some(Prescribed::Motion(motion)) = pr {
+            for (component, pr) in [(0, &bc.ux), (1, &bc.uy)] {
+                let Some(pr) = pr.as_ref() else { continue };
+                if let Some(law) = pr.drive_law() {
+                    let scale = match pr {
+                        crate::continuum::Prescribed::ScaledLinear(_) => (first..=last)
+                            .map(|g| {
+                                let x = points[nd + g];
+                                pr.drive_scale(x.x, x.y)
+                            })
+                            .collect(),
+                        _ => Vec::new(),
+                    };
                     ops.penalty.moving.push(MovingEdge {
                         points: first..last + 1,
                         component,
-                        motion,
+                        scale,
+                        drive: Drive::new(law),
                     });
                 }
             }
@@ -202,8 +225,14 @@ impl EfgBody {
         let released = |name: &str| spec.is_released(name);
         // loads: tractions (Eq. 27, boundary term)
         let mut row = ShapeRow::new();
+        let mut timed = Vec::new();
+        let mut scratch = Vec::new();
         for bc in spec.bc.iter().filter(|b| b.is_load()) {
-            let target = if bc.name.as_deref().is_some_and(released) {
+            let target = if bc.table.is_some() {
+                scratch.clear();
+                scratch.resize(ndof, 0.0);
+                &mut scratch
+            } else if bc.name.as_deref().is_some_and(released) {
                 &mut f_released
             } else {
                 &mut f_permanent
@@ -218,6 +247,29 @@ impl EfgBody {
                     target[2 * i] += w * t * row.phi[k] * tr[0];
                     target[2 * i + 1] += w * t * row.phi[k] * tr[1];
                 }
+            }
+            if let Some(tb) = &bc.table {
+                timed.push(TimedLoad::from_dense(tb.clone(), &scratch));
+            }
+        }
+        // point loads at material points, F += Φᵀ(p) f (Eq. 46)
+        for pl in &spec.loads {
+            shape_functions(&support, Vec2::from(pl.point), &mut row)
+                .map_err(|e| EfgError::coverage(e, spec.d_max, &spec.name))?;
+            let target = if pl.table.is_some() {
+                scratch.clear();
+                scratch.resize(ndof, 0.0);
+                &mut scratch
+            } else {
+                &mut f_permanent
+            };
+            for k in 0..row.len() {
+                let i = row.idx[k] as usize;
+                target[2 * i] += row.phi[k] * pl.force[0];
+                target[2 * i + 1] += row.phi[k] * pl.force[1];
+            }
+            if let Some(tb) = &pl.table {
+                timed.push(TimedLoad::from_dense(tb.clone(), &scratch));
             }
         }
         // body force ρ g (Eq. 27, domain term)
@@ -246,6 +298,9 @@ impl EfgBody {
             f_permanent,
             f_released,
             f_point: vec![0.0; ndof],
+            timed,
+            load_work: 0.0,
+            contact_force: Vec2::ZERO,
             refine_work: Default::default(),
             refine_pending: false,
             refine_rows: None,
@@ -285,7 +340,10 @@ impl EfgBody {
         let mut f: Vec<f64> = (0..self.n_dofs())
             .map(|i| self.f_permanent[i] + self.f_released[i] + self.f_point[i])
             .collect();
-        self.ops.penalty.add_load(&mut f, self.step, self.params.dt);
+        for l in &self.timed {
+            l.add_to(&mut f, self.time);
+        }
+        self.ops.penalty.add_load(&mut f, When::Now);
         let mut ch = Cholesky::factor(&self.ops.kbar())?;
         ch.solve_in_place(&mut f);
         self.state.u = f;
@@ -306,7 +364,10 @@ impl EfgBody {
         let mut f: Vec<f64> = (0..self.n_dofs())
             .map(|i| self.f_permanent[i] + self.f_point[i])
             .collect();
-        self.ops.penalty.add_load(&mut f, self.step, dt);
+        for l in &self.timed {
+            l.add_to(&mut f, self.step as f64 * dt);
+        }
+        self.ops.penalty.add_load(&mut f, When::Now);
         let kbar = self.ops.kbar();
         crate::continuum::newmark::consistent_acceleration(
             &m,
@@ -347,14 +408,27 @@ impl EfgBody {
         for (p, f) in self.f_point.iter_mut().zip(&self.f_permanent) {
             *p += f;
         }
+        let (step, dt) = (self.step, self.params.dt);
+        let t1 = (step + 1) as f64 * dt;
+        for l in &self.timed {
+            l.add_to(&mut self.f_point, t1);
+        }
+        // the drives decide their positions at t + Δt from the state at t
+        let pen = &mut self.ops.penalty;
+        for k in 0..pen.moving.len() {
+            let e = &pen.moving[k];
+            let measured = match e.drive.measure() {
+                Some(Measure::Contacts) => self.contact_force.to_array()[e.component],
+                _ => pen.edge_force(e, &self.state.u, When::Now),
+            };
+            pen.moving[k].drive.decide(step, dt, measured);
+        }
         let refine = !self.ops.penalty.moving.is_empty();
         if refine {
             self.refine_work[0].clone_from(&self.f_point);
         }
         // penalty load with the prescribed values at t + Δt (E4)
-        self.ops
-            .penalty
-            .add_load(&mut self.f_point, self.step + 1, self.params.dt);
+        self.ops.penalty.add_load(&mut self.f_point, When::Next);
         nm.predict(&self.state, &self.f_point);
         if refine {
             self.refine_residual()?;
@@ -394,7 +468,7 @@ impl EfgBody {
     /// gap-form residual has no such term. Cost: one more solve per step.
     fn refine_residual(&mut self) -> Result<(), EfgError> {
         let nm = self.newmark.as_mut().ok_or(EfgError::NotStarted)?;
-        let (step, dt, s) = (self.step + 1, self.params.dt, &self.state);
+        let s = &self.state;
         let pen = &self.ops.penalty;
         // the residual matters on the penalty rows only (elsewhere it is
         // the round-off of ordinary terms): products on those rows
@@ -431,7 +505,7 @@ impl EfgBody {
         }
         tmp.iter_mut().zip(u1.iter()).for_each(|(t, u)| *t = -u);
         sel.mul_add(&self.ops.k, tmp, r);
-        pen.add_spring_force(u1, step, dt, r);
+        pen.add_spring_force(u1, When::Next, r);
         self.refine_pending = true;
         Ok(())
     }
@@ -451,10 +525,18 @@ impl EfgBody {
         }
         // work of the moving edges over the step, trapezoidal in time
         let (pen, step, dt) = (&self.ops.penalty, self.step, self.params.dt);
-        let mut work = pen.half_step_work(&self.state.u, step, step, dt);
+        let (t0, t1) = (step as f64 * dt, (step + 1) as f64 * dt);
+        let mut work = pen.half_step_work(&self.state.u, When::Now);
+        let loads0 = TimedLoad::half_sum(&self.timed, &self.state.u, t0, t1);
         nm.commit(&mut self.state);
-        work += pen.half_step_work(&self.state.u, step, step + 1, dt);
+        work += pen.half_step_work(&self.state.u, When::Next);
         self.motion_work += work;
+        if !self.timed.is_empty() {
+            self.load_work += TimedLoad::half_sum(&self.timed, &self.state.u, t0, t1) - loads0;
+        }
+        for e in &mut self.ops.penalty.moving {
+            e.drive.advance();
+        }
         self.f_point.iter_mut().for_each(|x| *x = 0.0);
         self.step += 1;
         self.time = self.step as f64 * self.params.dt;
@@ -473,6 +555,8 @@ impl EfgBody {
             time: self.time,
             f_point: self.f_point.clone(),
             motion_work: self.motion_work,
+            drives: self.drives().map(|(_, d)| *d).collect(),
+            load_work: self.load_work,
             reactions: Vec::new(),
             boundary: None,
         }
@@ -483,13 +567,28 @@ impl EfgBody {
     /// and the prescribed motion (a function of the step) are the build's.
     pub fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError> {
         s.check(&self.name, self.n_dofs(), 0)?;
+        s.check_drives(&self.name, Some(self.ops.penalty.moving.len()))?;
         self.state.clone_from(&s.state);
+        for (e, d) in self.ops.penalty.moving.iter_mut().zip(&s.drives) {
+            e.drive.state = *d;
+        }
+        self.load_work = s.load_work;
         self.step = s.step;
         self.time = s.time;
         self.f_point.clone_from(&s.f_point);
         self.motion_work = s.motion_work;
         self.refine_pending = false;
         Ok(())
+    }
+
+    /// The drives (moving edge components) with their components (0: x,
+    /// 1: y), in build order.
+    pub fn drives(&self) -> impl Iterator<Item = (usize, &DriveState)> {
+        self.ops
+            .penalty
+            .moving
+            .iter()
+            .map(|e| (e.component, &e.drive.state))
     }
 
     /// Shape functions (and derivatives) of this body at `p`: the row
@@ -556,9 +655,7 @@ impl EfgBody {
     /// displacement at the present time (moving edges included):
     /// `½ Σ_g (u(x_g) − ū_g)ᵀ W_g (u(x_g) − ū_g)` (E4, [`super::penalty`]).
     pub fn penalty_energy(&self) -> f64 {
-        self.ops
-            .penalty
-            .energy(&self.state.u, self.step, self.params.dt)
+        self.ops.penalty.energy(&self.state.u, When::Now)
     }
     /// Strain energy including the penalty springs:
     /// [`elastic_energy`](Self::elastic_energy) +

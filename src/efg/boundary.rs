@@ -47,6 +47,9 @@ impl ContactBody for EfgBody {
     fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64) {
         add_dof_load(&mut self.f_point, row, g);
     }
+    fn set_contact_force(&mut self, f: Vec2) {
+        self.contact_force = f;
+    }
     fn commit(&mut self) -> Result<(), EfgError> {
         EfgBody::commit(self)
     }
@@ -64,6 +67,7 @@ impl ContactBody for EfgBody {
             // constant loads from U = 0 (the penalty load is in `penalty`),
             // plus the work of the moving edges
             work: self.motion_work
+                + self.load_work
                 + self
                     .f_permanent
                     .iter()

@@ -10,24 +10,48 @@
 //!   `½UᵀK^αU − UᵀF^α + ½Σ_g ūᵀW_gū` but without its cancellation (with
 //!   α = 10⁵E the three terms are huge and nearly cancel when the edge has
 //!   moved);
-//! - the force of a moving edge on the body, `Σ_g w_g,c (ū_c − u_c(x_g))`.
+//! - the force of a moving edge on the body, `Σ_g s_g w_g,c (ū_c − u_c(x_g))`
+//!   (the generalised force conjugate to its drive's position, `s_g` the
+//!   drive's scale at the point: 1 for a translation).
+//!
+//! A moving edge's prescribed values are known at the body's present step
+//! ([`When::Now`]) and, once its drive decided the step under way, at the
+//! next ([`When::Next`]).
 
-use crate::continuum::MotionField;
+use crate::continuum::Drive;
 use crate::geom::Vec2;
 use crate::sparse::SymCsc;
 use std::ops::Range;
 
-/// One moving component of a prescribed edge (`ux` or `uy` =
-/// `{ velocity = v, until_step = N }`): `ū_c(x_g, t) = ū_c(x_g, 0) + d(t)`
-/// on the edge's points.
+/// One moving component of a prescribed edge (`ux` or `uy` given as a
+/// drive, [`crate::continuum::drive`]): `ū_c(x_g, tₙ) = ū_c(x_g, 0) +
+/// s_g d(n)` on the edge's points.
 #[derive(Debug, Clone)]
 pub struct MovingEdge {
     /// The edge's penalty points.
     pub points: Range<usize>,
     /// 0: x, 1: y.
     pub component: usize,
-    /// Velocity `v` and stop step `N`: `d(t) = v · min(n, N) · Δt`.
-    pub motion: MotionField,
+    /// The scale `s_g` per point of `points` (empty: all 1).
+    pub scale: Vec<f64>,
+    /// The drive: its law and position.
+    pub drive: Drive,
+}
+
+pub use crate::continuum::drive::When;
+
+impl MovingEdge {
+    /// The scale at point `g` (of `points`).
+    fn scale_at(&self, g: usize) -> f64 {
+        self.scale
+            .get(g - self.points.start)
+            .copied()
+            .unwrap_or(1.0)
+    }
+    /// The drive's position `d`.
+    pub fn position(&self, when: When) -> f64 {
+        self.drive.state.position(when)
+    }
 }
 
 /// The penalty points of a body (see the module docs).
@@ -94,13 +118,21 @@ impl Penalty {
         self.weight[g]
     }
 
-    /// `ū(x_g)` after `step` steps of `dt`.
-    pub fn prescribed(&self, g: usize, step: usize, dt: f64) -> [f64; 2] {
+    /// `ū(x_g)` now or at the next step.
+    pub fn prescribed(&self, g: usize, when: When) -> [f64; 2] {
         let mut v = self.value[g];
         for e in self.moving.iter().filter(|e| e.points.contains(&g)) {
-            v[e.component] += e.motion.displacement(step, dt);
+            v[e.component] += e.scale_at(g) * e.position(when);
         }
         v
+    }
+
+    /// Place every drive whose law is a function of time at `step`
+    /// ([`Drive::set_step`]).
+    pub fn set_step(&mut self, step: usize, dt: f64) {
+        for e in &mut self.moving {
+            e.drive.set_step(step, dt);
+        }
     }
 
     /// `u(x_g) = Σ_J φ_J(x_g) u_J` of the nodal vector `u`.
@@ -151,11 +183,11 @@ impl Penalty {
         kbar
     }
 
-    /// `f += F^α(t) = Σ_g Φ_gᵀ W_g ū_g(t)` after `step` steps of `dt` (E4).
-    pub fn add_load(&self, f: &mut [f64], step: usize, dt: f64) {
+    /// `f += F^α(t) = Σ_g Φ_gᵀ W_g ū_g(t)` now or at the next step (E4).
+    pub fn add_load(&self, f: &mut [f64], when: When) {
         for g in 0..self.len() {
             let [wx, wy] = self.weight[g];
-            let ub = self.prescribed(g, step, dt);
+            let ub = self.prescribed(g, when);
             let (fx, fy) = (wx * ub[0], wy * ub[1]);
             if fx == 0.0 && fy == 0.0 {
                 continue;
@@ -169,10 +201,10 @@ impl Penalty {
 
     /// `f += F^α(t) − K^α U = Σ_g Φ_gᵀ W_g (ū_g − u(x_g))`: the force of the
     /// penalty springs on the nodes, from their gap (no `K^α U` formed).
-    pub fn add_spring_force(&self, u: &[f64], step: usize, dt: f64, f: &mut [f64]) {
+    pub fn add_spring_force(&self, u: &[f64], when: When, f: &mut [f64]) {
         for g in 0..self.len() {
             let [wx, wy] = self.weight[g];
-            let ub = self.prescribed(g, step, dt);
+            let ub = self.prescribed(g, when);
             let d = Vec2::new(ub[0], ub[1]) - self.displacement(g, u);
             let (fx, fy) = (wx * d.x, wy * d.y);
             for (j, phi) in self.row(g) {
@@ -184,47 +216,50 @@ impl Penalty {
 
     /// Energy of the penalty springs from their gap,
     /// `½ Σ_g (u(x_g) − ū_g)ᵀ W_g (u(x_g) − ū_g)` (module docs).
-    pub fn energy(&self, u: &[f64], step: usize, dt: f64) -> f64 {
+    pub fn energy(&self, u: &[f64], when: When) -> f64 {
         (0..self.len())
             .map(|g| {
                 let [wx, wy] = self.weight[g];
-                let ub = self.prescribed(g, step, dt);
+                let ub = self.prescribed(g, when);
                 let d = self.displacement(g, u) - Vec2::new(ub[0], ub[1]);
                 0.5 * (wx * d.x * d.x + wy * d.y * d.y)
             })
             .sum()
     }
 
-    /// Force of moving edge `e` on the body along its component,
-    /// `Σ_g w_g,c (ū_c(x_g) − u_c(x_g))`, after `step` steps of `dt`.
-    pub fn edge_force(&self, e: &MovingEdge, u: &[f64], step: usize, dt: f64) -> f64 {
+    /// Force of moving edge `e` on the body along its component (the
+    /// generalised force conjugate to its drive's position),
+    /// `Σ_g s_g w_g,c (ū_c(x_g) − u_c(x_g))`, with the prescribed values
+    /// `when`.
+    pub fn edge_force(&self, e: &MovingEdge, u: &[f64], when: When) -> f64 {
         let c = e.component;
         e.points
             .clone()
             .map(|g| {
                 let u_g = self.displacement(g, u);
                 let u_c = if c == 0 { u_g.x } else { u_g.y };
-                self.weight[g][c] * (self.prescribed(g, step, dt)[c] - u_c)
+                e.scale_at(g) * self.weight[g][c] * (self.prescribed(g, when)[c] - u_c)
             })
             .sum()
     }
 
-    /// Half the trapezoidal work of the moving edges over the step
-    /// `step → step + 1`, with their forces in the state `u` after `at`
-    /// steps: `Σ_e ½ (d_e(step + 1) − d_e(step)) F_e(u, at)`. Called with
-    /// the states before (`at = step`) and after (`at = step + 1`) the step,
+    /// Half the trapezoidal work of the moving edges over the step under
+    /// way (drives decided), with their forces in the state `u` and the
+    /// prescribed values `when`: `Σ_e ½ (d_e(n+1) − d_e(n)) F_e(u, when)`.
+    /// Called with the states before (`Now`) and after (`Next`) the step,
     /// the sum is the work of the moving edges on the body; with the gap
-    /// energy it is exact for γ = ½, β = ¼ (the stored energy
-    /// `½U̇ᵀMU̇ + ½UᵀKU + E^α` changes by it plus the work of the other loads).
-    pub fn half_step_work(&self, u: &[f64], step: usize, at: usize, dt: f64) -> f64 {
+    /// energy it is exact for γ = ½, β = ¼ whatever the positions `d_e(n)`
+    /// (the stored energy `½U̇ᵀMU̇ + ½UᵀKU + E^α` changes by it plus the
+    /// work of the other loads).
+    pub fn half_step_work(&self, u: &[f64], when: When) -> f64 {
         self.moving
             .iter()
             .map(|e| {
-                let dd = e.motion.displacement(step + 1, dt) - e.motion.displacement(step, dt);
+                let dd = e.drive.state.d_next - e.drive.state.d;
                 if dd == 0.0 {
                     return 0.0;
                 }
-                0.5 * dd * self.edge_force(e, u, at, dt)
+                0.5 * dd * self.edge_force(e, u, when)
             })
             .sum()
     }
@@ -232,6 +267,7 @@ impl Penalty {
 
 #[cfg(test)]
 mod tests {
+    use super::When;
     use crate::continuum::{
         BodyParams, Edge, EdgeCondition, Elastic, LinearField, MotionField, Prescribed, Rectangle,
     };
@@ -279,28 +315,30 @@ mod tests {
 
     #[test]
     fn gap_energy_equals_the_quadratic_form_when_well_conditioned() {
-        let b = block();
-        let (pen, u, dt) = (&b.ops.penalty, &b.state.u, b.params.dt);
+        let mut b = block();
         let kbar = b.ops.kbar();
+        let dt = b.params.dt;
         for step in [0, 3, 5, 9] {
+            b.ops.penalty.set_step(step, dt);
+            let (pen, u) = (&b.ops.penalty, &b.state.u);
             // ½UᵀK^αU − UᵀF^α(t) + ½ Σ_g ū_gᵀ W_g ū_g
             let mut f = vec![0.0; u.len()];
-            pen.add_load(&mut f, step, dt);
+            pen.add_load(&mut f, When::Now);
             let c: f64 = (0..pen.len())
                 .map(|g| {
-                    let (w, ub) = (pen.weight(g), pen.prescribed(g, step, dt));
+                    let (w, ub) = (pen.weight(g), pen.prescribed(g, When::Now));
                     0.5 * (w[0] * ub[0] * ub[0] + w[1] * ub[1] * ub[1])
                 })
                 .sum();
             let quad = 0.5 * (kbar.quad_form(u) - b.ops.k.quad_form(u))
                 - f.iter().zip(u).map(|(a, b)| a * b).sum::<f64>()
                 + c;
-            let gap = pen.energy(u, step, dt);
+            let gap = pen.energy(u, When::Now);
             assert!(gap > 1e-4, "the springs are stretched: {gap}");
             assert!((gap - quad).abs() < 1e-10 * gap, "{step}: {gap} vs {quad}");
             // the spring force is the gradient: F^α − K^α U
             let mut fs = vec![0.0; u.len()];
-            pen.add_spring_force(u, step, dt, &mut fs);
+            pen.add_spring_force(u, When::Now, &mut fs);
             let mut ku = vec![0.0; u.len()];
             kbar.mul_add(u, &mut ku);
             b.ops
@@ -314,8 +352,9 @@ mod tests {
 
     #[test]
     fn moving_edge_force_matches_the_old_unit_load_formula() {
-        let b = block();
-        let (pen, u, dt) = (&b.ops.penalty, &b.state.u, b.params.dt);
+        let mut b = block();
+        let dt = b.params.dt;
+        let (pen, u) = (&b.ops.penalty, &b.state.u);
         let e = &pen.moving[0];
         assert_eq!(e.component, 1);
         // F^α₁ = ∫ Φᵀ α e_y dΓ over the edge and ∫ α dΓ
@@ -328,27 +367,33 @@ mod tests {
         let stiffness: f64 = e.points.clone().map(|g| pen.weight(g)[1]).sum();
         // ∫ α dΓ = α t L
         assert!((stiffness - 2000.0 * 0.5 * 2.0).abs() < 1e-9);
+        let unit_u = unit.iter().zip(u).map(|(a, b)| a * b).sum::<f64>();
         for step in [0, 2, 7] {
-            let d = e.motion.displacement(step, dt);
-            let old = d * stiffness - unit.iter().zip(u).map(|(a, b)| a * b).sum::<f64>();
-            let new = pen.edge_force(e, u, step, dt);
+            b.ops.penalty.set_step(step, dt);
+            let e = &b.ops.penalty.moving[0];
+            let d = e.drive.law.position(step, dt).unwrap();
+            let old = d * stiffness - unit_u;
+            let new = b.ops.penalty.edge_force(e, &b.state.u, When::Now);
             assert!((new - old).abs() < 1e-12 * stiffness, "{new} vs {old}");
         }
+        b.ops.penalty.set_step(3, dt);
+        let (pen, u) = (&b.ops.penalty, &b.state.u);
+        let e = &pen.moving[0];
         // a rigid translation c of the body against an edge at d: the
         // springs hold ½ (c − d)² α t L, and push with (d − c) α t L
         let mut t = vec![0.0; u.len()];
         t.iter_mut().skip(1).step_by(2).for_each(|x| *x = 0.05);
-        let d = e.motion.displacement(3, dt);
+        let d = e.drive.law.position(3, dt).unwrap();
         let left: f64 = (0..pen.len())
             .filter(|g| !e.points.contains(g))
             .map(|g| {
-                let ub = pen.prescribed(g, 3, dt);
+                let ub = pen.prescribed(g, When::Now);
                 0.5 * pen.weight(g)[0] * ub[0] * ub[0]
             })
             .sum();
         let want = 0.5 * (0.05 - d) * (0.05 - d) * stiffness + left;
-        assert!((pen.energy(&t, 3, dt) - want).abs() < 1e-9 * want);
-        let f = pen.edge_force(e, &t, 3, dt);
+        assert!((pen.energy(&t, When::Now) - want).abs() < 1e-9 * want);
+        let f = pen.edge_force(e, &t, When::Now);
         assert!((f - (d - 0.05) * stiffness).abs() < 1e-9 * stiffness);
     }
 }

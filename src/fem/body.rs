@@ -40,11 +40,12 @@ use super::q4;
 use crate::continuum::conditions::{
     constrained, edge_ends, prescribed, timoshenko_of, traction_at,
 };
+use crate::continuum::drive::When;
 use crate::continuum::material::energy_error_of;
 use crate::continuum::newmark::{Newmark, NewmarkParams, State};
 use crate::continuum::quadrature::{self, QuadPoint};
 use crate::continuum::timoshenko::Timoshenko;
-use crate::continuum::{BodyParams, Edge, MassKind, MotionField, Prescribed};
+use crate::continuum::{BodyParams, Drive, Edge, MassKind, Measure, TimedLoad};
 use crate::continuum::{BodyState, Material, Sample, StateError};
 use crate::geom::Vec2;
 use crate::sparse::{Cholesky, Pattern, SymCsc};
@@ -131,6 +132,17 @@ pub struct FemBody {
     pub f_released: Vec<f64>,
     /// Point loads accumulated for the next step, cleared by `advance`.
     pub f_point: Vec<f64>,
+    /// Loads that change in time (tractions and point loads with a
+    /// `table`): `F(t) = f_permanent + Σ_k s_k(t) F_k`.
+    pub timed: Vec<TimedLoad>,
+    /// Work of the timed loads since t = 0 (trapezoidal in time).
+    pub load_work: f64,
+    /// Total force of the discs on the body at the present state (set by
+    /// the coupling before each step, for servo drives).
+    pub contact_force: Vec2,
+    /// The drives (prescribed components that change in time) with their
+    /// component (0: x, 1: y), one per bc component.
+    pub drives: Vec<(usize, Drive)>,
     /// Right-hand side scratch of a step.
     rhs: Vec<f64>,
     /// Work of the supports of moving edges since t = 0.
@@ -157,8 +169,9 @@ struct Constraint {
     dof: usize,
     /// `ū_c` at t = 0.
     value: f64,
-    /// A moving edge: `ū_c(tₙ) = value + v·min(n, N)·Δt`.
-    motion: Option<MotionField>,
+    /// A moving edge: its drive and the scale `s` of this DOF,
+    /// `ū_c(tₙ) = value + s d(n)`.
+    drive: Option<(usize, f64)>,
     /// `(j, K_cj, G_cj)` for every DOF `j` coupled with this one (itself
     /// included).
     row: Vec<(usize, f64, f64)>,
@@ -167,16 +180,19 @@ struct Constraint {
 }
 
 impl Constraint {
-    /// The prescribed value after `step` steps of `dt`.
-    fn at(&self, step: usize, dt: f64) -> f64 {
-        self.value + self.motion.map_or(0.0, |m| m.displacement(step, dt))
+    /// The prescribed value now or at the next step.
+    fn at(&self, drives: &[(usize, Drive)], when: When) -> f64 {
+        self.value
+            + self
+                .drive
+                .map_or(0.0, |(k, s)| s * drives[k].1.state.position(when))
     }
 }
 
-/// `U_c = ū_c(step)` in `u`, exactly.
-fn impose(constraints: &[Constraint], u: &mut [f64], step: usize, dt: f64) {
+/// `U_c = ū_c` (now or next) in `u`, exactly.
+fn impose(constraints: &[Constraint], drives: &[(usize, Drive)], u: &mut [f64], when: When) {
     for c in constraints {
-        u[c.dof] = c.at(step, dt);
+        u[c.dof] = c.at(drives, when);
     }
 }
 
@@ -313,7 +329,10 @@ impl FemBody {
         }
         let timoshenko = timoshenko_of(spec);
         // prescribed DOFs: the nodes on the edge take ū at their position
-        let mut fixed: Vec<Option<(f64, Option<MotionField>)>> = vec![None; ndof];
+        // per DOF: its value at t = 0 and its drive (index, scale)
+        type Fixed = (f64, Option<(usize, f64)>);
+        let mut fixed: Vec<Option<Fixed>> = vec![None; ndof];
+        let mut drives: Vec<(usize, Drive)> = Vec::new();
         let edge_nodes = |e: Edge| -> Vec<usize> {
             match e {
                 Edge::Left => (0..ny).map(|j| j * nx).collect(),
@@ -324,16 +343,24 @@ impl FemBody {
         };
         for bc in spec.bc.iter().filter(|b| !b.is_load()) {
             let (cx, cy) = constrained(bc);
+            // one drive per moving component of the bc
+            let mut ids = [None, None];
+            for (a, pr) in [(0, &bc.ux), (1, &bc.uy)] {
+                if let Some(law) = pr.as_ref().and_then(|p| p.drive_law()) {
+                    ids[a] = Some(drives.len());
+                    drives.push((a, Drive::new(law)));
+                }
+            }
             for node in edge_nodes(bc.edge) {
                 let x = Vec2::new(xs[node % nx], ys[node / nx]);
                 let ub = prescribed(bc, x, timoshenko.as_ref());
-                for (a, on, pr) in [(0, cx, bc.ux), (1, cy, bc.uy)] {
+                for (a, on, pr) in [(0, cx, &bc.ux), (1, cy, &bc.uy)] {
                     if on {
-                        let motion = match pr {
-                            Some(Prescribed::Motion(m)) => Some(m),
-                            _ => None,
-                        };
-                        fixed[2 * node + a] = Some((ub[a], motion));
+                        let drive = ids[a].map(|k| {
+                            let s = pr.as_ref().map_or(1.0, |p| p.drive_scale(x.x, x.y));
+                            (k, s)
+                        });
+                        fixed[2 * node + a] = Some((ub[a], drive));
                     }
                 }
             }
@@ -342,7 +369,7 @@ impl FemBody {
             .iter()
             .enumerate()
             .filter_map(|(dof, f)| {
-                let (value, motion) = (*f)?;
+                let (value, drive) = (*f)?;
                 let row = neighbours(nx, ny, dof / 2)
                     .flat_map(|m| [2 * m, 2 * m + 1])
                     .map(|j| (j, k.get(dof, j), gram.get(dof, j)))
@@ -350,7 +377,7 @@ impl FemBody {
                 Some(Constraint {
                     dof,
                     value,
-                    motion,
+                    drive,
                     row,
                     reaction: 0.0,
                 })
@@ -390,6 +417,10 @@ impl FemBody {
             f_permanent: vec![],
             f_released: vec![],
             f_point: vec![0.0; ndof],
+            timed: Vec::new(),
+            load_work: 0.0,
+            contact_force: Vec2::ZERO,
+            drives,
             rhs: vec![0.0; ndof],
             motion_work: 0.0,
             state: State::zeros(ndof),
@@ -410,8 +441,13 @@ impl FemBody {
             Edge::Left | Edge::Right => ny - 1,
             Edge::Top | Edge::Bottom => nx - 1,
         };
+        let mut scratch = Vec::new();
         for bc in spec.bc.iter().filter(|b| b.is_load()) {
-            let target = if bc.name.as_deref().is_some_and(|n| spec.is_released(n)) {
+            let target = if bc.table.is_some() {
+                scratch.clear();
+                scratch.resize(ndof, 0.0);
+                &mut scratch
+            } else if bc.name.as_deref().is_some_and(|n| spec.is_released(n)) {
                 &mut f_released
             } else {
                 &mut f_permanent
@@ -424,6 +460,27 @@ impl FemBody {
                     target[2 * node] += w * t * phi * tr[0];
                     target[2 * node + 1] += w * t * phi * tr[1];
                 }
+            }
+            if let Some(tb) = &bc.table {
+                body.timed.push(TimedLoad::from_dense(tb.clone(), &scratch));
+            }
+        }
+        // point loads at material points, F += Nᵀ(p) f (Eq. 46)
+        for pl in &spec.loads {
+            let loc = body.locate(Vec2::from(pl.point))?;
+            let target = if pl.table.is_some() {
+                scratch.clear();
+                scratch.resize(ndof, 0.0);
+                &mut scratch
+            } else {
+                &mut f_permanent
+            };
+            for (&node, phi) in loc.nodes.iter().zip(loc.shape()) {
+                target[2 * node] += phi * pl.force[0];
+                target[2 * node + 1] += phi * pl.force[1];
+            }
+            if let Some(tb) = &pl.table {
+                body.timed.push(TimedLoad::from_dense(tb.clone(), &scratch));
             }
         }
         // body force ρ g (Eq. 27, domain term)
@@ -438,7 +495,12 @@ impl FemBody {
                 target[2 * i + 1] += material.density * gravity[1] * s;
             }
         }
-        impose(&body.constraints, &mut body.state.u, 0, 0.0);
+        impose(
+            &body.constraints,
+            &body.drives,
+            &mut body.state.u,
+            When::Now,
+        );
         body.info = FemInfo {
             nodes: n,
             dofs: ndof,
@@ -504,14 +566,17 @@ impl FemBody {
     /// Static solve `K U = F` with the permanent and released loads plus the
     /// accumulated point loads; the state becomes (U, 0, 0), `U_c = ū_c`.
     pub fn solve_static(&mut self) -> Result<(), FemError> {
-        let (step, dt) = (self.step, self.params.dt);
         let mut f: Vec<f64> = (0..self.n_dofs())
             .map(|i| self.f_permanent[i] + self.f_released[i] + self.f_point[i])
             .collect();
-        self.lift(&mut f, |c| [c.at(step, dt), 0.0, 0.0]);
+        for l in &self.timed {
+            l.add_to(&mut f, self.time);
+        }
+        let drives = &self.drives;
+        self.lift(&mut f, |c| [c.at(drives, When::Now), 0.0, 0.0]);
         let mut ch = Cholesky::factor(&self.k)?;
         ch.solve_in_place(&mut f);
-        impose(&self.constraints, &mut f, step, dt);
+        impose(&self.constraints, &self.drives, &mut f, When::Now);
         self.state.u = f;
         self.state.v.iter_mut().for_each(|x| *x = 0.0);
         self.state.a.iter_mut().for_each(|x| *x = 0.0);
@@ -576,6 +641,9 @@ impl FemBody {
         let mut f: Vec<f64> = (0..self.n_dofs())
             .map(|i| self.f_permanent[i] + self.f_point[i])
             .collect();
+        for l in &self.timed {
+            l.add_to(&mut f, self.step as f64 * dt);
+        }
         let s = &self.state;
         self.lift(&mut f, |c| [s.u[c.dof], s.v[c.dof], 0.0]);
         for c in &self.constraints {
@@ -591,7 +659,16 @@ impl FemBody {
         for i in 0..self.constraints.len() {
             let c = &self.constraints[i];
             self.state.a[c.dof] = 0.0;
-            let r = self.reaction(c, self.f_permanent[c.dof] + self.f_point[c.dof]);
+            let mut applied = self.f_permanent[c.dof] + self.f_point[c.dof];
+            for l in &self.timed {
+                applied += l.table.value(self.step as f64 * dt)
+                    * l.dofs
+                        .iter()
+                        .filter(|e| e.0 == c.dof)
+                        .map(|e| e.1)
+                        .sum::<f64>();
+            }
+            let r = self.reaction(c, applied);
             self.constraints[i].reaction = r;
         }
         let mut nm = Newmark::new(m, c, self.k.clone(), self.params)?;
@@ -625,22 +702,46 @@ impl FemBody {
     /// in between, which put no load on prescribed DOFs).
     pub fn predict(&mut self) -> Result<&mut Newmark, FemError> {
         let nm = self.newmark.as_ref().ok_or(FemError::NotStarted)?;
-        let (next, dt) = (self.step + 1, self.params.dt);
+        let (step, dt) = (self.step, self.params.dt);
         for (p, f) in self.f_point.iter_mut().zip(&self.f_permanent) {
             *p += f;
+        }
+        for l in &self.timed {
+            l.add_to(&mut self.f_point, (step + 1) as f64 * dt);
+        }
+        // the drives decide their positions at t + Δt from the state at t:
+        // a servo on the edge measures the support reactions
+        // `Σ_c s_c R_c` of its DOFs (the force of the support on the body)
+        for k in 0..self.drives.len() {
+            let (comp, d) = &self.drives[k];
+            let measured = match d.measure() {
+                Some(Measure::Contacts) => self.contact_force.to_array()[*comp],
+                _ => self
+                    .constraints
+                    .iter()
+                    .filter_map(|c| c.drive.filter(|e| e.0 == k).map(|e| e.1 * c.reaction))
+                    .sum(),
+            };
+            self.drives[k].1.decide(step, dt, measured);
         }
         let mut rhs = std::mem::take(&mut self.rhs);
         rhs.copy_from_slice(&self.f_point);
         let s = &self.state;
+        let drives = &self.drives;
         self.lift(&mut rhs, |c| {
-            let (i, u1) = (c.dof, c.at(next, dt));
+            let (i, u1) = (c.dof, c.at(drives, When::Next));
             let (v1, a1) = nm.rates(s.u[i], s.v[i], s.a[i], u1);
             [u1, v1, a1]
         });
         let nm = self.newmark.as_mut().ok_or(FemError::NotStarted)?;
         nm.predict(&self.state, &rhs);
         self.rhs = rhs;
-        impose(&self.constraints, nm.solution_mut(), next, dt);
+        impose(
+            &self.constraints,
+            &self.drives,
+            nm.solution_mut(),
+            When::Next,
+        );
         Ok(nm)
     }
 
@@ -650,18 +751,31 @@ impl FemBody {
     /// clock.
     pub fn commit(&mut self) -> Result<(), FemError> {
         let (step, dt) = (self.step, self.params.dt);
+        let (t0, t1) = (step as f64 * dt, (step + 1) as f64 * dt);
         let nm = self.newmark.as_mut().ok_or(FemError::NotStarted)?;
-        impose(&self.constraints, nm.solution_mut(), step + 1, dt);
+        impose(
+            &self.constraints,
+            &self.drives,
+            nm.solution_mut(),
+            When::Next,
+        );
+        let loads0 = TimedLoad::half_sum(&self.timed, &self.state.u, t0, t1);
         nm.commit(&mut self.state);
+        if !self.timed.is_empty() {
+            self.load_work += TimedLoad::half_sum(&self.timed, &self.state.u, t0, t1) - loads0;
+        }
         for i in 0..self.constraints.len() {
             let c = &self.constraints[i];
-            if c.motion.is_none() {
+            if c.drive.is_none() {
                 continue;
             }
             let r = self.reaction(c, self.f_point[c.dof]);
-            let du = c.at(step + 1, dt) - c.at(step, dt);
+            let du = c.at(&self.drives, When::Next) - c.at(&self.drives, When::Now);
             self.motion_work += 0.5 * (c.reaction + r) * du;
             self.constraints[i].reaction = r;
+        }
+        for (_, d) in &mut self.drives {
+            d.advance();
         }
         self.f_point.iter_mut().for_each(|x| *x = 0.0);
         self.step += 1;
@@ -680,6 +794,8 @@ impl FemBody {
             time: self.time,
             f_point: self.f_point.clone(),
             motion_work: self.motion_work,
+            drives: self.drives.iter().map(|(_, d)| d.state).collect(),
+            load_work: self.load_work,
             reactions: self.constraints.iter().map(|c| c.reaction).collect(),
             boundary: None,
         }
@@ -689,7 +805,12 @@ impl FemBody {
     /// same parameters (name, DOFs and prescribed DOFs checked).
     pub fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError> {
         s.check(&self.name, self.n_dofs(), self.constraints.len())?;
+        s.check_drives(&self.name, Some(self.drives.len()))?;
         self.state.clone_from(&s.state);
+        for ((_, d), st) in self.drives.iter_mut().zip(&s.drives) {
+            d.state = *st;
+        }
+        self.load_work = s.load_work;
         self.step = s.step;
         self.time = s.time;
         self.f_point.clone_from(&s.f_point);
@@ -767,7 +888,7 @@ impl FemBody {
             .zip(&self.state.u)
             .map(|(f, u)| f * u)
             .sum();
-        w + self.motion_work
+        w + self.motion_work + self.load_work
     }
     /// Strain energy `½ Uᵀ K U` with the unmodified K.
     pub fn strain_energy(&self) -> f64 {

@@ -39,6 +39,9 @@ impl ContactBody for FemBody {
     fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64) {
         add_dof_load(&mut self.f_point, row, g);
     }
+    fn set_contact_force(&mut self, f: Vec2) {
+        self.contact_force = f;
+    }
     fn predict(&mut self) -> Result<&mut Newmark, FemError> {
         FemBody::predict(self)
     }

@@ -184,6 +184,14 @@ impl<'a> BodyRef<'a> {
             BodyRef::Fem(b) => b.node(i),
         }
     }
+    /// The drives (prescribed components that change in time) with their
+    /// component (0: x, 1: y), in build order.
+    pub fn drives(self) -> Vec<(usize, crate::continuum::DriveState)> {
+        match self {
+            BodyRef::Efg(b) => b.drives().map(|(c, d)| (c, *d)).collect(),
+            BodyRef::Fem(b) => b.drives.iter().map(|(c, d)| (*c, d.state)).collect(),
+        }
+    }
     /// Per-body data for frames: EFG nodal shape rows (FE needs none).
     pub fn frame_data(self) -> Result<Option<PointShapes>, BodyError> {
         match self {

@@ -29,6 +29,18 @@ pub enum Probe {
         /// The energy's name.
         quantity: String,
     },
+    /// A drive of body `body` (its `index`-th drive, [`BodyRef::drives`]):
+    /// `drive_ux`/`drive_uy` (position), `drive_vx`/`drive_vy` (velocity
+    /// of the last step), `drive_fx`/`drive_fy` (force measured when the
+    /// last step was decided).
+    Drive {
+        /// Body index.
+        body: usize,
+        /// Index among the body's drives.
+        index: usize,
+        /// The quantity's name.
+        quantity: String,
+    },
     /// Total force of the discs on body `body` (`y`: the y component).
     BodyForce {
         /// Body index.
@@ -208,6 +220,18 @@ pub fn value<'a>(
                 "kinetic_energy" => b.kinetic_energy(),
                 "strain_energy" => b.strain_energy(),
                 _ => b.kinetic_energy() + b.strain_energy(),
+            }
+        }
+        Probe::Drive {
+            body: b,
+            index,
+            quantity,
+        } => {
+            let d = body(*b).drives()[*index].1;
+            match &quantity[..quantity.len() - 1] {
+                "drive_u" => d.d,
+                "drive_v" => d.velocity,
+                _ => d.measured,
             }
         }
         Probe::BodyForce { body: b, y } => coupled.map_or(0.0, |m| {

@@ -9,7 +9,9 @@
 //!   histories, the Verlet bookkeeping (reference positions, rebuild
 //!   counter, stale flag, largest displacement), clock;
 //! - continuum: each body's [`BodyState`] — `U`, `U̇`, `Ü`, clock, pending
-//!   point loads, work of moving edges, FE support reactions;
+//!   point loads, work of moving edges, drives (position, velocity, servo
+//!   integral, last measurement), work of timed loads, FE support
+//!   reactions;
 //! - coupled: [`CoupledState`] — the granular state, each body's state with
 //!   its boundary Green matrix's DOFs (batch by batch), the disc–body
 //!   contacts with their histories and forces, the scheme's counters.
@@ -32,8 +34,9 @@ use crate::dem::state::GranularState;
 /// Version of the byte format of [`ModelState::to_bytes`]; raised whenever
 /// a saved type changes.
 /// (2: walls keep both ends of the Verlet reference, for joined ends;
-/// 3: walls keep the integral velocity of a servo with integral action.)
-pub const STATE_FORMAT_VERSION: u32 = 3;
+/// 3: walls keep the integral velocity of a servo with integral action;
+/// 4: bodies keep their drives' state and the work of timed loads.)
+pub const STATE_FORMAT_VERSION: u32 = 4;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

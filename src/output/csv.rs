@@ -1,4 +1,5 @@
-//! `history.csv`: one row per recorded step, streamed to disk.
+//! `history.csv`: one row per recorded step, streamed to disk, and read
+//! back ([`History`]) by post-processing.
 
 use crate::dem::Granular;
 use std::fs::File;
@@ -165,5 +166,65 @@ mod tests {
         assert_eq!(h, vec!["t", "f"]);
         assert_eq!(rows, vec![vec![0.0, 1.5], vec![0.1, -2.25e-9]]);
         std::fs::remove_dir_all(dir).unwrap();
+    }
+}
+
+/// A `history.csv`: its column names and rows of numbers.
+#[derive(Debug, Clone, Default)]
+pub struct History {
+    /// Column names, in order (`step`, `t`, probes, measures).
+    pub columns: Vec<String>,
+    /// The rows.
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl History {
+    /// Parse the text of a `history.csv` (a header line, then numbers).
+    pub fn parse(text: &str) -> Result<History, String> {
+        let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+        let columns: Vec<String> = lines
+            .next()
+            .ok_or("empty history")?
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .collect();
+        let mut rows = Vec::new();
+        for (k, l) in lines.enumerate() {
+            let row = l
+                .split(',')
+                .map(|s| s.trim().parse::<f64>())
+                .collect::<Result<Vec<f64>, _>>()
+                .map_err(|e| format!("history row {}: {e}", k + 1))?;
+            if row.len() != columns.len() {
+                return Err(format!(
+                    "history row {}: {} values for {} columns",
+                    k + 1,
+                    row.len(),
+                    columns.len()
+                ));
+            }
+            rows.push(row);
+        }
+        Ok(History { columns, rows })
+    }
+
+    /// Read and parse a `history.csv` file.
+    pub fn read(path: &Path) -> Result<History, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        History::parse(&text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// The values of the column `name`, one per row.
+    pub fn values(&self, name: &str) -> Result<Vec<f64>, String> {
+        let c = self.column(name)?;
+        Ok(self.rows.iter().map(|r| r[c]).collect())
+    }
+
+    /// Index of the column `name`.
+    pub fn column(&self, name: &str) -> Result<usize, String> {
+        self.columns
+            .iter()
+            .position(|c| c == name)
+            .ok_or_else(|| format!("history.csv has no column `{name}`"))
     }
 }

@@ -3,7 +3,9 @@
 #   paraview --script=OUT/view.py                 # the GUI, last frame shown
 #   pvbatch OUT/view.py --screenshot view.png     # an image (headless:
 #                                                 # xvfb-run pvbatch ...)
-#     options: --time T (default: the last frame), --size W H
+#     options: --time T (default: the last frame), --size W H,
+#              --discs displacement (colour the discs by their displacement
+#              since t = 0 instead of their speed)
 #
 # Discs are true-size filled circles coloured by speed, bodies (deformed)
 # coloured by von Mises stress, contact force chains are tubes whose width
@@ -38,6 +40,9 @@ def option(name, n=1):
 SCREENSHOT = option("--screenshot")
 AT = option("--time")
 SIZE = [int(x) for x in (option("--size", 2) or [1600, 900])]
+DISC_FIELD = option("--discs") or "velocity"
+if DISC_FIELD not in ("velocity", "displacement"):
+    raise SystemExit("--discs: velocity or displacement")
 
 pvd = {os.path.basename(p)[:-4]: p for p in sorted(glob.glob(os.path.join(HERE, "*.pvd")))}
 static = sorted(glob.glob(os.path.join(HERE, "*.vtu")))
@@ -115,10 +120,10 @@ if "discs" in pvd:
     d.SetScaleArray = ["POINTS", "radius"]
     d.UseScaleFunction = 0
     d.GaussianRadius = 1.0
-    ColorBy(d, ("POINTS", "velocity", "Magnitude"))
-    lut = GetColorTransferFunction("velocity")
+    ColorBy(d, ("POINTS", DISC_FIELD, "Magnitude"))
+    lut = GetColorTransferFunction(DISC_FIELD)
     lut.ApplyPreset("Cool to Warm", True)
-    bars.append((d, lut, "disc speed [m/s]"))
+    bars.append((d, lut, "disc speed [m/s]" if DISC_FIELD == "velocity" else "disc displacement [m]"))
 
 # contact force chains: tubes along the contact lines, wider with larger
 # normal force (a tube's radius goes from `Radius` at the smallest force
@@ -180,14 +185,14 @@ if pvd:  # a static analysis has no time
     td.FontSize = 20
     td.WindowLocation = "Upper Left Corner"
 
-# colour bars along the bottom; speed from 0
+# colour bars along the bottom; speed and displacement from 0
 for k, (d, lut, name) in enumerate(bars):
     bar = colour_bar(d, lut, name)
     bar.WindowLocation = "Any Location"
     bar.Orientation = "Horizontal"
     bar.Position = [0.06 + 0.5 * k, 0.03]
     d.RescaleTransferFunctionToDataRange(False, True)
-    if name.startswith("disc speed"):
+    if name.startswith("disc "):
         lo, hi = d.LookupTable.RGBPoints[0], d.LookupTable.RGBPoints[-4]
         lut.RescaleTransferFunction(0.0, hi if hi > 0 else 1.0)
 

@@ -90,6 +90,12 @@ pub fn write_discs(
         &r.iter().map(|r| 2.0 * r).collect::<Vec<_>>(),
     );
     f.array("velocity", 3, "", &by_id2(&p.vel));
+    f.array(
+        "displacement",
+        3,
+        "",
+        &vec3(order.iter().map(|&s| g.displacement(s))),
+    );
     f.array("spin", 1, "", &by_id(&p.omega));
     f.array("force", 3, "", &by_id2(&p.force));
     f.array("torque", 1, "", &by_id(&p.torque));

@@ -25,8 +25,9 @@
 use super::{Analysis, Problems, Scenario};
 pub use crate::continuum::{
     BodyParams, Edge, EdgeCondition as BcSpec, Elastic, LinearField, MassKind, MotionField, Plane,
-    Prescribed, Rectangle, TimoshenkoSpec,
+    PointLoad, Prescribed, Rectangle, TimoshenkoSpec,
 };
+use crate::continuum::{DriveLaw, Measure, ServoSpec, Table, Target};
 use serde::Deserialize;
 
 /// One continuum body.
@@ -68,6 +69,9 @@ pub struct BodySpec {
     /// Boundary conditions on the edges.
     #[serde(default)]
     pub bc: Vec<BcSpec>,
+    /// Point loads at material points (`[[body.load]]`).
+    #[serde(default)]
+    pub load: Vec<PointLoad>,
     /// Initial state of a dynamic run (default: at rest, undeformed).
     pub initial: Option<InitialSpec>,
     /// Edges that discs can touch (coupled runs), e.g. `["top", "right"]`;
@@ -129,6 +133,7 @@ impl BodySpec {
                 .as_ref()
                 .map_or_else(Vec::new, |i| i.static_under.clone()),
             self_weight: self.self_weight,
+            loads: self.load.clone(),
         }
     }
 }
@@ -183,6 +188,11 @@ pub const BODY_QUANTITIES: &[&str] = &["kinetic_energy", "strain_energy", "total
 /// Coupled runs: the total force of the discs on a body (no `point`), e.g.
 /// a footing's reaction.
 pub const CONTACT_FORCE_QUANTITIES: &[&str] = &["contact_fx", "contact_fy"];
+/// A body's drive (its first bc component `ux`/`uy` that changes in time):
+/// position, velocity, measured force (no `point`).
+pub const DRIVE_QUANTITIES: &[&str] = &[
+    "drive_ux", "drive_uy", "drive_vx", "drive_vy", "drive_fx", "drive_fy",
+];
 
 /// Is `pr` a probe of a body? In a continuum-only run every point quantity
 /// is; in a coupled run a probe belongs to a body when it has a `point` or
@@ -190,6 +200,7 @@ pub const CONTACT_FORCE_QUANTITIES: &[&str] = &["contact_fx", "contact_fy"];
 pub fn is_body_probe(pr: &crate::scenario::Probe, continuum_only: bool) -> bool {
     let q = pr.quantity.as_str();
     BODY_QUANTITIES.contains(&q)
+        || DRIVE_QUANTITIES.contains(&q)
         || (!continuum_only && CONTACT_FORCE_QUANTITIES.contains(&q))
         || (POINT_QUANTITIES.contains(&q) && (continuum_only || pr.point.is_some()))
 }
@@ -271,8 +282,8 @@ fn validate_magnitudes(sc: &Scenario, i: usize, b: &BodySpec, p: &mut Problems) 
     ];
     for (k, bc) in b.bc.iter().enumerate() {
         let at = |f: &str| format!("body.{i}.bc.{k}.{f}");
-        for (f, v) in [("ux", bc.ux), ("uy", bc.uy)] {
-            let Some(v) = v.filter(|v| v.finite()) else {
+        for (f, v) in [("ux", &bc.ux), ("uy", &bc.uy)] {
+            let Some(v) = v.as_ref().filter(|v| v.finite()) else {
                 continue;
             };
             let largest = corners
@@ -301,8 +312,13 @@ fn validate_magnitudes(sc: &Scenario, i: usize, b: &BodySpec, p: &mut Problems) 
             )
         };
         let mut loads = Vec::new();
+        let times = bc
+            .table
+            .as_ref()
+            .filter(|tb| tb.problem().is_none())
+            .map_or(1.0, |tb| tb.max_abs());
         if let Some(t) = bc.traction.filter(|t| t.iter().all(|v| v.is_finite())) {
-            loads.push(stress("traction", t[0].abs().max(t[1].abs())));
+            loads.push(stress("traction", t[0].abs().max(t[1].abs()) * times));
         }
         if let Some(s) = bc.parabolic_shear.filter(|s| s.is_finite()) {
             loads.push(stress("parabolic_shear", s / length));
@@ -314,6 +330,24 @@ fn validate_magnitudes(sc: &Scenario, i: usize, b: &BodySpec, p: &mut Problems) 
             p.check(ok, path, message);
         }
     }
+    if e.is_finite() && e > 0.0 && t.is_finite() && t > 0.0 {
+        for (k, pl) in b.load.iter().enumerate() {
+            let times = pl
+                .table
+                .as_ref()
+                .filter(|tb| tb.problem().is_none())
+                .map_or(1.0, |tb| tb.max_abs());
+            // as a stress over the body's size and thickness
+            let s = pl.force[0].abs().max(pl.force[1].abs()) * times / (length * t);
+            p.check(
+                !s.is_finite() || s <= MAX_RELATIVE_MAGNITUDE * e,
+                format!("body.{i}.load.{k}.force"),
+                format!(
+                    "a load of {s:e} (as a stress over the body's size and thickness) is more than {MAX_RELATIVE_MAGNITUDE:e} × E = {e:e}: no linear-elastic state, and the solution overflows"
+                ),
+            );
+        }
+    }
 }
 
 /// Prescribed edge motions (`{ velocity = v, until_step = N }`) that move
@@ -323,14 +357,51 @@ pub fn absurd_motion(sc: &Scenario, steps: usize, dt: f64) -> Option<(String, St
     for (i, b) in sc.body.iter().enumerate() {
         let length = b.rectangle.size[0].max(b.rectangle.size[1]);
         for (k, bc) in b.bc.iter().enumerate() {
-            for (f, v) in [("ux", bc.ux), ("uy", bc.uy)] {
-                if let Some(Prescribed::Motion(m)) = v {
-                    let d = m.displacement(steps, dt).abs();
+            for (f, v) in [("ux", &bc.ux), ("uy", &bc.uy)] {
+                let Some(law) = v.as_ref().and_then(|v| v.drive_law()) else {
+                    continue;
+                };
+                // a bound of the drive's travel over the run
+                let t = steps as f64 * dt;
+                let servo_speed = |s: &ServoSpec| s.max_velocity.unwrap_or(0.0).abs();
+                // the largest scale over the rectangle's corners
+                let (o, sz) = (b.rectangle.origin, b.rectangle.size);
+                let scale = match v {
+                    Some(pr @ Prescribed::ScaledLinear(_)) => [0.0, 1.0]
+                        .iter()
+                        .flat_map(|&i| [0.0, 1.0].map(move |j| (i, j)))
+                        .map(|(i, j)| pr.drive_scale(o[0] + i * sz[0], o[1] + j * sz[1]).abs())
+                        .fold(0.0, f64::max),
+                    _ => 1.0,
+                };
+                let d = match &law {
+                    DriveLaw::Velocity(m) => m.displacement(steps, dt).abs(),
+                    DriveLaw::Table(tb) => tb.max_abs() * scale,
+                    DriveLaw::VelocityTable(tb) => tb.max_abs() * t.max(tb.end()),
+                    DriveLaw::Servo(s) => servo_speed(s) * t,
+                    DriveLaw::Phases(ps) => {
+                        ps.iter()
+                            .map(|p| {
+                                p.velocity
+                                    .unwrap_or(0.0)
+                                    .abs()
+                                    .max(p.servo.as_ref().map_or(0.0, servo_speed))
+                            })
+                            .fold(0.0, f64::max)
+                            * t
+                    }
+                };
+                {
                     if d.is_nan() || d > MAX_RELATIVE_MAGNITUDE * length {
                         return Some((
                             format!("body.{i}.bc.{k}.{f}"),
                             format!(
-                                "the edge would move by {d:e} over the run ({steps} steps of {dt:e}), more than {MAX_RELATIVE_MAGNITUDE:e} × the body's size ({length:e}); set `until_step` or a smaller velocity"
+                                "the edge would move by {}{d:e} over the run ({steps} steps of {dt:e}), more than {MAX_RELATIVE_MAGNITUDE:e} × the body's size ({length:e}); set `until_step`, a smaller velocity or smaller table values",
+                                if matches!(law, DriveLaw::Velocity(_)) {
+                                    ""
+                                } else {
+                                    "up to "
+                                }
                             ),
                         ));
                     }
@@ -339,6 +410,107 @@ pub fn absurd_motion(sc: &Scenario, steps: usize, dt: f64) -> Option<(String, St
         }
     }
     None
+}
+
+/// A table's problem as a located error.
+fn check_table(tb: &Table, at: &str, p: &mut Problems) {
+    if let Some(m) = tb.problem() {
+        p.push(at, m);
+    }
+}
+
+/// Checks of a prescribed component that changes in time (tables, servo,
+/// phases) at `at` (e.g. `body.0.bc.1.uy`).
+fn validate_drive(sc: &Scenario, v: &Prescribed, gamma: f64, at: &str, p: &mut Problems) {
+    let coupled = sc.granular.is_some();
+    let servo = |sv: &ServoSpec, at: &str, p: &mut Problems| {
+        p.check(
+            gamma > 0.5,
+            at,
+            format!(
+                "a servo drive needs a dissipative Newmark, γ > ½ (got γ = {gamma}), e.g. `newmark = {{ gamma = 0.6, beta = 0.3025 }}`: with γ = ½ the driven edge rings at the step frequency undamped (the accelerations of a prescribed edge grow after every change of speed) and the servo feeds the ringing (README, \"Loads and drives\")"
+            ),
+        );
+        match &sv.force {
+            None => p.push(
+                format!("{at}.force"),
+                "a servo needs a target `force` (N, on the body along the component; a number or a table [[t, F], …])",
+            ),
+            Some(Target::Value(f)) => p.check(f.is_finite(), format!("{at}.force"), "must be finite"),
+            Some(Target::Table(tb)) => check_table(tb, &format!("{at}.force"), p),
+        }
+        match sv.gain {
+            None => p.push(
+                format!("{at}.gain"),
+                "a servo needs a `gain` G (m/s per N): one step against a stiffness K removes the fraction G K Δt of the force error; choose G ≈ 0.3/(K Δt)",
+            ),
+            Some(g) => p.check(g.is_finite() && g > 0.0, format!("{at}.gain"), format!("must be > 0 (got {g})")),
+        }
+        match sv.max_velocity {
+            None => p.push(
+                format!("{at}.max_velocity"),
+                "a servo needs a `max_velocity` (m/s)",
+            ),
+            Some(v) => p.check(
+                v.is_finite() && v > 0.0,
+                format!("{at}.max_velocity"),
+                format!("must be > 0 (got {v})"),
+            ),
+        }
+        p.check(
+            sv.integral.is_finite() && (0.0..1.0).contains(&sv.integral),
+            format!("{at}.integral"),
+            format!("integral action β must be in [0, 1) (got {})", sv.integral),
+        );
+        p.check(
+            sv.measure != Measure::Contacts || coupled,
+            format!("{at}.measure"),
+            "`measure = \"contacts\"` needs discs (a coupled run); use `\"edge\"`",
+        );
+    };
+    match v.drive_law() {
+        Some(DriveLaw::Table(tb)) => check_table(&tb, &format!("{at}.table"), p),
+        Some(DriveLaw::VelocityTable(tb)) => check_table(&tb, &format!("{at}.velocity_table"), p),
+        Some(DriveLaw::Servo(sv)) => servo(&sv, &format!("{at}.servo"), p),
+        Some(DriveLaw::Phases(ps)) => {
+            p.check(
+                !ps.is_empty(),
+                format!("{at}.phases"),
+                "give at least one phase",
+            );
+            let mut last = 0;
+            for (k, ph) in ps.iter().enumerate() {
+                let pat = format!("{at}.phases.{k}");
+                p.check(
+                    !(ph.velocity.is_some() && ph.servo.is_some()),
+                    &pat,
+                    "a phase has one motion: `velocity` or `servo` (or neither: at rest)",
+                );
+                if let Some(v) = ph.velocity {
+                    p.check(v.is_finite(), format!("{pat}.velocity"), "must be finite");
+                }
+                if let Some(sv) = &ph.servo {
+                    servo(sv, &format!("{pat}.servo"), p);
+                }
+                match ph.until_step {
+                    None => p.check(
+                        k + 1 == ps.len(),
+                        format!("{pat}.until_step"),
+                        "every phase but the last needs `until_step` (the step at which the next begins)",
+                    ),
+                    Some(n) => {
+                        p.check(
+                            n > last || (k == 0 && n > 0),
+                            format!("{pat}.until_step"),
+                            format!("must increase from phase to phase (got {n} after {last})"),
+                        );
+                        last = n;
+                    }
+                }
+            }
+        }
+        _ => {}
+    }
 }
 
 /// Names of the granular ParaView series (`discs.pvd`, …): a body may not
@@ -553,10 +725,28 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                     format!("bc name `{name}` is used twice (or is the reserved `gravity`)"),
                 );
             }
-            for (f, v) in [("ux", bc.ux), ("uy", bc.uy)] {
+            for (f, v) in [("ux", &bc.ux), ("uy", &bc.uy)] {
                 if let Some(v) = v {
                     p.check(v.finite(), at(f), "must be finite");
+                    validate_drive(sc, v, b.newmark.gamma, &at(f), p);
                 }
+            }
+            if let Some(tb) = &bc.table {
+                check_table(tb, &at("table"), p);
+                p.check(
+                    bc.is_load(),
+                    at("table"),
+                    "`table` multiplies a load (`traction`, `parabolic_shear`) in time; for a prescribed displacement write `ux`/`uy = { table = [[t, u], …] }`",
+                );
+                p.check(
+                    bc.name.as_deref().is_none_or(|n| {
+                        !b.initial
+                            .as_ref()
+                            .is_some_and(|i| i.static_under.iter().any(|s| s == n))
+                    }),
+                    at("table"),
+                    "a load with a `table` cannot be in `initial.static_under` (released loads are constant)",
+                );
             }
             if let Some(t) = &bc.timoshenko {
                 p.check(t.p.is_finite(), at("timoshenko.P"), "must be finite");
@@ -570,6 +760,32 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             }
             if let Some(t) = bc.parabolic_shear {
                 p.check(t.is_finite(), at("parabolic_shear"), "must be finite");
+            }
+        }
+        for (k, pl) in b.load.iter().enumerate() {
+            let at = |f: &str| format!("body.{i}.load.{k}.{f}");
+            let (o, s) = (b.rectangle.origin, b.rectangle.size);
+            let pt = pl.point;
+            let tol = 1e-9 * (s[0].abs() + s[1].abs());
+            if !pt.iter().all(|v| v.is_finite()) {
+                p.push(at("point"), "must be two finite numbers");
+            } else {
+                p.check(
+                    pt[0] >= o[0] - tol
+                        && pt[0] <= o[0] + s[0] + tol
+                        && pt[1] >= o[1] - tol
+                        && pt[1] <= o[1] + s[1] + tol,
+                    at("point"),
+                    format!("{pt:?} is outside body `{}`", b.name),
+                );
+            }
+            p.check(
+                pl.force.iter().all(|v| v.is_finite()),
+                at("force"),
+                "must be two finite numbers",
+            );
+            if let Some(tb) = &pl.table {
+                check_table(tb, &at("table"), p);
             }
         }
         p.check(
@@ -618,9 +834,10 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 p.push(
                     at("quantity"),
                     format!(
-                        "unknown body quantity `{q}`; one of {} (with `point`) or {}",
+                        "unknown body quantity `{q}`; one of {} (with `point`), {} or {}",
                         POINT_QUANTITIES.join(", "),
-                        BODY_QUANTITIES.join(", ")
+                        BODY_QUANTITIES.join(", "),
+                        DRIVE_QUANTITIES.join(", ")
                     ),
                 );
             }
@@ -632,6 +849,21 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
         };
         if body.is_none() {
             p.push(at("body"), "no body of that name");
+        }
+        if let (true, Some(b)) = (DRIVE_QUANTITIES.contains(&q), body) {
+            let c = if q.ends_with('x') { "ux" } else { "uy" };
+            let has = b.bc.iter().any(|bc| {
+                let pr = if c == "ux" { &bc.ux } else { &bc.uy };
+                !bc.is_load() && !bc.fixed && pr.as_ref().is_some_and(|v| v.drive_law().is_some())
+            });
+            p.check(
+                has,
+                at("quantity"),
+                format!(
+                    "body `{}` has no `{c}` that changes in time (velocity, table, servo, phases) to record",
+                    b.name
+                ),
+            );
         }
         if POINT_QUANTITIES.contains(&q) {
             match pr.point {

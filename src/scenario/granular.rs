@@ -62,7 +62,9 @@ pub struct GranularSpec {
     /// by more than 1e-3 of the smaller radius (a pre-stressed packing,
     /// e.g. a settled bed read from CSV). Default false: such a start state
     /// is an error. Packings generated with `method = "deposit"` or
-    /// `"grow"` are settled by efgdem and always accepted.
+    /// `"grow"` are settled by efgdem: their overlaps with each other and
+    /// the walls are accepted, not with a body (the preparation does not
+    /// see the bodies).
     #[serde(default)]
     pub allow_overlap: bool,
 }
