@@ -413,7 +413,7 @@ impl PointRows {
     }
 
     /// The whole `S` (2m × 2m, row-major), formed column by column
-    /// ([`form`](Self::form): `O(n_act² + m r n_act + m² r)` for `m`
+    /// (`form`: `O(n_act² + m r n_act + m² r)` for `m`
     /// functionals of `r` entries on `n_act` DOFs, against `O(m² r²)`
     /// entry by entry) and kept for the blocks and products of the step.
     pub fn dense(&mut self, green: &BoundaryGreen, s: &mut Vec<f64>) {
