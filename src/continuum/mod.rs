@@ -6,14 +6,17 @@
 pub mod body_params;
 pub mod compliance;
 pub mod conditions;
+pub mod kirsch;
 pub mod material;
 pub mod newmark;
 pub mod quadrature;
 pub mod state;
 pub mod timoshenko;
 
-pub use body_params::{BodyParams, Elastic, MassKind, Plane, Rectangle};
-pub use conditions::{Edge, EdgeCondition, LinearField, MotionField, Prescribed, TimoshenkoSpec};
+pub use body_params::{BodyParams, Elastic, MassKind, Plane, PolygonShape, Rectangle};
+pub use conditions::{
+    Edge, EdgeCondition, EdgeName, KirschSpec, LinearField, MotionField, Prescribed, TimoshenkoSpec,
+};
 pub use material::{Material, Sample};
 pub use state::{BodyState, BoundaryState, StateError};
 

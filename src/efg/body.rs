@@ -6,10 +6,11 @@
 use super::EfgError;
 use super::assemble::{self, Operators, PointRole, PointShapes};
 use super::penalty::MovingEdge;
+use super::polygon::PolygonMesh;
 use super::shape::{ShapeRow, shape_functions};
 use super::support::Support;
 use crate::continuum::conditions::{
-    constrained, edge_ends, prescribed, timoshenko_of, traction_at,
+    constrained, edge_ends, prescribed, timoshenko_of, traction_at, traction_normal,
 };
 use crate::continuum::material::energy_error_of;
 use crate::continuum::newmark::{Newmark, NewmarkParams, State};
@@ -50,6 +51,9 @@ pub struct EfgBody {
     pub name: String,
     /// Node grid `[nx, ny]`; node `(i, j)` is `j·nx + i` at `(xs[i], ys[j])`.
     pub grid: [usize; 2],
+    /// The nodes and integration triangles of a polygon body (then `grid`
+    /// is `[0, 0]` and `xs`, `ys` are empty).
+    pub mesh: Option<PolygonMesh>,
     /// x of the node columns, ascending (reference configuration).
     pub xs: Vec<f64>,
     /// y of the node rows, ascending (reference configuration).
@@ -107,51 +111,110 @@ impl EfgBody {
     /// thread-count independent), and load vectors. `gravity` is the
     /// acceleration of `[simulation] gravity`.
     pub fn new(spec: &BodyParams, gravity: [f64; 2]) -> Result<EfgBody, EfgError> {
-        let [nx, ny] = spec.nodes;
-        if nx < 2 || ny < 2 {
-            return Err(EfgError::Invalid(format!(
-                "body `{}`: the node grid needs at least 2 × 2 nodes",
-                spec.name
-            )));
-        }
-        let origin = Vec2::from(spec.rectangle.origin);
-        let size = Vec2::from(spec.rectangle.size);
-        let xs: Vec<f64> = (0..nx)
-            .map(|i| origin.x + size.x * i as f64 / (nx - 1) as f64)
-            .collect();
-        let ys: Vec<f64> = (0..ny)
-            .map(|j| origin.y + size.y * j as f64 / (ny - 1) as f64)
-            .collect();
-        let support = Support::for_grid(&xs, &ys, spec.d_max);
+        let invalid = |m: String| EfgError::Invalid(format!("body `{}`: {m}", spec.name));
         let el = spec.elastic;
         let material = Material::of_params(spec);
         let t = el.thickness;
         let alpha = spec.penalty.unwrap_or(1e5 * el.e);
-        let cells = spec.cells.unwrap_or([nx - 1, ny - 1]);
         let n = spec.gauss;
         let timoshenko = timoshenko_of(spec);
+        let origin = Vec2::from(spec.rectangle.origin);
+        let size = Vec2::from(spec.rectangle.size);
+        // nodes, supports, domain quadrature, and per bc its boundary
+        // pieces (a, b, outward normal, sub-segments)
+        type Pieces = Vec<(Vec2, Vec2, Option<Vec2>, usize)>;
+        let (xs, ys, support, domain, mesh, pieces): (_, _, _, _, _, Vec<Pieces>) = if let Some(
+            poly,
+        ) =
+            &spec.polygon
+        {
+            let mesh = PolygonMesh::new(&poly.domain, poly.spacing).map_err(invalid)?;
+            let h = poly.spacing;
+            let node: Vec<[f64; 4]> = mesh
+                .nodes
+                .iter()
+                .map(|p| [p.x, p.y, spec.d_max * h, spec.d_max * h])
+                .collect();
+            let support = Support::new(node).with_visibility(&poly.domain, true);
+            let domain = mesh.domain_points(n.saturating_sub(3).max(1));
+            let mut pieces = Vec::with_capacity(spec.bc.len());
+            for bc in &spec.bc {
+                let Some(e) = poly.domain.edge(bc.edge.as_str()) else {
+                    return Err(invalid(format!(
+                        "unknown edge `{}` (the polygon's named edges: {})",
+                        bc.edge,
+                        poly.domain
+                            .edges
+                            .iter()
+                            .map(|e| e.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )));
+                };
+                if bc.parabolic_shear.is_some() || bc.timoshenko.is_some() {
+                    return Err(invalid(format!(
+                        "bc on `{}`: parabolic_shear and timoshenko are for rectangular bodies only",
+                        bc.edge
+                    )));
+                }
+                pieces.push(
+                    mesh.pieces(&e.segments)
+                        .into_iter()
+                        .map(|(a, b)| {
+                            let d = b - a;
+                            (a, b, Some(Vec2::new(d.y, -d.x) * (1.0 / d.norm())), 1)
+                        })
+                        .collect(),
+                );
+            }
+            (Vec::new(), Vec::new(), support, domain, Some(mesh), pieces)
+        } else {
+            let [nx, ny] = spec.nodes;
+            if nx < 2 || ny < 2 {
+                return Err(EfgError::Invalid(format!(
+                    "body `{}`: the node grid needs at least 2 × 2 nodes",
+                    spec.name
+                )));
+            }
+            let xs: Vec<f64> = (0..nx)
+                .map(|i| origin.x + size.x * i as f64 / (nx - 1) as f64)
+                .collect();
+            let ys: Vec<f64> = (0..ny)
+                .map(|j| origin.y + size.y * j as f64 / (ny - 1) as f64)
+                .collect();
+            let support = Support::for_grid(&xs, &ys, spec.d_max);
+            let cells = spec.cells.unwrap_or([nx - 1, ny - 1]);
+            let segs = |e: Edge| match e {
+                Edge::Left | Edge::Right => cells[1],
+                Edge::Top | Edge::Bottom => cells[0],
+            };
+            let domain = quadrature::domain_points(origin, size, cells, n);
+            let mut pieces = Vec::with_capacity(spec.bc.len());
+            for bc in &spec.bc {
+                let e = bc.side().map_err(invalid)?;
+                let (a, b) = edge_ends(origin, size, e);
+                pieces.push(vec![(a, b, None, segs(e))]);
+            }
+            (xs, ys, support, domain, None, pieces)
+        };
         // quadrature points: domain, then penalty points of each Γu bc
-        let domain = quadrature::domain_points(origin, size, cells, n);
         let mut points: Vec<Vec2> = domain.iter().map(|q| q.x).collect();
         let mut roles: Vec<PointRole> = domain.iter().map(|q| PointRole::Domain(q.w * t)).collect();
         let mut penalty_values: Vec<[f64; 2]> = Vec::new();
         let mut penalty_bc: Vec<usize> = Vec::new();
-        let segs = |e: Edge| match e {
-            Edge::Left | Edge::Right => cells[1],
-            Edge::Top | Edge::Bottom => cells[0],
-        };
         for (bi, bc) in spec.bc.iter().enumerate().filter(|(_, b)| !b.is_load()) {
-            let (a, b) = edge_ends(origin, size, bc.edge);
             let (cx, cy) = constrained(bc);
-            for q in quadrature::edge_points(a, b, segs(bc.edge), n) {
-                points.push(q.x);
-                let w = q.w * t * alpha;
-                roles.push(PointRole::Penalty(
-                    if cx { w } else { 0.0 },
-                    if cy { w } else { 0.0 },
-                ));
-                penalty_values.push(prescribed(bc, q.x, timoshenko.as_ref()));
-                penalty_bc.push(bi);
+            for &(a, b, _, m) in &pieces[bi] {
+                for q in quadrature::edge_points(a, b, m, n) {
+                    points.push(q.x);
+                    let w = q.w * t * alpha;
+                    roles.push(PointRole::Penalty(
+                        if cx { w } else { 0.0 },
+                        if cy { w } else { 0.0 },
+                    ));
+                    penalty_values.push(prescribed(bc, q.x, timoshenko.as_ref()));
+                    penalty_bc.push(bi);
+                }
             }
         }
         let t0 = Instant::now();
@@ -202,21 +265,25 @@ impl EfgBody {
         let released = |name: &str| spec.is_released(name);
         // loads: tractions (Eq. 27, boundary term)
         let mut row = ShapeRow::new();
-        for bc in spec.bc.iter().filter(|b| b.is_load()) {
+        for (bi, bc) in spec.bc.iter().enumerate().filter(|(_, b)| b.is_load()) {
             let target = if bc.name.as_deref().is_some_and(released) {
                 &mut f_released
             } else {
                 &mut f_permanent
             };
-            let (a, b) = edge_ends(origin, size, bc.edge);
-            for QuadPoint { x, w } in quadrature::edge_points(a, b, segs(bc.edge), n) {
-                let tr = traction_at(bc, a, b, x);
-                shape_functions(&support, x, &mut row)
-                    .map_err(|e| EfgError::coverage(e, spec.d_max, &spec.name))?;
-                for k in 0..row.len() {
-                    let i = row.idx[k] as usize;
-                    target[2 * i] += w * t * row.phi[k] * tr[0];
-                    target[2 * i + 1] += w * t * row.phi[k] * tr[1];
+            for &(a, b, normal, m) in &pieces[bi] {
+                for QuadPoint { x, w } in quadrature::edge_points(a, b, m, n) {
+                    let tr = match normal {
+                        Some(nv) => traction_normal(bc, a, b, x, nv),
+                        None => traction_at(bc, a, b, x),
+                    };
+                    shape_functions(&support, x, &mut row)
+                        .map_err(|e| EfgError::coverage(e, spec.d_max, &spec.name))?;
+                    for k in 0..row.len() {
+                        let i = row.idx[k] as usize;
+                        target[2 * i] += w * t * row.phi[k] * tr[0];
+                        target[2 * i + 1] += w * t * row.phi[k] * tr[1];
+                    }
                 }
             }
         }
@@ -234,7 +301,8 @@ impl EfgBody {
         }
         Ok(EfgBody {
             name: spec.name.clone(),
-            grid: spec.nodes,
+            grid: if mesh.is_some() { [0, 0] } else { spec.nodes },
+            mesh,
             xs,
             ys,
             origin,

@@ -114,6 +114,7 @@ impl BodySpec {
         BodyParams {
             name: self.name.clone(),
             rectangle: self.rectangle,
+            polygon: None,
             nodes: self.nodes,
             cells: self.cells,
             gauss: self.gauss,
