@@ -660,6 +660,47 @@ impl EfgBody {
         )
     }
 
+    /// [`energy_error`](Self::energy_error) of a polygon body, integrated
+    /// over its triangles with each split into `sub²` (7 points each).
+    pub fn energy_error_polygon(
+        &self,
+        exact_stress: impl Fn(Vec2) -> [f64; 3],
+        sub: usize,
+    ) -> Result<f64, EfgError> {
+        let Some(mesh) = &self.mesh else {
+            return Err(EfgError::Invalid(format!(
+                "body `{}` is not a polygon body",
+                self.name
+            )));
+        };
+        let [d11, d12, _, d33] = self.material.d;
+        let det = d11 * d11 - d12 * d12;
+        let compl = |s: [f64; 3]| {
+            [
+                (d11 * s[0] - d12 * s[1]) / det,
+                (d11 * s[1] - d12 * s[0]) / det,
+                s[2] / d33,
+            ]
+        };
+        let (mut num, mut den) = (0.0, 0.0);
+        let mut row = ShapeRow::new();
+        for q in mesh.domain_points(sub) {
+            self.shape_row(q.x, &mut row)?;
+            let s = self.sample_row(&row);
+            let se = exact_stress(q.x);
+            let ee = compl(se);
+            let mut dn = 0.0;
+            let mut dd = 0.0;
+            for k in 0..3 {
+                dn += (s.stress[k] - se[k]) * (s.strain[k] - ee[k]);
+                dd += se[k] * ee[k];
+            }
+            num += q.w * dn;
+            den += q.w * dd;
+        }
+        Ok((num / den).sqrt())
+    }
+
     /// Shape functions at every node position (for nodal output).
     pub fn nodal_shapes(&self) -> Result<PointShapes, EfgError> {
         let pts: Vec<Vec2> = (0..self.n_nodes()).map(|i| self.node(i)).collect();

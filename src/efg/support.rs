@@ -358,14 +358,20 @@ impl Support {
         let s0 = d0.norm();
         let d2 = p - c;
         let s2 = d2.norm();
-        if s0 == 0.0 || s2 == 0.0 {
+        if s0 == 0.0 {
             return None;
         }
         let f = len / s0;
-        // ∇f = ∇s₂/s₀ − (s₁ + s₂)∇s₀/s₀²
+        // ∇f = ∇s₂/s₀ − (s₁ + s₂)∇s₀/s₀² (∇s₂ taken as 0 at p = x_c,
+        // where s₂ has a cone point: f is continuous there)
+        let g2 = if s2 > 0.0 {
+            d2 * (1.0 / (s2 * s0))
+        } else {
+            Vec2::ZERO
+        };
         let g = [
-            d2.x / (s2 * s0) - len * d0.x / (s0 * s0 * s0),
-            d2.y / (s2 * s0) - len * d0.y / (s0 * s0 * s0),
+            g2.x - len * d0.x / (s0 * s0 * s0),
+            g2.y - len * d0.y / (s0 * s0 * s0),
         ];
         Some((f, g))
     }
