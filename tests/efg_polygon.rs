@@ -217,7 +217,11 @@ fn kirsch(h: f64) -> (f64, f64, usize) {
     let (a, l, s) = (1.0, 5.0, 1.0);
     let m = arc_segments(a, h);
     let mut outline = v(&[[a, 0.0], [l, 0.0], [l, l], [0.0, l], [0.0, a]]);
-    outline.extend(arc(a, std::f64::consts::FRAC_PI_2, 0.0, m).into_iter().take(m - 1));
+    outline.extend(
+        arc(a, std::f64::consts::FRAC_PI_2, 0.0, m)
+            .into_iter()
+            .take(m - 1),
+    );
     let edges = vec![
         ("bottom".to_string(), vec![(0, 0)]),
         ("outer".to_string(), vec![(0, 1), (0, 2)]),
@@ -262,7 +266,10 @@ fn kirsch_plate_coarse() {
     let (r2, e2, _) = kirsch(0.2);
     let rate = (e1 / e2).log2();
     println!("energy-norm rate {rate:.2}");
-    assert!((r2 - 1.0).abs() < 0.05, "σ_xx(0, a)/3σ = {r2} (h = 0.4: {r1})");
+    assert!(
+        (r2 - 1.0).abs() < 0.05,
+        "σ_xx(0, a)/3σ = {r2} (h = 0.4: {r1})"
+    );
     assert!(e2 < e1 && e2 < 0.05 && rate > 0.7, "{e1} {e2}");
 }
 
@@ -274,7 +281,10 @@ fn kirsch_plate_refined() {
     for h in [0.4, 0.2, 0.1, 0.05] {
         let (r, e, n) = kirsch(h);
         if let Some((hp, ep)) = prev {
-            println!("| {h} | {n} | {r:.5} | {e:.3e} | {:.2} |", (ep / e).ln() / (hp / h).ln());
+            println!(
+                "| {h} | {n} | {r:.5} | {e:.3e} | {:.2} |",
+                (ep / e).ln() / (hp / h).ln()
+            );
         } else {
             println!("| {h} | {n} | {r:.5} | {e:.3e} | – |");
         }
@@ -320,7 +330,10 @@ fn lame(h: f64) -> (f64, f64) {
     // limits from inside Ω (see `kirsch`)
     let s0 = b.sample(Vec2::new(a + 1e-7, 0.0)).unwrap();
     let s1 = b.sample(Vec2::new(0.0, a + 1e-7)).unwrap();
-    let r = ((s0.u.x + s1.u.y) / (2.0 * ur), (s0.stress[1] + s1.stress[0]) / (2.0 * stt));
+    let r = (
+        (s0.u.x + s1.u.y) / (2.0 * ur),
+        (s0.stress[1] + s1.stress[0]) / (2.0 * stt),
+    );
     println!(
         "Lamé h = {h}: {} nodes, u_r(a)/exact = {:.5} ({:.5} at (a, 0), {:.5} at (0, a)), σ_θθ(a)/exact = {:.5} ({:.5}, {:.5})",
         b.n_nodes(),
@@ -338,4 +351,129 @@ fn lame(h: f64) -> (f64, f64) {
 fn lame_ring_internal_pressure() {
     let (u, s) = lame(0.1);
     assert!((u - 1.0).abs() < 0.01 && (s - 1.0).abs() < 0.01, "{u} {s}");
+}
+
+// ---- scenario files: a polygon body end to end, and located errors ----
+
+#[allow(dead_code)]
+mod common;
+
+/// A holed plate with a pressurised hole, through the CLI.
+const PLATE: &str = r#"[simulation]
+analysis = "static"
+
+[[body]]
+name = "plate"
+outline = [[0.0, 0.0], [4.0, 0.0], [4.0, 2.0], [0.0, 2.0]]
+holes = [{ center = [2.0, 1.0], radius = 0.5, segments = 24 }]
+spacing = 0.25
+elastic = { E = 1000.0, nu = 0.3 }
+
+[body.edges]
+base = { loop = 0, segments = [0, 0] }
+wall = { loop = 1 }
+
+[[body.bc]]
+edge = "base"
+fixed = true
+
+[[body.bc]]
+edge = "wall"
+pressure = 1.0
+"#;
+
+fn cli(tag: &str, text: &str) -> (std::process::Output, std::path::PathBuf, std::path::PathBuf) {
+    let d = common::tmpdir(tag);
+    let f = d.join("s.toml");
+    std::fs::write(&f, text).unwrap();
+    let o = common::bin()
+        .args(["run", f.to_str().unwrap(), "-o"])
+        .arg(d.join("out"))
+        .output()
+        .unwrap();
+    (o, f, d)
+}
+
+#[test]
+fn polygon_scenario_runs_and_writes_triangles() {
+    let (o, _, d) = cli("poly-good", PLATE);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = d.join("out");
+    let vtu: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "vtu"))
+        .collect();
+    assert!(!vtu.is_empty(), "no .vtu in {out:?}");
+    let text = String::from_utf8_lossy(&std::fs::read(&vtu[0]).unwrap()).to_string();
+    assert!(text.contains("NumberOfCells"), "{text:.300}");
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+fn bad(tag: &str, from: &str, to: &str, field: &str, words: &str) {
+    assert!(PLATE.contains(from), "{from}");
+    let text = PLATE.replacen(from, to, 1);
+    let (o, f, d) = cli(tag, &text);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{tag}: {err}");
+    assert!(err.contains(&format!("{}:", f.display())), "{tag}: {err}");
+    assert!(err.contains(field), "{tag}: expected `{field}` in: {err}");
+    assert!(err.contains(words), "{tag}: expected `{words}` in: {err}");
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
+fn clockwise_outline_is_refused() {
+    bad(
+        "poly-cw",
+        "[[0.0, 0.0], [4.0, 0.0], [4.0, 2.0], [0.0, 2.0]]",
+        "[[0.0, 0.0], [0.0, 2.0], [4.0, 2.0], [4.0, 0.0]]",
+        "outline",
+        "clockwise",
+    );
+}
+
+#[test]
+fn self_intersecting_outline_is_refused() {
+    bad(
+        "poly-bow",
+        "[[0.0, 0.0], [4.0, 0.0], [4.0, 2.0], [0.0, 2.0]]",
+        "[[0.0, 0.0], [4.0, 2.0], [4.0, 0.0], [0.0, 2.0]]",
+        "outline",
+        "not simple",
+    );
+}
+
+#[test]
+fn hole_outside_is_refused() {
+    bad(
+        "poly-hole",
+        "center = [2.0, 1.0]",
+        "center = [5.0, 1.0]",
+        "holes",
+        "not strictly inside",
+    );
+}
+
+#[test]
+fn unknown_edge_is_refused() {
+    bad(
+        "poly-edge",
+        "edge = \"wall\"",
+        "edge = \"wal\"",
+        "bc[1].edge",
+        "unknown edge `wal`",
+    );
+}
+
+#[test]
+fn polygon_on_fem_body_is_refused() {
+    bad(
+        "poly-fem",
+        "name = \"plate\"",
+        "name = \"plate\"\nmethod = \"fem-q4\"",
+        "outline",
+        "EFG only",
+    );
 }
