@@ -68,9 +68,8 @@ fn patch_errors(b: &EfgBody, h: f64) -> (f64, f64) {
         ];
         eu = eu.max((s.u.x - u[0]).abs().max((s.u.y - u[1]).abs()) / 1e-2);
         if mesh.domain.boundary_distance(p) > h {
-            for k in 0..3 {
-                let e = (s.stress[k] - se[k]).abs() / smax;
-                es = es.max(e);
+            for (sk, ek) in s.stress.iter().zip(&se) {
+                es = es.max((sk - ek).abs() / smax);
             }
         }
     }
