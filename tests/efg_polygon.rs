@@ -476,3 +476,49 @@ fn polygon_on_fem_body_is_refused() {
         "EFG only",
     );
 }
+
+/// Hash of [`rectangle_shape_functions_are_bitwise_unchanged`] at commit 026963b.
+const EXPECTED_HASH: u64 = 0xe7107dfece3ecbde;
+
+/// FNV-1a over the shape-function rows of a rectangular grid at 500
+/// pseudo-random points: the constant is the value of the code before
+/// polygon bodies (commit 026963b), so rectangles' shape functions are
+/// bitwise unchanged by the visibility test.
+#[test]
+fn rectangle_shape_functions_are_bitwise_unchanged() {
+    use efgdem::efg::shape::{ShapeRow, shape_functions};
+    use efgdem::efg::support::Support;
+    let xs: Vec<f64> = (0..9)
+        .map(|i| i as f64 * 0.3 + 0.01 * (i * i) as f64)
+        .collect();
+    let ys: Vec<f64> = (0..6).map(|j| -1.0 + j as f64 * 0.45).collect();
+    let s = Support::for_grid(&xs, &ys, 2.0);
+    let mut h: u64 = 0xcbf29ce484222325;
+    let mut mix = |v: u64| {
+        h ^= v;
+        h = h.wrapping_mul(0x100000001b3);
+    };
+    let mut seed = 7u64;
+    let mut rnd = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut row = ShapeRow::new();
+    for _ in 0..500 {
+        let p = Vec2::new(
+            xs[0] + rnd() * (xs[8] - xs[0]),
+            ys[0] + rnd() * (ys[5] - ys[0]),
+        );
+        shape_functions(&s, p, &mut row).unwrap();
+        for k in 0..row.len() {
+            mix(row.idx[k] as u64);
+            mix(row.phi[k].to_bits());
+            mix(row.dx[k].to_bits());
+            mix(row.dy[k].to_bits());
+        }
+    }
+    println!("shape-function hash {h:#018x}");
+    assert_eq!(h, EXPECTED_HASH);
+}
