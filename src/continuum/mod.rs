@@ -247,6 +247,13 @@ pub trait ContactBody: Send + Sync + 'static {
     fn name(&self) -> &str;
     /// Origin and size of the rectangle, node grid `[nx, ny]`.
     fn grid(&self) -> (Vec2, Vec2, [usize; 2]);
+    /// Reference points of the contact chains along `edges`, `refine`
+    /// points per node spacing ([`contact_chains`] on the rectangle); a
+    /// polygon body gives one closed chain per loop instead.
+    fn chains(&self, edges: &[Edge], refine: usize) -> Vec<Vec<Vec2>> {
+        let (origin, size, grid) = self.grid();
+        contact_chains(origin, size, grid, edges, refine)
+    }
     /// The row `[(node, φ_J(x))]` at the material point `x`.
     fn row(&self, x: Vec2) -> Result<Row, Self::Error>;
     /// Nodal displacement, velocity, acceleration.
@@ -345,10 +352,9 @@ impl<B: ContactBody> WithBoundary<B> {
     /// Wrap `body` with contact chains along `edges` ([`contact_chains`]),
     /// `refine` points per node spacing (for FE: per element edge).
     pub fn new(body: B, edges: &[Edge], refine: usize) -> Result<Self, B::Error> {
-        let (origin, size, grid) = body.grid();
         let mut chains = Vec::new();
         let mut rows = Vec::new();
-        for pts in contact_chains(origin, size, grid, edges, refine.max(1)) {
+        for pts in body.chains(edges, refine.max(1)) {
             rows.push(pts.iter().map(|&x| body.row(x)).collect::<Result<_, _>>()?);
             chains.push(BoundaryChain::new(pts));
         }

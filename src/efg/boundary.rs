@@ -8,7 +8,8 @@ use super::body::EfgBody;
 use super::shape::ShapeRow;
 use crate::continuum::newmark::{Newmark, State};
 use crate::continuum::{
-    BodyEnergies, BodyState, ContactBody, Row, StateError, WithBoundary, add_dof_load, add_row_load,
+    BodyEnergies, BodyState, ContactBody, Edge, Row, StateError, WithBoundary, add_dof_load,
+    add_row_load,
 };
 use crate::geom::Vec2;
 
@@ -22,6 +23,37 @@ impl ContactBody for EfgBody {
     }
     fn grid(&self) -> (Vec2, Vec2, [usize; 2]) {
         (self.origin, self.size, self.grid)
+    }
+    /// Rectangles: [`crate::continuum::contact_chains`] along `edges`. A
+    /// polygon body: every loop (outline and holes) is one closed chain
+    /// (body on its left), through the boundary nodes with `refine` points
+    /// per piece between them; `edges` is ignored.
+    fn chains(&self, edges: &[Edge], refine: usize) -> Vec<Vec<Vec2>> {
+        let Some(m) = &self.mesh else {
+            return crate::continuum::contact_chains(
+                self.origin,
+                self.size,
+                self.grid,
+                edges,
+                refine,
+            );
+        };
+        m.segment_nodes
+            .iter()
+            .map(|segs| {
+                let mut pts = Vec::new();
+                for ids in segs {
+                    for w in ids.windows(2) {
+                        let (a, b) = (m.nodes[w[0]], m.nodes[w[1]]);
+                        for k in 0..refine {
+                            pts.push(a + (b - a) * (k as f64 / refine as f64));
+                        }
+                    }
+                }
+                pts.push(pts[0]);
+                pts
+            })
+            .collect()
     }
     /// The MLS shape functions `φ_J(x)` (E7).
     fn row(&self, x: Vec2) -> Result<Row, EfgError> {
