@@ -584,6 +584,48 @@ fixed = true
         "wedge: contact {steps} vs {wsteps} steps, rebound ({:.5}, {:.5}) vs rigid wall ({:.5}, {:.5})",
         vc.x, vc.y, vw.x, vw.y
     );
+    // the slanted edge alone as the contact boundary: the same rebound;
+    // the base alone: the disc enters the wedge untouched
+    for (edges, touches) in [("[\"slope\"]", true), ("[\"base\"]", false)] {
+        let named = body.replace(
+            "self_weight = false",
+            &format!("self_weight = false\ncontact_edges = {edges}"),
+        ) + "";
+        let named = named.replace(
+            "base = { loop = 0, segments = [0, 0] }",
+            "base = { loop = 0, segments = [0, 0] }\nslope = { loop = 0, segments = [2, 2] }",
+        );
+        let sc = efgdem::scenario::parse(&format!("{head}{named}"), "wedge.toml").unwrap();
+        let mut m = sc.build().unwrap().into_coupled().unwrap();
+        let mut n = 0;
+        for _ in 0..3000 {
+            m.step().unwrap();
+            n += usize::from(!m.contacts.is_empty());
+        }
+        let v = m.granular.particles.vel[0];
+        if touches {
+            assert!(
+                n == steps && (v - vc).norm() < 1e-9 * vc.norm(),
+                "{edges}: {n} {v:?}"
+            );
+        } else {
+            assert!(
+                n == 0 && (v - Vec2::new(0.0, -1.0)).norm() < 1e-12,
+                "{edges}: {n} {v:?}"
+            );
+        }
+    }
+    let bad = body.replace(
+        "self_weight = false",
+        "self_weight = false\ncontact_edges = [\"slop\"]",
+    );
+    let e = efgdem::scenario::parse(&format!("{head}{bad}"), "wedge.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("contact_edges") && e.contains("unknown edge `slop`"),
+        "{e}"
+    );
     // the rebound leaves along the slanted normal's side: +x
     assert!(vw.x > 0.05 && vw.y > 0.5, "{vw:?}");
     assert!(wsteps > 700 && (steps as f64 - wsteps as f64).abs() < 0.01 * wsteps as f64);

@@ -352,9 +352,16 @@ impl<B: ContactBody> WithBoundary<B> {
     /// Wrap `body` with contact chains along `edges` ([`contact_chains`]),
     /// `refine` points per node spacing (for FE: per element edge).
     pub fn new(body: B, edges: &[Edge], refine: usize) -> Result<Self, B::Error> {
+        let chains = body.chains(edges, refine.max(1));
+        Self::with_chains(body, chains)
+    }
+
+    /// Wrap `body` with the given contact chains (reference points, body
+    /// on the left), e.g. a polygon body's named edges.
+    pub fn with_chains(body: B, points: Vec<Vec<Vec2>>) -> Result<Self, B::Error> {
         let mut chains = Vec::new();
         let mut rows = Vec::new();
-        for pts in body.chains(edges, refine.max(1)) {
+        for pts in points {
             rows.push(pts.iter().map(|&x| body.row(x)).collect::<Result<_, _>>()?);
             chains.push(BoundaryChain::new(pts));
         }

@@ -25,8 +25,8 @@
 use super::{Analysis, Problems, Scenario};
 use crate::continuum::PolygonShape;
 pub use crate::continuum::{
-    BodyParams, Edge, EdgeCondition as BcSpec, Elastic, LinearField, MassKind, MotionField, Plane,
-    Prescribed, Rectangle, TimoshenkoSpec,
+    BodyParams, Edge, EdgeCondition as BcSpec, EdgeName, Elastic, LinearField, MassKind,
+    MotionField, Plane, Prescribed, Rectangle, TimoshenkoSpec,
 };
 use crate::geom::Vec2;
 use crate::geom::polygon::{Domain, circle};
@@ -89,8 +89,9 @@ pub struct BodySpec {
     /// Edges that discs can touch (coupled runs), e.g. `["top", "right"]`;
     /// default: all four (one closed chain). Adjacent edges are joined
     /// around their common corner; `[]` gives a body no contact boundary.
+    /// Polygon bodies: names of their `edges` (default: every loop).
     #[serde(default = "all_edges")]
-    pub contact_edges: Vec<Edge>,
+    pub contact_edges: Vec<EdgeName>,
     /// Contact material (a `[[material]]` name) of the body's boundary;
     /// default: the disc's own material, as for walls.
     pub contact_material: Option<String>,
@@ -240,8 +241,23 @@ fn yes() -> bool {
     true
 }
 
-fn all_edges() -> Vec<Edge> {
-    Edge::ALL.to_vec()
+fn all_edges() -> Vec<EdgeName> {
+    Edge::ALL.map(EdgeName::from).to_vec()
+}
+
+impl BodySpec {
+    /// The rectangle's contact edges (names that are not one of the four
+    /// sides are left out; validation reports them).
+    pub fn contact_sides(&self) -> Vec<Edge> {
+        self.contact_edges
+            .iter()
+            .filter_map(EdgeName::side)
+            .collect()
+    }
+    /// Are the contact edges the default (every edge / every loop)?
+    pub fn default_contact_edges(&self) -> bool {
+        self.contact_edges == all_edges()
+    }
 }
 
 fn default_contact_refine() -> usize {
@@ -514,11 +530,6 @@ fn validate_polygon(_sc: &Scenario, i: usize, b: &BodySpec, d: Option<&Domain>, 
             }
         }
     }
-    p.check(
-        b.contact_edges.len() == 4,
-        at("contact_edges"),
-        "a polygon body's contact boundary is all its loops (outline and holes); restricting it by `contact_edges` is not implemented: omit the field",
-    );
 }
 
 /// Prescribed edge motions (`{ velocity = v, until_step = N }`) that move
@@ -716,9 +727,18 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
         let mut seen = std::collections::HashSet::new();
         for (k, e) in b.contact_edges.iter().enumerate() {
             p.check(
-                seen.insert(*e),
+                seen.insert(e.clone()),
                 format!("body.{i}.contact_edges.{k}"),
-                format!("edge `{e:?}` is listed twice"),
+                format!("edge `{e}` is listed twice"),
+            );
+            let known = match &domain {
+                Some(d) => d.edge(e.as_str()).is_some() || b.default_contact_edges(),
+                None => b.is_polygon() || e.side().is_some(),
+            };
+            p.check(
+                known,
+                format!("body.{i}.contact_edges.{k}"),
+                format!("unknown edge `{e}`"),
             );
         }
         if b.self_weight && sc.simulation.gravity != [0.0, 0.0] && el.density <= 0.0 {

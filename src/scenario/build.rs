@@ -417,7 +417,7 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
         let at = format!("body.{i}");
         let (g, edges, refine) = (
             sc.simulation.gravity,
-            &spec.contact_edges,
+            &spec.contact_sides(),
             spec.contact_refine,
         );
         let p = spec.params();
@@ -429,8 +429,16 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
                         .map_err(|e| bad(&format!("{at}.initial"), e))?;
                 }
                 body.start_dynamic(body_dt).map_err(|e| bad(&at, e))?;
-                let mut c = EfgContinuum::new(body, edges, refine)
-                    .map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
+                let named =
+                    (!spec.default_contact_edges()).then_some(spec.contact_edges.as_slice());
+                let mut c = match body.polygon_chains(named, refine) {
+                    Some(chains) => {
+                        let chains = chains.map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
+                        EfgContinuum::with_chains(body, chains)
+                    }
+                    None => EfgContinuum::new(body, edges, refine),
+                }
+                .map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
                 c.mode = mode;
                 Box::new(c)
             }
@@ -663,7 +671,7 @@ fn body_bytes(sc: &Scenario, b: &super::body::BodySpec) -> f64 {
         // significant entries) over the DOFs of the nodes whose support
         // reaches a contact edge
         let edge_nodes: f64 = b
-            .contact_edges
+            .contact_sides()
             .iter()
             .map(|e| match e {
                 super::body::Edge::Left | super::body::Edge::Right => ny,
