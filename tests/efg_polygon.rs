@@ -695,3 +695,71 @@ fixed = true
     assert!(wsteps > 700 && (steps as f64 - wsteps as f64).abs() < 0.01 * wsteps as f64);
     assert!((vc - vw).norm() < 0.01 * vw.norm(), "{vc:?} vs {vw:?}");
 }
+
+/// The static limit in a re-entrant corner: a disc (m = 7.854 kg) placed
+/// in the inner corner of an L-shaped polygon body, against its vertical
+/// step and on its horizontal one, under gravity, settles (contact
+/// dashpots, body damping) with the contact forces on it summing to
+/// `(0, m g)` within 1e-3 of m g.
+#[test]
+fn disc_resting_in_a_re_entrant_corner_carries_its_weight() {
+    let r: f64 = 0.05;
+    let kn = 1.0e6;
+    let m = 1000.0 * std::f64::consts::PI * r * r;
+    let g = 9.81;
+    let y = 0.3 + r - m * g / kn;
+    let src = format!(
+        r#"
+[simulation]
+dt = 1e-5
+steps = 1
+gravity = [0.0, -{g}]
+
+[[material]]
+name = "disc"
+density = 1000.0
+kn = {kn}
+ks = 1.0e6
+friction = 0.3
+
+[granular]
+material = "disc"
+thickness = 1.0
+discs = [[0.55, {y}, {r}]]
+damping = {{ kind = "critical-ratio", zeta = 0.7 }}
+allow_overlap = true
+
+[[body]]
+name = "step"
+outline = [[0.0, 0.0], [1.0, 0.0], [1.0, 0.3], [0.5, 0.3], [0.5, 0.6], [0.0, 0.6]]
+spacing = 0.05
+elastic = {{ E = 1.0e9, nu = 0.3, density = 2000.0, plane = "strain" }}
+damping = 2.0e6
+self_weight = false
+[body.edges]
+base = {{ loop = 0, segments = [0, 0] }}
+[[body.bc]]
+edge = "base"
+fixed = true
+"#
+    );
+    let sc = efgdem::scenario::parse(&src, "corner.toml").unwrap();
+    let mut model = sc.build().unwrap().into_coupled().unwrap();
+    for _ in 0..20000 {
+        model.step().unwrap();
+    }
+    let f = model.contacts.iter().fold(Vec2::ZERO, |a, c| a + c.force);
+    let w = m * g;
+    println!(
+        "corner: {} contacts, force on the disc ({:.6}, {:.6}) N, m g = {w:.6} N, disc velocity {:?}",
+        model.contacts.len(),
+        f.x,
+        f.y,
+        model.granular.particles.vel[0]
+    );
+    assert!(!model.contacts.is_empty());
+    assert!(
+        (f.y - w).abs() < 1e-3 * w && f.x.abs() < 1e-3 * w,
+        "{f:?} vs {w}"
+    );
+}
