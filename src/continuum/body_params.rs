@@ -25,13 +25,23 @@ pub enum MassKind {
 
 /// An axis-aligned rectangle in the reference configuration: the domain Ω
 /// of a body.
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Copy, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct Rectangle {
     /// Lower-left corner.
     pub origin: [f64; 2],
     /// Width and height.
     pub size: [f64; 2],
+}
+
+/// A polygon domain (EFG bodies only): outline, holes and named edges,
+/// and the node spacing `h`.
+#[derive(Debug, Clone)]
+pub struct PolygonShape {
+    /// The validated domain.
+    pub domain: crate::geom::polygon::Domain,
+    /// Node spacing `h` (grid and boundary nodes).
+    pub spacing: f64,
 }
 
 /// Linear isotropic elasticity.
@@ -110,8 +120,10 @@ impl std::fmt::Display for Plane {
 pub struct BodyParams {
     /// Name used in messages and outputs.
     pub name: String,
-    /// The body's rectangle.
+    /// The body's rectangle (for a polygon body: the outline's bounding box).
     pub rectangle: Rectangle,
+    /// A polygon domain instead of the rectangle (EFG only).
+    pub polygon: Option<PolygonShape>,
     /// Node grid `[nx, ny]` (row-major, x fastest), ≥ 2 each.
     pub nodes: [usize; 2],
     /// Background integration cells `[cx, cy]` (EFG); default `nodes − 1`.
@@ -150,6 +162,7 @@ impl BodyParams {
         BodyParams {
             name: name.to_string(),
             rectangle,
+            polygon: None,
             nodes,
             cells: None,
             gauss: 4,

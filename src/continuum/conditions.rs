@@ -37,14 +37,51 @@ impl Edge {
     }
 }
 
+/// The edge a condition acts on, by name: `left`, `right`, `top`, `bottom`
+/// on a rectangle ([`Edge`]), or a named edge of a polygon body
+/// ([`crate::geom::polygon::NamedEdge`]).
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Deserialize)]
+#[serde(transparent)]
+pub struct EdgeName(pub String);
+
+impl EdgeName {
+    /// The rectangle's edge of this name, if it is one of the four.
+    pub fn side(&self) -> Option<Edge> {
+        Edge::ALL.into_iter().find(|e| e.name() == self.0)
+    }
+    /// The name.
+    pub fn as_str(&self) -> &str {
+        &self.0
+    }
+}
+
+impl From<Edge> for EdgeName {
+    fn from(e: Edge) -> Self {
+        EdgeName(e.name().to_string())
+    }
+}
+
+impl From<&str> for EdgeName {
+    fn from(e: &str) -> Self {
+        EdgeName(e.to_string())
+    }
+}
+
+impl std::fmt::Display for EdgeName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
 /// One boundary condition on one edge: exactly one of `fixed`, `ux`/`uy`,
 /// `timoshenko` (prescribed displacement, penalty), `traction`,
 /// `parabolic_shear` (loads).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EdgeCondition {
-    /// The edge the condition acts on (Γu or Γt).
-    pub edge: Edge,
+    /// The edge the condition acts on (Γu or Γt): a rectangle's side or a
+    /// polygon body's named edge.
+    pub edge: EdgeName,
     /// Optional name, used by `initial.static_under`.
     pub name: Option<String>,
     /// Both components zero.
@@ -58,6 +95,12 @@ pub struct EdgeCondition {
     pub timoshenko: Option<TimoshenkoSpec>,
     /// Uniform traction `[tx, ty]` (force per unit area of the edge face).
     pub traction: Option<[f64; 2]>,
+    /// Normal pressure `p`: traction `−p n` (n the outward normal), positive
+    /// pushing into the body.
+    pub pressure: Option<f64>,
+    /// The exact Kirsch traction `σ·n` of an infinite plate with a circular
+    /// hole (centre at the origin) under uniaxial tension along x.
+    pub kirsch: Option<KirschSpec>,
     /// Parabolic shear traction with resultant `P` (force per unit thickness)
     /// along the edge, `τ = 3P/(2D)·(1 − 4s²/D²)`, s from the edge centre.
     pub parabolic_shear: Option<f64>,
@@ -82,6 +125,19 @@ pub struct PointLoad {
     pub force: [f64; 2],
     /// Multiplier in time; `None`: constant.
     pub table: Option<Table>,
+}
+
+/// `kirsch = { S = σ, a = radius }`: the exact field of an infinite plate
+/// with a traction-free circular hole of radius `a` centred at the origin
+/// under uniaxial tension `σ` along x at infinity (Kirsch 1898).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KirschSpec {
+    /// Remote tension σ along x.
+    #[serde(rename = "S")]
+    pub s: f64,
+    /// Hole radius.
+    pub a: f64,
 }
 
 /// A prescribed displacement component: a number, `{ linear = [a, b, c] }`
@@ -242,22 +298,24 @@ pub struct TimoshenkoSpec {
 impl EdgeCondition {
     /// A condition on `edge` with nothing prescribed or loaded yet (fill in
     /// one of the fields with struct-update syntax).
-    pub fn on(edge: Edge) -> Self {
+    pub fn on(edge: impl Into<EdgeName>) -> Self {
         EdgeCondition {
-            edge,
+            edge: edge.into(),
             name: None,
             fixed: false,
             ux: None,
             uy: None,
             timoshenko: None,
             traction: None,
+            pressure: None,
+            kirsch: None,
             parabolic_shear: None,
             table: None,
         }
     }
 
     /// Both displacement components zero on `edge`.
-    pub fn fixed(edge: Edge) -> Self {
+    pub fn fixed(edge: impl Into<EdgeName>) -> Self {
         EdgeCondition {
             fixed: true,
             ..EdgeCondition::on(edge)
@@ -265,7 +323,7 @@ impl EdgeCondition {
     }
 
     /// A uniform traction `[tx, ty]` on `edge`.
-    pub fn traction(edge: Edge, t: [f64; 2]) -> Self {
+    pub fn traction(edge: impl Into<EdgeName>, t: [f64; 2]) -> Self {
         EdgeCondition {
             traction: Some(t),
             ..EdgeCondition::on(edge)
@@ -274,7 +332,21 @@ impl EdgeCondition {
 
     /// Is this a load (traction) rather than a prescribed displacement?
     pub fn is_load(&self) -> bool {
-        self.traction.is_some() || self.parabolic_shear.is_some()
+        self.traction.is_some()
+            || self.parabolic_shear.is_some()
+            || self.pressure.is_some()
+            || self.kirsch.is_some()
+    }
+
+    /// The rectangle's side this condition is on, or an error naming the
+    /// unknown edge (rectangular bodies only know the four sides).
+    pub fn side(&self) -> Result<Edge, String> {
+        self.edge.side().ok_or_else(|| {
+            format!(
+                "edge `{}` is not an edge of a rectangle (left, right, top, bottom)",
+                self.edge
+            )
+        })
     }
 }
 
@@ -314,17 +386,40 @@ pub fn prescribed(bc: &EdgeCondition, x: Vec2, tim: Option<&Timoshenko>) -> [f64
 /// (Eq. 27, boundary term): uniform, or the parabolic shear
 /// `τ = 3P/(2D)·(1 − 4s²/D²)` with `s` measured from the edge centre.
 pub fn traction_at(bc: &EdgeCondition, a: Vec2, b: Vec2, x: Vec2) -> [f64; 2] {
+    let n = match bc.edge.side() {
+        Some(Edge::Left) => Vec2::new(-1.0, 0.0),
+        Some(Edge::Right) => Vec2::new(1.0, 0.0),
+        Some(Edge::Bottom) => Vec2::new(0.0, -1.0),
+        Some(Edge::Top) => Vec2::new(0.0, 1.0),
+        None => {
+            let d = b - a;
+            Vec2::new(d.y, -d.x) * (1.0 / d.norm())
+        }
+    };
+    traction_normal(bc, a, b, x, n)
+}
+
+/// [`traction_at`] with the edge's outward unit normal `n` given (polygon
+/// bodies): also the pressure `−p n` and the Kirsch traction `σ·n`.
+pub fn traction_normal(bc: &EdgeCondition, a: Vec2, b: Vec2, x: Vec2, n: Vec2) -> [f64; 2] {
     if let Some(tv) = bc.traction {
         return tv;
+    }
+    if let Some(p) = bc.pressure {
+        return [-p * n.x, -p * n.y];
+    }
+    if let Some(k) = bc.kirsch {
+        let s = super::kirsch::Kirsch::new(k.s, k.a).stress(x);
+        return [s[0] * n.x + s[2] * n.y, s[2] * n.x + s[1] * n.y];
     }
     let len = (b - a).norm();
     let mid = (a + b) * 0.5;
     let p = bc.parabolic_shear.unwrap_or(0.0);
     let s = (x - mid).norm();
     let tau = 1.5 * p / len * (1.0 - 4.0 * s * s / (len * len));
-    match bc.edge {
-        Edge::Left | Edge::Right => [0.0, tau],
-        Edge::Top | Edge::Bottom => [tau, 0.0],
+    match bc.edge.side() {
+        Some(Edge::Left | Edge::Right) => [0.0, tau],
+        _ => [tau, 0.0],
     }
 }
 

@@ -8,6 +8,7 @@ pub mod cantilever;
 pub mod compliance;
 pub mod conditions;
 pub mod drive;
+pub mod kirsch;
 pub mod material;
 pub mod newmark;
 pub mod quadrature;
@@ -15,9 +16,10 @@ pub mod state;
 pub mod table;
 pub mod timoshenko;
 
-pub use body_params::{BodyParams, Elastic, MassKind, Plane, Rectangle};
+pub use body_params::{BodyParams, Elastic, MassKind, Plane, PolygonShape, Rectangle};
 pub use conditions::{
-    Edge, EdgeCondition, LinearField, MotionField, PointLoad, Prescribed, TimoshenkoSpec,
+    Edge, EdgeCondition, EdgeName, KirschSpec, LinearField, MotionField, PointLoad, Prescribed,
+    TimoshenkoSpec,
 };
 pub use drive::{Drive, DriveLaw, DrivePhase, DriveState, Measure, ServoSpec, Target};
 pub use material::{Material, Sample};
@@ -254,6 +256,13 @@ pub trait ContactBody: Send + Sync + 'static {
     fn name(&self) -> &str;
     /// Origin and size of the rectangle, node grid `[nx, ny]`.
     fn grid(&self) -> (Vec2, Vec2, [usize; 2]);
+    /// Reference points of the contact chains along `edges`, `refine`
+    /// points per node spacing ([`contact_chains`] on the rectangle); a
+    /// polygon body gives one closed chain per loop instead.
+    fn chains(&self, edges: &[Edge], refine: usize) -> Vec<Vec<Vec2>> {
+        let (origin, size, grid) = self.grid();
+        contact_chains(origin, size, grid, edges, refine)
+    }
     /// The row `[(node, φ_J(x))]` at the material point `x`.
     fn row(&self, x: Vec2) -> Result<Row, Self::Error>;
     /// Nodal displacement, velocity, acceleration.
@@ -356,10 +365,16 @@ impl<B: ContactBody> WithBoundary<B> {
     /// Wrap `body` with contact chains along `edges` ([`contact_chains`]),
     /// `refine` points per node spacing (for FE: per element edge).
     pub fn new(body: B, edges: &[Edge], refine: usize) -> Result<Self, B::Error> {
-        let (origin, size, grid) = body.grid();
+        let chains = body.chains(edges, refine.max(1));
+        Self::with_chains(body, chains)
+    }
+
+    /// Wrap `body` with the given contact chains (reference points, body
+    /// on the left), e.g. a polygon body's named edges.
+    pub fn with_chains(body: B, points: Vec<Vec<Vec2>>) -> Result<Self, B::Error> {
         let mut chains = Vec::new();
         let mut rows = Vec::new();
-        for pts in contact_chains(origin, size, grid, edges, refine.max(1)) {
+        for pts in points {
             rows.push(pts.iter().map(|&x| body.row(x)).collect::<Result<_, _>>()?);
             chains.push(BoundaryChain::new(pts));
         }

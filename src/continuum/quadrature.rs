@@ -99,6 +99,48 @@ pub fn edge_points(a: Vec2, b: Vec2, segments: usize, n: usize) -> Vec<QuadPoint
     out
 }
 
+/// Dunavant's 7-point rule on a triangle (degree 5, Dunavant 1985): the
+/// centroid and two orbits `(α, α, 1 − 2α)` with `α = (6 ∓ √15)/21` and
+/// weights `(155 ∓ √15)/1200` (fractions of the area). Each triangle
+/// `[a, b, c]` is first split into `sub²` similar sub-triangles (`sub ≥ 1`).
+/// Points are appended triangle by triangle.
+pub fn triangle_points(tris: &[[Vec2; 3]], sub: usize, out: &mut Vec<QuadPoint>) {
+    let r15 = 15f64.sqrt();
+    let (a1, a2) = ((6.0 - r15) / 21.0, (6.0 + r15) / 21.0);
+    let (w1, w2) = ((155.0 - r15) / 1200.0, (155.0 + r15) / 1200.0);
+    let mut rule: Vec<([f64; 3], f64)> = vec![([1.0 / 3.0; 3], 9.0 / 40.0)];
+    for (a, w) in [(a1, w1), (a2, w2)] {
+        let b = 1.0 - 2.0 * a;
+        rule.push(([a, a, b], w));
+        rule.push(([a, b, a], w));
+        rule.push(([b, a, a], w));
+    }
+    let sub = sub.max(1);
+    let inv = 1.0 / sub as f64;
+    for &[a, b, c] in tris {
+        let (e1, e2) = ((b - a) * inv, (c - a) * inv);
+        let area = 0.5 * e1.cross(e2).abs();
+        // sub-triangles: (i, j) upward and (i, j) downward
+        for j in 0..sub {
+            for i in 0..sub - j {
+                let o = a + e1 * i as f64 + e2 * j as f64;
+                let mut tri = vec![[o, o + e1, o + e2]];
+                if i + j + 1 < sub {
+                    tri.push([o + e1, o + e1 + e2, o + e2]);
+                }
+                for [p, q, r] in tri {
+                    for (l, w) in &rule {
+                        out.push(QuadPoint {
+                            x: p * l[0] + q * l[1] + r * l[2],
+                            w: w * area,
+                        });
+                    }
+                }
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -134,5 +176,34 @@ mod tests {
         let e = edge_points(Vec2::new(0.0, 0.0), Vec2::new(3.0, 4.0), 5, 3);
         let len: f64 = e.iter().map(|q| q.w).sum();
         assert!((len - 5.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn triangle_rule_is_exact_to_degree_five() {
+        let t = [[
+            Vec2::new(0.0, 0.0),
+            Vec2::new(2.0, 0.0),
+            Vec2::new(0.0, 1.0),
+        ]];
+        for sub in [1, 3] {
+            let mut q = Vec::new();
+            triangle_points(&t, sub, &mut q);
+            assert_eq!(q.len(), 7 * sub * sub);
+            // ∫ x^i y^j over the triangle (0,0),(2,0),(0,1): 2^(i+1) i! j! / (i+j+2)!
+            let fact = |n: u32| (1..=n).map(f64::from).product::<f64>();
+            for i in 0..=5u32 {
+                for j in 0..=5 - i {
+                    let num: f64 = q
+                        .iter()
+                        .map(|p| p.w * p.x.x.powi(i as i32) * p.x.y.powi(j as i32))
+                        .sum();
+                    let exact = 2f64.powi(i as i32 + 1) * fact(i) * fact(j) / fact(i + j + 2);
+                    assert!(
+                        (num - exact).abs() < 1e-13 * exact.max(1.0),
+                        "x^{i} y^{j}: {num} vs {exact}"
+                    );
+                }
+            }
+        }
     }
 }

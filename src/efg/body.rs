@@ -6,10 +6,11 @@
 use super::EfgError;
 use super::assemble::{self, Operators, PointRole, PointShapes};
 use super::penalty::{MovingEdge, When};
+use super::polygon::PolygonMesh;
 use super::shape::{ShapeRow, shape_functions};
 use super::support::Support;
 use crate::continuum::conditions::{
-    constrained, edge_ends, prescribed, timoshenko_of, traction_at,
+    constrained, edge_ends, prescribed, timoshenko_of, traction_at, traction_normal,
 };
 use crate::continuum::material::energy_error_of;
 use crate::continuum::newmark::{Newmark, NewmarkParams, State};
@@ -53,6 +54,9 @@ pub struct EfgBody {
     pub name: String,
     /// Node grid `[nx, ny]`; node `(i, j)` is `j·nx + i` at `(xs[i], ys[j])`.
     pub grid: [usize; 2],
+    /// The nodes and integration triangles of a polygon body (then `grid`
+    /// is `[0, 0]` and `xs`, `ys` are empty).
+    pub mesh: Option<PolygonMesh>,
     /// x of the node columns, ascending (reference configuration).
     pub xs: Vec<f64>,
     /// y of the node rows, ascending (reference configuration).
@@ -119,51 +123,110 @@ impl EfgBody {
     /// thread-count independent), and load vectors. `gravity` is the
     /// acceleration of `[simulation] gravity`.
     pub fn new(spec: &BodyParams, gravity: [f64; 2]) -> Result<EfgBody, EfgError> {
-        let [nx, ny] = spec.nodes;
-        if nx < 2 || ny < 2 {
-            return Err(EfgError::Invalid(format!(
-                "body `{}`: the node grid needs at least 2 × 2 nodes",
-                spec.name
-            )));
-        }
-        let origin = Vec2::from(spec.rectangle.origin);
-        let size = Vec2::from(spec.rectangle.size);
-        let xs: Vec<f64> = (0..nx)
-            .map(|i| origin.x + size.x * i as f64 / (nx - 1) as f64)
-            .collect();
-        let ys: Vec<f64> = (0..ny)
-            .map(|j| origin.y + size.y * j as f64 / (ny - 1) as f64)
-            .collect();
-        let support = Support::for_grid(&xs, &ys, spec.d_max);
+        let invalid = |m: String| EfgError::Invalid(format!("body `{}`: {m}", spec.name));
         let el = spec.elastic;
         let material = Material::of_params(spec);
         let t = el.thickness;
         let alpha = spec.penalty.unwrap_or(1e5 * el.e);
-        let cells = spec.cells.unwrap_or([nx - 1, ny - 1]);
         let n = spec.gauss;
         let timoshenko = timoshenko_of(spec);
+        let origin = Vec2::from(spec.rectangle.origin);
+        let size = Vec2::from(spec.rectangle.size);
+        // nodes, supports, domain quadrature, and per bc its boundary
+        // pieces (a, b, outward normal, sub-segments)
+        type Pieces = Vec<(Vec2, Vec2, Option<Vec2>, usize)>;
+        let (xs, ys, support, domain, mesh, pieces): (_, _, _, _, _, Vec<Pieces>) = if let Some(
+            poly,
+        ) =
+            &spec.polygon
+        {
+            let mesh = PolygonMesh::new(&poly.domain, poly.spacing).map_err(invalid)?;
+            let h = poly.spacing;
+            let node: Vec<[f64; 4]> = mesh
+                .nodes
+                .iter()
+                .map(|p| [p.x, p.y, spec.d_max * h, spec.d_max * h])
+                .collect();
+            let support = Support::new(node).with_visibility(&poly.domain, true);
+            let domain = mesh.domain_points(n.saturating_sub(3).max(1));
+            let mut pieces = Vec::with_capacity(spec.bc.len());
+            for bc in &spec.bc {
+                let Some(e) = poly.domain.edge(bc.edge.as_str()) else {
+                    return Err(invalid(format!(
+                        "unknown edge `{}` (the polygon's named edges: {})",
+                        bc.edge,
+                        poly.domain
+                            .edges
+                            .iter()
+                            .map(|e| e.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )));
+                };
+                if bc.parabolic_shear.is_some() || bc.timoshenko.is_some() {
+                    return Err(invalid(format!(
+                        "bc on `{}`: parabolic_shear and timoshenko are for rectangular bodies only",
+                        bc.edge
+                    )));
+                }
+                pieces.push(
+                    mesh.pieces(&e.segments)
+                        .into_iter()
+                        .map(|(a, b)| {
+                            let d = b - a;
+                            (a, b, Some(Vec2::new(d.y, -d.x) * (1.0 / d.norm())), 1)
+                        })
+                        .collect(),
+                );
+            }
+            (Vec::new(), Vec::new(), support, domain, Some(mesh), pieces)
+        } else {
+            let [nx, ny] = spec.nodes;
+            if nx < 2 || ny < 2 {
+                return Err(EfgError::Invalid(format!(
+                    "body `{}`: the node grid needs at least 2 × 2 nodes",
+                    spec.name
+                )));
+            }
+            let xs: Vec<f64> = (0..nx)
+                .map(|i| origin.x + size.x * i as f64 / (nx - 1) as f64)
+                .collect();
+            let ys: Vec<f64> = (0..ny)
+                .map(|j| origin.y + size.y * j as f64 / (ny - 1) as f64)
+                .collect();
+            let support = Support::for_grid(&xs, &ys, spec.d_max);
+            let cells = spec.cells.unwrap_or([nx - 1, ny - 1]);
+            let segs = |e: Edge| match e {
+                Edge::Left | Edge::Right => cells[1],
+                Edge::Top | Edge::Bottom => cells[0],
+            };
+            let domain = quadrature::domain_points(origin, size, cells, n);
+            let mut pieces = Vec::with_capacity(spec.bc.len());
+            for bc in &spec.bc {
+                let e = bc.side().map_err(invalid)?;
+                let (a, b) = edge_ends(origin, size, e);
+                pieces.push(vec![(a, b, None, segs(e))]);
+            }
+            (xs, ys, support, domain, None, pieces)
+        };
         // quadrature points: domain, then penalty points of each Γu bc
-        let domain = quadrature::domain_points(origin, size, cells, n);
         let mut points: Vec<Vec2> = domain.iter().map(|q| q.x).collect();
         let mut roles: Vec<PointRole> = domain.iter().map(|q| PointRole::Domain(q.w * t)).collect();
         let mut penalty_values: Vec<[f64; 2]> = Vec::new();
         let mut penalty_bc: Vec<usize> = Vec::new();
-        let segs = |e: Edge| match e {
-            Edge::Left | Edge::Right => cells[1],
-            Edge::Top | Edge::Bottom => cells[0],
-        };
         for (bi, bc) in spec.bc.iter().enumerate().filter(|(_, b)| !b.is_load()) {
-            let (a, b) = edge_ends(origin, size, bc.edge);
             let (cx, cy) = constrained(bc);
-            for q in quadrature::edge_points(a, b, segs(bc.edge), n) {
-                points.push(q.x);
-                let w = q.w * t * alpha;
-                roles.push(PointRole::Penalty(
-                    if cx { w } else { 0.0 },
-                    if cy { w } else { 0.0 },
-                ));
-                penalty_values.push(prescribed(bc, q.x, timoshenko.as_ref()));
-                penalty_bc.push(bi);
+            for &(a, b, _, m) in &pieces[bi] {
+                for q in quadrature::edge_points(a, b, m, n) {
+                    points.push(q.x);
+                    let w = q.w * t * alpha;
+                    roles.push(PointRole::Penalty(
+                        if cx { w } else { 0.0 },
+                        if cy { w } else { 0.0 },
+                    ));
+                    penalty_values.push(prescribed(bc, q.x, timoshenko.as_ref()));
+                    penalty_bc.push(bi);
+                }
             }
         }
         let t0 = Instant::now();
@@ -227,7 +290,7 @@ impl EfgBody {
         let mut row = ShapeRow::new();
         let mut timed = Vec::new();
         let mut scratch = Vec::new();
-        for bc in spec.bc.iter().filter(|b| b.is_load()) {
+        for (bi, bc) in spec.bc.iter().enumerate().filter(|(_, b)| b.is_load()) {
             let target = if bc.table.is_some() {
                 scratch.clear();
                 scratch.resize(ndof, 0.0);
@@ -237,15 +300,19 @@ impl EfgBody {
             } else {
                 &mut f_permanent
             };
-            let (a, b) = edge_ends(origin, size, bc.edge);
-            for QuadPoint { x, w } in quadrature::edge_points(a, b, segs(bc.edge), n) {
-                let tr = traction_at(bc, a, b, x);
-                shape_functions(&support, x, &mut row)
-                    .map_err(|e| EfgError::coverage(e, spec.d_max, &spec.name))?;
-                for k in 0..row.len() {
-                    let i = row.idx[k] as usize;
-                    target[2 * i] += w * t * row.phi[k] * tr[0];
-                    target[2 * i + 1] += w * t * row.phi[k] * tr[1];
+            for &(a, b, normal, m) in &pieces[bi] {
+                for QuadPoint { x, w } in quadrature::edge_points(a, b, m, n) {
+                    let tr = match normal {
+                        Some(nv) => traction_normal(bc, a, b, x, nv),
+                        None => traction_at(bc, a, b, x),
+                    };
+                    shape_functions(&support, x, &mut row)
+                        .map_err(|e| EfgError::coverage(e, spec.d_max, &spec.name))?;
+                    for k in 0..row.len() {
+                        let i = row.idx[k] as usize;
+                        target[2 * i] += w * t * row.phi[k] * tr[0];
+                        target[2 * i + 1] += w * t * row.phi[k] * tr[1];
+                    }
                 }
             }
             if let Some(tb) = &bc.table {
@@ -286,7 +353,8 @@ impl EfgBody {
         }
         Ok(EfgBody {
             name: spec.name.clone(),
-            grid: spec.nodes,
+            grid: if mesh.is_some() { [0, 0] } else { spec.nodes },
+            mesh,
             xs,
             ys,
             origin,
@@ -687,6 +755,47 @@ impl EfgBody {
             },
             exact_stress,
         )
+    }
+
+    /// [`energy_error`](Self::energy_error) of a polygon body, integrated
+    /// over its triangles with each split into `sub²` (7 points each).
+    pub fn energy_error_polygon(
+        &self,
+        exact_stress: impl Fn(Vec2) -> [f64; 3],
+        sub: usize,
+    ) -> Result<f64, EfgError> {
+        let Some(mesh) = &self.mesh else {
+            return Err(EfgError::Invalid(format!(
+                "body `{}` is not a polygon body",
+                self.name
+            )));
+        };
+        let [d11, d12, _, d33] = self.material.d;
+        let det = d11 * d11 - d12 * d12;
+        let compl = |s: [f64; 3]| {
+            [
+                (d11 * s[0] - d12 * s[1]) / det,
+                (d11 * s[1] - d12 * s[0]) / det,
+                s[2] / d33,
+            ]
+        };
+        let (mut num, mut den) = (0.0, 0.0);
+        let mut row = ShapeRow::new();
+        for q in mesh.domain_points(sub) {
+            self.shape_row(q.x, &mut row)?;
+            let s = self.sample_row(&row);
+            let se = exact_stress(q.x);
+            let ee = compl(se);
+            let mut dn = 0.0;
+            let mut dd = 0.0;
+            for k in 0..3 {
+                dn += (s.stress[k] - se[k]) * (s.strain[k] - ee[k]);
+                dd += se[k] * ee[k];
+            }
+            num += q.w * dn;
+            den += q.w * dd;
+        }
+        Ok((num / den).sqrt())
     }
 
     /// Shape functions at every node position (for nodal output).

@@ -8,12 +8,81 @@ use super::body::EfgBody;
 use super::shape::ShapeRow;
 use crate::continuum::newmark::{Newmark, State};
 use crate::continuum::{
-    BodyEnergies, BodyState, ContactBody, Row, StateError, WithBoundary, add_dof_load, add_row_load,
+    BodyEnergies, BodyState, ContactBody, Edge, Row, StateError, WithBoundary, add_dof_load,
+    add_row_load,
 };
 use crate::geom::Vec2;
 
 /// An [`EfgBody`] with its contact boundary: what the coupling drives.
 pub type EfgContinuum = WithBoundary<EfgBody>;
+
+impl EfgBody {
+    /// The contact chains of a polygon body (`None` for a rectangle): along
+    /// the named edges `names` (all loops if `None`), through the boundary
+    /// nodes with `refine` points per piece between them, body on the left
+    /// (holes run clockwise). Consecutive segments of a loop join into one
+    /// chain; a whole loop is one closed chain. Unknown names are an error.
+    pub fn polygon_chains(
+        &self,
+        names: Option<&[crate::continuum::EdgeName]>,
+        refine: usize,
+    ) -> Option<Result<Vec<Vec<Vec2>>, EfgError>> {
+        let m = self.mesh.as_ref()?;
+        let refine = refine.max(1);
+        let mut on: Vec<Vec<bool>> = m
+            .segment_nodes
+            .iter()
+            .map(|s| vec![names.is_none(); s.len()])
+            .collect();
+        for n in names.unwrap_or(&[]) {
+            let Some(e) = m.domain.edge(n.as_str()) else {
+                return Some(Err(EfgError::Invalid(format!(
+                    "body `{}`: unknown edge `{n}`",
+                    self.name
+                ))));
+            };
+            for &(l, s) in &e.segments {
+                on[l][s] = true;
+            }
+        }
+        let mut chains = Vec::new();
+        for (l, segs) in m.segment_nodes.iter().enumerate() {
+            let n = segs.len();
+            let sel = &on[l];
+            // start after an unselected segment (or at 0 for a whole loop)
+            let Some(k0) = (0..n)
+                .find(|&k| sel[k] && !sel[(k + n - 1) % n])
+                .or(sel[0].then_some(0))
+            else {
+                continue;
+            };
+            let mut cur: Vec<Vec2> = Vec::new();
+            for t in 0..n {
+                let k = (k0 + t) % n;
+                if !sel[k] {
+                    if !cur.is_empty() {
+                        chains.push(std::mem::take(&mut cur));
+                    }
+                    continue;
+                }
+                if !cur.is_empty() {
+                    cur.pop(); // the previous segment's end = this start
+                }
+                for w in segs[k].windows(2) {
+                    let (a, b) = (m.nodes[w[0]], m.nodes[w[1]]);
+                    for j in 0..refine {
+                        cur.push(a + (b - a) * (j as f64 / refine as f64));
+                    }
+                }
+                cur.push(m.nodes[*segs[k].last().expect("a segment has 2 nodes")]);
+            }
+            if !cur.is_empty() {
+                chains.push(cur);
+            }
+        }
+        Some(Ok(chains))
+    }
+}
 
 impl ContactBody for EfgBody {
     type Error = EfgError;
@@ -22,6 +91,16 @@ impl ContactBody for EfgBody {
     }
     fn grid(&self) -> (Vec2, Vec2, [usize; 2]) {
         (self.origin, self.size, self.grid)
+    }
+    /// Rectangles: [`crate::continuum::contact_chains`] along `edges`. A
+    /// polygon body: every loop (outline and holes) is one closed chain
+    /// (body on its left), through the boundary nodes with `refine` points
+    /// per piece between them; `edges` is ignored.
+    fn chains(&self, edges: &[Edge], refine: usize) -> Vec<Vec<Vec2>> {
+        match self.polygon_chains(None, refine) {
+            Some(Ok(c)) => c,
+            _ => crate::continuum::contact_chains(self.origin, self.size, self.grid, edges, refine),
+        }
     }
     /// The MLS shape functions `φ_J(x)` (E7).
     fn row(&self, x: Vec2) -> Result<Row, EfgError> {

@@ -11,6 +11,7 @@ pub mod assemble;
 pub mod body;
 pub mod boundary;
 pub mod penalty;
+pub mod polygon;
 pub mod shape;
 pub mod support;
 pub mod weight;

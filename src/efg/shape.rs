@@ -126,11 +126,34 @@ pub fn shape_functions(
         if rx >= 1.0 || ry >= 1.0 {
             continue;
         }
-        let (wx, dwx) = super::weight::cubic_spline(rx);
-        let (wy, dwy) = super::weight::cubic_spline(ry);
-        let dwx = dwx * ddx.signum() * iv[0];
-        let dwy = dwy * ddy.signum() * iv[1];
-        let (w, w_x, w_y) = (wx * wy, dwx * wy, wx * dwy);
+        let (w, w_x, w_y) = if support.hidden(k as usize, p) {
+            // diffraction: the offset scaled by f = (s₁ + s₂)/s₀
+            let Some((f, [fx, fy])) = support.diffraction(k as usize, p) else {
+                continue;
+            };
+            let (ex, ey) = (ddx * f, ddy * f);
+            let rx = ex.abs() * iv[0];
+            let ry = ey.abs() * iv[1];
+            if rx >= 1.0 || ry >= 1.0 {
+                continue;
+            }
+            let (wx, dwx) = super::weight::cubic_spline(rx);
+            let (wy, dwy) = super::weight::cubic_spline(ry);
+            let (sx, sy) = (ex.signum() * iv[0], ey.signum() * iv[1]);
+            let (rx_x, rx_y) = (sx * (f + ddx * fx), sx * ddx * fy);
+            let (ry_x, ry_y) = (sy * ddy * fx, sy * (f + ddy * fy));
+            (
+                wx * wy,
+                dwx * rx_x * wy + wx * dwy * ry_x,
+                dwx * rx_y * wy + wx * dwy * ry_y,
+            )
+        } else {
+            let (wx, dwx) = super::weight::cubic_spline(rx);
+            let (wy, dwy) = super::weight::cubic_spline(ry);
+            let dwx = dwx * ddx.signum() * iv[0];
+            let dwy = dwy * ddy.signum() * iv[1];
+            (wx * wy, dwx * wy, wx * dwy)
+        };
         let px = -ddx * ihx;
         let py = -ddy * ihy;
         let q = [1.0, px, py, px * px, px * py, py * py];

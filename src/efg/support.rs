@@ -18,6 +18,57 @@ pub struct Support {
     /// `items[start[b]..start[b + 1]]`, in increasing node order.
     start: Vec<u32>,
     items: Vec<u32>,
+    /// Boundary segments that hide points from nodes (polygon bodies; `None`
+    /// for rectangles, whose supports are never cut).
+    pub visibility: Option<Visibility>,
+}
+
+/// The visibility criterion (Belytschko, Lu & Gu 1994, "Element-free
+/// Galerkin methods", IJNME 37; Belytschko, Krongauz, Organ, Fleming &
+/// Krysl 1996, "Meshless methods: an overview and recent developments",
+/// CMAME 139, §5.1): the boundary is opaque, so the weight of node `I` at
+/// `x` is zero when the segment `x_I → x` properly crosses a boundary
+/// segment (touching or running along one is not a crossing, so boundary
+/// nodes see along their own edges). Supports do not reach across holes,
+/// slots or re-entrant corners. Per node, only the segments whose bounding
+/// box meets the node's support rectangle are tested.
+///
+/// With `diffraction` (the default for polygon bodies) a hidden point gets
+/// the weight of the diffraction method (Organ, Fleming, Terry & Belytschko
+/// 1996, "Continuous meshless approximations for nonconvex bodies by
+/// diffraction and transparency", Comput. Mech. 18; Belytschko et al. 1996
+/// §5.2) with λ = 1: the distance `x_I → x` is replaced by the length of
+/// the shortest path bent around one boundary vertex `x_c` that sees both,
+/// `s₁ + s₂(x)`, i.e. the offset `x − x_I` is scaled by
+/// `f = (s₁ + s₂)/s₀`. The weight is then continuous across the shadow
+/// line (`f = 1` there, `∇f = 0`), which the Galerkin patch test needs; pure
+/// visibility cuts the weight and fails it (measured: 4e-2 stress error on
+/// an L-shape).
+#[derive(Debug, Clone)]
+pub struct Visibility {
+    /// The boundary segments.
+    pub segments: Vec<(Vec2, Vec2)>,
+    /// Bend hidden rays around boundary vertices (diffraction) instead of
+    /// cutting them (pure visibility).
+    pub diffraction: bool,
+    /// The domain: a ray between two boundary points that crosses no
+    /// segment may still run outside Ω (across a notch); its midpoint
+    /// decides.
+    pub domain: crate::geom::polygon::Domain,
+    /// CSR: segments near node `k` are `items[start[k]..start[k + 1]]`.
+    start: Vec<u32>,
+    items: Vec<u32>,
+    /// CSR per node: boundary vertices reachable from `x_I` with their
+    /// geodesic distance (shortest path inside Ω̄, bent at vertices).
+    geo_start: Vec<u32>,
+    geo: Vec<(Vec2, f64)>,
+}
+
+impl Visibility {
+    /// Segments that meet the support of node `k`.
+    pub fn near(&self, k: usize) -> &[u32] {
+        &self.items[self.start[k] as usize..self.start[k + 1] as usize]
+    }
 }
 
 /// `c_I` per direction for a tensor grid with coordinates `xs`, `ys`: the
@@ -98,6 +149,7 @@ impl Support {
             nbins,
             start: Vec::new(),
             items: Vec::new(),
+            visibility: None,
         };
         // count, prefix, fill (node order kept within each bin)
         let nb = nbins[0] * nbins[1];
@@ -153,6 +205,177 @@ impl Support {
         )
     }
 
+    /// Make `segments` opaque: the visibility criterion ([`Visibility`]),
+    /// or with `diffraction` the diffraction method.
+    pub fn with_visibility(
+        mut self,
+        domain: &crate::geom::polygon::Domain,
+        diffraction: bool,
+    ) -> Support {
+        let segments: Vec<(Vec2, Vec2)> = domain.segments().collect();
+        let mut start = vec![0u32];
+        let mut items = Vec::new();
+        for n in &self.node {
+            for (k, (a, b)) in segments.iter().enumerate() {
+                let (lx, hx) = (a.x.min(b.x), a.x.max(b.x));
+                let (ly, hy) = (a.y.min(b.y), a.y.max(b.y));
+                if hx >= n[0] - n[2] && lx <= n[0] + n[2] && hy >= n[1] - n[3] && ly <= n[1] + n[3]
+                {
+                    items.push(k as u32);
+                }
+            }
+            start.push(items.len() as u32);
+        }
+        let mut v = Visibility {
+            segments,
+            diffraction,
+            domain: domain.clone(),
+            start,
+            items,
+            geo_start: vec![0],
+            geo: Vec::new(),
+        };
+        if diffraction {
+            for k in 0..self.node.len() {
+                let n = self.node[k];
+                let xi = Vec2::new(n[0], n[1]);
+                let reach = 1.5 * n[2].max(n[3]);
+                let mut verts: Vec<Vec2> = Vec::new();
+                for &s in v.near(k) {
+                    let (a, b) = v.segments[s as usize];
+                    for c in [a, b] {
+                        if c != xi && (c - xi).norm() < reach && !verts.contains(&c) {
+                            verts.push(c);
+                        }
+                    }
+                }
+                // Dijkstra from x_I over the visibility graph of the vertices
+                let m = verts.len();
+                let mut dist: Vec<f64> = verts
+                    .iter()
+                    .map(|&c| {
+                        if Self::blocked(&v, k, xi, c) {
+                            f64::INFINITY
+                        } else {
+                            (c - xi).norm()
+                        }
+                    })
+                    .collect();
+                let mut done = vec![false; m];
+                for _ in 0..m {
+                    let Some(i) = (0..m)
+                        .filter(|&i| !done[i] && dist[i].is_finite())
+                        .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))
+                    else {
+                        break;
+                    };
+                    done[i] = true;
+                    for j in 0..m {
+                        let d = dist[i] + (verts[j] - verts[i]).norm();
+                        if !done[j]
+                            && d < dist[j]
+                            && d < reach
+                            && !Self::blocked(&v, k, verts[i], verts[j])
+                        {
+                            dist[j] = d;
+                        }
+                    }
+                }
+                for (c, d) in verts.into_iter().zip(dist) {
+                    if d < reach {
+                        v.geo.push((c, d));
+                    }
+                }
+                v.geo_start.push(v.geo.len() as u32);
+            }
+        }
+        self.visibility = Some(v);
+        self
+    }
+
+    /// Is `p` hidden from node `k` by the boundary (visibility criterion)?
+    /// Always `false` without [`Visibility`].
+    #[inline]
+    pub fn hidden(&self, k: usize, p: Vec2) -> bool {
+        let Some(v) = &self.visibility else {
+            return false;
+        };
+        let n = &self.node[k];
+        let xi = Vec2::new(n[0], n[1]);
+        Self::blocked(v, k, xi, p)
+    }
+
+    /// Is the straight path `a → b` blocked by a boundary segment near
+    /// node `k`?
+    #[inline]
+    fn blocked(v: &Visibility, k: usize, a: Vec2, b: Vec2) -> bool {
+        use crate::geom::polygon::{on_segment, properly_cross};
+        let near = v.near(k);
+        if near.iter().any(|&s| {
+            let (c, d) = v.segments[s as usize];
+            properly_cross(a, b, c, d)
+        }) {
+            return true;
+        }
+        // both ends on the boundary: the ray may run outside Ω
+        let on = |p: Vec2| {
+            near.iter().any(|&s| {
+                let (c, d) = v.segments[s as usize];
+                on_segment(c, d, p)
+            })
+        };
+        if on(a) && on(b) {
+            let m = (a + b) * 0.5;
+            let tol = 1e-9 * (b - a).norm();
+            return !(v.domain.contains(m) || v.domain.boundary_distance(m) <= tol);
+        }
+        false
+    }
+
+    /// For `p` hidden from node `k`: the diffraction factor
+    /// `f = (s₁ + s₂)/s₀` and its gradient `∇f`, where `s₁ + s₂` is the
+    /// geodesic distance from `x_I` to `p` inside Ω̄: over the boundary
+    /// vertices `x_c` that `p` sees, `s₁` = the precomputed geodesic
+    /// distance `x_I → x_c` (shortest path bent at vertices),
+    /// `s₂ = |p − x_c|`, `s₀ = |p − x_I|`.
+    /// `None` without diffraction or if no vertex sees both.
+    pub fn diffraction(&self, k: usize, p: Vec2) -> Option<(f64, [f64; 2])> {
+        let v = self.visibility.as_ref().filter(|v| v.diffraction)?;
+        let mut best: Option<(f64, Vec2)> = None;
+        for &(c, g) in &v.geo[v.geo_start[k] as usize..v.geo_start[k + 1] as usize] {
+            let len = g + (p - c).norm();
+            if best.is_some_and(|(l, _)| l <= len) {
+                continue;
+            }
+            if !Self::blocked(v, k, c, p) {
+                best = Some((len, c));
+            }
+        }
+        let n = &self.node[k];
+        let xi = Vec2::new(n[0], n[1]);
+        let (len, c) = best?;
+        let d0 = p - xi;
+        let s0 = d0.norm();
+        let d2 = p - c;
+        let s2 = d2.norm();
+        if s0 == 0.0 {
+            return None;
+        }
+        let f = len / s0;
+        // ∇f = ∇s₂/s₀ − (s₁ + s₂)∇s₀/s₀² (∇s₂ taken as 0 at p = x_c,
+        // where s₂ has a cone point: f is continuous there)
+        let g2 = if s2 > 0.0 {
+            d2 * (1.0 / (s2 * s0))
+        } else {
+            Vec2::ZERO
+        };
+        let g = [
+            g2.x - len * d0.x / (s0 * s0 * s0),
+            g2.y - len * d0.y / (s0 * s0 * s0),
+        ];
+        Some((f, g))
+    }
+
     /// Number of nodes.
     pub fn len(&self) -> usize {
         self.node.len()
@@ -185,7 +408,13 @@ impl Support {
         // `|Δx| < d_m` differs from it by one rounding at the support's edge
         // (a 42 × 8 node grid had nodes there and overran its row buffer)
         let (n, inv) = (&self.node[k], &self.inv_half[k]);
-        (p.x - n[0]).abs() * inv[0] < 1.0 && (p.y - n[1]).abs() * inv[1] < 1.0
+        (p.x - n[0]).abs() * inv[0] < 1.0
+            && (p.y - n[1]).abs() * inv[1] < 1.0
+            && (!self.hidden(k, p)
+                || self.diffraction(k, p).is_some_and(|(f, _)| {
+                    ((p.x - n[0]) * f).abs() * inv[0] < 1.0
+                        && ((p.y - n[1]) * f).abs() * inv[1] < 1.0
+                }))
     }
 
     /// Nodes whose support covers `p`, in increasing order, into `out`.

@@ -351,7 +351,7 @@ impl FemBody {
                     drives.push((a, Drive::new(law)));
                 }
             }
-            for node in edge_nodes(bc.edge) {
+            for node in edge_nodes(bc.side().map_err(FemError::Invalid)?) {
                 let x = Vec2::new(xs[node % nx], ys[node / nx]);
                 let ub = prescribed(bc, x, timoshenko.as_ref());
                 for (a, on, pr) in [(0, cx, &bc.ux), (1, cy, &bc.uy)] {
@@ -452,8 +452,9 @@ impl FemBody {
             } else {
                 &mut f_permanent
             };
-            let (a, b) = edge_ends(origin, size, bc.edge);
-            for QuadPoint { x, w } in quadrature::edge_points(a, b, segs(bc.edge), 3) {
+            let side = bc.side().map_err(FemError::Invalid)?;
+            let (a, b) = edge_ends(origin, size, side);
+            for QuadPoint { x, w } in quadrature::edge_points(a, b, segs(side), 3) {
                 let tr = traction_at(bc, a, b, x);
                 let loc = body.locate(x)?;
                 for (&node, phi) in loc.nodes.iter().zip(loc.shape()) {

@@ -54,9 +54,26 @@ pub fn write_grid(
     f: &NodalFields,
     format: VtkFormat,
 ) -> std::io::Result<()> {
+    write_cells(path, grid, None, m, f, format)
+}
+
+/// [`write_grid`], or with `triangles` (a polygon body's integration
+/// triangulation, counter-clockwise node triples) as VTK triangles instead
+/// of the grid's quads.
+pub fn write_cells(
+    path: &Path,
+    grid: [usize; 2],
+    triangles: Option<&[[usize; 3]]>,
+    m: &Material,
+    f: &NodalFields,
+    format: VtkFormat,
+) -> std::io::Result<()> {
     let [nx, ny] = grid;
     let n = f.reference.len();
-    let ncells = nx.saturating_sub(1) * ny.saturating_sub(1);
+    let ncells = match triangles {
+        Some(t) => t.len(),
+        None => nx.saturating_sub(1) * ny.saturating_sub(1),
+    };
     let mut w = VtkFile::new(GRID, format);
     w.open(
         "Piece",
@@ -118,6 +135,16 @@ pub fn write_grid(
     }
     w.close("PointData");
     w.open("Cells", "");
+    if let Some(t) = triangles {
+        let conn: Vec<i32> = t.iter().flat_map(|c| c.map(|i| i as i32)).collect();
+        w.array("connectivity", 1, "", &conn);
+        let offs: Vec<i32> = (1..=ncells as i32).map(|c| 3 * c).collect();
+        w.array("offsets", 1, "", &offs);
+        w.array("types", 1, "", &vec![5u8; ncells]);
+        w.close("Cells");
+        w.close("Piece");
+        return w.write(GRID, path);
+    }
     let conn: Vec<i32> = (0..ny.saturating_sub(1))
         .flat_map(|j| {
             (0..nx - 1).flat_map(move |i| {
@@ -145,9 +172,14 @@ pub fn write_body(
     path: &Path,
 ) -> std::io::Result<()> {
     match (body, shapes) {
-        (BodyRef::Efg(b), Some(s)) => {
-            write_grid(path, b.grid, &b.material, &efg_fields(b, s), format)
-        }
+        (BodyRef::Efg(b), Some(s)) => write_cells(
+            path,
+            b.grid,
+            b.mesh.as_ref().map(|m| m.triangles.as_slice()),
+            &b.material,
+            &efg_fields(b, s),
+            format,
+        ),
         (BodyRef::Fem(b), _) => {
             let (u, v, s) = b.nodal_fields();
             let n = b.n_nodes();

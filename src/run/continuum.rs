@@ -204,20 +204,36 @@ pub(super) fn check(sc: &Scenario, model: &Model) -> String {
             }
         };
         let i = &b.info;
-        let _ = writeln!(
-            s,
-            "body `{}` (EFG): {} × {} = {} nodes, {} DOFs; {} domain + {} boundary Gauss points ({}×{} per cell); d_max = {}",
-            b.name,
-            b.grid[0],
-            b.grid[1],
-            i.nodes,
-            i.dofs,
-            i.domain_points,
-            i.boundary_points,
-            spec.gauss,
-            spec.gauss,
-            b.d_max
-        );
+        if let Some(m) = &b.mesh {
+            let _ = writeln!(
+                s,
+                "body `{}` (EFG, polygon with {} hole(s), spacing {}): {} nodes, {} DOFs; {} triangles, {} domain + {} boundary Gauss points; d_max = {}",
+                b.name,
+                m.domain.loops.len() - 1,
+                m.spacing,
+                i.nodes,
+                i.dofs,
+                m.triangles.len(),
+                i.domain_points,
+                i.boundary_points,
+                b.d_max
+            );
+        } else {
+            let _ = writeln!(
+                s,
+                "body `{}` (EFG): {} × {} = {} nodes, {} DOFs; {} domain + {} boundary Gauss points ({}×{} per cell); d_max = {}",
+                b.name,
+                b.grid[0],
+                b.grid[1],
+                i.nodes,
+                i.dofs,
+                i.domain_points,
+                i.boundary_points,
+                spec.gauss,
+                spec.gauss,
+                b.d_max
+            );
+        }
         let _ = writeln!(
             s,
             "  support coverage: {}–{} nodes per Gauss point (≥ 3 needed); K̄ lower triangle: {} entries",

@@ -38,8 +38,9 @@ impl EntryWatch {
     fn new(sc: &Scenario, m: &CoupledModel) -> Result<Self, crate::model::body::BodyError> {
         let mut bodies = Vec::new();
         for (i, spec) in sc.body.iter().enumerate() {
-            let open = Edge::ALL.map(|e| !spec.contact_edges.contains(&e));
-            if !open.contains(&true) {
+            let sides = spec.contact_sides();
+            let open = Edge::ALL.map(|e| !sides.contains(&e));
+            if spec.is_polygon() || !open.contains(&true) {
                 continue;
             }
             let (o, s) = (

@@ -23,11 +23,14 @@
 //! Every field is documented in `docs/scenario.md`.
 
 use super::{Analysis, Problems, Scenario};
+use crate::continuum::PolygonShape;
 pub use crate::continuum::{
-    BodyParams, Edge, EdgeCondition as BcSpec, Elastic, LinearField, MassKind, MotionField, Plane,
-    PointLoad, Prescribed, Rectangle, TimoshenkoSpec,
+    BodyParams, Edge, EdgeCondition as BcSpec, EdgeName, Elastic, LinearField, MassKind,
+    MotionField, Plane, PointLoad, Prescribed, Rectangle, TimoshenkoSpec,
 };
 use crate::continuum::{DriveLaw, Measure, ServoSpec, Table, Target};
+use crate::geom::Vec2;
+use crate::geom::polygon::{Domain, circle};
 use serde::Deserialize;
 
 /// One continuum body.
@@ -44,10 +47,23 @@ pub struct BodySpec {
     /// `"lumped"` (row sum). EFG bodies always use the consistent Gram matrix.
     #[serde(default)]
     pub mass: MassKind,
-    /// The body's rectangle.
+    /// The body's rectangle (or, for a polygon body, filled in with the
+    /// outline's bounding box when the file is parsed).
+    #[serde(default)]
     pub rectangle: Rectangle,
-    /// Node grid `[nx, ny]` (row-major, x fastest).
+    /// Node grid `[nx, ny]` (row-major, x fastest); rectangles only.
+    #[serde(default)]
     pub nodes: [usize; 2],
+    /// Polygon body (EFG only): the outline's vertices, counter-clockwise.
+    pub outline: Option<Vec<[f64; 2]>>,
+    /// Holes of a polygon body: vertex lists (counter-clockwise) or circles.
+    #[serde(default)]
+    pub holes: Vec<HoleSpec>,
+    /// Node spacing `h` of a polygon body.
+    pub spacing: Option<f64>,
+    /// Named edges of a polygon body: `name = { loop = k, segments = [i, j] }`.
+    #[serde(default)]
+    pub edges: std::collections::BTreeMap<String, EdgeSpec>,
     /// Background integration cells `[cx, cy]`; default `nodes − 1`.
     pub cells: Option<[usize; 2]>,
     /// Gauss points per cell direction (n × n per cell, n per boundary segment).
@@ -77,8 +93,9 @@ pub struct BodySpec {
     /// Edges that discs can touch (coupled runs), e.g. `["top", "right"]`;
     /// default: all four (one closed chain). Adjacent edges are joined
     /// around their common corner; `[]` gives a body no contact boundary.
+    /// Polygon bodies: names of their `edges` (default: every loop).
     #[serde(default = "all_edges")]
-    pub contact_edges: Vec<Edge>,
+    pub contact_edges: Vec<EdgeName>,
     /// Contact material (a `[[material]]` name) of the body's boundary;
     /// default: the disc's own material, as for walls.
     pub contact_material: Option<String>,
@@ -93,12 +110,158 @@ pub struct BodySpec {
     pub self_weight: bool,
 }
 
+/// A hole of a polygon body: its vertices (counter-clockwise), or
+/// `{ center = [x, y], radius = r, segments = n }` (a regular n-gon inscribed
+/// in the circle, first vertex at angle 0).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(
+    untagged,
+    expecting = "a list of [x, y] vertices or { center = [x, y], radius = r, segments = n }"
+)]
+pub enum HoleSpec {
+    /// Vertices.
+    Points(Vec<[f64; 2]>),
+    /// A circle as a regular polygon.
+    Circle(CircleSpec),
+}
+
+/// `{ center = [x, y], radius = r, segments = n }`.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CircleSpec {
+    /// Centre.
+    pub center: [f64; 2],
+    /// Radius.
+    pub radius: f64,
+    /// Number of segments (default 32).
+    #[serde(default = "default_circle_segments")]
+    pub segments: usize,
+}
+
+fn default_circle_segments() -> usize {
+    32
+}
+
+/// `{ loop = k, segments = [i, j] }`: segments `i..=j` of loop `k` (0 = the
+/// outline, k = hole k; segment i runs from vertex i to vertex i + 1, in
+/// the order the vertices are given); `segments` absent: the whole loop.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EdgeSpec {
+    /// The loop: 0 outline, k ≥ 1 hole k.
+    #[serde(rename = "loop")]
+    pub lp: usize,
+    /// First and last segment (inclusive); may wrap around (`[5, 1]`).
+    pub segments: Option<[usize; 2]>,
+}
+
+impl BodySpec {
+    /// Is this a polygon body (`outline` given)?
+    pub fn is_polygon(&self) -> bool {
+        self.outline.is_some()
+    }
+
+    /// The validated polygon domain with its named edges (the user's
+    /// `edges`, plus `outline` and `hole1`, `hole2`, … for whole loops
+    /// unless the user took those names): `Err((field, message))`.
+    pub fn domain(&self) -> Result<Option<Domain>, (String, String)> {
+        let Some(outline) = &self.outline else {
+            return Ok(None);
+        };
+        let outline: Vec<Vec2> = outline.iter().map(|&p| p.into()).collect();
+        let mut holes = Vec::with_capacity(self.holes.len());
+        for (k, h) in self.holes.iter().enumerate() {
+            holes.push(match h {
+                HoleSpec::Points(p) => p.iter().map(|&q| q.into()).collect(),
+                HoleSpec::Circle(c) => {
+                    if !(c.radius > 0.0 && c.radius.is_finite()) || c.segments < 3 {
+                        return Err((
+                            format!("holes.{k}"),
+                            format!(
+                                "a circle needs radius > 0 and segments ≥ 3 (got radius {}, segments {})",
+                                c.radius, c.segments
+                            ),
+                        ));
+                    }
+                    circle(c.center.into(), c.radius, c.segments)
+                }
+            });
+        }
+        let sizes: Vec<usize> = std::iter::once(outline.len())
+            .chain(holes.iter().map(Vec::len))
+            .collect();
+        let mut edges = Vec::new();
+        for (name, e) in &self.edges {
+            let Some(&n) = sizes.get(e.lp) else {
+                return Err((
+                    format!("edges.{name}.loop"),
+                    format!(
+                        "loop {} does not exist (0 = outline, 1..{} = holes)",
+                        e.lp,
+                        sizes.len() - 1
+                    ),
+                ));
+            };
+            let segs: Vec<(usize, usize)> = match e.segments {
+                None => (0..n).map(|i| (e.lp, i)).collect(),
+                Some([i, j]) if i < n && j < n => {
+                    let len = (j + n - i) % n + 1;
+                    (0..len).map(|t| (e.lp, (i + t) % n)).collect()
+                }
+                Some(r) => {
+                    return Err((
+                        format!("edges.{name}.segments"),
+                        format!("loop {} has segments 0..={}, not {r:?}", e.lp, n - 1),
+                    ));
+                }
+            };
+            edges.push((name.clone(), segs));
+        }
+        for (k, &n) in sizes.iter().enumerate() {
+            let name = if k == 0 {
+                "outline".to_string()
+            } else {
+                format!("hole{k}")
+            };
+            if !self.edges.contains_key(&name) {
+                edges.push((name, (0..n).map(|i| (k, i)).collect()));
+            }
+        }
+        Domain::new(outline, holes, edges).map(Some).map_err(|e| {
+            (
+                if e.to_string().contains("hole") {
+                    "holes"
+                } else {
+                    "outline"
+                }
+                .to_string(),
+                e.to_string(),
+            )
+        })
+    }
+}
+
 fn yes() -> bool {
     true
 }
 
-fn all_edges() -> Vec<Edge> {
-    Edge::ALL.to_vec()
+fn all_edges() -> Vec<EdgeName> {
+    Edge::ALL.map(EdgeName::from).to_vec()
+}
+
+impl BodySpec {
+    /// The rectangle's contact edges (names that are not one of the four
+    /// sides are left out; validation reports them).
+    pub fn contact_sides(&self) -> Vec<Edge> {
+        self.contact_edges
+            .iter()
+            .filter_map(EdgeName::side)
+            .collect()
+    }
+    /// Are the contact edges the default (every edge / every loop)?
+    pub fn default_contact_edges(&self) -> bool {
+        self.contact_edges == all_edges()
+    }
 }
 
 fn default_contact_refine() -> usize {
@@ -118,6 +281,10 @@ impl BodySpec {
         BodyParams {
             name: self.name.clone(),
             rectangle: self.rectangle,
+            polygon: self.domain().ok().flatten().map(|domain| PolygonShape {
+                domain,
+                spacing: self.spacing.unwrap_or(0.0),
+            }),
             nodes: self.nodes,
             cells: self.cells,
             gauss: self.gauss,
@@ -350,6 +517,55 @@ fn validate_magnitudes(sc: &Scenario, i: usize, b: &BodySpec, p: &mut Problems) 
     }
 }
 
+/// Checks of a polygon body (`outline`): EFG only, `spacing` instead of
+/// `nodes`, contact on all loops.
+fn validate_polygon(_sc: &Scenario, i: usize, b: &BodySpec, d: Option<&Domain>, p: &mut Problems) {
+    let at = |f: &str| format!("body.{i}.{f}");
+    p.check(
+        b.method == Method::Efg,
+        at("outline"),
+        "polygon bodies are EFG only: a `fem-q4` body is a rectangle (`rectangle` and `nodes`)",
+    );
+    p.check(
+        b.nodes == [0, 0] && b.cells.is_none(),
+        at("nodes"),
+        "a polygon body has no node grid: give `spacing = h` (not `nodes`/`cells`)",
+    );
+    let bbox_ok = d.is_none_or(|d| {
+        let (lo, hi) = d.bounds();
+        b.rectangle.origin == lo.to_array() && b.rectangle.size == (hi - lo).to_array()
+    });
+    p.check(
+        bbox_ok,
+        at("rectangle"),
+        "give either `rectangle` or `outline`, not both",
+    );
+    match b.spacing {
+        None => p.push(
+            at("spacing"),
+            "a polygon body needs `spacing = h` (node spacing)",
+        ),
+        Some(h) => {
+            p.check(
+                h.is_finite() && h > 0.0,
+                at("spacing"),
+                format!("must be a finite number > 0 (got {h})"),
+            );
+            if let Some(d) = d
+                && h.is_finite()
+                && h > 0.0
+            {
+                let n = d.area() / (h * h);
+                p.check(
+                    n <= 5e6,
+                    at("spacing"),
+                    format!("about {n:.1e} nodes: at most 5·10⁶ (raise the spacing)"),
+                );
+            }
+        }
+    }
+}
+
 /// Prescribed edge motions (`{ velocity = v, until_step = N }`) that move
 /// an edge more than [`MAX_RELATIVE_MAGNITUDE`] × the body's size over a
 /// run of `steps` steps of `dt`: `(path, message)` of the first one.
@@ -562,8 +778,24 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             ),
         );
         validate_magnitudes(sc, i, b, p);
+        let domain = match b.domain() {
+            Ok(d) => d,
+            Err((f, m)) => {
+                p.push(at(&f), m);
+                None
+            }
+        };
+        if b.is_polygon() {
+            validate_polygon(sc, i, b, domain.as_ref(), p);
+        } else {
+            p.check(
+                b.holes.is_empty() && b.edges.is_empty() && b.spacing.is_none(),
+                at("outline"),
+                "`holes`, `edges` and `spacing` belong to a polygon body: give `outline` too (or use `rectangle` and `nodes` alone)",
+            );
+        }
         p.check(
-            b.nodes[0] >= 2 && b.nodes[1] >= 2,
+            b.is_polygon() || (b.nodes[0] >= 2 && b.nodes[1] >= 2),
             at("nodes"),
             format!(
                 "the node grid needs at least 2 nodes per direction (got {:?}); e.g. [33, 9]",
@@ -667,9 +899,18 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
         let mut seen = std::collections::HashSet::new();
         for (k, e) in b.contact_edges.iter().enumerate() {
             p.check(
-                seen.insert(*e),
+                seen.insert(e.clone()),
                 format!("body.{i}.contact_edges.{k}"),
-                format!("edge `{e:?}` is listed twice"),
+                format!("edge `{e}` is listed twice"),
+            );
+            let known = match &domain {
+                Some(d) => d.edge(e.as_str()).is_some() || b.default_contact_edges(),
+                None => b.is_polygon() || e.side().is_some(),
+            };
+            p.check(
+                known,
+                format!("body.{i}.contact_edges.{k}"),
+                format!("unknown edge `{e}`"),
             );
         }
         if b.self_weight && sc.simulation.gravity != [0.0, 0.0] && el.density <= 0.0 {
@@ -706,15 +947,51 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 bc.timoshenko.is_some(),
                 bc.traction.is_some(),
                 bc.parabolic_shear.is_some(),
+                bc.pressure.is_some(),
+                bc.kirsch.is_some(),
             ];
             let n = kinds.iter().filter(|&&x| x).count();
             p.check(
                 n == 1,
                 at("edge"),
                 format!(
-                    "give exactly one of `fixed = true`, `ux`/`uy`, `timoshenko`, `traction`, `parabolic_shear` ({n} given)"
+                    "give exactly one of `fixed = true`, `ux`/`uy`, `timoshenko`, `traction`, `parabolic_shear`, `pressure`, `kirsch` ({n} given)"
                 ),
             );
+            match &domain {
+                Some(d) => {
+                    p.check(
+                        d.edge(bc.edge.as_str()).is_some(),
+                        at("edge"),
+                        format!(
+                            "unknown edge `{}`; this polygon body's edges are: {}",
+                            bc.edge,
+                            d.edges.iter().map(|e| e.name.as_str()).collect::<Vec<_>>().join(", ")
+                        ),
+                    );
+                    p.check(
+                        bc.timoshenko.is_none() && bc.parabolic_shear.is_none(),
+                        at("edge"),
+                        "`timoshenko` and `parabolic_shear` are for rectangular bodies only",
+                    );
+                }
+                None if !b.is_polygon() => p.check(
+                    bc.edge.side().is_some(),
+                    at("edge"),
+                    format!(
+                        "unknown edge `{}`: a rectangle's edges are `left`, `right`, `top`, `bottom`",
+                        bc.edge
+                    ),
+                ),
+                None => {}
+            }
+            if let Some(v) = bc.pressure {
+                p.check(v.is_finite(), at("pressure"), "must be finite");
+            }
+            if let Some(k) = bc.kirsch {
+                p.check(k.s.is_finite(), at("kirsch.S"), "must be finite");
+                p.positive(k.a, at("kirsch.a"));
+            }
             if !bc.is_load() && n == 1 {
                 has_support = true;
             }

@@ -418,7 +418,7 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
         let at = format!("body.{i}");
         let (g, edges, refine) = (
             sc.simulation.gravity,
-            &spec.contact_edges,
+            &spec.contact_sides(),
             spec.contact_refine,
         );
         let p = spec.params();
@@ -430,8 +430,16 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
                         .map_err(|e| bad(&format!("{at}.initial"), e))?;
                 }
                 body.start_dynamic(body_dt).map_err(|e| bad(&at, e))?;
-                let mut c = EfgContinuum::new(body, edges, refine)
-                    .map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
+                let named =
+                    (!spec.default_contact_edges()).then_some(spec.contact_edges.as_slice());
+                let mut c = match body.polygon_chains(named, refine) {
+                    Some(chains) => {
+                        let chains = chains.map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
+                        EfgContinuum::with_chains(body, chains)
+                    }
+                    None => EfgContinuum::new(body, edges, refine),
+                }
+                .map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
                 c.mode = mode;
                 Box::new(c)
             }
@@ -633,7 +641,14 @@ fn disc_count(sc: &Scenario) -> f64 {
 /// measurements of `efgdem check` on EFG and FE bodies of 5 000 to
 /// 40 000 nodes (within ≈ 20 % for `d_max` 1.5–3, `gauss` 2–8).
 fn body_bytes(sc: &Scenario, b: &super::body::BodySpec) -> f64 {
-    let [nx, ny] = b.nodes.map(|n| n as f64);
+    let [nx, ny] = match (b.domain().ok().flatten(), b.spacing) {
+        // a polygon body: the grid of its bounding box
+        (Some(d), Some(h)) if h > 0.0 => {
+            let (lo, hi) = d.bounds();
+            [(hi.x - lo.x) / h + 1.0, (hi.y - lo.y) / h + 1.0]
+        }
+        _ => b.nodes.map(|n| n as f64),
+    };
     let nodes = nx * ny;
     let (mut bytes, band) = match b.method {
         Method::Efg => {
@@ -657,7 +672,7 @@ fn body_bytes(sc: &Scenario, b: &super::body::BodySpec) -> f64 {
         // significant entries) over the DOFs of the nodes whose support
         // reaches a contact edge
         let edge_nodes: f64 = b
-            .contact_edges
+            .contact_sides()
             .iter()
             .map(|e| match e {
                 super::body::Edge::Left | super::body::Edge::Right => ny,
@@ -898,7 +913,13 @@ fn start_state(sc: &Scenario, g: &Granular, purpose: BuildFor) -> Result<(), Inv
     for (bi, b) in sc.body.iter().enumerate() {
         let lo = Vec2::from(b.rectangle.origin);
         let hi = lo + Vec2::from(b.rectangle.size);
+        let domain = b.domain().ok().flatten();
         let found = hits(&|x, r| {
+            if let Some(d) = &domain {
+                // polygon: overlap = r ± distance to the boundary
+                let dist = d.boundary_distance(x);
+                return if d.contains(x) { r + dist } else { r - dist };
+            }
             let c = Vec2::new(x.x.clamp(lo.x, hi.x), x.y.clamp(lo.y, hi.y));
             if c == x {
                 // centre inside: overlap = r + distance to the nearest edge

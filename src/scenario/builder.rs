@@ -180,7 +180,7 @@ impl BodySpec {
     }
     /// The edges discs can touch.
     pub fn contact_edges(mut self, edges: &[Edge]) -> Self {
-        self.contact_edges = edges.to_vec();
+        self.contact_edges = edges.iter().map(|&e| e.into()).collect();
         self
     }
     /// Gravity on the body's own mass.

@@ -419,6 +419,25 @@ pub fn parse(src: &str, file: &str) -> Result<Scenario, ScenarioError> {
         }],
     })?;
     let mut sc = sc;
+    // a polygon body's rectangle is its outline's bounding box
+    for b in &mut sc.body {
+        if let Some(o) = &b.outline
+            && !o.is_empty()
+            && b.rectangle.size == [0.0, 0.0]
+        {
+            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for p in o {
+                for k in 0..2 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+            b.rectangle = body::Rectangle {
+                origin: lo,
+                size: [hi[0] - lo[0], hi[1] - lo[1]],
+            };
+        }
+    }
     sc.source = Some(std::sync::Arc::new(Source {
         file: file.to_string(),
         text: src.to_string(),

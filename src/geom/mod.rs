@@ -1,4 +1,8 @@
-//! Plane geometry: a small `Vec2` value type and point–segment queries.
+//! Plane geometry: a small `Vec2` value type and point–segment queries;
+//! polygonal domains ([`polygon`]) and their triangulation ([`triangulate`]).
+
+pub mod polygon;
+pub mod triangulate;
 
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 

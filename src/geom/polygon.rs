@@ -1,0 +1,504 @@
+//! Polygonal domains: an outline and holes, each a closed loop of straight
+//! segments, validated (simple, counter-clockwise outline, holes strictly
+//! inside and disjoint), with point-in-domain and segment-crossing tests
+//! (the visibility criterion of the EFG supports uses the latter).
+//!
+//! Storage convention: loop 0 is the outline, counter-clockwise; loops
+//! `1..` are the holes, stored **clockwise** (reversed from the user's
+//! counter-clockwise input), so the body is on the left of every segment
+//! `points[i] → points[i + 1]` and the outward normal is the segment
+//! direction rotated by −90°, as the contact chains expect.
+
+use super::Vec2;
+
+/// A closed loop: segment `i` runs from `points[i]` to `points[(i + 1) % n]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Loop {
+    /// Vertices (no repeated first point).
+    pub points: Vec<Vec2>,
+}
+
+impl Loop {
+    /// Number of segments (= vertices).
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+    /// No vertex.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+    /// End points of segment `i`.
+    pub fn segment(&self, i: usize) -> (Vec2, Vec2) {
+        let n = self.points.len();
+        (self.points[i % n], self.points[(i + 1) % n])
+    }
+    /// Twice the signed area (positive counter-clockwise).
+    pub fn signed_area2(&self) -> f64 {
+        (0..self.len())
+            .map(|i| {
+                let (a, b) = self.segment(i);
+                a.cross(b)
+            })
+            .sum()
+    }
+}
+
+/// A named set of boundary segments `(loop, segment)` in storage indexing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedEdge {
+    /// The name bcs and `contact_edges` refer to.
+    pub name: String,
+    /// `(loop, segment)` pairs, storage indexing (holes reversed).
+    pub segments: Vec<(usize, usize)>,
+}
+
+/// An outline with holes and named edges: the domain Ω of a polygon body.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Domain {
+    /// Loop 0: outline (CCW); loops 1..: holes (stored CW).
+    pub loops: Vec<Loop>,
+    /// Named edges.
+    pub edges: Vec<NamedEdge>,
+}
+
+/// Why a polygon was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PolygonError {
+    /// Fewer than 3 vertices.
+    #[error("{what} has {n} vertices; a loop needs at least 3")]
+    TooFew {
+        /// Which loop (`outline`, `hole 1`, …).
+        what: String,
+        /// Vertex count.
+        n: usize,
+    },
+    /// A non-finite coordinate or a zero-length segment.
+    #[error("{what}: {message}")]
+    Degenerate {
+        /// Which loop.
+        what: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// Two segments of one loop meet away from their common vertex.
+    #[error(
+        "{what} is not simple: segment {i} ({a:?} → {b:?}) intersects segment {j} ({c:?} → {d:?})"
+    )]
+    SelfIntersecting {
+        /// Which loop.
+        what: String,
+        /// First segment (user indexing).
+        i: usize,
+        /// Second segment (user indexing).
+        j: usize,
+        /// Ends of segment i.
+        a: [f64; 2],
+        /// Ends of segment i.
+        b: [f64; 2],
+        /// Ends of segment j.
+        c: [f64; 2],
+        /// Ends of segment j.
+        d: [f64; 2],
+    },
+    /// A loop given clockwise.
+    #[error(
+        "{what} is clockwise (signed area {area:.6e} < 0); give the vertices counter-clockwise (body on the left when walking along the outline; holes also counter-clockwise, as seen from their own inside)"
+    )]
+    Clockwise {
+        /// Which loop.
+        what: String,
+        /// Signed area.
+        area: f64,
+    },
+    /// A hole not strictly inside the outline, or overlapping another hole.
+    #[error("{what}")]
+    HolePlacement {
+        /// What is wrong.
+        what: String,
+    },
+    /// A named edge refers to a loop or segment that does not exist.
+    #[error("edge `{name}`: {message}")]
+    BadEdge {
+        /// Edge name.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+fn loop_name(k: usize) -> String {
+    if k == 0 {
+        "the outline".into()
+    } else {
+        format!("hole {k}")
+    }
+}
+
+/// Orientation of `c` relative to the line `a → b`: +1 left, −1 right, 0 on
+/// it (within a relative tolerance of `1e-10 · |b − a|`).
+#[inline]
+pub fn orient(a: Vec2, b: Vec2, c: Vec2) -> i8 {
+    let ab = b - a;
+    let cr = ab.cross(c - a);
+    let tol = 1e-10 * ab.norm2().max((c - a).norm2());
+    if cr > tol {
+        1
+    } else if cr < -tol {
+        -1
+    } else {
+        0
+    }
+}
+
+/// Do the open segments `a b` and `c d` cross properly (each one's end points
+/// strictly on opposite sides of the other)? Touching, ending on the other
+/// segment and collinear overlap are not crossings.
+#[inline]
+pub fn properly_cross(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> bool {
+    let o1 = orient(a, b, c);
+    let o2 = orient(a, b, d);
+    if o1 * o2 >= 0 {
+        return false;
+    }
+    let o3 = orient(c, d, a);
+    let o4 = orient(c, d, b);
+    o3 * o4 < 0
+}
+
+/// Is `p` on the closed segment `a b` (within the [`orient`] tolerance)?
+pub fn on_segment(a: Vec2, b: Vec2, p: Vec2) -> bool {
+    orient(a, b, p) == 0 && {
+        let ab = b - a;
+        let t = (p - a).dot(ab) / ab.norm2();
+        (-1e-12..=1.0 + 1e-12).contains(&t)
+    }
+}
+
+/// Do the closed segments `a b` and `c d` share any point?
+pub fn segments_meet(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> bool {
+    properly_cross(a, b, c, d)
+        || on_segment(a, b, c)
+        || on_segment(a, b, d)
+        || on_segment(c, d, a)
+        || on_segment(c, d, b)
+}
+
+/// Is `p` strictly inside the closed loop (crossing number; points on the
+/// loop count as outside)?
+pub fn inside_loop(points: &[Vec2], p: Vec2) -> bool {
+    let n = points.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (points[i], points[(i + 1) % n]);
+        if on_segment(a, b, p) {
+            return false;
+        }
+        if (a.y > p.y) != (b.y > p.y) {
+            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+            if x > p.x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+impl Domain {
+    /// Validate and store an outline and holes, all given counter-clockwise
+    /// (holes as seen from their own inside). Holes are stored reversed
+    /// (clockwise). `edges` name segment sets in the user's indexing
+    /// (`(loop, segment)` with segment `i` from vertex `i` to `i + 1`); they
+    /// are mapped to storage indexing.
+    pub fn new(
+        outline: Vec<Vec2>,
+        holes: Vec<Vec<Vec2>>,
+        edges: Vec<(String, Vec<(usize, usize)>)>,
+    ) -> Result<Domain, PolygonError> {
+        let user: Vec<Loop> = std::iter::once(outline)
+            .chain(holes)
+            .map(|points| Loop { points })
+            .collect();
+        for (k, l) in user.iter().enumerate() {
+            check_loop(l, &loop_name(k))?;
+        }
+        let outline = &user[0];
+        for (k, h) in user.iter().enumerate().skip(1) {
+            for (i, &p) in h.points.iter().enumerate() {
+                if !inside_loop(&outline.points, p) {
+                    return Err(PolygonError::HolePlacement {
+                        what: format!(
+                            "hole {k} is not strictly inside the outline: its vertex {i} ({}, {}) is outside or on it",
+                            p.x, p.y
+                        ),
+                    });
+                }
+            }
+            if let Some((i, j)) = first_meeting(h, outline) {
+                return Err(PolygonError::HolePlacement {
+                    what: format!(
+                        "hole {k} is not strictly inside the outline: its segment {i} meets the outline's segment {j}"
+                    ),
+                });
+            }
+            for (m, g) in user.iter().enumerate().skip(1).take(k - 1) {
+                if let Some((i, j)) = first_meeting(h, g) {
+                    return Err(PolygonError::HolePlacement {
+                        what: format!(
+                            "holes {m} and {k} overlap: segment {j} of hole {m} meets segment {i} of hole {k}"
+                        ),
+                    });
+                }
+                if inside_loop(&g.points, h.points[0]) || inside_loop(&h.points, g.points[0]) {
+                    return Err(PolygonError::HolePlacement {
+                        what: format!("holes {m} and {k} overlap: one lies inside the other"),
+                    });
+                }
+            }
+        }
+        let loops: Vec<Loop> = user
+            .iter()
+            .enumerate()
+            .map(|(k, l)| {
+                let mut points = l.points.clone();
+                if k > 0 {
+                    points.reverse();
+                }
+                Loop { points }
+            })
+            .collect();
+        let mut named = Vec::with_capacity(edges.len());
+        for (name, segs) in edges {
+            let mut out = Vec::with_capacity(segs.len());
+            for (k, i) in segs {
+                let Some(l) = loops.get(k) else {
+                    return Err(PolygonError::BadEdge {
+                        name,
+                        message: format!(
+                            "loop {k} does not exist (0 = outline, 1.. = holes; the body has {} loop(s))",
+                            loops.len()
+                        ),
+                    });
+                };
+                let n = l.len();
+                if i >= n {
+                    return Err(PolygonError::BadEdge {
+                        name,
+                        message: format!("{} has segments 0..{}, not {i}", loop_name(k), n - 1),
+                    });
+                }
+                // user segment i of a hole (p_i → p_{i+1}) is stored
+                // reversed as segment (n − 2 − i) mod n
+                let s = if k == 0 { i } else { (2 * n - 2 - i) % n };
+                out.push((k, s));
+            }
+            named.push(NamedEdge {
+                name,
+                segments: out,
+            });
+        }
+        Ok(Domain {
+            loops,
+            edges: named,
+        })
+    }
+
+    /// Is `p` inside Ω (strictly inside the outline and outside every hole;
+    /// points on the boundary count as outside)?
+    pub fn contains(&self, p: Vec2) -> bool {
+        inside_loop(&self.loops[0].points, p)
+            && self.loops[1..]
+                .iter()
+                .all(|h| !inside_loop(&h.points, p) && !on_loop(&h.points, p))
+    }
+
+    /// All boundary segments `(a, b)`, loop by loop, body on the left.
+    pub fn segments(&self) -> impl Iterator<Item = (Vec2, Vec2)> + '_ {
+        self.loops
+            .iter()
+            .flat_map(|l| (0..l.len()).map(move |i| l.segment(i)))
+    }
+
+    /// The named edge `name`.
+    pub fn edge(&self, name: &str) -> Option<&NamedEdge> {
+        self.edges.iter().find(|e| e.name == name)
+    }
+
+    /// Distance from `p` to the nearest boundary segment.
+    pub fn boundary_distance(&self, p: Vec2) -> f64 {
+        self.segments()
+            .map(|(a, b)| (p - super::closest_on_segment(p, a, b).1).norm())
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Lower-left and upper-right corners of the outline's bounding box.
+    pub fn bounds(&self) -> (Vec2, Vec2) {
+        let mut lo = Vec2::new(f64::INFINITY, f64::INFINITY);
+        let mut hi = Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for p in &self.loops[0].points {
+            lo.x = lo.x.min(p.x);
+            lo.y = lo.y.min(p.y);
+            hi.x = hi.x.max(p.x);
+            hi.y = hi.y.max(p.y);
+        }
+        (lo, hi)
+    }
+
+    /// Area of Ω.
+    pub fn area(&self) -> f64 {
+        0.5 * self.loops.iter().map(Loop::signed_area2).sum::<f64>()
+    }
+}
+
+fn on_loop(points: &[Vec2], p: Vec2) -> bool {
+    let n = points.len();
+    (0..n).any(|i| on_segment(points[i], points[(i + 1) % n], p))
+}
+
+fn first_meeting(a: &Loop, b: &Loop) -> Option<(usize, usize)> {
+    for i in 0..a.len() {
+        let (p, q) = a.segment(i);
+        for j in 0..b.len() {
+            let (r, s) = b.segment(j);
+            if segments_meet(p, q, r, s) {
+                return Some((i, j));
+            }
+        }
+    }
+    None
+}
+
+fn check_loop(l: &Loop, what: &str) -> Result<(), PolygonError> {
+    let n = l.len();
+    if n < 3 {
+        return Err(PolygonError::TooFew {
+            what: what.into(),
+            n,
+        });
+    }
+    if let Some(p) = l
+        .points
+        .iter()
+        .find(|p| !(p.x.is_finite() && p.y.is_finite()))
+    {
+        return Err(PolygonError::Degenerate {
+            what: what.into(),
+            message: format!("non-finite vertex ({}, {})", p.x, p.y),
+        });
+    }
+    for i in 0..n {
+        let (a, b) = l.segment(i);
+        if a == b {
+            return Err(PolygonError::Degenerate {
+                what: what.into(),
+                message: format!("segment {i} has zero length (vertex {i} repeated)"),
+            });
+        }
+    }
+    for i in 0..n {
+        let (a, b) = l.segment(i);
+        for j in i + 1..n {
+            let (c, d) = l.segment(j);
+            let adjacent = j == i + 1 || (i == 0 && j == n - 1);
+            let bad = if adjacent {
+                // share one vertex: bad only if they fold back on each other
+                let (shared, p, q) = if j == i + 1 { (b, a, d) } else { (a, b, c) };
+                orient(shared, p, q) == 0 && (p - shared).dot(q - shared) > 0.0
+            } else {
+                segments_meet(a, b, c, d)
+            };
+            if bad {
+                return Err(PolygonError::SelfIntersecting {
+                    what: what.into(),
+                    i,
+                    j,
+                    a: a.to_array(),
+                    b: b.to_array(),
+                    c: c.to_array(),
+                    d: d.to_array(),
+                });
+            }
+        }
+    }
+    let area = 0.5 * l.signed_area2();
+    if area <= 0.0 {
+        return Err(PolygonError::Clockwise {
+            what: what.into(),
+            area,
+        });
+    }
+    Ok(())
+}
+
+/// A regular polygon approximating a circle: `segments` vertices,
+/// counter-clockwise, the first at angle 0.
+pub fn circle(center: Vec2, radius: f64, segments: usize) -> Vec<Vec2> {
+    (0..segments)
+        .map(|k| {
+            let t = std::f64::consts::TAU * k as f64 / segments as f64;
+            center + Vec2::new(t.cos(), t.sin()) * radius
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(p: &[[f64; 2]]) -> Vec<Vec2> {
+        p.iter().map(|&a| a.into()).collect()
+    }
+
+    #[test]
+    fn validation_messages() {
+        let sq = v(&[[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]]);
+        let cw: Vec<Vec2> = sq.iter().rev().copied().collect();
+        assert!(matches!(
+            Domain::new(cw, vec![], vec![]),
+            Err(PolygonError::Clockwise { .. })
+        ));
+        let bow = v(&[[0.0, 0.0], [4.0, 4.0], [4.0, 0.0], [0.0, 4.0]]);
+        assert!(matches!(
+            Domain::new(bow, vec![], vec![]),
+            Err(PolygonError::SelfIntersecting { .. })
+        ));
+        let out = circle(Vec2::new(5.0, 2.0), 0.5, 8);
+        let e = Domain::new(sq.clone(), vec![out], vec![]).unwrap_err();
+        assert!(e.to_string().contains("not strictly inside"), "{e}");
+        let h1 = circle(Vec2::new(1.5, 2.0), 0.8, 8);
+        let h2 = circle(Vec2::new(2.5, 2.0), 0.8, 8);
+        let e = Domain::new(sq.clone(), vec![h1.clone(), h2], vec![]).unwrap_err();
+        assert!(e.to_string().contains("overlap"), "{e}");
+        let d = Domain::new(sq, vec![h1], vec![("h".into(), vec![(1, 0)])]).unwrap();
+        assert!(d.loops[1].signed_area2() < 0.0);
+        assert!(d.contains(Vec2::new(3.5, 3.5)));
+        assert!(!d.contains(Vec2::new(1.5, 2.0)));
+        assert!(!d.contains(Vec2::new(5.0, 2.0)));
+        // user segment 0 of the hole, reversed: same end points
+        let (a, b) = d.loops[1].segment(d.edge("h").unwrap().segments[0].1);
+        let c = circle(Vec2::new(1.5, 2.0), 0.8, 8);
+        assert_eq!((a, b), (c[1], c[0]));
+    }
+
+    #[test]
+    fn crossing_ignores_touching_and_collinear() {
+        let (a, b) = (Vec2::new(0.0, 0.0), Vec2::new(2.0, 0.0));
+        assert!(properly_cross(
+            a,
+            b,
+            Vec2::new(1.0, -1.0),
+            Vec2::new(1.0, 1.0)
+        ));
+        assert!(!properly_cross(
+            a,
+            b,
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0)
+        ));
+        assert!(!properly_cross(
+            a,
+            b,
+            Vec2::new(1.0, 0.0),
+            Vec2::new(3.0, 0.0)
+        ));
+    }
+}

@@ -1,0 +1,45 @@
+//! Constrained Delaunay triangulation of a polygon body's nodes (the
+//! `spade` crate) with the domain's boundary segments as constraints;
+//! triangles outside the outline or inside holes are dropped, so the
+//! triangles cover Ω exactly (up to the straight segments that define it).
+
+use super::Vec2;
+use super::polygon::Domain;
+use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+
+/// Why a triangulation failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("triangulation failed: {0}")]
+pub struct TriangulationError(pub String);
+
+/// Triangles `[i, j, k]` (counter-clockwise, indices into `points`) of the
+/// constrained Delaunay triangulation of `points` with the `constraints`
+/// (pairs of point indices, the boundary pieces between consecutive
+/// boundary nodes), keeping those whose centroid lies in `domain`.
+pub fn triangulate(
+    points: &[Vec2],
+    constraints: &[[usize; 2]],
+    domain: &Domain,
+) -> Result<Vec<[usize; 3]>, TriangulationError> {
+    let verts: Vec<Point2<f64>> = points.iter().map(|p| Point2::new(p.x, p.y)).collect();
+    let cdt =
+        ConstrainedDelaunayTriangulation::<Point2<f64>>::bulk_load_cdt(verts, constraints.to_vec())
+            .map_err(|e| TriangulationError(format!("{e:?}")))?;
+    if cdt.num_vertices() != points.len() {
+        return Err(TriangulationError(format!(
+            "{} of {} nodes coincide with others",
+            points.len() - cdt.num_vertices(),
+            points.len()
+        )));
+    }
+    let mut out = Vec::new();
+    for f in cdt.inner_faces() {
+        let v = f.vertices().map(|h| h.fix().index());
+        let c = (points[v[0]] + points[v[1]] + points[v[2]]) * (1.0 / 3.0);
+        if domain.contains(c) {
+            let area2 = (points[v[1]] - points[v[0]]).cross(points[v[2]] - points[v[0]]);
+            out.push(if area2 >= 0.0 { v } else { [v[0], v[2], v[1]] });
+        }
+    }
+    Ok(out)
+}
