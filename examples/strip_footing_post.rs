@@ -14,9 +14,9 @@
 //! probes `reaction` (`contact_fy` of the footing) and `settlement` (`uy`
 //! of a point of the footing), and a `[[measure]]` named `bed` with a
 //! `porosity` column (the unit weight γ = ρ_s (1 − n) g of the bed, from
-//! the rows before the footing touches it). Theory: `efgdem::bearing`.
+//! the rows before the footing touches it). Theory: `efgdem::geotech::bearing`.
 
-use efgdem::bearing::{self, CurvePoint, NGamma};
+use efgdem::geotech::bearing::{self, CurvePoint, NGamma};
 use efgdem::output::csv::History;
 use efgdem::output::plot::{Chart, Mark, Series, line_chart};
 use efgdem::scenario::{self, Scenario};

@@ -65,12 +65,11 @@
 //! 5. [`model`]: the [`model::Model`] users step and read.
 //! 6. [`scenario`]: the TOML format — parse, validate, build a `Model`.
 //! 7. [`output`]: history CSV, ParaView files, JSON, plots, progress.
-//! 8. [`run`], then [`study`], [`reproduce`], [`biaxial`], [`bearing`] and [`geotech`]: drivers and
+//! 8. [`run`], then [`study`], [`reproduce`], [`biaxial`] and [`geotech`]: drivers and
 //!    post-processing.
 
 #![warn(missing_docs)]
 
-pub mod bearing;
 pub mod biaxial;
 pub mod continuum;
 pub mod coupling;

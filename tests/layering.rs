@@ -14,7 +14,7 @@ const LAYERS: &[&[&str]] = &[
     &["scenario"],
     &["output"],
     &["run"],
-    &["study", "reproduce", "biaxial", "bearing", "geotech"],
+    &["study", "reproduce", "biaxial", "geotech"],
 ];
 
 fn layer_of(module: &str) -> usize {

@@ -6,7 +6,7 @@
 #[allow(dead_code)]
 mod common;
 
-use efgdem::bearing::{self, NGamma};
+use efgdem::geotech::bearing::{self, NGamma};
 use efgdem::output::csv::History;
 
 /// The example, smaller: every edit must apply.

@@ -1,5 +1,5 @@
 //! Geotechnical examples of issue 15 (`examples/silo.toml`,
-//! `examples/retaining_wall.toml`): drivers that run a coupled scenario
+//! `examples/retaining_wall.toml`, `examples/strip_footing.toml`): drivers that run a coupled scenario
 //! through the library, average what a geotechnical engineer reads (the
 //! earth pressure on a wall from the disc–body contacts, the stress and
 //! density of the grains in horizontal bands) over the last part of the
@@ -8,6 +8,7 @@
 //! bands ([`Bands`]), the free surface of a fill ([`surface`]), the weight
 //! of the grains, and the scale knob ([`scale_lengths`]).
 
+pub mod bearing;
 pub mod retaining;
 pub mod silo;
 
