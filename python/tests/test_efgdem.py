@@ -345,7 +345,7 @@ def test_dict_type_errors_name_the_field():
         "<dict>: granular.damping.kind: unknown variant `viscous`")
     ex = load_toml(EXAMPLE1)
     ex["body"][0]["bc"][0]["edge"] = "lft"
-    with pytest.raises(efgdem.ScenarioError, match=r"^<dict>: body\[0\]\.bc\[0\]\.edge: unknown variant"):
+    with pytest.raises(efgdem.ScenarioError, match=r"^<dict>: body\[0\]\.bc\[0\]\.edge: unknown edge `lft`"):
         efgdem.Model.from_dict(ex)
 
 
