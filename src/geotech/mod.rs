@@ -12,11 +12,71 @@ pub mod bearing;
 pub mod retaining;
 pub mod silo;
 
+use crate::coupling::CoupledModel;
 use crate::dem::Granular;
 use crate::dem::measure::{self, OuterContact, Quantity, Region};
 use crate::geom::Vec2;
 use crate::model::Model;
 use crate::scenario::Scenario;
+use std::ops::ControlFlow;
+
+/// How a driver averages: the window, the sampling and the bins.
+#[derive(Debug, Clone, Copy)]
+pub struct Options {
+    /// Start of the averaging window (s).
+    pub average_from: f64,
+    /// Steps between the states averaged.
+    pub every: usize,
+    /// Bins along the wall(s) (over the wall's height).
+    pub bins: usize,
+    /// Measurement bands of the grains (floor to surface).
+    pub bands: usize,
+}
+
+/// Run `model` to `end_time` and call `sample(model, grains, coupling)` on
+/// every `opts.every`-th step from `opts.average_from` on; `progress(t)`
+/// every 1000 steps. Stops at the first error of `sample`. Returns the
+/// number of states sampled.
+pub fn sample_until(
+    model: &mut Model,
+    end_time: f64,
+    opts: &Options,
+    mut progress: impl FnMut(f64),
+    mut sample: impl FnMut(&Model, &Granular, &CoupledModel) -> Result<(), String>,
+) -> Result<usize, String> {
+    let every = opts.every.max(1);
+    let (mut step, mut n) = (0usize, 0usize);
+    let mut err = None;
+    model
+        .run_until(end_time, |m| {
+            step += 1;
+            if step.is_multiple_of(1000) {
+                progress(m.time());
+            }
+            if m.time() < opts.average_from || !step.is_multiple_of(every) {
+                return ControlFlow::Continue(());
+            }
+            let result = match (m.granular(), m.coupled()) {
+                (Some(g), Some(c)) => sample(m, g, c),
+                _ => Err("not a coupled run with grains".to_string()),
+            };
+            match result {
+                Ok(()) => {
+                    n += 1;
+                    ControlFlow::Continue(())
+                }
+                Err(e) => {
+                    err = Some(e);
+                    ControlFlow::Break(())
+                }
+            }
+        })
+        .map_err(|e| e.to_string())?;
+    match err {
+        Some(e) => Err(e),
+        None => Ok(n),
+    }
+}
 
 /// Time-averaged Love–Weber stress and porosity of horizontal bands of
 /// the grains (the `[[measure]]` quantities of `dem::measure`, computed

@@ -28,7 +28,8 @@
 //! wall's centre line) gives the top deflection, with `EI = E' h³/12`,
 //! `κGA = 5/6 G h` (plane strain: `E' = E/(1 − ν²)`).
 
-use super::{BandMean, Bands, grain_density, surface};
+pub use super::Options;
+use super::{BandMean, Bands, grain_density, sample_until, surface};
 use crate::continuum::cantilever::{LoadBin, tip_deflection};
 use crate::continuum::{Edge, Plane};
 use crate::geom::Vec2;
@@ -36,7 +37,6 @@ use crate::model::probe::global_quantity;
 use crate::model::traction::{EdgeTraction, TractionBin};
 use crate::output::plot::{Chart, Mark, PlotError, REFERENCE_COLOR, Series, line_chart, palette};
 use crate::scenario::Scenario;
-use std::ops::ControlFlow;
 use std::path::Path;
 
 /// The wall a scenario describes.
@@ -116,19 +116,6 @@ impl Wall {
     }
 }
 
-/// How the run is averaged.
-#[derive(Debug, Clone, Copy)]
-pub struct Options {
-    /// Start of the averaging window (s).
-    pub average_from: f64,
-    /// Steps between the states averaged.
-    pub every: usize,
-    /// Height bins on the face (over the wall's height).
-    pub bins: usize,
-    /// Measurement bands of the backfill (floor to surface).
-    pub bands: usize,
-}
-
 /// Everything [`run`] measures.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct WallResult {
@@ -177,11 +164,7 @@ pub struct WallResult {
 
 /// Run the scenario `sc` to its end time, averaging as `opts` says;
 /// `progress(t)` every 1000 steps.
-pub fn run(
-    sc: &Scenario,
-    opts: &Options,
-    mut progress: impl FnMut(f64),
-) -> Result<WallResult, String> {
+pub fn run(sc: &Scenario, opts: &Options, progress: impl FnMut(f64)) -> Result<WallResult, String> {
     let w = Wall::from_scenario(sc)?;
     let mut model = sc.build().map_err(|e| e.to_string())?;
     let mut face = EdgeTraction::new(0, Edge::Right, w.y.0, w.y.1, opts.bins, w.thickness)
@@ -190,58 +173,32 @@ pub fn run(
     let base = Vec2::new(0.5 * (w.x.0 + w.x.1), w.y.0);
     let mut bands: Option<Bands> = None;
     let mut surf = f64::NAN;
-    let (mut kin, mut n) = (0.0, 0usize);
+    let mut kin = 0.0;
     let mut ux = vec![];
     let mut ux_base = 0.0;
-    let every = opts.every.max(1);
-    let mut step = 0usize;
-    let mut err = None;
     let height = w.y.1 - w.y.0;
-    model
-        .run_until(w.end_time, |m| {
-            step += 1;
-            if step.is_multiple_of(1000) {
-                progress(m.time());
-            }
-            if m.time() < opts.average_from || !step.is_multiple_of(every) {
-                return ControlFlow::Continue(());
-            }
-            let (Some(g), Some(c)) = (m.granular(), m.coupled()) else {
-                err = Some("the retaining wall is not a coupled run".to_string());
-                return ControlFlow::Break(());
-            };
-            let b = bands.get_or_insert_with(|| {
-                // the backfill away from the wall: from one wall height
-                // beside it (or its middle third if it is narrower)
-                let x_lo = (w.x.1 + height).min(w.x.1 + (w.x_far - w.x.1) / 3.0);
-                let x_hi = w
-                    .x_far
-                    .min(x_lo + height)
-                    .max(x_lo + (w.x_far - w.x.1) / 3.0)
-                    .min(w.x_far);
-                surf = surface(g, w.x.1, w.x_far, 8);
-                Bands::new(x_lo, x_hi, w.y.0, surf, opts.bands)
-            });
-            b.add(m);
-            face.add(&c.contacts);
-            kin += global_quantity(g, "kinetic");
-            match (m.body(0).sample(top), m.body(0).sample(base)) {
-                (Ok(s), Ok(b)) => {
-                    ux.push(s.u.x - b.u.x);
-                    ux_base += b.u.x;
-                }
-                (Err(e), _) | (_, Err(e)) => {
-                    err = Some(e.to_string());
-                    return ControlFlow::Break(());
-                }
-            }
-            n += 1;
-            ControlFlow::Continue(())
-        })
-        .map_err(|e| e.to_string())?;
-    if let Some(e) = err {
-        return Err(e);
-    }
+    let n = sample_until(&mut model, w.end_time, opts, progress, |m, g, c| {
+        let b = bands.get_or_insert_with(|| {
+            // the backfill away from the wall: from one wall height
+            // beside it (or its middle third if it is narrower)
+            let x_lo = (w.x.1 + height).min(w.x.1 + (w.x_far - w.x.1) / 3.0);
+            let x_hi = w
+                .x_far
+                .min(x_lo + height)
+                .max(x_lo + (w.x_far - w.x.1) / 3.0)
+                .min(w.x_far);
+            surf = surface(g, w.x.1, w.x_far, 8);
+            Bands::new(x_lo, x_hi, w.y.0, surf, opts.bands)
+        });
+        b.add(m);
+        face.add(&c.contacts);
+        kin += global_quantity(g, "kinetic");
+        let (s, b) = (m.body(0).sample(top), m.body(0).sample(base));
+        let (s, b) = (s.map_err(|e| e.to_string())?, b.map_err(|e| e.to_string())?);
+        ux.push(s.u.x - b.u.x);
+        ux_base += b.u.x;
+        Ok(())
+    })?;
     let bands = bands.ok_or("no state in the averaging window")?;
     let means = bands.means();
     let bulk = &means[..means.len().saturating_sub(1).max(1)];

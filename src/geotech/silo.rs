@@ -29,13 +29,13 @@
 //! **Weight balance**: the weight of the grains `Σ m g` against the floor's
 //! reaction plus the walls' vertical resultant (averaged).
 
-use super::{BandMean, Bands, grain_density, surface, weight};
+pub use super::Options;
+use super::{BandMean, Bands, grain_density, sample_until, surface, weight};
 use crate::continuum::Edge;
 use crate::model::probe::{global_quantity, wall_quantity};
 use crate::model::traction::{EdgeTraction, TractionBin};
 use crate::output::plot::{Chart, Mark, PlotError, REFERENCE_COLOR, Series, line_chart, palette};
 use crate::scenario::Scenario;
-use std::ops::ControlFlow;
 use std::path::Path;
 
 /// The silo a scenario describes.
@@ -117,19 +117,6 @@ impl Silo {
     pub fn width(&self) -> f64 {
         self.x1 - self.x0
     }
-}
-
-/// How the run is averaged.
-#[derive(Debug, Clone, Copy)]
-pub struct Options {
-    /// Start of the averaging window (s).
-    pub average_from: f64,
-    /// Steps between the states averaged.
-    pub every: usize,
-    /// Depth bins on each wall (over the wall's height).
-    pub bins: usize,
-    /// Measurement bands between the floor and the surface.
-    pub bands: usize,
 }
 
 /// One depth of the Janssen comparison.
@@ -218,11 +205,7 @@ pub fn janssen(rho_b: f64, g: f64, w: f64, mu_w: f64, k: f64, z: f64) -> f64 {
 
 /// Run the silo scenario `sc` to its end time, averaging as `opts` says;
 /// `progress(t)` is called every 1000 steps.
-pub fn run(
-    sc: &Scenario,
-    opts: &Options,
-    mut progress: impl FnMut(f64),
-) -> Result<SiloResult, String> {
+pub fn run(sc: &Scenario, opts: &Options, progress: impl FnMut(f64)) -> Result<SiloResult, String> {
     let silo = Silo::from_scenario(sc)?;
     let mut model = sc.build().map_err(|e| e.to_string())?;
     let (y0, y1) = silo.y_range;
@@ -232,40 +215,20 @@ pub fn run(
         .map_err(|e| e.to_string())?;
     let mut bands: Option<Bands> = None;
     let mut surf = f64::NAN;
-    let (mut floor, mut kin, mut n) = (0.0, 0.0, 0usize);
+    let (mut floor, mut kin) = (0.0, 0.0);
     let t_disc = sc.granular.as_ref().map_or(1.0, |g| g.thickness);
-    let every = opts.every.max(1);
-    let mut step = 0usize;
-    let mut err = None;
-    model
-        .run_until(silo.end_time, |m| {
-            step += 1;
-            if step.is_multiple_of(1000) {
-                progress(m.time());
-            }
-            if m.time() < opts.average_from || !step.is_multiple_of(every) {
-                return ControlFlow::Continue(());
-            }
-            let (Some(g), Some(c)) = (m.granular(), m.coupled()) else {
-                err = Some("the silo is not a coupled run".to_string());
-                return ControlFlow::Break(());
-            };
-            let b = bands.get_or_insert_with(|| {
-                surf = surface(g, silo.x0, silo.x1, 8);
-                Bands::new(silo.x0, silo.x1, y0, surf, opts.bands)
-            });
-            b.add(m);
-            left.add(&c.contacts);
-            right.add(&c.contacts);
-            floor += -wall_quantity(&g.walls[silo.floor], "wall_fy", t_disc);
-            kin += global_quantity(g, "kinetic");
-            n += 1;
-            ControlFlow::Continue(())
-        })
-        .map_err(|e| e.to_string())?;
-    if let Some(e) = err {
-        return Err(e);
-    }
+    let n = sample_until(&mut model, silo.end_time, opts, progress, |m, g, c| {
+        let b = bands.get_or_insert_with(|| {
+            surf = surface(g, silo.x0, silo.x1, 8);
+            Bands::new(silo.x0, silo.x1, y0, surf, opts.bands)
+        });
+        b.add(m);
+        left.add(&c.contacts);
+        right.add(&c.contacts);
+        floor += -wall_quantity(&g.walls[silo.floor], "wall_fy", t_disc);
+        kin += global_quantity(g, "kinetic");
+        Ok(())
+    })?;
     let bands = bands.ok_or("no state in the averaging window")?;
     let g = model.granular().ok_or("no grains")?;
     let weight = weight(g, sc.simulation.gravity);
