@@ -19,7 +19,6 @@
 
 use efgdem::geotech::{self, retaining};
 use efgdem::output::traction::write_traction_csv;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -88,23 +87,7 @@ fn main_() -> Result<(), String> {
         Some(r.surface),
     )
     .map_err(e)?;
-    let mut f = std::fs::File::create(out.join("bands.csv")).map_err(e)?;
-    writeln!(f, "y_lo,y_hi,depth_mid,sxx,syy,sxy,porosity,K").map_err(e)?;
-    for b in &r.bands {
-        writeln!(
-            f,
-            "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
-            b.y_lo,
-            b.y_hi,
-            r.surface - 0.5 * (b.y_lo + b.y_hi),
-            b.sxx,
-            b.syy,
-            b.sxy,
-            b.porosity,
-            b.sxx / b.syy
-        )
-        .map_err(e)?;
-    }
+    geotech::write_bands_csv(&out.join("bands.csv"), &r.bands, r.surface).map_err(e)?;
     let k0 = |p: f64| 1.0 - p.to_radians().sin();
     let mut json = serde_json::to_value(&r).map_err(|e| e.to_string())?;
     json["run_seconds"] = secs.into();

@@ -75,23 +75,7 @@ fn main_() -> Result<(), String> {
         Some(r.surface),
     )
     .map_err(e)?;
-    let mut f = std::fs::File::create(out.join("bands.csv")).map_err(e)?;
-    writeln!(f, "y_lo,y_hi,depth_mid,sxx,syy,sxy,porosity,K").map_err(e)?;
-    for b in &r.bands {
-        writeln!(
-            f,
-            "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
-            b.y_lo,
-            b.y_hi,
-            r.surface - 0.5 * (b.y_lo + b.y_hi),
-            b.sxx,
-            b.syy,
-            b.sxy,
-            b.porosity,
-            b.sxx / b.syy
-        )
-        .map_err(e)?;
-    }
+    geotech::write_bands_csv(&out.join("bands.csv"), &r.bands, r.surface).map_err(e)?;
     let mut f = std::fs::File::create(out.join("janssen.csv")).map_err(e)?;
     writeln!(f, "depth,measured,janssen,hydrostatic").map_err(e)?;
     for c in &r.compared {

@@ -108,6 +108,33 @@ pub struct BandMean {
     pub porosity: f64,
 }
 
+/// Write `bands.csv`: per band its bottom, top, depth of its middle below
+/// `surface`, σ_xx, σ_yy, σ_xy, porosity and K = σ_xx/σ_yy.
+pub fn write_bands_csv(
+    path: &std::path::Path,
+    bands: &[BandMean],
+    surface: f64,
+) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(f, "y_lo,y_hi,depth_mid,sxx,syy,sxy,porosity,K")?;
+    for b in bands {
+        writeln!(
+            f,
+            "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+            b.y_lo,
+            b.y_hi,
+            surface - 0.5 * (b.y_lo + b.y_hi),
+            b.sxx,
+            b.syy,
+            b.sxy,
+            b.porosity,
+            b.sxx / b.syy
+        )?;
+    }
+    f.flush()
+}
+
 impl Bands {
     /// `n` bands of equal height between `y0` and `y1`, spanning
     /// `x0 … x1`.
