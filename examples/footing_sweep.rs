@@ -17,8 +17,14 @@
 //! With `NO_GEOMETRIC_STIFFNESS` set in the environment the contacts'
 //! geometric stiffness stays explicit (`geometric_stiffness = false`).
 //!
+//! With `BED=similar` the bed is instead 6 footing widths wide and 1.8
+//! deep, the proportions of `examples/strip_footing.toml` (a bed that holds
+//! a footing's failure mechanism): the number of discs then grows with the
+//! square of the footing width (1.25·10⁷ discs at 1 000 contacts, ≈ 4 GiB).
+//!
 //!     cargo run --release --example footing_sweep -- [threads] [steps] [contacts,...] [nodes,...]
 //!     cargo run --release --example footing_sweep -- 2 100 10,100,1000,5000 1000,10000
+//!     BED=similar cargo run --release --example footing_sweep -- 2 50 10,100,1000 1000,10000
 
 use efgdem::scenario;
 use std::time::Instant;
@@ -44,6 +50,7 @@ friction = 0.5
 material = "grain"
 discs = {{ generate = "hex", box = [[0.0, 0.0], [{width}, {depth}]], radius = {R} }}
 damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+allow_overlap = true   # the footing starts 1 % of a radius into the top row
 
 [[wall]]
 name = "floor"
@@ -100,6 +107,7 @@ fn main() {
     let contacts = list(3, "10,100,1000,5000");
     let nodes = list(4, "1000,10000");
     let warm = 20;
+    let similar = std::env::var("BED").is_ok_and(|b| b == "similar");
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -112,8 +120,13 @@ fn main() {
         );
         for &nc in &contacts {
             let w = nc as f64 * 2.0 * R;
-            let width = 1.5 * w + 80.0 * R;
-            let depth = 17.0 * 3f64.sqrt() * R + 2.0 * R;
+            let rows = if similar {
+                (1.8 * w / (3f64.sqrt() * R)).round()
+            } else {
+                17.0
+            };
+            let width = if similar { 6.0 * w } else { 1.5 * w + 80.0 * R };
+            let depth = rows * 3f64.sqrt() * R + 2.0 * R;
             let bed_src = bed(width, depth);
             // the bed alone: DEM-only timing, and the height of its top row
             let sc = scenario::parse(&bed_src, "bed.toml").expect("bed scenario");
@@ -126,6 +139,7 @@ fn main() {
                 .map(|(p, r)| p.y + r)
                 .fold(f64::MIN, f64::max);
             let n_discs = g.particles.len();
+            eprintln!("  bed of {n_discs} discs built");
             for _ in 0..warm {
                 g.step();
             }
@@ -134,6 +148,7 @@ fn main() {
                 g.step();
             }
             let dem_ms = t.elapsed().as_secs_f64() * 1e3 / steps as f64;
+            drop(g);
             for &nn in &nodes {
                 let src = bed_src.clone() + &footing((width - w) / 2.0, top - 0.01 * R, w, nn);
                 let sc = scenario::parse(&src, "footing.toml").expect("footing scenario");

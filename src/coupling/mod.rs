@@ -27,6 +27,7 @@
 //! `k_n Δt` on the body; it is stable only with a dissipative Newmark
 //! (the paper's γ = 1.5, β = 0.8) or a soft contact.
 
+pub mod candidates;
 pub mod energy;
 pub mod implicit;
 pub mod interface;
@@ -38,6 +39,7 @@ use crate::dem::Granular;
 use crate::dem::contact::{self, ContactLaw, Side, effective_mass};
 use crate::dem::particles::Particles;
 use crate::geom::Vec2;
+use candidates::Candidates;
 use segments::SegmentGrid;
 use std::time::Instant;
 
@@ -106,6 +108,11 @@ pub struct CoupledModel {
     pub contacts: Vec<BodyContact>,
     /// Per body, per chain: its segments binned for detection.
     grids: Vec<Vec<SegmentGrid>>,
+    /// Per body, per chain: the discs that may touch it.
+    near: Vec<Vec<Candidates>>,
+    /// The largest disc radius and the DEM rebuild count it was found at
+    /// (discs are only added with a rebuild).
+    r_max: Option<(usize, f64)>,
     scratch: Vec<BodyContact>,
     loads: Vec<Load>,
     sub: usize,
@@ -221,6 +228,8 @@ impl CoupledModel {
             staggered: substeps > 1,
             contacts: Vec::new(),
             grids: Vec::new(),
+            near: Vec::new(),
+            r_max: None,
             scratch: Vec::new(),
             loads: Vec::new(),
             sub: 0,
@@ -235,9 +244,12 @@ impl CoupledModel {
 
     /// One DEM step, and a body step every `substeps` of them.
     pub fn step(&mut self) -> Result<(), CouplingError> {
-        let t0 = Instant::now();
+        let t = Instant::now();
         let implicit = self.substeps == 1 && !self.staggered;
+        // the DEM's neighbour list (part of its step)
         self.granular.prepare_contacts();
+        let t0 = Instant::now();
+        self.timing.dem += (t0 - t).as_secs_f64();
         if implicit {
             // the disc–body forces of the present state are known: they go
             // into the DEM's fused step as external forces
@@ -303,8 +315,19 @@ impl CoupledModel {
         }
     }
 
+    /// The discs that may touch a body ([`Candidates`]) have a finite
+    /// state: a non-finite one must not reach a body's step. The others
+    /// are the DEM's (`Model::step` checks every disc after each step; a
+    /// pass over the whole bed here cost as much as the transfer itself on
+    /// large beds).
     fn check_finite(&self) -> Result<(), CouplingError> {
-        if self.granular.is_finite() {
+        let p = &self.granular.particles;
+        let finite = |d: usize| {
+            let (x, v) = (p.pos[d], p.vel[d]);
+            (x.x + x.y + v.x + v.y + p.omega[d]).is_finite()
+        };
+        let near = self.near.iter().flatten().flat_map(|c| &c.slots);
+        if near.copied().all(|d| finite(d as usize)) {
             Ok(())
         } else {
             Err(CouplingError::Unstable {
@@ -343,7 +366,13 @@ impl CoupledModel {
                 }
                 // candidates within a margin: contacts that close during
                 // the step are part of the implicit solve
-                for (d, t) in touching(chain, &self.grids[b][c], p, CANDIDATE_MARGIN) {
+                for (d, t) in touching(
+                    chain,
+                    &self.grids[b][c],
+                    &self.near[b][c],
+                    p,
+                    CANDIDATE_MARGIN,
+                ) {
                     let r = p.radius[d];
                     let (fs_old, _) = history(&self.contacts, (p.id[d], b as u16, c as u16));
                     let law = self.body_laws[b * nm + p.material[d] as usize];
@@ -462,7 +491,7 @@ impl CoupledModel {
                 if chain.segments() == 0 {
                     continue;
                 }
-                for (d, t) in touching(chain, &self.grids[b][c], p, 0.0) {
+                for (d, t) in touching(chain, &self.grids[b][c], &self.near[b][c], p, 0.0) {
                     let (x, r) = (p.pos[d], p.radius[d]);
                     let key = (p.id[d], b as u16, c as u16);
                     let (mut fs, mut mr) = history(&self.contacts, key);
@@ -539,14 +568,39 @@ impl CoupledModel {
     /// Bin every chain's current segments; a segment within twice the
     /// largest (margin-grown) radius of a centre is in that centre's cell,
     /// so the grid gives the closest feature [`interface::detect`] gives.
+    /// Bin each chain's segments ([`SegmentGrid`]) and keep its candidate
+    /// discs ([`Candidates`]) for a detection with the contact `margin`.
     fn rebuild_grids(&mut self, margin: f64) {
-        let reach = 2.0 * self.granular.particles.max_radius() * (1.0 + margin);
+        let g = &self.granular;
+        let r_max = match self.r_max {
+            Some((n, r)) if n == g.grid.rebuilds => r,
+            _ => {
+                let r = g.particles.max_radius();
+                self.r_max = Some((g.grid.rebuilds, r));
+                r
+            }
+        };
+        let reach = 2.0 * r_max * (1.0 + margin);
+        // the candidates' growth: the DEM's skin, at least a tenth of the
+        // largest radius (refreshes every few DEM rebuilds at most)
+        let s = g.grid.skin.max(0.1 * r_max);
         self.grids.resize_with(self.bodies.len(), Vec::new);
-        for (body, grids) in self.bodies.iter().zip(&mut self.grids) {
+        self.near.resize_with(self.bodies.len(), Vec::new);
+        for ((body, grids), near) in self.bodies.iter().zip(&mut self.grids).zip(&mut self.near) {
             let chains = body.contact_boundary();
             grids.resize_with(chains.len(), SegmentGrid::default);
-            for (chain, g) in chains.iter().zip(grids.iter_mut()) {
-                g.rebuild(chain, reach);
+            near.resize_with(chains.len(), Candidates::default);
+            for ((chain, sg), cand) in chains.iter().zip(grids.iter_mut()).zip(near.iter_mut()) {
+                sg.rebuild(chain, reach);
+                cand.update(
+                    &g.particles,
+                    sg.chain_lo,
+                    sg.chain_hi,
+                    1.0 + margin,
+                    g.grid.rebuilds,
+                    g.max_disp,
+                    s,
+                );
             }
         }
     }
@@ -584,11 +638,13 @@ const CANDIDATE_MARGIN: f64 = 0.1;
 fn touching<'a>(
     chain: &'a BoundaryChain,
     grid: &'a SegmentGrid,
+    near: &'a Candidates,
     p: &'a Particles,
     margin: f64,
 ) -> impl Iterator<Item = (usize, interface::Touch)> + 'a {
     let (lo, hi) = (grid.chain_lo, grid.chain_hi);
-    (0..p.len()).filter_map(move |d| {
+    near.slots.iter().filter_map(move |&d| {
+        let d = d as usize;
         let (x, rm) = (p.pos[d], p.radius[d] * (1.0 + margin));
         if x.x + rm < lo.x || x.x - rm > hi.x || x.y + rm < lo.y || x.y - rm > hi.y {
             return None;
