@@ -25,6 +25,8 @@
 //!     cargo run --release --example footing_sweep -- [threads] [steps] [contacts,...] [nodes,...]
 //!     cargo run --release --example footing_sweep -- 2 100 10,100,1000,5000 1000,10000
 //!     BED=similar cargo run --release --example footing_sweep -- 2 50 10,100,1000 1000,10000
+//!
+//! `BED=rows:N` keeps the shallow bed's width with N rows instead of 17.
 
 use efgdem::scenario;
 use std::time::Instant;
@@ -107,7 +109,9 @@ fn main() {
     let contacts = list(3, "10,100,1000,5000");
     let nodes = list(4, "1000,10000");
     let warm = 20;
-    let similar = std::env::var("BED").is_ok_and(|b| b == "similar");
+    let bed_kind = std::env::var("BED").unwrap_or_default();
+    let similar = bed_kind == "similar";
+    let rows_given: Option<f64> = bed_kind.strip_prefix("rows:").and_then(|r| r.parse().ok());
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -123,7 +127,7 @@ fn main() {
             let rows = if similar {
                 (1.8 * w / (3f64.sqrt() * R)).round()
             } else {
-                17.0
+                rows_given.unwrap_or(17.0)
             };
             let width = if similar { 6.0 * w } else { 1.5 * w + 80.0 * R };
             let depth = rows * 3f64.sqrt() * R + 2.0 * R;
