@@ -845,3 +845,60 @@ fn a_coupled_run_restarts_with_identical_outputs() {
     let src = with_outputs(&bed_on_plate("efg", ""), "quantity = \"kinetic\"");
     check_run_restart("coupled", &src, 800, 433);
 }
+
+#[test]
+fn a_restart_refuses_a_changed_discs_csv() {
+    let dir = out_dir("csv");
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("discs.csv");
+    std::fs::write(&csv, "x,y,r\n0.05,0.05,0.004\n0.15,0.05,0.004\n").unwrap();
+    let src = format!(
+        r#"
+[simulation]
+steps = 20
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "sand"
+density = 2650.0
+kn = 1.0e6
+ks = 5.0e5
+friction = 0.5
+
+[granular]
+material = "sand"
+discs = {{ csv = "{}" }}
+damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+
+[[wall]]
+name = "floor"
+from = [0.0, 0.0]
+to = [0.3, 0.0]
+"#,
+        csv.display()
+    );
+    let out = dir.join("out");
+    let first = RunOptions {
+        checkpoint_every: 11,
+        ..opts(&out)
+    };
+    drive(&src, 1, first).unwrap();
+    let again = || RunOptions {
+        restart: Some(out.join("checkpoint.bin")),
+        ..opts(&out)
+    };
+    // the same file restarts
+    assert_eq!(
+        drive(&src, 1, again()).unwrap()["status"].as_str(),
+        Some("completed")
+    );
+    // one radius changed in the file, the scenario text the same: refused
+    std::fs::write(&csv, "x,y,r\n0.05,0.05,0.004\n0.15,0.05,0.0041\n").unwrap();
+    match drive(&src, 1, again()) {
+        Err(e @ RunError::Restart { .. }) => {
+            assert!(e.to_string().contains("scenario has changed"), "{e}")
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -7,6 +7,7 @@
 use super::RunError;
 use crate::model::{Model, ModelState};
 use crate::scenario::Scenario;
+use crate::scenario::granular::{DiscsSpec, DiscsTable};
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 use std::path::{Path, PathBuf};
 
@@ -37,16 +38,24 @@ pub(super) struct Checkpoint {
 }
 
 /// A fingerprint of the scenario's content (FNV-1a 64 of its parsed form,
-/// so comments and layout do not count): a restart refuses a checkpoint of
-/// another scenario.
+/// so comments and layout do not count, and of the bytes of the discs' CSV
+/// file if it reads one): a restart refuses a checkpoint of another
+/// scenario or of other discs.
 pub(super) fn fingerprint(sc: &Scenario) -> u64 {
-    let mut sc = sc.clone();
-    sc.source = None;
-    format!("{sc:?}")
-        .bytes()
-        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
-            (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
-        })
+    let mut text = {
+        let mut sc = sc.clone();
+        sc.source = None;
+        format!("{sc:?}").into_bytes()
+    };
+    if let Some(DiscsSpec::Table(DiscsTable { csv: Some(csv), .. })) =
+        sc.granular.as_ref().map(|g| &g.discs)
+    {
+        // an unreadable file fails the build with its own error
+        text.extend(std::fs::read(sc.resolve(csv)).unwrap_or_default());
+    }
+    text.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
 }
 
 impl Checkpoint {
@@ -104,7 +113,7 @@ impl Checkpoint {
         ck.path = path.to_path_buf();
         if ck.scenario != fingerprint(sc) {
             return Err(bad(
-                "the scenario has changed since the checkpoint was written (only comments and layout may change); run it afresh".into(),
+                "the scenario has changed since the checkpoint was written (only comments and layout may change, and not the discs' CSV file); run it afresh".into(),
             ));
         }
         Ok(ck)
