@@ -537,6 +537,67 @@ fn unknown_edge_is_refused() {
 }
 
 #[test]
+fn bad_refinements_are_refused() {
+    let good = "spacing = 0.25\nrefine = [{ edges = [\"wall\"], spacing = 0.1, width = 0.3 }]";
+    for (tag, to, field, words) in [
+        (
+            "poly-refine-edge",
+            good.replace("\"wall\"", "\"wal\""),
+            "refine[0].edges[0]",
+            "unknown edge `wal`",
+        ),
+        (
+            "poly-refine-coarse",
+            good.replace("spacing = 0.1", "spacing = 0.25"),
+            "refine[0].spacing",
+            "below the body's spacing",
+        ),
+        (
+            "poly-refine-zero",
+            good.replace("spacing = 0.1", "spacing = 0.0"),
+            "refine[0].spacing",
+            "must be > 0",
+        ),
+        (
+            "poly-refine-width",
+            good.replace("width = 0.3", "width = -1.0"),
+            "refine[0].width",
+            "must be a finite number > 0",
+        ),
+    ] {
+        bad(tag, "spacing = 0.25", &to, field, words);
+    }
+}
+
+/// The refinement through a scenario file: more nodes, the run succeeds.
+#[test]
+fn refined_polygon_scenario_runs() {
+    let text = PLATE.replacen(
+        "spacing = 0.25",
+        "spacing = 0.25\nrefine = [{ edges = [\"wall\"], spacing = 0.0625, width = 0.25 }]",
+        1,
+    );
+    let sc = efgdem::scenario::parse(&text, "refined.toml").unwrap();
+    let p = sc.body[0].params();
+    let refine = &p.polygon.as_ref().unwrap().refine;
+    assert_eq!(refine.len(), 1);
+    let mut segs = refine[0].segments.clone();
+    segs.sort();
+    assert_eq!(segs, whole(1, 24));
+    let b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
+    let plain = EfgBody::new(
+        &efgdem::scenario::parse(PLATE, "plate.toml").unwrap().body[0].params(),
+        [0.0, 0.0],
+    )
+    .unwrap();
+    println!("refined plate: {} nodes (plain {})", b.n_nodes(), plain.n_nodes());
+    assert!(b.n_nodes() > plain.n_nodes() + 100);
+    let (o, _, d) = cli("poly-refined", &text);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(d).unwrap();
+}
+
+#[test]
 fn polygon_on_fem_body_is_refused() {
     bad(
         "poly-fem",

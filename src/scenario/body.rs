@@ -113,14 +113,15 @@ pub struct BodySpec {
     pub self_weight: bool,
 }
 
-/// `refine = [{ edge = "name", spacing = h_r, width = w }]`: nodes at the
-/// finer spacing `h_r` along a named edge of a polygon body and within
-/// `w` of it.
+/// `refine = [{ edges = ["name", …], spacing = h_r, width = w }]`: nodes
+/// at the finer spacing `h_r` along named edges of a polygon body and
+/// within `w` of them, graded to the body's spacing beyond (see
+/// [`crate::efg::polygon`]).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RefineSpec {
-    /// A named edge of the body.
-    pub edge: String,
+    /// Named edges of the body.
+    pub edges: Vec<String>,
     /// The node spacing near it (smaller than the body's `spacing`).
     pub spacing: f64,
     /// Width of the refined band.
@@ -302,12 +303,15 @@ impl BodySpec {
                 refine: self
                     .refine
                     .iter()
-                    .filter_map(|r| {
-                        Some(Refine {
-                            segments: domain.edge(&r.edge)?.segments.clone(),
-                            spacing: r.spacing,
-                            width: r.width,
-                        })
+                    .map(|r| Refine {
+                        segments: r
+                            .edges
+                            .iter()
+                            .filter_map(|e| domain.edge(e))
+                            .flat_map(|e| e.segments.iter().copied())
+                            .collect(),
+                        spacing: r.spacing,
+                        width: r.width,
                     })
                     .collect(),
                 domain,
@@ -595,20 +599,26 @@ fn validate_polygon(_sc: &Scenario, i: usize, b: &BodySpec, d: Option<&Domain>, 
     let h = b.spacing.unwrap_or(f64::INFINITY);
     for (k, r) in b.refine.iter().enumerate() {
         let at = |f: &str| format!("body.{i}.refine.{k}.{f}");
+        p.check(
+            !r.edges.is_empty(),
+            at("edges"),
+            "name at least one edge to refine near",
+        );
         if let Some(d) = d {
-            p.check(
-                d.edge(&r.edge).is_some(),
-                at("edge"),
-                format!(
-                    "unknown edge `{}` (the polygon's named edges: {})",
-                    r.edge,
-                    d.edges
-                        .iter()
-                        .map(|e| e.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            );
+            for (j, e) in r.edges.iter().enumerate() {
+                p.check(
+                    d.edge(e).is_some(),
+                    format!("body.{i}.refine.{k}.edges.{j}"),
+                    format!(
+                        "unknown edge `{e}` (the polygon's named edges: {})",
+                        d.edges
+                            .iter()
+                            .map(|e| e.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                );
+            }
         }
         p.check(
             r.spacing.is_finite() && r.spacing > 0.0 && r.spacing < h,
@@ -627,8 +637,10 @@ fn validate_polygon(_sc: &Scenario, i: usize, b: &BodySpec, d: Option<&Domain>, 
             && r.spacing > 0.0
             && r.width > 0.0
         {
+            // the band and the graded transition beyond it, on both sides
             let perimeter: f64 = d.segments().map(|(a, b)| (b - a).norm()).sum();
-            let n = d.area().min(r.width * 2.0 * perimeter) / (r.spacing * r.spacing);
+            let reach = r.width + (h.min(1e300) - r.spacing).max(0.0) / crate::efg::polygon::GRADING;
+            let n = d.area().min(2.0 * reach * perimeter) / (r.spacing * r.spacing);
             p.check(
                 n <= 5e6,
                 at("spacing"),
