@@ -169,11 +169,20 @@ fn polygon_body_reports_discs_entering_through_non_contact_edges() {
         let root = tmpdir(tag);
         let file = root.join("s.toml");
         let text = polygon(edges);
-        assert!(text.contains("holes =") && text.contains("[0.6, 0.25, 0.03]"), "{text}");
+        assert!(
+            text.contains("holes =") && text.contains("[0.6, 0.25, 0.03]"),
+            "{text}"
+        );
         std::fs::write(&file, text).unwrap();
         let dir = root.join("out");
         let out = bin()
-            .args(["run", file.to_str().unwrap(), "-q", "-o", dir.to_str().unwrap()])
+            .args([
+                "run",
+                file.to_str().unwrap(),
+                "-q",
+                "-o",
+                dir.to_str().unwrap(),
+            ])
             .output()
             .unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr).to_string();

@@ -590,7 +590,11 @@ fn refined_polygon_scenario_runs() {
         [0.0, 0.0],
     )
     .unwrap();
-    println!("refined plate: {} nodes (plain {})", b.n_nodes(), plain.n_nodes());
+    println!(
+        "refined plate: {} nodes (plain {})",
+        b.n_nodes(),
+        plain.n_nodes()
+    );
     assert!(b.n_nodes() > plain.n_nodes() + 100);
     let (o, _, d) = cli("poly-refined", &text);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -894,4 +898,3 @@ fixed = true
         "{f:?} vs {w}"
     );
 }
-

@@ -140,9 +140,8 @@ impl EfgBody {
         ) =
             &spec.polygon
         {
-            let mesh =
-                PolygonMesh::refined(&poly.domain, poly.spacing, &poly.refine, spec.d_max)
-                    .map_err(invalid)?;
+            let mesh = PolygonMesh::refined(&poly.domain, poly.spacing, &poly.refine, spec.d_max)
+                .map_err(invalid)?;
             let node: Vec<[f64; 4]> = mesh
                 .nodes
                 .iter()

@@ -228,8 +228,14 @@ impl PolygonMesh {
                     Vec2::new(a.x.max(lo.x), a.y.max(lo.y)),
                     Vec2::new(b.x.min(hi.x), b.y.min(hi.y)),
                 );
-                let (i0, i1) = (((a.x - o.x) / sk).floor() as i64, ((b.x - o.x) / sk).ceil() as i64);
-                let (j0, j1) = (((a.y - o.y) / sk).floor() as i64, ((b.y - o.y) / sk).ceil() as i64);
+                let (i0, i1) = (
+                    ((a.x - o.x) / sk).floor() as i64,
+                    ((b.x - o.x) / sk).ceil() as i64,
+                );
+                let (j0, j1) = (
+                    ((a.y - o.y) / sk).floor() as i64,
+                    ((b.y - o.y) / sk).ceil() as i64,
+                );
                 for j in j0..=j1 {
                     for i in i0..=i1 {
                         let p = Vec2::new(o.x + i as f64 * sk, o.y + j as f64 * sk);
@@ -465,5 +471,66 @@ mod tests {
         );
         assert!((d.area() - (12.0 - d.loops[1].signed_area2().abs() * 0.5)).abs() < 1e-12);
         assert!(q.iter().all(|p| d.contains(p.x)));
+    }
+
+    #[test]
+    fn refined_mesh_is_graded_and_covers_the_domain() {
+        let outline: Vec<Vec2> = [[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]]
+            .iter()
+            .map(|&p| p.into())
+            .collect();
+        let hole = crate::geom::polygon::circle(Vec2::new(2.0, 2.0), 0.5, 32);
+        let d = Domain::new(outline, vec![hole], vec![]).unwrap();
+        let (h, hr, w) = (0.4, 0.05, 0.3);
+        let r = Refine {
+            segments: (0..32).map(|i| (1, i)).collect(),
+            spacing: hr,
+            width: w,
+        };
+        let m = PolygonMesh::refined(&d, h, std::slice::from_ref(&r), 2.0).unwrap();
+        let plain = PolygonMesh::refined(&d, h, &[], 2.0).unwrap();
+        assert_eq!(plain.nodes, PolygonMesh::new(&d, h).unwrap().nodes);
+        let q = m.domain_points(1);
+        let area: f64 = q.iter().map(|p| p.w).sum();
+        assert!((area - d.area()).abs() < 1e-12 * d.area(), "{area}");
+        assert!(q.iter().all(|p| d.contains(p.x)));
+        let c = Vec2::new(2.0, 2.0);
+        for (k, p) in m.nodes.iter().enumerate() {
+            // the nearest other node: at least half the node's grid level
+            // (which is > s/2), the band's interior nodes at exactly h_r
+            let near = m
+                .nodes
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != k)
+                .map(|(_, q)| (*q - *p).norm())
+                .fold(f64::INFINITY, f64::min);
+            let dist = (*p - c).norm() - 0.5;
+            let s = (hr + GRADING * (dist - w).max(0.0)).min(h);
+            assert!(
+                (m.node_spacing[k] - s).abs() < 0.02 * s + 0.01 * hr
+                    || k < m
+                        .segment_nodes
+                        .iter()
+                        .flatten()
+                        .map(Vec::len)
+                        .sum::<usize>(),
+                "node {k} at {p:?}: h_I = {} vs s = {s}",
+                m.node_spacing[k]
+            );
+            assert!(
+                near >= 0.25 * s * (1.0 - 1e-9),
+                "node {k} at {p:?}: nearest {near}, s = {s}"
+            );
+            if dist < w - 0.01 && d.boundary_distance(*p) > hr {
+                assert!(
+                    near <= hr * 1.0001,
+                    "node {k} at {p:?} in the band: nearest {near}"
+                );
+            }
+        }
+        // far fewer nodes than a uniform h_r mesh, more than a uniform h one
+        let n_fine = d.area() / (hr * hr);
+        assert!(m.nodes.len() > plain.nodes.len() + 200 && (m.nodes.len() as f64) < 0.2 * n_fine);
     }
 }

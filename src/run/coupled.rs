@@ -181,12 +181,14 @@ impl EntryWatch {
                 })
                 .collect();
             let v_body = v_body * (1.0 / count);
-            let (lo, hi) = loops[0].iter().fold((loops[0][0], loops[0][0]), |(a, c), p| {
-                (
-                    Vec2::new(a.x.min(p.x), a.y.min(p.y)),
-                    Vec2::new(c.x.max(p.x), c.y.max(p.y)),
-                )
-            });
+            let (lo, hi) = loops[0]
+                .iter()
+                .fold((loops[0][0], loops[0][0]), |(a, c), p| {
+                    (
+                        Vec2::new(a.x.min(p.x), a.y.min(p.y)),
+                        Vec2::new(c.x.max(p.x), c.y.max(p.y)),
+                    )
+                });
             for d in 0..p.len() {
                 let x = p.pos[d];
                 if x.x <= lo.x || x.x >= hi.x || x.y <= lo.y || x.y >= hi.y {
@@ -566,7 +568,14 @@ mod tests {
         // clockwise (body on the left of every segment)
         let v = |p: &[[f64; 2]]| p.iter().map(|&a| Vec2::from(a)).collect::<Vec<_>>();
         let loops = vec![
-            v(&[[0.0, 0.0], [4.0, 0.0], [4.0, 2.0], [2.0, 2.0], [2.0, 4.0], [0.0, 4.0]]),
+            v(&[
+                [0.0, 0.0],
+                [4.0, 0.0],
+                [4.0, 2.0],
+                [2.0, 2.0],
+                [2.0, 4.0],
+                [0.0, 4.0],
+            ]),
             v(&[[0.5, 0.5], [0.5, 1.5], [1.5, 1.5], [1.5, 0.5]]),
         ];
         let rest = Vec2::ZERO;
@@ -575,15 +584,33 @@ mod tests {
         assert_eq!(entered_segment(&loops, Vec2::new(1.0, 1.0), rest), None);
         assert_eq!(entered_segment(&loops, Vec2::new(4.5, 1.0), rest), None);
         // at rest: the nearest segment
-        assert_eq!(entered_segment(&loops, Vec2::new(2.9, 1.95), rest), Some((0, 2)));
-        assert_eq!(entered_segment(&loops, Vec2::new(1.6, 1.0), rest), Some((1, 2)));
+        assert_eq!(
+            entered_segment(&loops, Vec2::new(2.9, 1.95), rest),
+            Some((0, 2))
+        );
+        assert_eq!(
+            entered_segment(&loops, Vec2::new(1.6, 1.0), rest),
+            Some((1, 2))
+        );
         // moving: the segment crossed going back along −v
         let x = Vec2::new(1.7, 1.0);
-        assert_eq!(entered_segment(&loops, x, Vec2::new(1.0, 0.0)), Some((1, 2))); // out of the hole
-        assert_eq!(entered_segment(&loops, x, Vec2::new(-1.0, 0.0)), Some((0, 1))); // from x = 4
-        assert_eq!(entered_segment(&loops, x, Vec2::new(0.0, 1.0)), Some((0, 0))); // from below
+        assert_eq!(
+            entered_segment(&loops, x, Vec2::new(1.0, 0.0)),
+            Some((1, 2))
+        ); // out of the hole
+        assert_eq!(
+            entered_segment(&loops, x, Vec2::new(-1.0, 0.0)),
+            Some((0, 1))
+        ); // from x = 4
+        assert_eq!(
+            entered_segment(&loops, x, Vec2::new(0.0, 1.0)),
+            Some((0, 0))
+        ); // from below
         // from above through the re-entrant step y = 2 (segment 2)
         let y = Vec2::new(3.0, 1.9);
-        assert_eq!(entered_segment(&loops, y, Vec2::new(0.0, -1.0)), Some((0, 2)));
+        assert_eq!(
+            entered_segment(&loops, y, Vec2::new(0.0, -1.0)),
+            Some((0, 2))
+        );
     }
 }

@@ -639,7 +639,8 @@ fn validate_polygon(_sc: &Scenario, i: usize, b: &BodySpec, d: Option<&Domain>, 
         {
             // the band and the graded transition beyond it, on both sides
             let perimeter: f64 = d.segments().map(|(a, b)| (b - a).norm()).sum();
-            let reach = r.width + (h.min(1e300) - r.spacing).max(0.0) / crate::efg::polygon::GRADING;
+            let reach =
+                r.width + (h.min(1e300) - r.spacing).max(0.0) / crate::efg::polygon::GRADING;
             let n = d.area().min(2.0 * reach * perimeter) / (r.spacing * r.spacing);
             p.check(
                 n <= 5e6,
