@@ -302,8 +302,9 @@ fn kirsch_refined(h: f64, refine: Option<(f64, f64)>) -> (f64, f64, usize) {
     let mu = 1000.0 / 2.6;
     let ue = exact.displacement(Vec2::new(0.0, a), mu, 2.7 / 1.3);
     println!(
-        "Kirsch h = {h}: {} nodes, σ_xx(0, a)/3σ = {:.5}, u_y(0, a) = {:.5e} (exact {:.5e}), energy-norm error {:.3e}",
+        "Kirsch h = {h}, refine {refine:?}: {} nodes, {} domain Gauss points, σ_xx(0, a)/3σ = {:.5}, u_y(0, a) = {:.5e} (exact {:.5e}), energy-norm error {:.3e}",
         b.n_nodes(),
+        b.info.domain_points,
         top.stress[0] / (3.0 * s),
         top.u.y,
         ue[1],
@@ -326,8 +327,9 @@ fn kirsch_plate_coarse() {
 }
 
 /// Refinement near the hole only: the stress concentration within 1 % at
-/// a fraction of the uniformly refined node count (h = 0.05: 9 916 nodes,
-/// σ_xx(0, a)/3σ = 0.9924).
+/// an eighth of the uniformly refined node count (h = 0.05: 9 916 nodes,
+/// σ_xx(0, a)/3σ = 0.9924, energy-norm error 1.48e-3; measured here 1 200
+/// nodes, 0.9926, 2.9e-3, against 1.5e-2 unrefined).
 #[test]
 fn kirsch_plate_refined_near_the_hole() {
     let (r, e, n) = kirsch_refined(0.2, Some((0.05, 0.5)));
@@ -337,7 +339,7 @@ fn kirsch_plate_refined_near_the_hole() {
     );
     assert!((r - 1.0).abs() < 0.01, "σ_xx(0, a)/3σ = {r}");
     assert!(
-        n < 3000 && e < 0.5 * e0,
+        n < 1500 && e < 0.25 * e0,
         "{n} nodes, error {e} against {e0}"
     );
 }
