@@ -141,3 +141,74 @@ fn contact_edges_default_to_one_closed_chain_and_can_be_empty() {
     assert_eq!(chains("contact_edges = []"), vec![]);
     assert_eq!(chains(r#"contact_edges = ["bottom"]"#), vec![(40, false)]);
 }
+
+/// The entry warning on a polygon body: the block of [`scenario`] as a
+/// polygon with a square hole; disc 1 is thrown at its left edge as
+/// before, disc 2 (r = 0.03) moves at 2 m/s inside the hole towards the
+/// hole's right side. With `contact_edges = ["bottom"]` both pass into the
+/// material and each is reported once, under the edge it crossed (`left`,
+/// `hole1`); with the default (every loop) neither enters nor is reported.
+#[test]
+fn polygon_body_reports_discs_entering_through_non_contact_edges() {
+    let polygon = |edges: &str| {
+        scenario(edges)
+            .replace(
+                "rectangle = { origin = [0.0, 0.0], size = [1.0, 0.5] }\nnodes = [11, 6]",
+                "outline = [[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]\nholes = [[[0.5, 0.1], [0.8, 0.1], [0.8, 0.4], [0.5, 0.4]]]\nspacing = 0.05",
+            )
+            .replace(
+                "[[body.bc]]\nedge = \"bottom\"",
+                "[body.edges]\nbottom = { loop = 0, segments = [0, 0] }\nleft = { loop = 0, segments = [3, 3] }\n\n[[body.bc]]\nedge = \"bottom\"",
+            )
+            .replace(
+                "discs = [[-0.2003, 0.25, 0.05]]\nvelocity = [2.0, 0.0]",
+                "discs = [[-0.2003, 0.25, 0.05], [0.6, 0.25, 0.03]]\nvelocity = [2.0, 0.0]",
+            )
+    };
+    let run_polygon = |tag: &str, edges: &str| {
+        let root = tmpdir(tag);
+        let file = root.join("s.toml");
+        let text = polygon(edges);
+        assert!(
+            text.contains("holes =") && text.contains("[0.6, 0.25, 0.03]"),
+            "{text}"
+        );
+        std::fs::write(&file, text).unwrap();
+        let dir = root.join("out");
+        let out = bin()
+            .args([
+                "run",
+                file.to_str().unwrap(),
+                "-q",
+                "-o",
+                dir.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{stderr}");
+        let entered = summary(&dir)["discs_entered_through_non_contact_edges"]
+            .as_u64()
+            .unwrap();
+        std::fs::remove_dir_all(&root).unwrap();
+        (stderr, entered)
+    };
+    let (err, entered) = run_polygon("edges-polygon-default", "");
+    assert!(!err.contains("warning: disc") && entered == 0, "{err}");
+    let (err, entered) = run_polygon("edges-polygon-bottom", r#"contact_edges = ["bottom"]"#);
+    eprintln!("{err}");
+    assert_eq!(entered, 2, "{err}");
+    assert_eq!(err.matches("warning: disc").count(), 2, "{err}");
+    // disc 2 reaches the hole's side x = 0.8 at t = (0.8 − 0.6)/2 = 0.1 s
+    // (step 1000 puts it there up to rounding, on the body's side), disc 1
+    // the outline's x = 0 at t = 0.2003/2 = 0.10015 s: each is reported at
+    // the first output step with its centre inside
+    assert!(
+        err.contains("warning: disc 2 entered body `block` through a non-contact edge (hole1) at t = 0.100000 s (step 1000)"),
+        "{err}"
+    );
+    assert!(
+        err.contains("warning: disc 1 entered body `block` through a non-contact edge (left) at t = 0.100200 s (step 1002)"),
+        "{err}"
+    );
+}

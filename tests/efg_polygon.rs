@@ -4,7 +4,7 @@
 
 use efgdem::continuum::{
     BodyParams, EdgeCondition, Elastic, KirschSpec, LinearField, PolygonShape, Prescribed,
-    Rectangle,
+    Rectangle, Refine,
 };
 use efgdem::efg::EfgBody;
 use efgdem::geom::Vec2;
@@ -30,7 +30,11 @@ fn params(domain: Domain, h: f64, gauss: usize, el: Elastic, bc: Vec<EdgeConditi
         [2, 2],
         el,
     );
-    p.polygon = Some(PolygonShape { domain, spacing: h });
+    p.polygon = Some(PolygonShape {
+        domain,
+        spacing: h,
+        refine: Vec::new(),
+    });
     p.gauss = gauss;
     p.bc = bc;
     p.self_weight = false;
@@ -77,6 +81,12 @@ fn patch_errors(b: &EfgBody, h: f64) -> (f64, f64) {
 }
 
 fn l_shape(h: f64, gauss: usize) -> (f64, f64) {
+    l_shape_refined(h, gauss, None)
+}
+
+/// The L-shape patch test, with `refine = Some((h_r, width))` nodes at
+/// `h_r` near the two edges of the re-entrant corner.
+fn l_shape_refined(h: f64, gauss: usize, refine: Option<(f64, f64)>) -> (f64, f64) {
     let outline = v(&[
         [0.0, 0.0],
         [2.0, 0.0],
@@ -86,18 +96,25 @@ fn l_shape(h: f64, gauss: usize) -> (f64, f64) {
         [0.0, 2.0],
     ]);
     let d = Domain::new(outline, vec![], vec![("outer".into(), whole(0, 6))]).unwrap();
-    let p = params(
+    let mut p = params(
         d,
         h,
         gauss,
         Elastic::new(1000.0, 0.25),
         vec![linear_bc("outer")],
     );
+    if let Some((spacing, width)) = refine {
+        p.polygon.as_mut().unwrap().refine.push(Refine {
+            segments: vec![(0, 2), (0, 3)],
+            spacing,
+            width,
+        });
+    }
     let mut b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
     b.solve_static().unwrap();
     let e = patch_errors(&b, h);
     println!(
-        "L-shape patch, h = {h}, gauss = {gauss}: {} nodes, displacement error {:.2e}, interior stress error {:.2e}",
+        "L-shape patch, h = {h}, gauss = {gauss}, refine {refine:?}: {} nodes, displacement error {:.2e}, interior stress error {:.2e}",
         b.n_nodes(),
         e.0,
         e.1
@@ -106,6 +123,12 @@ fn l_shape(h: f64, gauss: usize) -> (f64, f64) {
 }
 
 fn holed_square(h: f64, gauss: usize) -> (f64, f64) {
+    holed_square_refined(h, gauss, None)
+}
+
+/// The holed-square patch test, with `refine = Some((h_r, width))` nodes
+/// at `h_r` near the hole.
+fn holed_square_refined(h: f64, gauss: usize, refine: Option<(f64, f64)>) -> (f64, f64) {
     let outline = v(&[[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]);
     let hole = circle(Vec2::new(0.1, 0.0), 0.4, 24);
     let d = Domain::new(
@@ -114,18 +137,25 @@ fn holed_square(h: f64, gauss: usize) -> (f64, f64) {
         vec![("outer".into(), whole(0, 4)), ("hole".into(), whole(1, 24))],
     )
     .unwrap();
-    let p = params(
+    let mut p = params(
         d,
         h,
         gauss,
         Elastic::new(1000.0, 0.25).plane_strain(),
         vec![linear_bc("outer"), linear_bc("hole")],
     );
+    if let Some((spacing, width)) = refine {
+        p.polygon.as_mut().unwrap().refine.push(Refine {
+            segments: whole(1, 24),
+            spacing,
+            width,
+        });
+    }
     let mut b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
     b.solve_static().unwrap();
     let e = patch_errors(&b, h);
     println!(
-        "holed square patch, h = {h}, gauss = {gauss}: {} nodes, displacement error {:.2e}, interior stress error {:.2e}",
+        "holed square patch, h = {h}, gauss = {gauss}, refine {refine:?}: {} nodes, displacement error {:.2e}, interior stress error {:.2e}",
         b.n_nodes(),
         e.0,
         e.1
@@ -145,6 +175,16 @@ fn patch_test_l_shape() {
 #[test]
 fn patch_test_holed_square() {
     let (eu, es) = holed_square(0.2, 6);
+    assert!(eu < 1e-4 && es < 1e-4, "{eu:.2e} {es:.2e}");
+}
+
+/// Refinement near edges (graded spacing, supports and integration that
+/// follow it) keeps the patch test at the uniform bounds.
+#[test]
+fn patch_test_refined_l_shape_and_holed_square() {
+    let (eu, es) = l_shape_refined(0.2, 5, Some((0.05, 0.2)));
+    assert!(eu < 1e-4 && es < 1e-4, "{eu:.2e} {es:.2e}");
+    let (eu, es) = holed_square_refined(0.2, 6, Some((0.05, 0.3)));
     assert!(eu < 1e-4 && es < 1e-4, "{eu:.2e} {es:.2e}");
 }
 
@@ -213,8 +253,14 @@ fn fixed_component(edge: &str, c: usize) -> EdgeCondition {
 /// Kirsch's quarter plate [0, L]² minus the disc r < a, spacing h:
 /// (σ_xx at (0, a) / 3σ, relative energy-norm error, nodes).
 fn kirsch(h: f64) -> (f64, f64, usize) {
+    kirsch_refined(h, None)
+}
+
+/// The Kirsch plate at spacing `h`, with `refine = Some((h_r, width))`
+/// nodes at `h_r` along the hole's arc and within `width` of it.
+fn kirsch_refined(h: f64, refine: Option<(f64, f64)>) -> (f64, f64, usize) {
     let (a, l, s) = (1.0, 5.0, 1.0);
-    let m = arc_segments(a, h);
+    let m = arc_segments(a, refine.map_or(h, |r| r.0));
     let mut outline = v(&[[a, 0.0], [l, 0.0], [l, l], [0.0, l], [0.0, a]]);
     outline.extend(
         arc(a, std::f64::consts::FRAC_PI_2, 0.0, m)
@@ -238,6 +284,13 @@ fn kirsch(h: f64) -> (f64, f64, usize) {
     ];
     let mut p = params(d, h, 5, el, bc);
     p.penalty = None;
+    if let (Some((hr, width)), Some(poly)) = (refine, p.polygon.as_mut()) {
+        poly.refine.push(Refine {
+            segments: (4..4 + m).map(|i| (0, i)).collect(),
+            spacing: hr,
+            width,
+        });
+    }
     let mut b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
     b.solve_static().unwrap();
     let exact = efgdem::continuum::kirsch::Kirsch::new(s, a);
@@ -249,8 +302,9 @@ fn kirsch(h: f64) -> (f64, f64, usize) {
     let mu = 1000.0 / 2.6;
     let ue = exact.displacement(Vec2::new(0.0, a), mu, 2.7 / 1.3);
     println!(
-        "Kirsch h = {h}: {} nodes, σ_xx(0, a)/3σ = {:.5}, u_y(0, a) = {:.5e} (exact {:.5e}), energy-norm error {:.3e}",
+        "Kirsch h = {h}, refine {refine:?}: {} nodes, {} domain Gauss points, σ_xx(0, a)/3σ = {:.5}, u_y(0, a) = {:.5e} (exact {:.5e}), energy-norm error {:.3e}",
         b.n_nodes(),
+        b.info.domain_points,
         top.stress[0] / (3.0 * s),
         top.u.y,
         ue[1],
@@ -270,6 +324,24 @@ fn kirsch_plate_coarse() {
         "σ_xx(0, a)/3σ = {r2} (h = 0.4: {r1})"
     );
     assert!(e2 < e1 && e2 < 0.05 && rate > 0.7, "{e1} {e2}");
+}
+
+/// Refinement near the hole only: the stress concentration within 1 % at
+/// an eighth of the uniformly refined node count (h = 0.05: 9 916 nodes,
+/// σ_xx(0, a)/3σ = 0.9924, energy-norm error 1.48e-3; measured here 1 200
+/// nodes, 0.9926, 2.9e-3, against 1.5e-2 unrefined).
+#[test]
+fn kirsch_plate_refined_near_the_hole() {
+    let (r, e, n) = kirsch_refined(0.2, Some((0.05, 0.5)));
+    let (_, e0, n0) = kirsch(0.2);
+    println!(
+        "refined near the hole: {n} nodes (coarse {n0}), σ_xx(0, a)/3σ = {r:.5}, energy-norm error {e:.3e} (coarse {e0:.3e})"
+    );
+    assert!((r - 1.0).abs() < 0.01, "σ_xx(0, a)/3σ = {r}");
+    assert!(
+        n < 1500 && e < 0.25 * e0,
+        "{n} nodes, error {e} against {e0}"
+    );
 }
 
 #[test]
@@ -464,6 +536,71 @@ fn unknown_edge_is_refused() {
         "bc[1].edge",
         "unknown edge `wal`",
     );
+}
+
+#[test]
+fn bad_refinements_are_refused() {
+    let good = "spacing = 0.25\nrefine = [{ edges = [\"wall\"], spacing = 0.1, width = 0.3 }]";
+    for (tag, to, field, words) in [
+        (
+            "poly-refine-edge",
+            good.replace("\"wall\"", "\"wal\""),
+            "refine[0].edges[0]",
+            "unknown edge `wal`",
+        ),
+        (
+            "poly-refine-coarse",
+            good.replace("spacing = 0.1", "spacing = 0.25"),
+            "refine[0].spacing",
+            "below the body's spacing",
+        ),
+        (
+            "poly-refine-zero",
+            good.replace("spacing = 0.1", "spacing = 0.0"),
+            "refine[0].spacing",
+            "must be > 0",
+        ),
+        (
+            "poly-refine-width",
+            good.replace("width = 0.3", "width = -1.0"),
+            "refine[0].width",
+            "must be a finite number > 0",
+        ),
+    ] {
+        bad(tag, "spacing = 0.25", &to, field, words);
+    }
+}
+
+/// The refinement through a scenario file: more nodes, the run succeeds.
+#[test]
+fn refined_polygon_scenario_runs() {
+    let text = PLATE.replacen(
+        "spacing = 0.25",
+        "spacing = 0.25\nrefine = [{ edges = [\"wall\"], spacing = 0.0625, width = 0.25 }]",
+        1,
+    );
+    let sc = efgdem::scenario::parse(&text, "refined.toml").unwrap();
+    let p = sc.body[0].params();
+    let refine = &p.polygon.as_ref().unwrap().refine;
+    assert_eq!(refine.len(), 1);
+    let mut segs = refine[0].segments.clone();
+    segs.sort();
+    assert_eq!(segs, whole(1, 24));
+    let b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
+    let plain = EfgBody::new(
+        &efgdem::scenario::parse(PLATE, "plate.toml").unwrap().body[0].params(),
+        [0.0, 0.0],
+    )
+    .unwrap();
+    println!(
+        "refined plate: {} nodes (plain {})",
+        b.n_nodes(),
+        plain.n_nodes()
+    );
+    assert!(b.n_nodes() > plain.n_nodes() + 100);
+    let (o, _, d) = cli("poly-refined", &text);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(d).unwrap();
 }
 
 #[test]

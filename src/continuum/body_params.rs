@@ -42,6 +42,20 @@ pub struct PolygonShape {
     pub domain: crate::geom::polygon::Domain,
     /// Node spacing `h` (grid and boundary nodes).
     pub spacing: f64,
+    /// Finer node spacings near named edges.
+    pub refine: Vec<Refine>,
+}
+
+/// A finer node spacing near some boundary segments of a polygon body:
+/// nodes at `spacing` along them and on a grid within `width` of them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refine {
+    /// The segments `(loop, segment)` refined near.
+    pub segments: Vec<(usize, usize)>,
+    /// The node spacing there (< the body's `spacing`).
+    pub spacing: f64,
+    /// Width of the refined band along the segments.
+    pub width: f64,
 }
 
 /// Linear isotropic elasticity.

@@ -16,7 +16,7 @@ pub mod state;
 pub mod table;
 pub mod timoshenko;
 
-pub use body_params::{BodyParams, Elastic, MassKind, Plane, PolygonShape, Rectangle};
+pub use body_params::{BodyParams, Elastic, MassKind, Plane, PolygonShape, Rectangle, Refine};
 pub use conditions::{
     Edge, EdgeCondition, EdgeName, KirschSpec, LinearField, MotionField, PointLoad, Prescribed,
     TimoshenkoSpec,

@@ -140,12 +140,13 @@ impl EfgBody {
         ) =
             &spec.polygon
         {
-            let mesh = PolygonMesh::new(&poly.domain, poly.spacing).map_err(invalid)?;
-            let h = poly.spacing;
+            let mesh = PolygonMesh::refined(&poly.domain, poly.spacing, &poly.refine, spec.d_max)
+                .map_err(invalid)?;
             let node: Vec<[f64; 4]> = mesh
                 .nodes
                 .iter()
-                .map(|p| [p.x, p.y, spec.d_max * h, spec.d_max * h])
+                .zip(&mesh.node_spacing)
+                .map(|(p, h)| [p.x, p.y, spec.d_max * h, spec.d_max * h])
                 .collect();
             let support = Support::new(node).with_visibility(&poly.domain, true);
             let domain = mesh.domain_points(n.saturating_sub(3).max(1));

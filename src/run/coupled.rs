@@ -21,6 +21,18 @@ use std::time::Instant;
 /// 2 k_n r). Each disc is reported once, as a warning on stderr.
 struct EntryWatch {
     bodies: Vec<Watched>,
+    polygons: Vec<WatchedPolygon>,
+}
+
+/// A polygon body with at least one segment outside its contact edges.
+struct WatchedPolygon {
+    body: usize,
+    /// Per loop (outline, then holes, body on the left), its vertices:
+    /// reference position and where to sample their displacement.
+    loops: Vec<Vec<(Vec2, At)>>,
+    /// Per loop, per segment (vertex k to k + 1): the name of the edge to
+    /// report if it is not a contact edge, `None` if it is one.
+    open: Vec<Vec<Option<String>>>,
 }
 
 /// A body with at least one edge that is not a contact edge.
@@ -37,7 +49,59 @@ struct Watched {
 impl EntryWatch {
     fn new(sc: &Scenario, m: &CoupledModel) -> Result<Self, crate::model::body::BodyError> {
         let mut bodies = Vec::new();
+        let mut polygons = Vec::new();
         for (i, spec) in sc.body.iter().enumerate() {
+            if let Ok(Some(d)) = spec.domain()
+                && !spec.default_contact_edges()
+            {
+                // a segment is open unless a contact edge names it; it is
+                // reported under the first named edge holding it
+                let contact: Vec<(usize, usize)> = spec
+                    .contact_edges
+                    .iter()
+                    .filter_map(|e| d.edge(e.as_str()))
+                    .flat_map(|e| e.segments.iter().copied())
+                    .collect();
+                let open: Vec<Vec<Option<String>>> = d
+                    .loops
+                    .iter()
+                    .enumerate()
+                    .map(|(l, lp)| {
+                        (0..lp.len())
+                            .map(|s| {
+                                (!contact.contains(&(l, s))).then(|| {
+                                    d.edges
+                                        .iter()
+                                        .find(|e| e.segments.contains(&(l, s)))
+                                        .map_or_else(
+                                            || format!("loop {l}, segment {s}"),
+                                            |e| e.name.clone(),
+                                        )
+                                })
+                            })
+                            .collect()
+                    })
+                    .collect();
+                if open.iter().flatten().any(Option::is_some) {
+                    let b = body(m, i);
+                    let loops = d
+                        .loops
+                        .iter()
+                        .map(|lp| {
+                            lp.points
+                                .iter()
+                                .map(|&x| b.bind(x).map(|at| (x, at)))
+                                .collect::<Result<Vec<_>, _>>()
+                        })
+                        .collect::<Result<Vec<_>, _>>()?;
+                    polygons.push(WatchedPolygon {
+                        body: i,
+                        loops,
+                        open,
+                    });
+                }
+                continue;
+            }
             let sides = spec.contact_sides();
             let open = Edge::ALL.map(|e| !sides.contains(&e));
             if spec.is_polygon() || !open.contains(&true) {
@@ -57,7 +121,7 @@ impl EntryWatch {
                 open,
             });
         }
-        Ok(EntryWatch { bodies })
+        Ok(EntryWatch { bodies, polygons })
     }
 
     /// Report the discs that entered a body through a non-contact edge since
@@ -98,7 +162,93 @@ impl EntryWatch {
                 }
             }
         }
+        for w in &self.polygons {
+            let b = body(m, w.body);
+            let mut v_body = Vec2::ZERO;
+            let mut count = 0.0;
+            let loops: Vec<Vec<Vec2>> = w
+                .loops
+                .iter()
+                .map(|lp| {
+                    lp.iter()
+                        .map(|(x, at)| {
+                            let smp = b.sample_at(at);
+                            v_body += smp.v;
+                            count += 1.0;
+                            *x + smp.u
+                        })
+                        .collect()
+                })
+                .collect();
+            let v_body = v_body * (1.0 / count);
+            let (lo, hi) = loops[0]
+                .iter()
+                .fold((loops[0][0], loops[0][0]), |(a, c), p| {
+                    (
+                        Vec2::new(a.x.min(p.x), a.y.min(p.y)),
+                        Vec2::new(c.x.max(p.x), c.y.max(p.y)),
+                    )
+                });
+            for d in 0..p.len() {
+                let x = p.pos[d];
+                if x.x <= lo.x || x.x >= hi.x || x.y <= lo.y || x.y >= hi.y {
+                    continue;
+                }
+                let id = p.id[d] as usize;
+                if reported[id] {
+                    continue;
+                }
+                if let Some((l, k)) = entered_segment(&loops, x, p.vel[d] - v_body)
+                    && let Some(name) = &w.open[l][k]
+                {
+                    reported[id] = true;
+                    eprintln!(
+                        "warning: disc {} entered body `{}` through a non-contact edge ({}) at t = {:.6} s (step {}); list the edge in `contact_edges` (default: every loop)",
+                        id + 1,
+                        names[w.body],
+                        name,
+                        m.granular.time,
+                        m.granular.step
+                    );
+                }
+            }
+        }
     }
+}
+
+/// If `x` lies strictly inside the polygon with holes `loops` (outline
+/// first; point in polygon by crossing numbers), the segment `(loop, k)`
+/// (vertex k to k + 1) it came in through, moving with velocity `v`
+/// relative to the polygon: the first segment hit when going back along
+/// `−v`; the nearest segment if the ray back hits none (e.g. at rest).
+fn entered_segment(loops: &[Vec<Vec2>], x: Vec2, v: Vec2) -> Option<(usize, usize)> {
+    use crate::geom::polygon::inside_loop;
+    if !inside_loop(&loops[0], x) || loops[1..].iter().any(|h| inside_loop(h, x)) {
+        return None;
+    }
+    let mut nearest: Option<((usize, usize), f64)> = None;
+    let mut crossed: Option<((usize, usize), f64)> = None;
+    for (l, lp) in loops.iter().enumerate() {
+        let n = lp.len();
+        for k in 0..n {
+            let (a, b) = (lp[k], lp[(k + 1) % n]);
+            let dist = (x - crate::geom::closest_on_segment(x, a, b).1).norm();
+            if nearest.is_none_or(|(_, d)| dist < d) {
+                nearest = Some(((l, k), dist));
+            }
+            // x − t v = a + s (b − a), t > 0, 0 ≤ s ≤ 1
+            let (e, w) = (b - a, x - a);
+            let den = v.cross(e);
+            if den != 0.0 {
+                let t = w.cross(e) / den;
+                let s = w.cross(v) / (-den);
+                if t > 0.0 && (0.0..=1.0).contains(&s) && crossed.is_none_or(|(_, u)| t < u) {
+                    crossed = Some(((l, k), t));
+                }
+            }
+        }
+    }
+    crossed.or(nearest).map(|(k, _)| k)
 }
 
 /// If `x` lies strictly inside the convex quadrilateral `quad`
@@ -410,5 +560,57 @@ mod tests {
         assert_eq!(entered_edge(&q, x, Vec2::new(0.0, 1.0)), Some(0)); // from below
         assert_eq!(entered_edge(&q, x, Vec2::new(1.0, 1.0)), Some(0)); // corner: bottom first
         assert_eq!(entered_edge(&q, x, Vec2::new(0.1, -1.0)), Some(2)); // from above
+    }
+
+    #[test]
+    fn entered_segment_of_a_polygon_with_a_hole() {
+        // an L-shape (outline counter-clockwise) with a square hole stored
+        // clockwise (body on the left of every segment)
+        let v = |p: &[[f64; 2]]| p.iter().map(|&a| Vec2::from(a)).collect::<Vec<_>>();
+        let loops = vec![
+            v(&[
+                [0.0, 0.0],
+                [4.0, 0.0],
+                [4.0, 2.0],
+                [2.0, 2.0],
+                [2.0, 4.0],
+                [0.0, 4.0],
+            ]),
+            v(&[[0.5, 0.5], [0.5, 1.5], [1.5, 1.5], [1.5, 0.5]]),
+        ];
+        let rest = Vec2::ZERO;
+        // outside: beyond the re-entrant corner, inside the hole, beyond x = 4
+        assert_eq!(entered_segment(&loops, Vec2::new(3.0, 3.0), rest), None);
+        assert_eq!(entered_segment(&loops, Vec2::new(1.0, 1.0), rest), None);
+        assert_eq!(entered_segment(&loops, Vec2::new(4.5, 1.0), rest), None);
+        // at rest: the nearest segment
+        assert_eq!(
+            entered_segment(&loops, Vec2::new(2.9, 1.95), rest),
+            Some((0, 2))
+        );
+        assert_eq!(
+            entered_segment(&loops, Vec2::new(1.6, 1.0), rest),
+            Some((1, 2))
+        );
+        // moving: the segment crossed going back along −v
+        let x = Vec2::new(1.7, 1.0);
+        assert_eq!(
+            entered_segment(&loops, x, Vec2::new(1.0, 0.0)),
+            Some((1, 2))
+        ); // out of the hole
+        assert_eq!(
+            entered_segment(&loops, x, Vec2::new(-1.0, 0.0)),
+            Some((0, 1))
+        ); // from x = 4
+        assert_eq!(
+            entered_segment(&loops, x, Vec2::new(0.0, 1.0)),
+            Some((0, 0))
+        ); // from below
+        // from above through the re-entrant step y = 2 (segment 2)
+        let y = Vec2::new(3.0, 1.9);
+        assert_eq!(
+            entered_segment(&loops, y, Vec2::new(0.0, -1.0)),
+            Some((0, 2))
+        );
     }
 }

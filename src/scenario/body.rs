@@ -23,12 +23,12 @@
 //! Every field is documented in `docs/scenario.md`.
 
 use super::{Analysis, Problems, Scenario};
-use crate::continuum::PolygonShape;
 pub use crate::continuum::{
     BodyParams, Edge, EdgeCondition as BcSpec, EdgeName, Elastic, LinearField, MassKind,
     MotionField, Plane, PointLoad, Prescribed, Rectangle, TimoshenkoSpec,
 };
 use crate::continuum::{DriveLaw, Measure, ServoSpec, Table, Target};
+use crate::continuum::{PolygonShape, Refine};
 use crate::geom::Vec2;
 use crate::geom::polygon::{Domain, circle};
 use serde::Deserialize;
@@ -64,6 +64,9 @@ pub struct BodySpec {
     /// Named edges of a polygon body: `name = { loop = k, segments = [i, j] }`.
     #[serde(default)]
     pub edges: std::collections::BTreeMap<String, EdgeSpec>,
+    /// Finer node spacings near named edges of a polygon body.
+    #[serde(default)]
+    pub refine: Vec<RefineSpec>,
     /// Background integration cells `[cx, cy]`; default `nodes − 1`.
     pub cells: Option<[usize; 2]>,
     /// Gauss points per cell direction (n × n per cell, n per boundary segment).
@@ -108,6 +111,21 @@ pub struct BodySpec {
     /// The paper's Example 1 has gravity on the disc only.
     #[serde(default = "yes")]
     pub self_weight: bool,
+}
+
+/// `refine = [{ edges = ["name", …], spacing = h_r, width = w }]`: nodes
+/// at the finer spacing `h_r` along named edges of a polygon body and
+/// within `w` of them, graded to the body's spacing beyond (see
+/// [`crate::efg::polygon`]).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RefineSpec {
+    /// Named edges of the body.
+    pub edges: Vec<String>,
+    /// The node spacing near it (smaller than the body's `spacing`).
+    pub spacing: f64,
+    /// Width of the refined band.
+    pub width: f64,
 }
 
 /// A hole of a polygon body: its vertices (counter-clockwise), or
@@ -282,6 +300,20 @@ impl BodySpec {
             name: self.name.clone(),
             rectangle: self.rectangle,
             polygon: self.domain().ok().flatten().map(|domain| PolygonShape {
+                refine: self
+                    .refine
+                    .iter()
+                    .map(|r| Refine {
+                        segments: r
+                            .edges
+                            .iter()
+                            .filter_map(|e| domain.edge(e))
+                            .flat_map(|e| e.segments.iter().copied())
+                            .collect(),
+                        spacing: r.spacing,
+                        width: r.width,
+                    })
+                    .collect(),
                 domain,
                 spacing: self.spacing.unwrap_or(0.0),
             }),
@@ -564,6 +596,59 @@ fn validate_polygon(_sc: &Scenario, i: usize, b: &BodySpec, d: Option<&Domain>, 
             }
         }
     }
+    let h = b.spacing.unwrap_or(f64::INFINITY);
+    for (k, r) in b.refine.iter().enumerate() {
+        let at = |f: &str| format!("body.{i}.refine.{k}.{f}");
+        p.check(
+            !r.edges.is_empty(),
+            at("edges"),
+            "name at least one edge to refine near",
+        );
+        if let Some(d) = d {
+            for (j, e) in r.edges.iter().enumerate() {
+                p.check(
+                    d.edge(e).is_some(),
+                    format!("body.{i}.refine.{k}.edges.{j}"),
+                    format!(
+                        "unknown edge `{e}` (the polygon's named edges: {})",
+                        d.edges
+                            .iter()
+                            .map(|e| e.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                );
+            }
+        }
+        p.check(
+            r.spacing.is_finite() && r.spacing > 0.0 && r.spacing < h,
+            at("spacing"),
+            format!(
+                "must be > 0 and below the body's spacing {h} (got {})",
+                r.spacing
+            ),
+        );
+        p.check(
+            r.width.is_finite() && r.width > 0.0,
+            at("width"),
+            format!("must be a finite number > 0 (got {})", r.width),
+        );
+        if let Some(d) = d
+            && r.spacing > 0.0
+            && r.width > 0.0
+        {
+            // the band and the graded transition beyond it, on both sides
+            let perimeter: f64 = d.segments().map(|(a, b)| (b - a).norm()).sum();
+            let reach =
+                r.width + (h.min(1e300) - r.spacing).max(0.0) / crate::efg::polygon::GRADING;
+            let n = d.area().min(2.0 * reach * perimeter) / (r.spacing * r.spacing);
+            p.check(
+                n <= 5e6,
+                at("spacing"),
+                format!("about {n:.1e} nodes in the band: at most 5·10⁶"),
+            );
+        }
+    }
 }
 
 /// Prescribed edge motions (`{ velocity = v, until_step = N }`) that move
@@ -789,9 +874,9 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             validate_polygon(sc, i, b, domain.as_ref(), p);
         } else {
             p.check(
-                b.holes.is_empty() && b.edges.is_empty() && b.spacing.is_none(),
+                b.holes.is_empty() && b.edges.is_empty() && b.spacing.is_none() && b.refine.is_empty(),
                 at("outline"),
-                "`holes`, `edges` and `spacing` belong to a polygon body: give `outline` too (or use `rectangle` and `nodes` alone)",
+                "`holes`, `edges`, `spacing` and `refine` belong to a polygon body: give `outline` too (or use `rectangle` and `nodes` alone)",
             );
         }
         p.check(
