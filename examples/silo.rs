@@ -66,7 +66,11 @@ fn main_() -> Result<(), String> {
     std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
     let t0 = Instant::now();
     let runs = silo::run_fills(&sc, &opts, fills, |k, t| {
-        eprint!("\rfill {}/{fills}: t = {t:.4} s of {:.4} s", k + 1, s.end_time)
+        eprint!(
+            "\rfill {}/{fills}: t = {t:.4} s of {:.4} s",
+            k + 1,
+            s.end_time
+        )
     })?;
     let secs = t0.elapsed().as_secs_f64();
     eprintln!();
@@ -139,7 +143,12 @@ fn main_() -> Result<(), String> {
     );
     println!(
         "pooled: ρ_b = {:.0} kg/m³; μ_w = {:.3} (left {:.3}, right {:.3}); K = {:.3}; weight balance max |error| {:.3} %",
-        ens.rho_b, ens.mu_w, ens.mu_w_walls[0], ens.mu_w_walls[1], ens.k, 100.0 * ens.balance_error
+        ens.rho_b,
+        ens.mu_w,
+        ens.mu_w_walls[0],
+        ens.mu_w_walls[1],
+        ens.k,
+        100.0 * ens.balance_error
     );
     println!(
         "Janssen below z = W: thrust {:+.1} %; bins: max |dev| {:.1} % ({} bins); one fill's bin scatters by {:.1} % (rms); σ_v∞ = {:.0} Pa",

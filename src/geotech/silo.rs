@@ -442,7 +442,8 @@ pub fn ensemble(runs: &[SiloResult], g: f64) -> Result<Ensemble, String> {
     let sum = |f: &dyn Fn(&SiloResult) -> f64| runs.iter().map(f).sum::<f64>();
     let mu_w = sum(&|r| r.walls_vertical[0] + r.walls_vertical[1])
         / sum(&|r| r.walls_horizontal[0] + r.walls_horizontal[1]);
-    let mu_w_walls = [0, 1].map(|k| sum(&|r| r.walls_vertical[k]) / sum(&|r| r.walls_horizontal[k]));
+    let mu_w_walls =
+        [0, 1].map(|k| sum(&|r| r.walls_vertical[k]) / sum(&|r| r.walls_horizontal[k]));
     let bulk = |r: &SiloResult| r.bands.len().saturating_sub(1).max(1);
     let k = sum(&|r| r.bands[..bulk(r)].iter().map(|b| b.sxx).sum())
         / sum(&|r| r.bands[..bulk(r)].iter().map(|b| b.syy).sum());
@@ -488,8 +489,12 @@ pub fn ensemble(runs: &[SiloResult], g: f64) -> Result<Ensemble, String> {
         mu_w_fills: runs.iter().map(|r| r.mu_w).collect(),
         k,
         k_fills: runs.iter().map(|r| r.k).collect(),
-        balance_error: runs.iter().fold(0.0f64, |a, r| a.max(r.balance_error.abs())),
-        max_deviation: compared.iter().fold(0.0f64, |a, c| a.max(c.deviation().abs())),
+        balance_error: runs
+            .iter()
+            .fold(0.0f64, |a, r| a.max(r.balance_error.abs())),
+        max_deviation: compared
+            .iter()
+            .fold(0.0f64, |a, c| a.max(c.deviation().abs())),
         thrust_deviation: compared.iter().map(|c| c.measured).sum::<f64>()
             / compared.iter().map(|c| c.janssen).sum::<f64>()
             - 1.0,
@@ -520,7 +525,11 @@ pub fn plot(dir: &Path, runs: &[SiloResult], e: &Ensemble, g: f64) -> Result<(),
         .collect();
     let wall = |f: &dyn Fn(&SiloResult, usize) -> f64| -> Vec<(f64, f64)> {
         runs.iter()
-            .flat_map(|r| filled.iter().map(move |&i| (depth(&r.left[i]), 1e-3 * f(r, i))))
+            .flat_map(|r| {
+                filled
+                    .iter()
+                    .map(move |&i| (depth(&r.left[i]), 1e-3 * f(r, i)))
+            })
             .collect()
     };
     let mean: Vec<(f64, f64)> = filled
@@ -705,6 +714,22 @@ mod tests {
             sigma_v_deviation: 0.0,
             sigma_v_infinity: 0.0,
         }
+    }
+
+    /// `with_seed` sets the generator's seed of a copy and refuses
+    /// discs that are not generated.
+    #[test]
+    fn with_seed_replaces_the_generators_seed() {
+        let sc = crate::scenario::load(Path::new("examples/silo.toml")).unwrap();
+        let s = with_seed(&sc, 7).unwrap();
+        let seed = |sc: &Scenario| match sc.granular.as_ref().map(|g| &g.discs) {
+            Some(DiscsSpec::Table(t)) => t.seed,
+            _ => 0,
+        };
+        assert_eq!((seed(&sc), seed(&s)), (1, 7));
+        let mut inline = sc.clone();
+        inline.granular.as_mut().unwrap().discs = DiscsSpec::Inline(vec![[0.0, 0.0, 1.0]]);
+        assert!(with_seed(&inline, 2).is_err());
     }
 
     /// Two fills pressing 1.1 and 0.9 × Janssen's pressure of the pooled
