@@ -151,13 +151,18 @@ fn main_() -> Result<(), String> {
         100.0 * ens.balance_error
     );
     println!(
-        "Janssen below z = W: thrust {:+.1} %; bins: max |dev| {:.1} % ({} bins); one fill's bin scatters by {:.1} % (rms); σ_v∞ = {:.0} Pa",
+        "Janssen below z = W: thrust {:+.1} %; bins: max |dev| {:.1} % ({} bins); σ_v∞ = {:.0} Pa",
         100.0 * ens.thrust_deviation,
         100.0 * ens.max_deviation,
         ens.compared.len(),
-        100.0 * ens.fill_scatter,
         ens.sigma_v_infinity
     );
+    if fills > 1 {
+        println!(
+            "one fill's bin scatters by {:.1} % (rms over the bins) about the mean of {fills}",
+            100.0 * ens.fill_scatter
+        );
+    }
     for c in &ens.compared {
         println!(
             "  z = {:6.1} mm: wall {:7.1} ± {:5.1} Pa (fills scatter {:4.1} %), K σ_v {:7.1} Pa ({:+.1} %), K ρ_b g z {:7.1} Pa",

@@ -572,7 +572,11 @@ pub fn plot(dir: &Path, runs: &[SiloResult], e: &Ensemble, g: f64) -> Result<(),
     };
     series.extend([
         Series::new(
-            format!("mean of {} fill(s), both walls", runs.len()),
+            if runs.len() == 1 {
+                "mean of the two walls".to_string()
+            } else {
+                format!("mean of {} fills (both walls)", runs.len())
+            },
             mean,
             Mark::Diamonds,
         )
@@ -606,8 +610,9 @@ pub fn plot(dir: &Path, runs: &[SiloResult], e: &Ensemble, g: f64) -> Result<(),
         series,
         notes: vec![
             format!(
-                "measured ({} fill(s)): μ_w = {:.3}, K = {:.3}, ρ_b = {:.0} kg/m³, W = {:.0} mm",
+                "measured, pooled over {} fill{}: μ_w = {:.3}, K = {:.3}, ρ_b = {:.0} kg/m³, W = {:.0} mm",
                 e.fills,
+                if e.fills == 1 { "" } else { "s" },
                 e.mu_w,
                 e.k,
                 e.rho_b,
