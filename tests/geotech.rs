@@ -115,10 +115,10 @@ fn silo_half_size() {
 /// balance of every fill to 0.5 % (measured: ≤ 0.08 %, one fill whose
 /// column still creeps 0.28 %). One fill's bins scatter by ≈ 20 %
 /// (force chains frozen in a packing at rest), the mean of 12 by ≈ 5 %.
-/// About 40 min on 2 shared cores (two fills side by side):
+/// 25 min on 2 cores shared with other jobs (two fills side by side):
 /// `cargo test --release --test geotech -- --ignored`.
 #[test]
-#[ignore = "12 full-size fills, ~45 min on 2 shared cores"]
+#[ignore = "12 full-size fills, 25–40 min on 2 cores"]
 fn silo_janssen_ensemble() {
     let sc = efgdem::scenario::load(Path::new("examples/silo.toml")).unwrap();
     let s = silo::Silo::from_scenario(&sc).unwrap();
