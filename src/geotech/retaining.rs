@@ -287,7 +287,8 @@ pub fn run(sc: &Scenario, opts: &Options, progress: impl FnMut(f64)) -> Result<W
 
 /// `retaining_wall.png` in `dir`: the measured earth pressure against
 /// depth (kPa) with Jaky's `K₀ ρ_b g z` for φ_peak and φ_cs, or, for a
-/// wall that has moved away (base displacement below −10⁻⁴ H),
+/// wall that has moved away (base displacement below −10⁻⁴ H, or its top
+/// more than 10⁻³ H further than its base: a rotation about the toe),
 /// Rankine's `K_a ρ_b g z`.
 pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), PlotError> {
     let pts: Vec<(f64, f64)> = r
@@ -302,14 +303,18 @@ pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), Plo
             (1e3 * r.height, 1e-3 * k * r.rho_b * g * r.height),
         ]
     };
-    let active = r.base_displacement < -1e-4 * r.height;
+    // translated (the base moved away) or rotated about the toe (the top
+    // moved away from the base by more than 0.1 % of H: 7× the at-rest
+    // example's bending)
+    let active = r.base_displacement < -1e-4 * r.height || r.deflection < -1e-3 * r.height;
     let k0 = |p: f64| if active { rankine_ka(p) } else { jaky_k0(p) };
     let name = if active { "Rankine K_a" } else { "Jaky K₀" };
     let chart = Chart {
         title: if active {
             format!(
-                "Retaining wall, active (translated {:.2} mm): earth pressure against depth",
-                -1e3 * r.base_displacement
+                "Retaining wall, active (base moved {:.2} mm, top {:.2} mm further): earth pressure against depth",
+                -1e3 * r.base_displacement,
+                -1e3 * r.deflection
             )
         } else {
             "Retaining wall at rest: earth pressure against depth".into()
