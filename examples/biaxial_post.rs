@@ -70,6 +70,7 @@ fn main_() -> Result<(), String> {
         let dir = Path::new(d);
         let (p, s) = post(&sc, dir, None)?;
         print_summary(&d.to_string(), &sc, &s);
+        print_mean_stress_angles(&p);
         runs.push((d.clone(), p));
     }
     if runs.len() > 1 {
@@ -139,6 +140,45 @@ fn print_summary(label: &str, sc: &Scenario, s: &Summary) {
     if let Some(i) = setup.and_then(|s| s.inertial_number()) {
         println!("  inertial number I = ε̇ d̄ √(ρ/σ₃) = {i:.2e}");
     }
+}
+
+/// The friction angles from the *mean* stresses of a window,
+/// `sin φ = (⟨σ₁⟩ − ⟨σ₃⟩)/(⟨σ₁⟩ + ⟨σ₃⟩)`, instead of the mean of the
+/// rows' `sin φ` (`biaxial::summarize`). The two agree when the rows are
+/// smooth (the dense test at 100 kPa); when the wall stress of single rows
+/// jumps by ±100 % (stiff grains at a low σ₃: `biaxial_backfill.toml`)
+/// the mean of `sin φ`, a concave function of σ₁, lies below the angle of
+/// the mean stresses, which is the one the Love–Weber check supports.
+fn print_mean_stress_angles(p: &[Point]) {
+    let o = Options::default();
+    let sin = |rows: &[&Point]| {
+        let n = rows.len().max(1) as f64;
+        let s1 = rows.iter().map(|x| x.sigma1).sum::<f64>() / n;
+        let s3 = rows.iter().map(|x| x.sigma3).sum::<f64>() / n;
+        (s1 - s3) / (s1 + s3)
+    };
+    let deg = |s: f64| s.asin().to_degrees();
+    let (mut best, mut at) = (f64::NEG_INFINITY, 0.0);
+    for x in p {
+        let w: Vec<&Point> = p
+            .iter()
+            .filter(|y| (y.eps1 - x.eps1).abs() <= 0.5 * o.smooth)
+            .collect();
+        let s = sin(&w);
+        if s > best {
+            (best, at) = (s, x.eps1);
+        }
+    }
+    let end = p.last().map_or(0.0, |x| x.eps1);
+    let cs: Vec<&Point> = p.iter().filter(|x| x.eps1 >= o.cs_from * end).collect();
+    println!(
+        "  from the mean stresses (windows of {:.0} % of ε₁): φ_peak = {:.2}° at ε₁ = {:.2} %; φ_cs = {:.2}° (ε₁ ≥ {:.1} %)",
+        100.0 * o.smooth,
+        deg(best),
+        100.0 * at,
+        deg(sin(&cs)),
+        100.0 * o.cs_from * end
+    );
 }
 
 /// One run per μ_r, then the table and the plots of all.

@@ -9,7 +9,9 @@
 //!     cargo run --release --example retaining_wall -- [SCENARIO] [-o out/retaining_wall] [--scale S] [--phi 23.7,21.4]
 //!
 //! With `examples/retaining_wall_active.toml` (the wall translated away
-//! from the backfill) it also compares the thrust with Rankine's K_a.
+//! from the backfill) or `retaining_wall_rotation.toml` the thrust is
+//! also compared with Rankine's K_a and with Coulomb's K_a cos δ at the
+//! wall friction δ = atan(drag/thrust) the run mobilises.
 //!
 //! `--scale S` multiplies every length but the grains' radii
 //! (`efgdem::geotech::scale_lengths`); `--phi` the friction angles (peak,
@@ -88,7 +90,12 @@ fn main_() -> Result<(), String> {
     )
     .map_err(e)?;
     geotech::write_bands_csv(&out.join("bands.csv"), &r.bands, r.surface).map_err(e)?;
-    let k0 = |p: f64| 1.0 - p.to_radians().sin();
+    let k0 = retaining::jaky_k0;
+    let ka = retaining::rankine_ka;
+    // the wall friction the run mobilises, and Coulomb's K_a with it
+    // (horizontal component: K_a cos δ, what the thrust measures)
+    let delta = (r.drag / r.thrust).atan().to_degrees().max(0.0);
+    let kc = |p: f64| retaining::coulomb_ka(p, delta) * delta.to_radians().cos();
     let mut json = serde_json::to_value(&r).map_err(|e| e.to_string())?;
     json["run_seconds"] = secs.into();
     json["scale"] = scale.into();
@@ -97,9 +104,11 @@ fn main_() -> Result<(), String> {
     json["phi_cs"] = phi_cs.into();
     json["k0_peak"] = k0(phi_peak).into();
     json["k0_cs"] = k0(phi_cs).into();
-    let ka = |p: f64| (1.0 - p.to_radians().sin()) / (1.0 + p.to_radians().sin());
     json["ka_peak"] = ka(phi_peak).into();
     json["ka_cs"] = ka(phi_cs).into();
+    json["delta"] = delta.into();
+    json["coulomb_ka_h_peak"] = kc(phi_peak).into();
+    json["coulomb_ka_h_cs"] = kc(phi_cs).into();
     efgdem::output::write_json(&out.join("retaining_wall.json"), &json).map_err(e)?;
     retaining::plot(&out, &r, w.g, [phi_peak, phi_cs]).map_err(|e| e.to_string())?;
     println!(
@@ -130,6 +139,13 @@ fn main_() -> Result<(), String> {
         ka(phi_cs),
         100.0 * (r.k_wall / ka(phi_cs) - 1.0),
         1e3 * r.base_displacement
+    );
+    println!(
+        "wall friction mobilised δ = atan(drag/thrust) = {delta:.1}°; Coulomb K_a cos δ = {:.3} (φ_peak: K_wall {:+.1} %), {:.3} (φ_cs: {:+.1} %)",
+        kc(phi_peak),
+        100.0 * (r.k_wall / kc(phi_peak) - 1.0),
+        kc(phi_cs),
+        100.0 * (r.k_wall / kc(phi_cs) - 1.0),
     );
     println!(
         "top deflection relative to the base {:.4} µm (spread over the window {:.2} %); beam theory {:.4} µm (bending {:.4}, shear {:.4}): {:+.2} %",

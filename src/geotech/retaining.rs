@@ -22,7 +22,9 @@
 //! **Theory**: Jaky's `K₀ = 1 − sin φ` (φ of the biaxial test on the same
 //! grains, peak or critical) gives the thrust `K₀ ρ_b g H²/2` at rest,
 //! Rankine's `K_a = (1 − sin φ)/(1 + sin φ)` once the wall has moved
-//! away far enough; beam
+//! away far enough, or, for a rough wall, Coulomb's `K_a(φ, δ)` with the
+//! wall friction δ = atan(drag/thrust) the run measures
+//! ([`jaky_k0`], [`rankine_ka`], [`coulomb_ka`]); beam
 //! theory ([`tip_deflection`]) under the *measured* binned pressure
 //! (and the moment `τ h/2` of the shear traction on the face about the
 //! wall's centre line) gives the top deflection, with `EI = E' h³/12`,
@@ -38,6 +40,37 @@ use crate::model::traction::{EdgeTraction, TractionBin};
 use crate::output::plot::{Chart, Mark, PlotError, REFERENCE_COLOR, Series, line_chart, palette};
 use crate::scenario::Scenario;
 use std::path::Path;
+
+/// Jaky's (1944) coefficient of earth pressure at rest of a normally
+/// consolidated soil, `K₀ = 1 − sin φ` (φ in degrees).
+pub fn jaky_k0(phi_deg: f64) -> f64 {
+    1.0 - phi_deg.to_radians().sin()
+}
+
+/// Rankine's (1857) active earth pressure coefficient behind a smooth
+/// vertical wall with a horizontal backfill,
+/// `K_a = (1 − sin φ)/(1 + sin φ) = tan²(45° − φ/2)` (φ in degrees).
+pub fn rankine_ka(phi_deg: f64) -> f64 {
+    let s = phi_deg.to_radians().sin();
+    (1.0 - s) / (1.0 + s)
+}
+
+/// Coulomb's (1776) active earth pressure coefficient of a vertical wall
+/// with wall friction δ and a horizontal backfill (the planar wedge that
+/// gives the largest thrust; e.g. Das, *Principles of Foundation
+/// Engineering*, Eq. for `K_a` with α = 90°, β = 0):
+///
+/// `K_a = cos²φ / (cos δ (1 + √(sin(φ + δ) sin φ / cos δ))²)`,
+///
+/// the thrust `P_a = K_a γ H²/2` acting at δ to the wall's normal, so
+/// that its horizontal component is `K_a cos δ γ H²/2`: compare a
+/// measured horizontal thrust with `K_a cos δ`. δ = 0 gives
+/// [`rankine_ka`]. Angles in degrees, `0 ≤ δ`, `0 < φ < 90°`.
+pub fn coulomb_ka(phi_deg: f64, delta_deg: f64) -> f64 {
+    let (phi, delta) = (phi_deg.to_radians(), delta_deg.to_radians());
+    let root = ((phi + delta).sin() * phi.sin() / delta.cos()).sqrt();
+    phi.cos().powi(2) / (delta.cos() * (1.0 + root).powi(2))
+}
 
 /// The wall a scenario describes.
 #[derive(Debug, Clone)]
@@ -254,7 +287,8 @@ pub fn run(sc: &Scenario, opts: &Options, progress: impl FnMut(f64)) -> Result<W
 
 /// `retaining_wall.png` in `dir`: the measured earth pressure against
 /// depth (kPa) with Jaky's `K₀ ρ_b g z` for φ_peak and φ_cs, or, for a
-/// wall that has moved away (base displacement below −10⁻⁴ H),
+/// wall that has moved away (base displacement below −10⁻⁴ H, or its top
+/// more than 10⁻³ H further than its base: a rotation about the toe),
 /// Rankine's `K_a ρ_b g z`.
 pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), PlotError> {
     let pts: Vec<(f64, f64)> = r
@@ -269,21 +303,18 @@ pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), Plo
             (1e3 * r.height, 1e-3 * k * r.rho_b * g * r.height),
         ]
     };
-    let active = r.base_displacement < -1e-4 * r.height;
-    let k0 = |p: f64| {
-        let s = p.to_radians().sin();
-        if active {
-            (1.0 - s) / (1.0 + s)
-        } else {
-            1.0 - s
-        }
-    };
+    // translated (the base moved away) or rotated about the toe (the top
+    // moved away from the base by more than 0.1 % of H: 7× the at-rest
+    // example's bending)
+    let active = r.base_displacement < -1e-4 * r.height || r.deflection < -1e-3 * r.height;
+    let k0 = |p: f64| if active { rankine_ka(p) } else { jaky_k0(p) };
     let name = if active { "Rankine K_a" } else { "Jaky K₀" };
     let chart = Chart {
         title: if active {
             format!(
-                "Retaining wall, active (translated {:.2} mm): earth pressure against depth",
-                -1e3 * r.base_displacement
+                "Retaining wall, active (base moved {:.2} mm, top {:.2} mm further): earth pressure against depth",
+                -1e3 * r.base_displacement,
+                -1e3 * r.deflection
             )
         } else {
             "Retaining wall at rest: earth pressure against depth".into()
