@@ -383,33 +383,48 @@ impl PointRows {
         &self.entries[self.start[c] as usize..self.start[c + 1] as usize]
     }
 
-    /// `Σ_e Σ_f c_e c_f G(e, f)` over the entries of functionals `r`, `c`.
-    fn entry(&self, green: &BoundaryGreen, r: usize, c: usize) -> f64 {
-        let mut v = 0.0;
-        for &(a, ca) in self.row(r) {
-            if a == NONE {
-                continue;
-            }
-            for &(b, cb) in self.row(c) {
-                if b != NONE {
-                    v += ca * cb * green.get(self.act[a as usize], self.act[b as usize]);
+    /// The block `S_kk`, its off-diagonal entry once (`S` is symmetric;
+    /// [`BoundaryGreen`] is, up to round-off), each inner sum down one
+    /// column of `G`.
+    fn diagonal_block(&self, green: &BoundaryGreen, k: usize) -> [f64; 4] {
+        let nb = green.len();
+        let quad = |r: &[(u32, f64)], c: &[(u32, f64)]| {
+            let mut v = 0.0;
+            for &(a, ca) in r {
+                if a == NONE {
+                    continue;
                 }
+                let col = &green.g[self.act[a as usize] as usize * nb..];
+                let mut t = 0.0;
+                for &(b, cb) in c {
+                    if b != NONE {
+                        t += cb * col[self.act[b as usize] as usize];
+                    }
+                }
+                v += ca * t;
             }
-        }
-        v
+            v
+        };
+        let (rx, ry) = (self.row(2 * k), self.row(2 * k + 1));
+        let xy = quad(rx, ry);
+        [quad(rx, rx), xy, xy, quad(ry, ry)]
     }
 
-    /// The 2 × 2 block `S_kl`, row-major.
-    pub fn block(&self, green: &BoundaryGreen, k: usize, l: usize) -> [f64; 4] {
-        if !self.s.is_empty() {
-            return dense_block(&self.s, k, l);
+    /// The diagonal blocks `S_kk` of every unknown (the preconditioner of
+    /// the contact solve), in parallel: `4 |row|²` entries of `G` each,
+    /// 5.3·10⁷ a step for 5 000 contacts with their geometric stiffness.
+    pub fn diagonal(&self, green: &BoundaryGreen, out: &mut Vec<[f64; 4]>) {
+        let m = self.len();
+        out.clear();
+        if self.s.is_empty() {
+            (0..m)
+                .into_par_iter()
+                .with_min_len(64)
+                .map(|k| self.diagonal_block(green, k))
+                .collect_into_vec(out);
+        } else {
+            out.extend((0..m).map(|k| dense_block(&self.s, k, k)));
         }
-        [
-            self.entry(green, 2 * k, 2 * l),
-            self.entry(green, 2 * k, 2 * l + 1),
-            self.entry(green, 2 * k + 1, 2 * l),
-            self.entry(green, 2 * k + 1, 2 * l + 1),
-        ]
     }
 
     /// The whole `S` (2m × 2m, row-major), formed column by column
@@ -524,11 +539,15 @@ pub enum Compliance<'a> {
 }
 
 impl Compliance<'_> {
-    /// The 2 × 2 block `S_kl`.
-    pub fn block(&self, k: usize, l: usize) -> [f64; 4] {
+    /// The diagonal blocks `S_kk` of every unknown.
+    pub fn diagonal(&self, out: &mut Vec<[f64; 4]>) {
         match self {
-            Compliance::Dense(s) => dense_block(s, k, l),
-            Compliance::Boundary(g, rows) => rows.block(g, k, l),
+            Compliance::Dense(s) => {
+                let m = (s.len() as f64).sqrt().round() as usize / 2;
+                out.clear();
+                out.extend((0..m).map(|k| dense_block(s, k, k)));
+            }
+            Compliance::Boundary(g, rows) => rows.diagonal(g, out),
         }
     }
 
@@ -692,10 +711,24 @@ mod tests {
             .collect();
         let mut pr = PointRows::default();
         pr.set(&scalar, &g);
-        let b = pr.block(&g, 1, 2);
-        assert!((b[1] - want[2 * 6 + 5]).abs() < 1e-15);
+        // the diagonal blocks (preconditioner), over G and over a formed S
+        let diagonal_matches = |pr: &mut PointRows| {
+            let mut d = Vec::new();
+            pr.diagonal(&g, &mut d);
+            assert_eq!(d.len(), 3);
+            for (k, dk) in d.iter().enumerate() {
+                for (e, (a, b)) in [(0, 0), (0, 1), (1, 0), (1, 1)].into_iter().enumerate() {
+                    let w = want[(2 * k + a) * 6 + 2 * k + b];
+                    assert!((dk[e] - w).abs() < 1e-15, "block {k} entry {e}");
+                }
+            }
+        };
+        assert!(pr.s.is_empty());
+        diagonal_matches(&mut pr);
         let mut s = Vec::new();
         pr.dense(&g, &mut s);
+        assert!(!pr.s.is_empty());
+        diagonal_matches(&mut pr);
         for (x, y) in s.iter().zip(&want) {
             assert!((x - y).abs() < 1e-15);
         }

@@ -306,8 +306,7 @@ impl Solver {
         out: &mut [Eval],
     ) -> usize {
         let m = contacts.len();
-        self.diag.clear();
-        self.diag.extend((0..m).map(|k| s.block(k, k)));
+        s.diagonal(&mut self.diag);
         for v in [&mut self.r, &mut self.t, &mut self.st, &mut self.d] {
             v.clear();
             v.resize(m, Vec2::ZERO);
