@@ -271,13 +271,18 @@ pub struct PointRows {
     ga_start: Vec<u32>,
     ga_col: Vec<u32>,
     ga_val: Vec<f64>,
-    /// Local position of every DOF of `B` ([`NONE`] if not touched).
+    /// Local position of every DOF of `B` ([`NONE`] if not touched), set
+    /// by [`PointRows::set`].
     map: Vec<u32>,
     /// `S` itself (2m × 2m, row-major) when forming it is cheaper than the
-    /// products over `G` ([`PointRows::set`]) or the contact solve asked for
-    /// it ([`PointRows::dense`]); empty otherwise.
+    /// products over `G` (`formed`) or the contact solve asked for it
+    /// ([`PointRows::dense`]); empty otherwise.
     s: Vec<f64>,
-    /// Scratch of [`form`](Self::form): `G` on the touched DOFs, one column.
+    /// Form `S` at its first use in the step ([`PointRows::set`]'s choice;
+    /// timed with the contact solve, not with the body's step).
+    formed: bool,
+    /// Scratch of [`form`](Self::form): `G` on the touched DOFs, `S` by
+    /// columns.
     ga: Vec<f64>,
     t: Vec<f64>,
 }
@@ -292,26 +297,33 @@ impl PointRows {
     pub fn set(&mut self, rows: &[Vec<(usize, f64)>], green: &BoundaryGreen) {
         self.start.clear();
         self.entries.clear();
-        self.act.clear();
         self.start.push(0);
+        // mark the touched DOFs of B, number them in B's order
+        self.map.clear();
+        self.map.resize(green.len(), NONE);
         for row in rows {
             for &(i, c) in row {
                 let b = green.position(i);
                 self.entries.push((b, c));
                 if b != NONE {
-                    self.act.push(b);
+                    self.map[b as usize] = 0;
                 }
             }
             self.start.push(self.entries.len() as u32);
         }
-        self.act.sort_unstable();
-        self.act.dedup();
-        let act = &self.act;
-        for e in &mut self.entries {
-            if e.0 != NONE {
-                e.0 = act.binary_search(&e.0).map_or(NONE, |p| p as u32);
+        self.act.clear();
+        for (b, l) in self.map.iter_mut().enumerate() {
+            if *l != NONE {
+                *l = self.act.len() as u32;
+                self.act.push(b as u32);
             }
         }
+        for e in &mut self.entries {
+            if e.0 != NONE {
+                e.0 = self.map[e.0 as usize];
+            }
+        }
+        let act = &self.act;
         self.q.resize(act.len(), 0.0);
         self.z.resize(act.len(), 0.0);
         self.ga_start.clear();
@@ -323,30 +335,39 @@ impl PointRows {
         let form = na * na + m2 * r * (na + m2) + PRODUCTS * m2 * m2;
         let over_g = (PRODUCTS + 1.0) * na * na * green.significant_fraction();
         self.s.clear();
-        if form < over_g {
-            self.form(green);
-        }
+        self.formed = form < over_g;
     }
 
     /// `S = Φ (G Φᵀ)` column by column: `G` on the touched DOFs gathered
     /// once (contiguous columns), then for each functional the combination
-    /// of its columns, then the functionals of that.
+    /// of its columns, then the functionals of that. Both in parallel over
+    /// columns once there is enough work (each column summed in the same
+    /// order whatever the thread count).
     fn form(&mut self, green: &BoundaryGreen) {
         let (m2, na, nb) = (self.start.len() - 1, self.act.len(), green.len());
+        let parallel = m2 * na >= 1 << 14;
         let mut ga = std::mem::take(&mut self.ga);
-        let mut t = std::mem::take(&mut self.t);
+        let mut sc = std::mem::take(&mut self.t);
         ga.resize(na * na, 0.0);
-        t.resize(na, 0.0);
-        for (c, &b) in self.act.iter().enumerate() {
+        sc.resize(m2 * m2, 0.0);
+        let act = &self.act;
+        let gather = |(gc, &b): (&mut [f64], &u32)| {
             let col = &green.g[b as usize * nb..(b as usize + 1) * nb];
-            for (v, &i) in ga[c * na..(c + 1) * na].iter_mut().zip(&self.act) {
+            for (v, &i) in gc.iter_mut().zip(act) {
                 *v = col[i as usize];
             }
+        };
+        if parallel {
+            ga.par_chunks_mut(na.max(1)).zip(act).for_each(gather);
+        } else {
+            ga.chunks_mut(na.max(1)).zip(act).for_each(gather);
         }
-        self.s.resize(m2 * m2, 0.0);
-        for c in 0..m2 {
-            t.iter_mut().for_each(|v| *v = 0.0);
-            for &(l, coef) in self.row(c) {
+        // column c of S (column-major in `sc`), with the scratch `t` (na)
+        let this = &*self;
+        let column = |t: &mut Vec<f64>, (c, sc): (usize, &mut [f64])| {
+            t.clear();
+            t.resize(na, 0.0);
+            for &(l, coef) in this.row(c) {
                 if l == NONE {
                     continue;
                 }
@@ -355,18 +376,35 @@ impl PointRows {
                     *tv += coef * g;
                 }
             }
-            for r in 0..m2 {
+            for (r, s) in sc.iter_mut().enumerate() {
                 let mut u = 0.0;
-                for &(l, coef) in self.row(r) {
+                for &(l, coef) in this.row(r) {
                     if l != NONE {
                         u += coef * t[l as usize];
                     }
                 }
-                self.s[r * m2 + c] = u;
+                *s = u;
+            }
+        };
+        if parallel {
+            sc.par_chunks_mut(m2)
+                .enumerate()
+                .with_min_len(8)
+                .for_each_init(Vec::new, column);
+        } else {
+            let mut t = Vec::new();
+            sc.chunks_mut(m2.max(1))
+                .enumerate()
+                .for_each(|x| column(&mut t, x));
+        }
+        self.s.resize(m2 * m2, 0.0);
+        for (c, col) in sc.chunks_exact(m2.max(1)).enumerate() {
+            for (r, v) in col.iter().enumerate() {
+                self.s[r * m2 + c] = *v;
             }
         }
         self.ga = ga;
-        self.t = t;
+        self.t = sc;
     }
 
     /// Number of unknowns (functional pairs).
@@ -413,7 +451,10 @@ impl PointRows {
     /// The diagonal blocks `S_kk` of every unknown (the preconditioner of
     /// the contact solve), in parallel: `4 |row|²` entries of `G` each,
     /// 5.3·10⁷ a step for 5 000 contacts with their geometric stiffness.
-    pub fn diagonal(&self, green: &BoundaryGreen, out: &mut Vec<[f64; 4]>) {
+    pub fn diagonal(&mut self, green: &BoundaryGreen, out: &mut Vec<[f64; 4]>) {
+        if self.formed && self.s.is_empty() {
+            self.form(green);
+        }
         let m = self.len();
         out.clear();
         if self.s.is_empty() {
@@ -441,11 +482,6 @@ impl PointRows {
 
     /// Gather the significant entries of `G` between the touched DOFs.
     fn gather(&mut self, green: &BoundaryGreen) {
-        self.map.clear();
-        self.map.resize(green.len(), NONE);
-        for (l, &b) in self.act.iter().enumerate() {
-            self.map[b as usize] = l as u32;
-        }
         self.ga_start.clear();
         self.ga_col.clear();
         self.ga_val.clear();
@@ -474,6 +510,9 @@ impl PointRows {
     /// each output entry is then one sparse dot product in a fixed order
     /// (bitwise independent of the thread count).
     pub fn mul(&mut self, green: &BoundaryGreen, x: &[Vec2], y: &mut [Vec2]) {
+        if self.formed && self.s.is_empty() {
+            self.form(green);
+        }
         if !self.s.is_empty() {
             dense_mul(&self.s, x, y);
             return;
@@ -540,7 +579,7 @@ pub enum Compliance<'a> {
 
 impl Compliance<'_> {
     /// The diagonal blocks `S_kk` of every unknown.
-    pub fn diagonal(&self, out: &mut Vec<[f64; 4]>) {
+    pub fn diagonal(&mut self, out: &mut Vec<[f64; 4]>) {
         match self {
             Compliance::Dense(s) => {
                 let m = (s.len() as f64).sqrt().round() as usize / 2;
