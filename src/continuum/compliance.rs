@@ -762,8 +762,9 @@ mod tests {
                 }
             }
         };
-        assert!(pr.s.is_empty());
+        pr.formed = false; // over G, whatever `set` chose for this size
         diagonal_matches(&mut pr);
+        assert!(pr.s.is_empty());
         let mut s = Vec::new();
         pr.dense(&g, &mut s);
         assert!(!pr.s.is_empty());
@@ -779,10 +780,10 @@ mod tests {
         ];
         let mut y = [Vec2::ZERO; 3];
         for formed in [false, true] {
-            if formed {
-                pr.form(&g);
-            }
+            pr.s.clear();
+            pr.formed = formed;
             pr.mul(&g, &x, &mut y);
+            assert_eq!(pr.s.is_empty(), !formed);
             for k in 0..3 {
                 for a in 0..2 {
                     let v: f64 = (0..6)
