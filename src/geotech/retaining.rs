@@ -302,7 +302,9 @@ impl WallResult {
 }
 
 /// `retaining_wall.png` in `dir`: the measured earth pressure against
-/// depth (kPa) with Jaky's `K₀ ρ_b g z` for φ_peak and φ_cs, or, for a
+/// depth (kPa) with Jaky's `K₀ ρ_b g z` for the two angles `phi` (the
+/// biaxial test's peak and critical, or a measured angle and its lower
+/// bound), or, for a
 /// wall that has moved away (base displacement below −10⁻⁴ H, or its top
 /// more than 10⁻³ H further than its base: a rotation about the toe),
 /// Rankine's `K_a ρ_b g z`.
@@ -323,11 +325,15 @@ pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), Plo
     let k0 = |p: f64| if active { rankine_ka(p) } else { jaky_k0(p) };
     let name = if active { "Rankine K_a" } else { "Jaky K₀" };
     let chart = Chart {
-        title: if active {
+        title: if r.turned() {
             format!(
-                "Retaining wall, active (base moved {:.2} mm, top {:.2} mm further): earth pressure against depth",
-                -1e3 * r.base_displacement,
+                "Retaining wall, active (turned about its toe, top {:.2} mm beyond the base): earth pressure against depth",
                 -1e3 * r.deflection
+            )
+        } else if active {
+            format!(
+                "Retaining wall, active (base moved {:.2} mm away): earth pressure against depth",
+                -1e3 * r.base_displacement
             )
         } else {
             "Retaining wall at rest: earth pressure against depth".into()
@@ -338,13 +344,13 @@ pub fn plot(dir: &Path, r: &WallResult, g: f64, phi: [f64; 2]) -> Result<(), Plo
             Series::new("measured (contact forces, binned)", pts, Mark::Points)
                 .with_color(palette(0)),
             Series::new(
-                format!("{name} = {:.3} (φ_peak = {}°)", k0(phi[0]), phi[0]),
+                format!("{name} = {:.3} (φ = {}°)", k0(phi[0]), phi[0]),
                 line(k0(phi[0])),
                 Mark::Line,
             )
             .with_color(palette(2)),
             Series::new(
-                format!("{name} = {:.3} (φ_cs = {}°)", k0(phi[1]), phi[1]),
+                format!("{name} = {:.3} (φ = {}°)", k0(phi[1]), phi[1]),
                 line(k0(phi[1])),
                 Mark::Dashed,
             )
