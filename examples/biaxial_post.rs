@@ -151,7 +151,7 @@ fn print_summary(label: &str, sc: &Scenario, s: &Summary) {
 /// the mean stresses, which is the one the Love–Weber check supports.
 fn print_mean_stress_angles(p: &[Point]) {
     let o = Options::default();
-    let sin = |rows: &[&Point]| {
+    let sin = |rows: &[Point]| {
         let n = rows.len().max(1) as f64;
         let s1 = rows.iter().map(|x| x.sigma1).sum::<f64>() / n;
         let s3 = rows.iter().map(|x| x.sigma3).sum::<f64>() / n;
@@ -159,24 +159,20 @@ fn print_mean_stress_angles(p: &[Point]) {
     };
     let deg = |s: f64| s.asin().to_degrees();
     let (mut best, mut at) = (f64::NEG_INFINITY, 0.0);
-    for x in p {
-        let w: Vec<&Point> = p
-            .iter()
-            .filter(|y| (y.eps1 - x.eps1).abs() <= 0.5 * o.smooth)
-            .collect();
-        let s = sin(&w);
+    for (i, x) in p.iter().enumerate() {
+        let s = sin(&p[biaxial::window(p, i, o.smooth)]);
         if s > best {
             (best, at) = (s, x.eps1);
         }
     }
     let end = p.last().map_or(0.0, |x| x.eps1);
-    let cs: Vec<&Point> = p.iter().filter(|x| x.eps1 >= o.cs_from * end).collect();
+    let cs = &p[p.partition_point(|x| x.eps1 < o.cs_from * end)..];
     println!(
         "  from the mean stresses (windows of {:.0} % of ε₁): φ_peak = {:.2}° at ε₁ = {:.2} %; φ_cs = {:.2}° (ε₁ ≥ {:.1} %)",
         100.0 * o.smooth,
         deg(best),
         100.0 * at,
-        deg(sin(&cs)),
+        deg(sin(cs)),
         100.0 * o.cs_from * end
     );
 }

@@ -390,8 +390,9 @@ pub fn dilatancy_angle(s: f64) -> f64 {
     (-s / (2.0 - s)).asin().to_degrees()
 }
 
-/// Indices of the rows whose ε₁ is within `w/2` of row `i`'s.
-fn window(p: &[Point], i: usize, w: f64) -> std::ops::Range<usize> {
+/// Indices of the rows whose ε₁ is within `w/2` of row `i`'s (`p` in
+/// increasing ε₁, as [`curve`] gives it; never empty).
+pub fn window(p: &[Point], i: usize, w: f64) -> std::ops::Range<usize> {
     let e = p[i].eps1;
     let lo = p.partition_point(|x| x.eps1 < e - 0.5 * w);
     let hi = p.partition_point(|x| x.eps1 <= e + 0.5 * w);
