@@ -281,10 +281,10 @@ pub struct PointRows {
     /// Form `S` at its first use in the step ([`PointRows::set`]'s choice;
     /// timed with the contact solve, not with the body's step).
     formed: bool,
-    /// Scratch of [`form`](Self::form): `G` on the touched DOFs, `S` by
-    /// columns.
+    /// Scratch of [`form`](Self::form): `G` on the touched DOFs, and `S`
+    /// by columns.
     ga: Vec<f64>,
-    t: Vec<f64>,
+    s_cols: Vec<f64>,
 }
 
 /// Products `S x` a contact solve typically needs (for the choice of
@@ -347,7 +347,7 @@ impl PointRows {
         let (m2, na, nb) = (self.start.len() - 1, self.act.len(), green.len());
         let parallel = m2 * na >= 1 << 14;
         let mut ga = std::mem::take(&mut self.ga);
-        let mut sc = std::mem::take(&mut self.t);
+        let mut sc = std::mem::take(&mut self.s_cols);
         ga.resize(na * na, 0.0);
         sc.resize(m2 * m2, 0.0);
         let act = &self.act;
@@ -404,7 +404,7 @@ impl PointRows {
             }
         }
         self.ga = ga;
-        self.t = sc;
+        self.s_cols = sc;
     }
 
     /// Number of unknowns (functional pairs).
@@ -449,8 +449,8 @@ impl PointRows {
     }
 
     /// The diagonal blocks `S_kk` of every unknown (the preconditioner of
-    /// the contact solve), in parallel: `4 |row|²` entries of `G` each,
-    /// 5.3·10⁷ a step for 5 000 contacts with their geometric stiffness.
+    /// the contact solve), in parallel: `3 |row|²` entries of `G` each,
+    /// 4·10⁷ a step for 5 000 contacts with their geometric stiffness.
     pub fn diagonal(&mut self, green: &BoundaryGreen, out: &mut Vec<[f64; 4]>) {
         if self.formed && self.s.is_empty() {
             self.form(green);
