@@ -223,6 +223,35 @@ pub trait Continuum: Send {
         self.begin_step(&[], &[], &mut Vec::new(), &mut Vec::new())?;
         self.finish_step(&[])
     }
+    /// Sub-cycled scheme, at the start of a body step of length `h`:
+    /// predict the step under the last body step's contact loads (held)
+    /// and let the contact boundary move on the straight path from its
+    /// present position to the predicted one ([`set_path`](Self::set_path)).
+    /// The body's state does not change.
+    fn begin_path(&mut self, _h: f64) -> Result<(), SolveError> {
+        Ok(())
+    }
+    /// Sub-cycled scheme: put the contact boundary at the fraction `s ∈
+    /// [0, 1)` of the present body step's path.
+    fn set_path(&mut self, _s: f64) {}
+    /// Sub-cycled scheme: the velocity of the boundary point at parameter
+    /// `s` of segment `seg` of chain `chain` on the path.
+    fn path_velocity(&self, chain: usize, seg: usize, s: f64) -> Vec2 {
+        let x = self.contact_boundary()[chain].material_point(seg, s);
+        self.boundary_velocity(chain, x)
+    }
+    /// Sub-cycled scheme: a force `f` on the boundary point at parameter
+    /// `s` of segment `seg`, for the end of the present body step.
+    fn add_path_load(&mut self, chain: usize, seg: usize, s: f64, f: Vec2) {
+        let x = self.contact_boundary()[chain].material_point(seg, s);
+        self.add_point_load(chain, x, f);
+    }
+    /// Sub-cycled scheme: take the body step with the loads of
+    /// [`add_path_load`](Self::add_path_load), which are then held for the
+    /// next path.
+    fn end_path(&mut self) -> Result<(), SolveError> {
+        self.advance()
+    }
     /// Kinetic and strain energy of the present state.
     fn energies(&self) -> BodyEnergies;
     /// The total force of the discs on the body at the present state, set
@@ -359,6 +388,30 @@ pub struct WithBoundary<B> {
     mapped: PointRows,
     /// `S` of the step ([`ComplianceMode::Direct`]).
     dense: Vec<f64>,
+    /// Sub-cycled scheme ([`Path`]).
+    path: Path,
+}
+
+/// The sub-cycled scheme's boundary path over one body step: the chain
+/// points move on straight lines from their positions at the start of the
+/// step to those of the step predicted under the last step's contact
+/// loads; the discs' forces go to the chain points (the shares of a
+/// segment's ends, the loads work-conjugate to that straight-segment
+/// geometry) and are averaged over the DEM steps.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Path {
+    /// Per chain, per point: position at the start of the body step.
+    pub start: Vec<Vec<Vec2>>,
+    /// Per chain, per point: predicted position at its end (empty: no
+    /// path under way).
+    pub end: Vec<Vec<Vec2>>,
+    /// Length of the body step.
+    pub h: f64,
+    /// Per chain, per point: loads of the last body step (held for the
+    /// prediction of the next).
+    pub held: Vec<Vec<Vec2>>,
+    /// Per chain, per point: loads of the present body step so far.
+    pub acc: Vec<Vec<Vec2>>,
 }
 
 impl<B: ContactBody> WithBoundary<B> {
@@ -388,7 +441,15 @@ impl<B: ContactBody> WithBoundary<B> {
             green: None,
             mapped: PointRows::default(),
             dense: Vec::new(),
+            path: Path::default(),
         };
+        let zeros: Vec<Vec<Vec2>> = c
+            .chains
+            .iter()
+            .map(|ch| vec![Vec2::ZERO; ch.reference.len()])
+            .collect();
+        c.path.held.clone_from(&zeros);
+        c.path.acc = zeros;
         c.refresh();
         Ok(c)
     }
@@ -590,6 +651,77 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         self.refresh();
         Ok(())
     }
+    /// One solve under the held loads (the body's state, clock and drives
+    /// are put back afterwards: the prediction has no side effect).
+    fn begin_path(&mut self, h: f64) -> Result<(), SolveError> {
+        let saved = self.body.save_state();
+        for (rows, held) in self.rows.iter().zip(&self.path.held) {
+            for (row, f) in rows.iter().zip(held) {
+                if *f != Vec2::ZERO {
+                    self.body.add_point_load_row(row, *f);
+                }
+            }
+        }
+        let (chains, rows, path) = (&self.chains, &self.rows, &mut self.path);
+        path.end.resize_with(chains.len(), Vec::new);
+        path.start.resize_with(chains.len(), Vec::new);
+        let predicted = self.body.predict().map(|nm| {
+            let u = nm.solution();
+            for ((end, chain), rows) in path.end.iter_mut().zip(chains).zip(rows) {
+                end.clear();
+                end.extend(chain.reference.iter().zip(rows).map(|(x, row)| *x + interpolate(row, u)));
+            }
+        });
+        predicted.map_err(|e| self.solve_error(e))?;
+        self.body
+            .restore_state(&saved)
+            .map_err(|e| self.solve_error(e))?;
+        for (start, chain) in self.path.start.iter_mut().zip(&self.chains) {
+            start.clone_from(&chain.current);
+        }
+        self.path.h = h;
+        Ok(())
+    }
+    fn set_path(&mut self, s: f64) {
+        let p = &self.path;
+        for ((chain, a), b) in self.chains.iter_mut().zip(&p.start).zip(&p.end) {
+            for ((cur, a), b) in chain.current.iter_mut().zip(a).zip(b) {
+                *cur = *a + (*b - *a) * s;
+            }
+        }
+    }
+    /// Constant along the path: the chain points' displacement over the
+    /// step divided by `h`, interpolated along the segment.
+    fn path_velocity(&self, chain: usize, seg: usize, s: f64) -> Vec2 {
+        let p = &self.path;
+        let (a, b) = (&p.start[chain], &p.end[chain]);
+        let v = |i: usize| (b[i] - a[i]) * (1.0 / p.h);
+        v(seg) * (1.0 - s) + v(seg + 1) * s
+    }
+    fn add_path_load(&mut self, chain: usize, seg: usize, s: f64, f: Vec2) {
+        let acc = &mut self.path.acc[chain];
+        acc[seg] += f * (1.0 - s);
+        acc[seg + 1] += f * s;
+    }
+    fn end_path(&mut self) -> Result<(), SolveError> {
+        // the average over the step belongs to its middle: the load at its
+        // end is extrapolated from it and the last step's average
+        let p = &self.path;
+        for ((rows, acc), held) in self.rows.iter().zip(&p.acc).zip(&p.held) {
+            for ((row, f), f0) in rows.iter().zip(acc).zip(held) {
+                let f = *f * 1.5 - *f0 * 0.5;
+                if f != Vec2::ZERO {
+                    self.body.add_point_load_row(row, f);
+                }
+            }
+        }
+        self.advance()?;
+        let p = &mut self.path;
+        std::mem::swap(&mut p.held, &mut p.acc);
+        p.acc.iter_mut().flatten().for_each(|f| *f = Vec2::ZERO);
+        p.end.clear();
+        Ok(())
+    }
     fn energies(&self) -> BodyEnergies {
         self.body.energies()
     }
@@ -610,6 +742,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         s.boundary = Some(BoundaryState {
             direct: self.mode == ComplianceMode::Direct,
             green: self.green.as_ref().map(BoundaryGreen::batches),
+            path: self.path.clone(),
         });
         s
     }
@@ -620,8 +753,19 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
                 "body `{name}`: the saved state has no contact boundary (a continuum-only model's)"
             )));
         };
+        let shape = |v: &[Vec<Vec2>]| {
+            v.len() == self.chains.len()
+                && v.iter().zip(&self.chains).all(|(p, c)| p.len() == c.reference.len())
+        };
+        let p = &b.path;
+        if !shape(&p.held) || !shape(&p.acc) || !(p.end.is_empty() || shape(&p.end) && shape(&p.start)) {
+            return Err(StateError::new(format!(
+                "body `{name}`: the saved boundary path does not fit its contact chains"
+            )));
+        }
         self.body.restore_state(s)?;
         self.refresh();
+        self.path.clone_from(p);
         self.mode = if b.direct {
             ComplianceMode::Direct
         } else {

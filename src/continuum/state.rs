@@ -93,6 +93,9 @@ pub struct BoundaryState {
     /// `None` when it was not built yet. Replayed on restore: its order
     /// decides the order of the sums of the contact solve.
     pub green: Option<Vec<Vec<u32>>>,
+    /// The sub-cycled scheme's boundary path and loads
+    /// ([`Path`](super::Path)).
+    pub path: super::Path,
 }
 
 impl BodyState {

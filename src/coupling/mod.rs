@@ -168,6 +168,10 @@ struct Load {
     chain: usize,
     /// Material point of the body where the reaction acts.
     material: Vec2,
+    /// Segment and parameter of that point (the sub-cycled scheme's
+    /// boundary path).
+    seg: usize,
+    s: f64,
     /// Contact point on the disc (for its moment).
     arm: Vec2,
     /// Force on the disc.
@@ -225,7 +229,7 @@ impl CoupledModel {
             bodies,
             body_laws,
             substeps: substeps.max(1),
-            staggered: substeps > 1,
+            staggered: false,
             contacts: Vec::new(),
             grids: Vec::new(),
             near: Vec::new(),
@@ -280,9 +284,25 @@ impl CoupledModel {
             self.timing.transfer += t2.elapsed().as_secs_f64();
             return r;
         }
+        let path = self.path_scheme();
+        if path {
+            let tb = Instant::now();
+            if self.sub == 0 {
+                let h = self.granular.dt * self.substeps as f64;
+                for b in &mut self.bodies {
+                    b.begin_path(h)?;
+                }
+            }
+            let s = self.sub as f64 / self.substeps as f64;
+            for b in &mut self.bodies {
+                b.set_path(s);
+            }
+            self.timing.body += tb.elapsed().as_secs_f64();
+        }
+        let t0 = Instant::now();
         self.granular.compute_contact_forces();
         let t1 = Instant::now();
-        self.body_contact_forces();
+        self.body_contact_forces(path);
         let t2 = Instant::now();
         self.granular.integrate();
         let t3 = Instant::now();
@@ -294,11 +314,21 @@ impl CoupledModel {
             self.sub = 0;
             self.set_contact_forces();
             for b in &mut self.bodies {
-                b.advance()?;
+                if path {
+                    b.end_path()?;
+                } else {
+                    b.advance()?;
+                }
             }
         }
         self.timing.body += t3.elapsed().as_secs_f64();
         Ok(())
+    }
+
+    /// The sub-cycled scheme: more than one DEM step per body step, the
+    /// boundary on its predicted path (not the staggered transfer).
+    pub fn path_scheme(&self) -> bool {
+        self.substeps > 1 && !self.staggered
     }
 
     /// Tell each body the total force of the discs on it at the present
@@ -477,7 +507,7 @@ impl CoupledModel {
 
     /// Detect disc–body contacts, evaluate them with the DEM contact law,
     /// apply the force to the disc and the reaction to the body.
-    fn body_contact_forces(&mut self) {
+    fn body_contact_forces(&mut self, path: bool) {
         let dt = self.granular.dt;
         let nm = self.granular.materials.len();
         let share = 1.0 / self.substeps as f64;
@@ -495,7 +525,11 @@ impl CoupledModel {
                     let (x, r) = (p.pos[d], p.radius[d]);
                     let key = (p.id[d], b as u16, c as u16);
                     let (mut fs, mut mr) = history(&self.contacts, key);
-                    let v_h = body.boundary_velocity(c, t.material);
+                    let v_h = if path {
+                        body.path_velocity(c, t.seg, t.s)
+                    } else {
+                        body.boundary_velocity(c, t.material)
+                    };
                     let law = &self.body_laws[b * nm + p.material[d] as usize];
                     let n = -t.normal; // from the disc towards the body
                     let m_eff = effective_mass(p.inv_mass[d], 0.0);
@@ -546,6 +580,8 @@ impl CoupledModel {
                         body: b,
                         chain: c,
                         material: t.material,
+                        seg: t.seg,
+                        s: t.s,
                         // torque arm r n, the DEM's convention (E12)
                         arm: x + n * r,
                         f: cf.f,
@@ -559,7 +595,12 @@ impl CoupledModel {
             if l.moment != 0.0 {
                 self.granular.add_external_moment(l.slot, l.moment);
             }
-            self.bodies[l.body].add_point_load(l.chain, l.material, -l.f * share);
+            let body = &mut self.bodies[l.body];
+            if path {
+                body.add_path_load(l.chain, l.seg, l.s, -l.f * share);
+            } else {
+                body.add_point_load(l.chain, l.material, -l.f * share);
+            }
         }
         next.sort_by_key(|q| q.key());
         self.scratch = std::mem::replace(&mut self.contacts, next);

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 /// First bytes of a checkpoint file.
 const MAGIC: &[u8; 8] = b"EFGDEMCK";
 /// Version of the envelope below (the model state has its own).
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 /// File name of the checkpoint in the output directory.
 pub const FILE: &str = "checkpoint.bin";

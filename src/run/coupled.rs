@@ -452,7 +452,13 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
         "dt": m.granular.dt,
         "body_dt": body_dt,
         "substeps": m.substeps,
-        "coupling": if m.staggered { "staggered" } else { "implicit" },
+        "coupling": if m.staggered {
+            "staggered"
+        } else if m.path_scheme() {
+            "sub-cycled"
+        } else {
+            "implicit"
+        },
         "dem_critical_dt": m.granular.critical_dt(),
         "discs": m.granular.particles.len(),
         "bodies": body_names,
