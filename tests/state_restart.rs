@@ -522,8 +522,9 @@ fn bed_on_efg_plate_restarts_bitwise() {
     check_bed(&bed_on_plate("efg", ""), 800, 450);
 }
 
-/// Sub-cycled, staggered transfer (an FE plate): saved in the middle of
-/// a body step, with the discs' loads of its first DEM steps pending.
+/// Sub-cycled (an FE plate): saved in the middle of a body step, with the
+/// boundary on its path and the discs' loads of its first DEM steps
+/// pending.
 #[test]
 fn bed_on_fem_plate_substepped_restarts_bitwise() {
     let src = bed_on_plate("fem-q4", "substeps = 3");
@@ -539,8 +540,10 @@ fn bed_on_fem_plate_substepped_restarts_bitwise() {
         panic!("a coupled state")
     };
     assert_eq!(m.sub, k % 3);
+    let path = &m.bodies[0].boundary.as_ref().expect("a boundary").path;
+    assert!(!path.end.is_empty(), "a path under way");
     assert!(
-        m.bodies[0].f_point.iter().any(|f| *f != 0.0),
+        path.acc.iter().flatten().any(|f| f.x != 0.0 || f.y != 0.0),
         "loads pending"
     );
     check_bed(&src, n, k);

@@ -57,6 +57,13 @@ impl BoundaryChain {
         self.reference.len().saturating_sub(1)
     }
 
+    /// The chain is a closed loop: its last point is its first (a body
+    /// whose whole boundary is in contact).
+    pub fn is_closed(&self) -> bool {
+        let r = &self.reference;
+        r.len() > 3 && r.first() == r.last()
+    }
+
     /// Material point at parameter `s ∈ [0, 1]` of segment `seg`.
     pub fn material_point(&self, seg: usize, s: f64) -> Vec2 {
         let a = self.reference[seg];
@@ -251,6 +258,14 @@ pub trait Continuum: Send {
     /// next path.
     fn end_path(&mut self) -> Result<(), SolveError> {
         self.advance()
+    }
+    /// The largest compliance `φ(x)ᵀ A⁻¹ φ(x)` of the body step at the
+    /// contact boundary (sampled at up to 32 chain points, both
+    /// directions): a contact of normal stiffness `k_n` there feeds back on
+    /// itself within a body step with the gain `k_n c`
+    /// ([`begin_path`](Self::begin_path) needs it small). 0 if unknown.
+    fn boundary_compliance(&mut self) -> Result<f64, SolveError> {
+        Ok(0.0)
     }
     /// Kinetic and strain energy of the present state.
     fn energies(&self) -> BodyEnergies;
@@ -669,7 +684,13 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             let u = nm.solution();
             for ((end, chain), rows) in path.end.iter_mut().zip(chains).zip(rows) {
                 end.clear();
-                end.extend(chain.reference.iter().zip(rows).map(|(x, row)| *x + interpolate(row, u)));
+                end.extend(
+                    chain
+                        .reference
+                        .iter()
+                        .zip(rows)
+                        .map(|(x, row)| *x + interpolate(row, u)),
+                );
             }
         });
         predicted.map_err(|e| self.solve_error(e))?;
@@ -681,6 +702,34 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         }
         self.path.h = h;
         Ok(())
+    }
+    fn boundary_compliance(&mut self) -> Result<f64, SolveError> {
+        let points: Vec<usize> = self.rows.iter().map(Vec::len).collect();
+        let total: usize = points.iter().sum();
+        let stride = total.div_ceil(32).max(1);
+        let Some(nm) = self.body.newmark_mut() else {
+            return Ok(0.0);
+        };
+        let mut x = vec![0.0; nm.n()];
+        let mut c_max: f64 = 0.0;
+        for row in self.rows.iter().flatten().step_by(stride) {
+            for a in 0..2 {
+                x.iter_mut().for_each(|v| *v = 0.0);
+                for &(j, phi) in row {
+                    let i = 2 * j as usize + a;
+                    if !nm.imposed().get(i).copied().unwrap_or(false) {
+                        x[i] = phi;
+                    }
+                }
+                nm.solve_in_place(&mut x);
+                let c: f64 = row
+                    .iter()
+                    .map(|&(j, phi)| phi * x[2 * j as usize + a])
+                    .sum();
+                c_max = c_max.max(c);
+            }
+        }
+        Ok(c_max)
     }
     fn set_path(&mut self, s: f64) {
         let p = &self.path;
@@ -755,15 +804,20 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         };
         let shape = |v: &[Vec<Vec2>]| {
             v.len() == self.chains.len()
-                && v.iter().zip(&self.chains).all(|(p, c)| p.len() == c.reference.len())
+                && v.iter()
+                    .zip(&self.chains)
+                    .all(|(p, c)| p.len() == c.reference.len())
         };
         let p = &b.path;
-        if !shape(&p.held) || !shape(&p.acc) || !(p.end.is_empty() || shape(&p.end) && shape(&p.start)) {
+        self.body.restore_state(s)?;
+        if !shape(&p.held)
+            || !shape(&p.acc)
+            || !(p.end.is_empty() || shape(&p.end) && shape(&p.start))
+        {
             return Err(StateError::new(format!(
                 "body `{name}`: the saved boundary path does not fit its contact chains"
             )));
         }
-        self.body.restore_state(s)?;
         self.refresh();
         self.path.clone_from(p);
         self.mode = if b.direct {

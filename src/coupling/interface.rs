@@ -159,13 +159,23 @@ pub fn detect_near(
             outward_normal(pts[seg], pts[seg + 1]),
         ),
         Some(j) => {
-            // Mean outward normal of the segments meeting at vertex j.
+            // Mean outward normal of the segments meeting at vertex j (both
+            // ends of a closed chain are the same vertex, where its last
+            // and first segments meet)
+            let closed = chain.is_closed();
+            let before = if j > 0 {
+                Some(j - 1)
+            } else {
+                closed.then_some(nseg - 1)
+            };
+            let after = if j < nseg {
+                Some(j)
+            } else {
+                closed.then_some(0)
+            };
             let mut n = Vec2::ZERO;
-            if j > 0 {
-                n += outward_normal(pts[j - 1], pts[j]);
-            }
-            if j < nseg {
-                n += outward_normal(pts[j], pts[j + 1]);
+            for i in before.into_iter().chain(after) {
+                n += outward_normal(pts[i], pts[i + 1]);
             }
             let l = n.norm();
             (Feature::Point(j), if l > 0.0 { n * (1.0 / l) } else { n })
@@ -313,6 +323,47 @@ mod tests {
         let tp = detect(&corner, c, 0.6).unwrap();
         assert!(tp.geometric_stiffness(&corner, 0, c, 1.0).is_none());
         assert!(t.geometric_stiffness(&ch, 0, o, 0.0).is_none());
+    }
+
+    /// Both ends of a closed chain are one convex corner: a disc beside it
+    /// (its centre level with the bottom edge, just below its extension)
+    /// gets the corner's radial normal, not the bottom edge's normal with
+    /// the centre taken as inside (an overlap of r + distance: found in a
+    /// footing run, a force of 2 k_n r for one step and 7 J created).
+    #[test]
+    fn both_ends_of_a_closed_chain_are_one_corner() {
+        // the unit square, counter-clockwise from its bottom-left corner
+        let ch = BoundaryChain::new(vec![
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+            Vec2::new(0.0, 0.0),
+        ]);
+        assert!(ch.is_closed());
+        for c in [
+            Vec2::new(-0.3, -1e-9),
+            Vec2::new(-0.3, 1e-9),
+            Vec2::new(-1e-9, -0.3),
+        ] {
+            let t = detect(&ch, c, 0.31).unwrap();
+            assert!(
+                matches!(t.feature, Feature::Point(0) | Feature::Point(4)),
+                "{c:?}"
+            );
+            assert!(
+                (t.overlap - (0.31 - c.norm())).abs() < 1e-12,
+                "{c:?}: {}",
+                t.overlap
+            );
+            assert!((t.normal - c * (1.0 / c.norm())).norm() < 1e-8, "{c:?}");
+        }
+        // an open chain's end keeps its one segment's normal (above its
+        // extension the centre counts as inside)
+        let open = BoundaryChain::new(ch.reference[..4].to_vec());
+        assert!(!open.is_closed());
+        let t = detect(&open, Vec2::new(-0.3, 1e-9), 0.31).unwrap();
+        assert!((t.overlap - (0.31 + 0.3)).abs() < 1e-8);
     }
 
     #[test]
