@@ -238,6 +238,11 @@ pub trait Continuum: Send {
     fn begin_path(&mut self, _h: f64) -> Result<(), SolveError> {
         Ok(())
     }
+    /// Sub-cycled scheme: how far any chain point moves on the present
+    /// path (0 when none is under way).
+    fn path_extent(&self) -> f64 {
+        0.0
+    }
     /// Sub-cycled scheme: put the contact boundary at the fraction `s ∈
     /// [0, 1)` of the present body step's path.
     fn set_path(&mut self, _s: f64) {}
@@ -730,6 +735,11 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             }
         }
         Ok(c_max)
+    }
+    fn path_extent(&self) -> f64 {
+        let p = &self.path;
+        let pairs = p.start.iter().flatten().zip(p.end.iter().flatten());
+        pairs.fold(0.0, |m, (a, b)| m.max((*b - *a).norm()))
     }
     fn set_path(&mut self, s: f64) {
         let p = &self.path;

@@ -379,7 +379,7 @@ impl CoupledModel {
         let nm = self.granular.materials.len();
         let mut next = std::mem::take(&mut self.scratch);
         next.clear();
-        self.rebuild_grids(CANDIDATE_MARGIN);
+        self.rebuild_grids(CANDIDATE_MARGIN, true);
         let w = &mut self.work;
         let p = &self.granular.particles;
         let mut body_time = 0.0;
@@ -514,7 +514,9 @@ impl CoupledModel {
         let mut next = std::mem::take(&mut self.scratch);
         next.clear();
         self.loads.clear();
-        self.rebuild_grids(0.0);
+        // on a path the grids of its first DEM step serve the whole body
+        // step (binned with the path's extent)
+        self.rebuild_grids(0.0, !path || self.sub == 0);
         let p = &self.granular.particles;
         for (b, body) in self.bodies.iter().enumerate() {
             for (c, chain) in body.contact_boundary().iter().enumerate() {
@@ -611,12 +613,20 @@ impl CoupledModel {
     /// so the grid gives the closest feature [`interface::detect`] gives.
     /// Bin each chain's segments ([`SegmentGrid`]) and keep its candidate
     /// discs ([`Candidates`]) for a detection with the contact `margin`.
-    fn rebuild_grids(&mut self, margin: f64) {
+    ///
+    /// With `regrid` false the grids are kept (the sub-cycled scheme bins
+    /// a chain once per body step, its reach and box grown by how far the
+    /// chain moves on its path, so the grid holds every segment within
+    /// reach of a disc at any point of the path); the candidates are
+    /// updated all the same.
+    fn rebuild_grids(&mut self, margin: f64, mut regrid: bool) {
         let g = &self.granular;
         let r_max = match self.r_max {
             Some((n, r)) if n == g.grid.rebuilds => r,
             _ => {
                 let r = g.particles.max_radius();
+                // a larger disc needs a longer reach
+                regrid |= self.r_max.is_none_or(|(_, r0)| r > r0);
                 self.r_max = Some((g.grid.rebuilds, r));
                 r
             }
@@ -629,10 +639,15 @@ impl CoupledModel {
         self.near.resize_with(self.bodies.len(), Vec::new);
         for ((body, grids), near) in self.bodies.iter().zip(&mut self.grids).zip(&mut self.near) {
             let chains = body.contact_boundary();
+            let extent = body.path_extent();
             grids.resize_with(chains.len(), SegmentGrid::default);
             near.resize_with(chains.len(), Candidates::default);
             for ((chain, sg), cand) in chains.iter().zip(grids.iter_mut()).zip(near.iter_mut()) {
-                sg.rebuild(chain, reach);
+                if regrid || sg.is_empty() {
+                    sg.rebuild(chain, reach + extent);
+                    let e = Vec2::new(extent, extent);
+                    (sg.chain_lo, sg.chain_hi) = (sg.chain_lo - e, sg.chain_hi + e);
+                }
                 cand.update(
                     &g.particles,
                     sg.chain_lo,

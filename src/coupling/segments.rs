@@ -25,6 +25,11 @@ pub struct SegmentGrid {
 }
 
 impl SegmentGrid {
+    /// Nothing binned yet.
+    pub fn is_empty(&self) -> bool {
+        self.nx == 0
+    }
+
     /// Bin the segments of `chain`; a disc centre within `reach` of a
     /// segment finds it in its own cell. Cells of about `reach`, at most a
     /// few per segment.
