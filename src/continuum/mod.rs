@@ -234,7 +234,7 @@ pub trait Continuum: Send {
     /// predict the step under the last body step's contact loads (held)
     /// and let the contact boundary move on the straight path from its
     /// present position to the predicted one ([`set_path`](Self::set_path)).
-    /// The body's state does not change.
+    /// The prediction stays pending until [`end_path`](Self::end_path).
     fn begin_path(&mut self, _h: f64) -> Result<(), SolveError> {
         Ok(())
     }
@@ -410,6 +410,13 @@ pub struct WithBoundary<B> {
     dense: Vec<f64>,
     /// Sub-cycled scheme ([`Path`]).
     path: Path,
+    /// The body's state before the pending prediction of a path (what a
+    /// save in the middle of a path holds: a restore predicts again).
+    pre: Option<BodyState>,
+    /// The contact force last set ([`Continuum::set_contact_force`]).
+    contact_force: Vec2,
+    /// Per chain point, its `x` and `y` functionals (the path's loads).
+    point_fs: Vec<Vec<(usize, f64)>>,
 }
 
 /// The sub-cycled scheme's boundary path over one body step: the chain
@@ -432,6 +439,9 @@ pub struct Path {
     pub held: Vec<Vec<Vec2>>,
     /// Per chain, per point: loads of the present body step so far.
     pub acc: Vec<Vec<Vec2>>,
+    /// The discs' total force on the body when the path was predicted
+    /// (what a servo drive measured then; a restore predicts again).
+    pub measured: Vec2,
 }
 
 impl<B: ContactBody> WithBoundary<B> {
@@ -462,6 +472,9 @@ impl<B: ContactBody> WithBoundary<B> {
             mapped: PointRows::default(),
             dense: Vec::new(),
             path: Path::default(),
+            pre: None,
+            contact_force: Vec2::ZERO,
+            point_fs: Vec::new(),
         };
         let zeros: Vec<Vec<Vec2>> = c
             .chains
@@ -513,6 +526,35 @@ impl<B: ContactBody> WithBoundary<B> {
         nodes.sort_unstable();
         nodes.dedup();
         nodes
+    }
+
+    /// Predict the body step under the held path loads (the solution stays
+    /// pending in the integrator) and set the path's end positions.
+    fn predict_path(&mut self) -> Result<(), SolveError> {
+        for (rows, held) in self.rows.iter().zip(&self.path.held) {
+            for (row, f) in rows.iter().zip(held) {
+                if *f != Vec2::ZERO {
+                    self.body.add_point_load_row(row, *f);
+                }
+            }
+        }
+        let (chains, rows, path) = (&self.chains, &self.rows, &mut self.path);
+        path.end.resize_with(chains.len(), Vec::new);
+        path.start.resize_with(chains.len(), Vec::new);
+        let predicted = self.body.predict().map(|nm| {
+            let u = nm.solution();
+            for ((end, chain), rows) in path.end.iter_mut().zip(chains).zip(rows) {
+                end.clear();
+                end.extend(
+                    chain
+                        .reference
+                        .iter()
+                        .zip(rows)
+                        .map(|(x, row)| *x + interpolate(row, u)),
+                );
+            }
+        });
+        predicted.map_err(|e| self.solve_error(e))
     }
 
     /// Build `G` (first call) and extend it to the nodes of the step's rows
@@ -671,37 +713,12 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         self.refresh();
         Ok(())
     }
-    /// One solve under the held loads (the body's state, clock and drives
-    /// are put back afterwards: the prediction has no side effect).
+    /// One solve under the held loads, kept pending: the step's end adds
+    /// the rest of the loads to it ([`end_path`](Continuum::end_path)).
     fn begin_path(&mut self, h: f64) -> Result<(), SolveError> {
-        let saved = self.body.save_state();
-        for (rows, held) in self.rows.iter().zip(&self.path.held) {
-            for (row, f) in rows.iter().zip(held) {
-                if *f != Vec2::ZERO {
-                    self.body.add_point_load_row(row, *f);
-                }
-            }
-        }
-        let (chains, rows, path) = (&self.chains, &self.rows, &mut self.path);
-        path.end.resize_with(chains.len(), Vec::new);
-        path.start.resize_with(chains.len(), Vec::new);
-        let predicted = self.body.predict().map(|nm| {
-            let u = nm.solution();
-            for ((end, chain), rows) in path.end.iter_mut().zip(chains).zip(rows) {
-                end.clear();
-                end.extend(
-                    chain
-                        .reference
-                        .iter()
-                        .zip(rows)
-                        .map(|(x, row)| *x + interpolate(row, u)),
-                );
-            }
-        });
-        predicted.map_err(|e| self.solve_error(e))?;
-        self.body
-            .restore_state(&saved)
-            .map_err(|e| self.solve_error(e))?;
+        self.pre = Some(self.body.save_state());
+        self.path.measured = self.contact_force;
+        self.predict_path()?;
         for (start, chain) in self.path.start.iter_mut().zip(&self.chains) {
             start.clone_from(&chain.current);
         }
@@ -762,19 +779,45 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         acc[seg] += f * (1.0 - s);
         acc[seg + 1] += f * s;
     }
+    /// The end load less the held one joins the pending prediction through
+    /// `A⁻¹` (with a moving edge's refinement residual: one solve).
     fn end_path(&mut self) -> Result<(), SolveError> {
+        if self.point_fs.is_empty() {
+            self.point_fs = self
+                .rows
+                .iter()
+                .flatten()
+                .flat_map(|row| {
+                    (0..2).map(move |a| {
+                        row.iter()
+                            .map(|&(j, phi)| (2 * j as usize + a, phi))
+                            .collect()
+                    })
+                })
+                .collect();
+        }
         // the average over the step belongs to its middle: the load at its
         // end is extrapolated from it and the last step's average
         let p = &self.path;
-        for ((rows, acc), held) in self.rows.iter().zip(&p.acc).zip(&p.held) {
-            for ((row, f), f0) in rows.iter().zip(acc).zip(held) {
-                let f = *f * 1.5 - *f0 * 0.5;
-                if f != Vec2::ZERO {
-                    self.body.add_point_load_row(row, f);
-                }
+        let delta: Vec<Vec2> = p
+            .acc
+            .iter()
+            .flatten()
+            .zip(p.held.iter().flatten())
+            .map(|(f, f0)| *f * 1.5 - *f0 * 0.5 - *f0)
+            .collect();
+        self.body
+            .add_point_forces(&self.point_fs, &delta)
+            .map_err(|e| self.solve_error(e))?;
+        // the step's loads: the held ones went in before the prediction
+        for (row, f) in self.rows.iter().flatten().zip(&delta) {
+            if *f != Vec2::ZERO {
+                self.body.add_point_load_row(row, *f);
             }
         }
-        self.advance()?;
+        self.body.commit().map_err(|e| self.solve_error(e))?;
+        self.refresh();
+        self.pre = None;
         let p = &mut self.path;
         std::mem::swap(&mut p.held, &mut p.acc);
         p.acc.iter_mut().flatten().for_each(|f| *f = Vec2::ZERO);
@@ -785,6 +828,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         self.body.energies()
     }
     fn set_contact_force(&mut self, f: Vec2) {
+        self.contact_force = f;
         self.body.set_contact_force(f);
     }
     fn green_size(&self) -> (usize, usize) {
@@ -797,7 +841,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     /// batch by batch (not its entries: [`restore_state`](Self::restore_state)
     /// computes them again by the same solves, in the same order).
     fn save_state(&self) -> BodyState {
-        let mut s = self.body.save_state();
+        let mut s = self.pre.clone().unwrap_or_else(|| self.body.save_state());
         s.boundary = Some(BoundaryState {
             direct: self.mode == ComplianceMode::Direct,
             green: self.green.as_ref().map(BoundaryGreen::batches),
@@ -830,6 +874,16 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         }
         self.refresh();
         self.path.clone_from(p);
+        self.pre = None;
+        if !p.end.is_empty() {
+            // the pending prediction, made again from the same state
+            let mut pre = s.clone();
+            pre.boundary = None;
+            self.pre = Some(pre);
+            self.body.set_contact_force(p.measured);
+            self.predict_path()
+                .map_err(|e| StateError::new(e.to_string()))?;
+        }
         self.mode = if b.direct {
             ComplianceMode::Direct
         } else {
