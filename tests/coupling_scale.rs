@@ -176,3 +176,34 @@ fn footing_is_bitwise_independent_of_the_thread_count() {
     assert!(a.0.len() > 60);
     assert_eq!(a, b);
 }
+
+/// The same for the sub-cycled scheme (10 DEM steps per body step, four
+/// body steps): the path, its loads and the grids binned once per body
+/// step do not depend on the thread count.
+#[test]
+fn subcycled_footing_is_bitwise_independent_of_the_thread_count() {
+    let src = footing_on_a_bed().replace("[[material]]", "substeps = 10\n[[material]]");
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            let mut m = parse(&src, "footing.toml")
+                .expect("scenario")
+                .build()
+                .expect("model")
+                .into_coupled()
+                .unwrap();
+            assert!(m.path_scheme());
+            for _ in 0..40 {
+                m.step().expect("step");
+            }
+            let forces: Vec<_> = m.contacts.iter().map(|c| (c.disc, c.force)).collect();
+            (forces, m.granular.particles.pos.clone())
+        })
+    };
+    let (a, b) = (run(1), run(2));
+    assert!(a.0.len() > 60);
+    assert_eq!(a, b);
+}
