@@ -238,6 +238,14 @@ pub trait Continuum: Send {
     fn begin_path(&mut self, _h: f64) -> Result<(), SolveError> {
         Ok(())
     }
+    /// Sub-cycled scheme: the energy the scheme created since t = 0 (what
+    /// the body received from its end loads, `Σ ½(Fₖ + Fₖ₊₁)·ΔU`, less what
+    /// the discs did on the predicted path, `Σ F̄ₖ·ΔŶ`), the work the discs
+    /// exchanged with the body through the path (`Σ |F̄ₖ·ΔŶ|` per chain
+    /// point) and the number of body steps with some.
+    fn path_energy(&self) -> (f64, f64, usize) {
+        (0.0, 0.0, 0)
+    }
     /// Sub-cycled scheme: how far any chain point moves on the present
     /// path (0 when none is under way).
     fn path_extent(&self) -> f64 {
@@ -442,6 +450,14 @@ pub struct Path {
     /// The discs' total force on the body when the path was predicted
     /// (what a servo drive measured then; a restore predicts again).
     pub measured: Vec2,
+    /// Per chain, per point: the end load of the last body step.
+    pub last_end: Vec<Vec<Vec2>>,
+    /// Energy the scheme created so far ([`Continuum::path_energy`]).
+    pub created: f64,
+    /// Work exchanged with the discs through the path so far.
+    pub exchanged: f64,
+    /// Body steps with work exchanged.
+    pub contact_steps: usize,
 }
 
 impl<B: ContactBody> WithBoundary<B> {
@@ -482,6 +498,7 @@ impl<B: ContactBody> WithBoundary<B> {
             .map(|ch| vec![Vec2::ZERO; ch.reference.len()])
             .collect();
         c.path.held.clone_from(&zeros);
+        c.path.last_end.clone_from(&zeros);
         c.path.acc = zeros;
         c.refresh();
         Ok(c)
@@ -758,6 +775,10 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         let pairs = p.start.iter().flatten().zip(p.end.iter().flatten());
         pairs.fold(0.0, |m, (a, b)| m.max((*b - *a).norm()))
     }
+    fn path_energy(&self) -> (f64, f64, usize) {
+        let p = &self.path;
+        (p.created, p.exchanged, p.contact_steps)
+    }
     fn set_path(&mut self, s: f64) {
         let p = &self.path;
         for ((chain, a), b) in self.chains.iter_mut().zip(&p.start).zip(&p.end) {
@@ -818,7 +839,32 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         self.body.commit().map_err(|e| self.solve_error(e))?;
         self.refresh();
         self.pre = None;
+        // the energy account of the step: what the body received against
+        // what the discs did on the path
         let p = &mut self.path;
+        let ends = p
+            .acc
+            .iter()
+            .flatten()
+            .zip(p.held.iter().flatten())
+            .map(|(f, f0)| *f * 1.5 - *f0 * 0.5);
+        let (mut received, mut done, mut exchanged) = (0.0, 0.0, 0.0);
+        for (((((f1, f0), avg), y0), yp), y1) in ends
+            .zip(p.last_end.iter_mut().flatten())
+            .zip(p.acc.iter().flatten())
+            .zip(p.start.iter().flatten())
+            .zip(p.end.iter().flatten())
+            .zip(self.chains.iter().flat_map(|c| &c.current))
+        {
+            received += (*f0 + f1).dot(*y1 - *y0) * 0.5;
+            let w = avg.dot(*yp - *y0);
+            done += w;
+            exchanged += w.abs();
+            *f0 = f1;
+        }
+        p.created += received - done;
+        p.exchanged += exchanged;
+        p.contact_steps += usize::from(exchanged > 0.0);
         std::mem::swap(&mut p.held, &mut p.acc);
         p.acc.iter_mut().flatten().for_each(|f| *f = Vec2::ZERO);
         p.end.clear();
@@ -866,6 +912,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         self.body.restore_state(s)?;
         if !shape(&p.held)
             || !shape(&p.acc)
+            || !shape(&p.last_end)
             || !(p.end.is_empty() || shape(&p.end) && shape(&p.start))
         {
             return Err(StateError::new(format!(

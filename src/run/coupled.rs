@@ -485,6 +485,10 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
             },
         },
     });
+    if m.path_scheme() {
+        let (created, exchanged) = m.subcycling_energy();
+        summary["subcycling"] = json!({ "E_created": created, "W_exchanged": exchanged });
+    }
     ended.record(&mut summary, &model);
     write_json(&dir.join("summary.json"), &summary)?;
     ended.result(summary, &model, dir)
