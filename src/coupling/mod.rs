@@ -34,8 +34,13 @@
 //! difference from the held load joins the pending prediction (one more
 //! solve). The discs' work differs from the body's by `F̄·A⁻¹Φᵀ(ΔF̄)`, the
 //! prediction's error: small when the body is stiff against the contacts
-//! over a body step (`k_n c` ≤ 0.05, checked at build). Cost: two body
-//! solves per n DEM steps, no contact solve.
+//! over a body step (`k_n c` ≤ 0.05, checked at build). It is a lag all
+//! the same (the body's response to a change of the contact forces reaches
+//! the discs a body step late), which can drive the contacts' own
+//! oscillation when the body step resolves it: each body keeps the energy
+//! the scheme created ([`Continuum::path_energy`]) and the driver stops a
+//! run that creates too much ([`MAX_CREATED`]). Cost: two body solves per
+//! n DEM steps, no contact solve.
 //!
 //! `coupling = "staggered"` instead applies the contact forces of the
 //! body's last state (boundary frozen over the body step) as loads of the
