@@ -148,7 +148,7 @@ fn closed_chain_corner_creates_no_energy() {
 /// received less what the discs did on the paths) against the independent
 /// energy account's `E_diss` (work less stored energy): on the 3 GPa
 /// footing at 10 substeps the scheme creates ≈ 0.5 % of the exchanged work
-/// (under the 1 % at which a run stops) and `−E_diss` shows the same.
+/// (under the 2 % at which a run stops) and `−E_diss` shows the same.
 #[test]
 fn subcycling_energy_is_what_the_account_misses() {
     let src = scenario(10, "3.0e9", 0.06);
@@ -175,8 +175,8 @@ fn subcycling_energy_is_what_the_account_misses() {
 /// A body soft enough to go unstable at 10 substeps (E = 2 GPa: its gain
 /// 0.034 passes the build's check, which cannot tell it from the stable
 /// 3 GPa one, gain 0.023; run on, it creates 5 % of the work) is stopped
-/// by `efgdem run` with the energy created (exit code 3, an instability),
-/// soon after its contacts begin, its history kept up to there.
+/// by `efgdem run` with the energy created (exit code 3, an instability)
+/// before the end, its history kept up to there.
 #[test]
 fn an_unstable_subcycled_run_stops() {
     let dir = std::env::temp_dir().join(format!("efgdem-subcycled-{}", std::process::id()));
@@ -184,7 +184,7 @@ fn an_unstable_subcycled_run_stops() {
     let file = dir.join("soft.toml");
     std::fs::write(
         &file,
-        scenario(10, "2.0e9", 0.05) + "[output]\nevery = 100\n",
+        scenario(10, "2.0e9", 0.08) + "[output]\nevery = 100\n",
     )
     .unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
@@ -205,6 +205,6 @@ fn an_unstable_subcycled_run_stops() {
         .unwrap()
         .parse()
         .unwrap();
-    assert!((0.015..0.03).contains(&last), "stopped at t = {last}");
+    assert!((0.015..0.07).contains(&last), "stopped at t = {last}");
     std::fs::remove_dir_all(&dir).ok();
 }

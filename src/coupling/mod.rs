@@ -735,11 +735,13 @@ impl CoupledModel {
 /// than this fraction of the run's largest work or stored energy so far,
 /// at every row of `history.csv` for 100 body steps in a row
 /// ([`CoupledModel::subcycling_energy`], checked by the driver). On an
-/// undamped footing the stable runs
-/// create 0.003–0.6 % of the work, the unstable ones (a body soft against
-/// the contacts, with a body step that resolves the contacts' own
-/// oscillation) 5–500 % and growing; a bed settling on a plate, 0.2 %.
-pub const MAX_CREATED: f64 = 0.01;
+/// undamped footing the stable runs create 0.003–0.6 % of the work, the
+/// unstable ones (a body soft against the contacts, with a body step that
+/// resolves the contacts' own oscillation) 5–500 % and growing; a bed
+/// settling on a plate 0.2 %; `examples/footing.toml` at 20 substeps
+/// 1.1 % (its contacts are made and broken all the time, and a contact's
+/// first body step is off by a quarter of its work).
+pub const MAX_CREATED: f64 = 0.02;
 
 /// Discs within `(1 + CANDIDATE_MARGIN) r` of a boundary enter the implicit
 /// contact solve (as open contacts unless the step closes them).
