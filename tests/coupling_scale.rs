@@ -7,6 +7,7 @@
 //! with ~100 simultaneous contacts.
 
 use efgdem::coupling::CoupledModel;
+use efgdem::geom::Vec2;
 use efgdem::scenario::parse;
 
 fn model(src: &str, direct: bool) -> CoupledModel {
@@ -153,26 +154,29 @@ fn footing_with_a_hundred_contacts_boundary_equals_direct() {
     assert!(rel < 1e-8, "footing: {rel:e}");
 }
 
+/// The contact forces and disc positions after 40 steps of `src` on
+/// `threads` threads.
+fn run_on(src: &str, threads: usize) -> (Vec<(u32, Vec2)>, Vec<Vec2>) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool");
+    pool.install(|| {
+        let mut m = model(src, false);
+        for _ in 0..40 {
+            m.step().expect("step");
+        }
+        let forces: Vec<_> = m.contacts.iter().map(|c| (c.disc, c.force)).collect();
+        (forces, m.granular.particles.pos.clone())
+    })
+}
+
 /// 1 and 2 threads give bitwise the same coupled run (boundary Green
 /// matrix built in parallel blocks, products by rows, DEM sweep).
 #[test]
 fn footing_is_bitwise_independent_of_the_thread_count() {
     let src = footing_on_a_bed();
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("pool");
-        pool.install(|| {
-            let mut m = model(&src, false);
-            for _ in 0..40 {
-                m.step().expect("step");
-            }
-            let forces: Vec<_> = m.contacts.iter().map(|c| (c.disc, c.force)).collect();
-            (forces, m.granular.particles.pos.clone())
-        })
-    };
-    let (a, b) = (run(1), run(2));
+    let (a, b) = (run_on(&src, 1), run_on(&src, 2));
     assert!(a.0.len() > 60);
     assert_eq!(a, b);
 }
@@ -183,27 +187,8 @@ fn footing_is_bitwise_independent_of_the_thread_count() {
 #[test]
 fn subcycled_footing_is_bitwise_independent_of_the_thread_count() {
     let src = footing_on_a_bed().replace("[[material]]", "substeps = 10\n[[material]]");
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("pool");
-        pool.install(|| {
-            let mut m = parse(&src, "footing.toml")
-                .expect("scenario")
-                .build()
-                .expect("model")
-                .into_coupled()
-                .unwrap();
-            assert!(m.path_scheme());
-            for _ in 0..40 {
-                m.step().expect("step");
-            }
-            let forces: Vec<_> = m.contacts.iter().map(|c| (c.disc, c.force)).collect();
-            (forces, m.granular.particles.pos.clone())
-        })
-    };
-    let (a, b) = (run(1), run(2));
+    assert!(model(&src, false).path_scheme());
+    let (a, b) = (run_on(&src, 1), run_on(&src, 2));
     assert!(a.0.len() > 60);
     assert_eq!(a, b);
 }
