@@ -242,10 +242,10 @@ pub trait Continuum: Send {
     /// the body received from its end loads, `Σ ½(Fₖ + Fₖ₊₁)·ΔU`, less what
     /// the discs did on the predicted path, `Σ F̄ₖ·ΔŶ`), the work the discs
     /// exchanged with the body through the path (`Σ |F̄ₖ·ΔŶ|` per chain
-    /// point). Kept for the
-    /// energy-conserving Newmark (γ = ½, β = ¼) only, whose load work is
-    /// exactly `½(Fₖ + Fₖ₊₁)·ΔU` (a dissipative one damps what the scheme
-    /// creates, and its load work has other terms): zeros otherwise.
+    /// point). Kept for the energy-conserving Newmark (γ = ½, β = ¼) only,
+    /// whose load work is exactly `½(Fₖ + Fₖ₊₁)·ΔU` (a dissipative one
+    /// damps what the scheme creates, and its load work has other terms):
+    /// zeros otherwise.
     fn path_energy(&self) -> (f64, f64) {
         (0.0, 0.0)
     }
@@ -744,8 +744,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         Ok(())
     }
     fn boundary_compliance(&mut self) -> Result<f64, SolveError> {
-        let points: Vec<usize> = self.rows.iter().map(Vec::len).collect();
-        let total: usize = points.iter().sum();
+        let total: usize = self.rows.iter().map(Vec::len).sum();
         let stride = total.div_ceil(32).max(1);
         let Some(nm) = self.body.newmark_mut() else {
             return Ok(0.0);
@@ -820,13 +819,15 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         // the average over the step belongs to its middle: the load at its
         // end is extrapolated from it and the last step's average
         let p = &self.path;
-        let delta: Vec<Vec2> = p
+        let held = || p.held.iter().flatten();
+        let ends: Vec<Vec2> = p
             .acc
             .iter()
             .flatten()
-            .zip(p.held.iter().flatten())
-            .map(|(f, f0)| *f * 1.5 - *f0 * 0.5 - *f0)
+            .zip(held())
+            .map(|(f, f0)| *f * 1.5 - *f0 * 0.5)
             .collect();
+        let delta: Vec<Vec2> = ends.iter().zip(held()).map(|(f, f0)| *f - *f0).collect();
         self.body
             .add_point_forces(&self.point_fs, &delta)
             .map_err(|e| self.solve_error(e))?;
@@ -846,14 +847,9 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             p.gamma == 0.5 && p.beta == 0.25
         });
         let p = &mut self.path;
-        let ends = p
-            .acc
-            .iter()
-            .flatten()
-            .zip(p.held.iter().flatten())
-            .map(|(f, f0)| *f * 1.5 - *f0 * 0.5);
         let (mut received, mut done, mut exchanged) = (0.0, 0.0, 0.0);
         for (((((f1, f0), avg), y0), yp), y1) in ends
+            .into_iter()
             .zip(p.last_end.iter_mut().flatten())
             .zip(p.acc.iter().flatten())
             .zip(p.start.iter().flatten())
