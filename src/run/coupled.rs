@@ -422,16 +422,13 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
                 // for 100 body steps in a row
                 let (created, _) = m.subcycling_energy();
                 work_max = work_max.max(e.w_ext.abs()).max(e.stored());
-                let work = work_max;
-                let over = created > MAX_CREATED * work;
-                let since = *over_since.get_or_insert(step);
-                if !over {
+                if created <= MAX_CREATED * work_max {
                     over_since = None;
-                } else if step - since >= 100 * m.substeps {
+                } else if step - *over_since.get_or_insert(step) >= 100 * m.substeps {
                     let err = CouplingError::Subcycling {
                         time: m.granular.time,
                         created,
-                        work,
+                        work: work_max,
                     };
                     return Err(RunError::Model(err.into()));
                 }

@@ -473,9 +473,10 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
 /// Largest feedback gain `k_n c` of a contact on a body within one body
 /// step that the sub-cycled scheme accepts (`c` the body step's point
 /// compliance at its contact boundary). Measured on an EFG footing driven
-/// into an undamped, frictionless bed (10–100 substeps, `tests/coupling_subcycled.rs`):
-/// `|E_diss|` ≤ 0.3 % of the work at gains 0.003–0.08, 5 % at 0.25,
-/// 15–90 % at 0.4–0.7.
+/// into an undamped, frictionless bed (10–100 substeps, README): `|E_diss|`
+/// ≤ 0.6 % of the work at gains 0.003–0.026; 5–544 % at 0.034–0.061 with
+/// 10 substeps (the run-time guard, [`crate::coupling::MAX_CREATED`], stops
+/// those below this limit) but 0.1 % at 0.078 with 50; 5–94 % above 0.15.
 pub const MAX_SUBCYCLING_GAIN: f64 = 0.05;
 
 /// The sub-cycled scheme predicts a body's boundary path under the last
