@@ -208,3 +208,25 @@ fn an_unstable_subcycled_run_stops() {
     assert!((0.015..0.07).contains(&last), "stopped at t = {last}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `efgdem check` reports each sub-cycled body's gain and the limits.
+#[test]
+fn check_reports_the_subcycling_gain() {
+    let dir = std::env::temp_dir().join(format!("efgdem-subcycled-check-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("stiff.toml");
+    std::fs::write(&file, scenario(50, "30.0e9", 0.001)).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
+        .args(["check", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains(
+            "body `footing` sub-cycled: a contact feeds back on itself with the gain k_n·c = 0.0026"
+        ),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

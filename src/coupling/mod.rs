@@ -150,6 +150,9 @@ pub struct CoupledModel {
     pub compliance_products: usize,
     /// Wall time spent so far in each part of the step.
     pub timing: StepTiming,
+    /// The sub-cycled scheme: per body, the gain `k_n c` of a contact on
+    /// it within a body step, found at the build (empty otherwise).
+    pub subcycling_gains: Vec<f64>,
 }
 
 /// Where the time of the coupled steps goes (seconds, accumulated).
@@ -279,6 +282,7 @@ impl CoupledModel {
             compliance_products: 0,
             geometric_stiffness: true,
             timing: StepTiming::default(),
+            subcycling_gains: Vec::new(),
         }
     }
 

@@ -11,6 +11,7 @@ use crate::model::body::BodyRef;
 use crate::model::{Model, System, coupled_body as body};
 use crate::output::write_json;
 use crate::scenario::Scenario;
+use crate::scenario::build::MAX_SUBCYCLING_GAIN;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -509,7 +510,11 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     });
     if m.path_scheme() {
         let (created, exchanged) = m.subcycling_energy();
-        summary["subcycling"] = json!({ "E_created": created, "W_exchanged": exchanged });
+        summary["subcycling"] = json!({
+            "E_created": created,
+            "W_exchanged": exchanged,
+            "gains": m.subcycling_gains,
+        });
     }
     ended.record(&mut summary, &model);
     write_json(&dir.join("summary.json"), &summary)?;
@@ -540,6 +545,13 @@ pub(super) fn check(full: &Model) -> String {
     );
     for (i, c) in model.bodies.iter().enumerate() {
         let n = body(model, i).n_nodes();
+        if let Some(gain) = model.subcycling_gains.get(i) {
+            s += &format!(
+                "body `{}` sub-cycled: a contact feeds back on itself with the gain k_n·c = {gain:.4} within a body step (limit {MAX_SUBCYCLING_GAIN}; a run stops if the scheme creates more than {} % of its work)\n",
+                c.name(),
+                100.0 * MAX_CREATED
+            );
+        }
         s += &format!(
             "body `{}` ({}): {} nodes, {} DOFs, {} contact chain(s) with {} segments\n",
             c.name(),

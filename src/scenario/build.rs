@@ -488,17 +488,17 @@ fn check_subcycling(m: &mut CoupledModel) -> Result<(), Invalid> {
         let kn = m.body_laws[b * nm..(b + 1) * nm]
             .iter()
             .fold(0.0f64, |k, l| k.max(l.kn));
-        let body = &mut m.bodies[b];
-        let c = body
+        let c = m.bodies[b]
             .boundary_compliance()
             .map_err(|e| bad(&format!("body.{b}"), e))?;
         let gain = kn * c;
+        m.subcycling_gains.push(gain);
         if gain > MAX_SUBCYCLING_GAIN {
             return Err(bad(
                 "simulation.substeps",
                 format!(
                     "body `{}` is too soft against the discs for {} DEM steps per body step: a contact (k_n = {kn:e}) feeds back on itself with the gain k_n·c = {gain:.3} within a body step (above {MAX_SUBCYCLING_GAIN} the predicted boundary path can create energy); use fewer substeps, 1 (the exact implicit step), or a stiffer body",
-                    body.name(),
+                    m.bodies[b].name(),
                     m.substeps
                 ),
             ));
