@@ -959,6 +959,23 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
 mod tests {
     use super::*;
 
+    /// All four edges make one closed chain (its ends one corner,
+    /// [`BoundaryChain::is_closed`]); fewer make open ones.
+    #[test]
+    fn all_four_edges_make_a_closed_chain() {
+        let (o, s, g) = (Vec2::new(0.15, 0.0798), Vec2::new(0.2, 0.04), [41, 9]);
+        for refine in [1, 2, 3] {
+            let ch = contact_chains(o, s, g, &Edge::ALL, refine);
+            assert_eq!(ch.len(), 1);
+            assert!(
+                BoundaryChain::new(ch[0].clone()).is_closed(),
+                "refine {refine}"
+            );
+            let open = contact_chains(o, s, g, &[Edge::Bottom, Edge::Right, Edge::Top], refine);
+            assert!(!BoundaryChain::new(open[0].clone()).is_closed());
+        }
+    }
+
     #[test]
     fn adjacent_edges_join_around_the_corner_counter_clockwise() {
         let (o, s, g) = (Vec2::ZERO, Vec2::new(2.0, 1.0), [5, 3]);
