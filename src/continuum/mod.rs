@@ -366,6 +366,20 @@ pub trait ContactBody: Send + Sync + 'static {
     fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError>;
 }
 
+/// `F += Φᵀ f` for the loads on a body's chain points (`loads` in chain
+/// order, point by point; zeros skipped), through the points' `rows`.
+fn add_chain_loads<'a, B: ContactBody>(
+    body: &mut B,
+    rows: &[Vec<Row>],
+    loads: impl IntoIterator<Item = &'a Vec2>,
+) {
+    for (row, f) in rows.iter().flatten().zip(loads) {
+        if *f != Vec2::ZERO {
+            body.add_point_load_row(row, *f);
+        }
+    }
+}
+
 /// `F += Φᵀ f`: the point load `f` on the nodal force vector through a row.
 pub fn add_row_load(force: &mut [f64], row: &[(u32, f64)], f: Vec2) {
     for &(j, phi) in row {
@@ -549,16 +563,9 @@ impl<B: ContactBody> WithBoundary<B> {
     /// Predict the body step under the held path loads (the solution stays
     /// pending in the integrator) and set the path's end positions.
     fn predict_path(&mut self) -> Result<(), SolveError> {
-        for (rows, held) in self.rows.iter().zip(&self.path.held) {
-            for (row, f) in rows.iter().zip(held) {
-                if *f != Vec2::ZERO {
-                    self.body.add_point_load_row(row, *f);
-                }
-            }
-        }
+        add_chain_loads(&mut self.body, &self.rows, self.path.held.iter().flatten());
         let (chains, rows, path) = (&self.chains, &self.rows, &mut self.path);
         path.end.resize_with(chains.len(), Vec::new);
-        path.start.resize_with(chains.len(), Vec::new);
         let predicted = self.body.predict().map(|nm| {
             let u = nm.solution();
             for ((end, chain), rows) in path.end.iter_mut().zip(chains).zip(rows) {
@@ -737,8 +744,10 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         self.pre = Some(self.body.save_state());
         self.path.measured = self.contact_force;
         self.predict_path()?;
-        for (start, chain) in self.path.start.iter_mut().zip(&self.chains) {
-            start.clone_from(&chain.current);
+        let starts = self.chains.iter().map(|c| &c.current);
+        self.path.start.resize_with(self.chains.len(), Vec::new);
+        for (start, current) in self.path.start.iter_mut().zip(starts) {
+            start.clone_from(current);
         }
         self.path.h = h;
         Ok(())
@@ -832,11 +841,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             .add_point_forces(&self.point_fs, &delta)
             .map_err(|e| self.solve_error(e))?;
         // the step's loads: the held ones went in before the prediction
-        for (row, f) in self.rows.iter().flatten().zip(&delta) {
-            if *f != Vec2::ZERO {
-                self.body.add_point_load_row(row, *f);
-            }
-        }
+        add_chain_loads(&mut self.body, &self.rows, &delta);
         self.body.commit().map_err(|e| self.solve_error(e))?;
         self.refresh();
         self.pre = None;

@@ -690,11 +690,11 @@ impl CoupledModel {
         self.near.resize_with(self.bodies.len(), Vec::new);
         for ((body, grids), near) in self.bodies.iter().zip(&mut self.grids).zip(&mut self.near) {
             let chains = body.contact_boundary();
-            let extent = body.path_extent();
             grids.resize_with(chains.len(), SegmentGrid::default);
             near.resize_with(chains.len(), Candidates::default);
             for ((chain, sg), cand) in chains.iter().zip(grids.iter_mut()).zip(near.iter_mut()) {
                 if regrid || sg.is_empty() {
+                    let extent = body.path_extent();
                     sg.rebuild(chain, reach + extent);
                     let e = Vec2::new(extent, extent);
                     (sg.chain_lo, sg.chain_hi) = (sg.chain_lo - e, sg.chain_hi + e);
