@@ -1206,7 +1206,7 @@ fn example2(job: &mut Job) -> Result<()> {
             row(&format!("EFG, E = {e:.1e}"), &d)?;
             sweep.push((e, name, d));
         }
-        // the FE–DE cross-check of §4.2.1 (issue 5): Q4 plate on the same grid
+        // the FE–DE cross-check of §4.2.1: Q4 plate on the same grid
         let fem_sc = parse(
             NINE_DISC_FEM[t],
             &format!("examples/fem_nine_disc_test{tn}.toml (built in)"),
