@@ -342,6 +342,23 @@ fn tutorial_step_3_footing() {
 }
 
 #[test]
+fn tutorial_plate_with_a_hole_check() {
+    let file = root().join("examples/culvert.toml");
+    let check = common::bin().arg("check").arg(&file).output().unwrap();
+    assert!(check.status.success());
+    let check = String::from_utf8_lossy(&check.stdout).into_owned();
+    let page = Page::read("docs/tutorial/plate-with-hole.md");
+    for quoted in [
+        "1200 discs",
+        "368 nodes, 736 DOFs, 1 contact chain(s) with 320 segments",
+        "10958 steps",
+    ] {
+        assert!(check.contains(quoted), "`check` no longer says {quoted:?}:\n{check}");
+        assert!(page.text.contains(quoted), "{} does not quote {quoted:?}", page.name);
+    }
+}
+
+#[test]
 fn shown_numbers_parse() {
     let (v, h) = parse_shown("−600.6");
     assert!((v + 600.6).abs() < 1e-12 && (h - 0.05).abs() < 1e-15);
