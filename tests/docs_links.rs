@@ -114,7 +114,11 @@ fn anchors(page: &Path) -> BTreeSet<String> {
         if let Some(h) = line.strip_prefix('#') {
             let s = slug(h.trim_start_matches('#'));
             let n = seen.entry(s.clone()).or_insert(0);
-            set.insert(if *n == 0 { s.clone() } else { format!("{s}-{n}") });
+            set.insert(if *n == 0 {
+                s.clone()
+            } else {
+                format!("{s}-{n}")
+            });
             *n += 1;
         }
         let mut rest = line.as_str();
@@ -141,10 +145,8 @@ fn relative_links_and_anchors_resolve() {
         let dir = page.parent().unwrap();
         // join each paragraph so that a link may wrap across lines
         let lines = prose(&text);
-        let joined: Vec<(usize, String)> = lines
-            .iter()
-            .map(|(n, l)| (*n, format!("{l} ")))
-            .collect();
+        let joined: Vec<(usize, String)> =
+            lines.iter().map(|(n, l)| (*n, format!("{l} "))).collect();
         let mut para = String::new();
         let mut first = 0;
         let mut paragraphs = Vec::new();
@@ -203,7 +205,13 @@ fn relative_links_and_anchors_resolve() {
 /// its top directories, no placeholder or pattern in it.
 fn repo_path(span: &str) -> Option<&str> {
     const TOPS: [&str; 7] = [
-        "src/", "tests/", "examples/", "docs/", "python/", "benches/", "assets/",
+        "src/",
+        "tests/",
+        "examples/",
+        "docs/",
+        "python/",
+        "benches/",
+        "assets/",
     ];
     let path = span.split([' ', ':', '#']).next()?;
     let path = path.trim_end_matches([',', '.', ')']);
@@ -300,10 +308,19 @@ fn no_source_cites_files_outside_the_repository() {
 #[test]
 fn the_checks_see_what_they_should() {
     assert_eq!(slug(" `[[probe]]`"), "probe");
-    assert_eq!(slug(" Runs that stop, and restarts"), "runs-that-stop-and-restarts");
-    assert_eq!(link_targets("a [b](c.md#d) and ![e](f.png)"), ["c.md#d", "f.png"]);
+    assert_eq!(
+        slug(" Runs that stop, and restarts"),
+        "runs-that-stop-and-restarts"
+    );
+    assert_eq!(
+        link_targets("a [b](c.md#d) and ![e](f.png)"),
+        ["c.md#d", "f.png"]
+    );
     assert!(cites_an_issue("see also issue 14"));
     assert!(!cites_an_issue("an issue of the paper"));
-    assert_eq!(repo_path("tests/docs_links.rs::x"), Some("tests/docs_links.rs"));
+    assert_eq!(
+        repo_path("tests/docs_links.rs::x"),
+        Some("tests/docs_links.rs")
+    );
     assert_eq!(repo_path("frames/<body>_NNNNNNN.vtu"), None);
 }

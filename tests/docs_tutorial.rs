@@ -353,8 +353,15 @@ fn tutorial_plate_with_a_hole_check() {
         "377 nodes, 754 DOFs, 1 contact chain(s) with 320 segments",
         "10958 steps",
     ] {
-        assert!(check.contains(quoted), "`check` no longer says {quoted:?}:\n{check}");
-        assert!(page.text.contains(quoted), "{} does not quote {quoted:?}", page.name);
+        assert!(
+            check.contains(quoted),
+            "`check` no longer says {quoted:?}:\n{check}"
+        );
+        assert!(
+            page.text.contains(quoted),
+            "{} does not quote {quoted:?}",
+            page.name
+        );
     }
 }
 

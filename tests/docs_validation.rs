@@ -40,7 +40,11 @@ fn code_spans(cell: &str) -> Vec<&str> {
 fn ignored(src: &str, name: &str) -> Option<bool> {
     let at = src.find(&format!("fn {name}("))?;
     let before: Vec<&str> = src[..at].lines().rev().take(4).collect();
-    Some(before.iter().any(|l| l.trim_start().starts_with("#[ignore")))
+    Some(
+        before
+            .iter()
+            .any(|l| l.trim_start().starts_with("#[ignore")),
+    )
 }
 
 #[test]
@@ -87,7 +91,9 @@ fn the_validation_table_is_what_the_tests_assert() {
             };
             if !func.is_empty() {
                 match ignored(&src, func) {
-                    None => failures.push(format!("docs/validation.md:{n}: no `fn {func}` in {file}")),
+                    None => {
+                        failures.push(format!("docs/validation.md:{n}: no `fn {func}` in {file}"))
+                    }
                     Some(ig) if ig != slow => failures.push(format!(
                         "docs/validation.md:{n}: {t} is {}#[ignore]d but the row says {}",
                         if ig { "" } else { "not " },
