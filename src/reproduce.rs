@@ -61,8 +61,7 @@ pub const E_FIG17: f64 = 1.0e12;
 /// `time`: the instant the figure shows; `setting`: a parameter of the
 /// figure; `none`: what the paper does not give), `x`, `y`, their units,
 /// `tag` (the mark on the figure), `label` (its legend entry), `source`
-/// (section, the paper's own line numbers and those of
-/// `wang2020-efg-de.md`) and `quote` (the sentence). `efgdem reproduce`
+/// (section and the paper's own line numbers) and `quote` (the sentence). `efgdem reproduce`
 /// copies it to `DIR/paper_values.csv`.
 pub const PAPER_VALUES: &str = include_str!("../assets/paper_values.csv");
 
