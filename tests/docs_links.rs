@@ -324,3 +324,39 @@ fn the_checks_see_what_they_should() {
     );
     assert_eq!(repo_path("frames/<body>_NNNNNNN.vtu"), None);
 }
+
+/// Every paper correction the code cites ("ERRATA E7") is explained on
+/// the theory page under its anchor (`docs/theory.md#e7`).
+#[test]
+fn every_cited_correction_is_on_the_theory_page() {
+    let theory = anchors(&root().join("docs/theory.md"));
+    let mut files = Vec::new();
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                out.push(p);
+            }
+        }
+    }
+    walk(&root().join("src"), &mut files);
+    let mut cited = BTreeSet::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        for (k, _) in text.match_indices("ERRATA E") {
+            let digits: String = text[k + 8..]
+                .chars()
+                .take_while(|c| c.is_ascii_digit())
+                .collect();
+            cited.insert(format!("e{digits}"));
+        }
+    }
+    assert!(cited.len() >= 10, "{cited:?}");
+    let missing: Vec<_> = cited.difference(&theory).collect();
+    assert!(
+        missing.is_empty(),
+        "not explained in docs/theory.md: {missing:?}"
+    );
+}
