@@ -360,3 +360,25 @@ fn every_cited_correction_is_on_the_theory_page() {
         "not explained in docs/theory.md: {missing:?}"
     );
 }
+
+/// The Rust API page shows the library's own doc test (`src/lib.rs`),
+/// not a copy that could drift from it.
+#[test]
+fn the_rust_api_page_shows_the_doc_test() {
+    let lib = std::fs::read_to_string(root().join("src/lib.rs")).unwrap();
+    let code: Vec<&str> = lib
+        .lines()
+        .filter_map(|l| l.strip_prefix("//!"))
+        .map(|l| l.strip_prefix(' ').unwrap_or(l))
+        .skip_while(|l| !l.starts_with("```"))
+        .skip(1)
+        .take_while(|l| !l.starts_with("```"))
+        .filter(|l| !l.starts_with("# "))
+        .collect();
+    assert!(code.len() > 10);
+    let page = std::fs::read_to_string(root().join("docs/reference/rust-api.md")).unwrap();
+    assert!(
+        page.contains(&code.join("\n")),
+        "docs/reference/rust-api.md does not show src/lib.rs's doc test as it is"
+    );
+}
