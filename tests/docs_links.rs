@@ -16,12 +16,16 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn md_files(dir: &Path, out: &mut Vec<PathBuf>) {
+/// Files under `dir` (recursively) whose extension is one of `exts`.
+fn files_with(dir: &Path, exts: &[&str], out: &mut Vec<PathBuf>) {
     for e in std::fs::read_dir(dir).unwrap() {
         let p = e.unwrap().path();
         if p.is_dir() {
-            md_files(&p, out);
-        } else if p.extension().is_some_and(|x| x == "md") {
+            files_with(&p, exts, out);
+        } else if p
+            .extension()
+            .is_some_and(|x| exts.contains(&x.to_str().unwrap()))
+        {
             out.push(p);
         }
     }
@@ -34,7 +38,7 @@ fn pages() -> Vec<PathBuf> {
         r.join("CHANGELOG.md"),
         r.join("examples/README.md"),
     ];
-    md_files(&r.join("docs"), &mut v);
+    files_with(&r.join("docs"), &["md"], &mut v);
     v.sort();
     v
 }
@@ -280,21 +284,8 @@ fn no_page_cites_outside_files_or_issue_numbers() {
 #[test]
 fn no_source_cites_files_outside_the_repository() {
     let mut files = Vec::new();
-    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(&p, out);
-            } else if p
-                .extension()
-                .is_some_and(|x| ["rs", "toml", "py", "pyi"].contains(&x.to_str().unwrap()))
-            {
-                out.push(p);
-            }
-        }
-    }
     for d in ["src", "tests", "examples", "benches", "python"] {
-        walk(&root().join(d), &mut files);
+        files_with(&root().join(d), &["rs", "toml", "py", "pyi"], &mut files);
     }
     let needle = ["shared", "/paper/"].concat();
     let failures: Vec<String> = files
@@ -331,17 +322,7 @@ fn the_checks_see_what_they_should() {
 fn every_cited_correction_is_on_the_theory_page() {
     let theory = anchors(&root().join("docs/theory.md"));
     let mut files = Vec::new();
-    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(&p, out);
-            } else if p.extension().is_some_and(|x| x == "rs") {
-                out.push(p);
-            }
-        }
-    }
-    walk(&root().join("src"), &mut files);
+    files_with(&root().join("src"), &["rs"], &mut files);
     let mut cited = BTreeSet::new();
     for f in &files {
         let text = std::fs::read_to_string(f).unwrap();
