@@ -58,6 +58,20 @@ pub struct Refine {
     pub width: f64,
 }
 
+/// A crack in an EFG body ([`crate::geom::crack`]): its polyline and an
+/// optional finer node spacing along it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CrackShape {
+    /// The polyline (ends: tips inside the body, or a mouth on its
+    /// boundary).
+    pub crack: crate::geom::crack::Crack,
+    /// Node spacing along the crack and within `width` of it, graded to
+    /// the body's spacing beyond (as [`Refine`]); `None`: the body's.
+    pub spacing: Option<f64>,
+    /// Width of the refined band along the crack.
+    pub width: f64,
+}
+
 /// Linear isotropic elasticity.
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -165,6 +179,9 @@ pub struct BodyParams {
     pub self_weight: bool,
     /// Point loads at material points (`[[body.load]]`).
     pub loads: Vec<PointLoad>,
+    /// Cracks (EFG only); a rectangle with cracks is meshed as a polygon
+    /// of spacing `min(width/(nx − 1), height/(ny − 1))`.
+    pub cracks: Vec<CrackShape>,
 }
 
 impl BodyParams {
@@ -190,6 +207,7 @@ impl BodyParams {
             static_under: Vec::new(),
             self_weight: true,
             loads: Vec::new(),
+            cracks: Vec::new(),
         }
     }
 

@@ -101,6 +101,9 @@ pub struct EdgeCondition {
     /// The exact Kirsch traction `σ·n` of an infinite plate with a circular
     /// hole (centre at the origin) under uniaxial tension along x.
     pub kirsch: Option<KirschSpec>,
+    /// Both components from the exact displacement of Griffith's inclined
+    /// crack in an infinite plate ([`super::griffith`]).
+    pub griffith: Option<GriffithSpec>,
     /// Parabolic shear traction with resultant `P` (force per unit thickness)
     /// along the edge, `τ = 3P/(2D)·(1 − 4s²/D²)`, s from the edge centre.
     pub parabolic_shear: Option<f64>,
@@ -138,6 +141,35 @@ pub struct KirschSpec {
     pub s: f64,
     /// Hole radius.
     pub a: f64,
+}
+
+/// `griffith = { S = σ, a = half-length, beta = β }`: the exact field of
+/// a straight crack of length `2a` centred at the origin, at `β` degrees
+/// to the x axis, in an infinite plate under remote tension `σ` along y.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GriffithSpec {
+    /// Remote tension σ along y.
+    #[serde(rename = "S")]
+    pub s: f64,
+    /// Half-length of the crack.
+    pub a: f64,
+    /// Angle of the crack to the x axis, degrees.
+    pub beta: f64,
+}
+
+impl GriffithSpec {
+    /// The field in a material of modulus `e`, Poisson's ratio `nu`.
+    pub fn field(&self, el: &super::Elastic) -> super::griffith::Griffith {
+        let (mu, kappa) = super::griffith::mu_kappa(el.e, el.nu, el.plane == super::Plane::Strain);
+        super::griffith::Griffith {
+            s: self.s,
+            a: self.a,
+            beta: self.beta.to_radians(),
+            mu,
+            kappa,
+        }
+    }
 }
 
 /// A prescribed displacement component: a number, `{ linear = [a, b, c] }`
@@ -306,6 +338,7 @@ impl EdgeCondition {
             ux: None,
             uy: None,
             timoshenko: None,
+            griffith: None,
             traction: None,
             pressure: None,
             kirsch: None,
@@ -364,17 +397,26 @@ pub fn edge_ends(origin: Vec2, size: Vec2, e: Edge) -> (Vec2, Vec2) {
 
 /// Which components a displacement bc constrains.
 pub fn constrained(bc: &EdgeCondition) -> (bool, bool) {
-    if bc.fixed || bc.timoshenko.is_some() {
+    if bc.fixed || bc.timoshenko.is_some() || bc.griffith.is_some() {
         (true, true)
     } else {
         (bc.ux.is_some(), bc.uy.is_some())
     }
 }
 
-/// The prescribed displacement `ū` of a bc at `x`.
-pub fn prescribed(bc: &EdgeCondition, x: Vec2, tim: Option<&Timoshenko>) -> [f64; 2] {
+/// The prescribed displacement `ū` of a bc at `x` (`el`: the body's
+/// elasticity, for the exact fields that depend on it).
+pub fn prescribed(
+    bc: &EdgeCondition,
+    x: Vec2,
+    tim: Option<&Timoshenko>,
+    el: &super::Elastic,
+) -> [f64; 2] {
     if let (Some(_), Some(t)) = (bc.timoshenko, tim) {
         return t.displacement(x);
+    }
+    if let Some(g) = bc.griffith {
+        return g.field(el).displacement(x);
     }
     [
         bc.ux.as_ref().map_or(0.0, |v| v.at(x.x, x.y)),

@@ -7,7 +7,9 @@ pub mod body_params;
 pub mod cantilever;
 pub mod compliance;
 pub mod conditions;
+pub mod crack_tip;
 pub mod drive;
+pub mod griffith;
 pub mod kirsch;
 pub mod material;
 pub mod newmark;
@@ -16,10 +18,12 @@ pub mod state;
 pub mod table;
 pub mod timoshenko;
 
-pub use body_params::{BodyParams, Elastic, MassKind, Plane, PolygonShape, Rectangle, Refine};
+pub use body_params::{
+    BodyParams, CrackShape, Elastic, MassKind, Plane, PolygonShape, Rectangle, Refine,
+};
 pub use conditions::{
-    Edge, EdgeCondition, EdgeName, KirschSpec, LinearField, MotionField, PointLoad, Prescribed,
-    TimoshenkoSpec,
+    Edge, EdgeCondition, EdgeName, GriffithSpec, KirschSpec, LinearField, MotionField, PointLoad,
+    Prescribed, TimoshenkoSpec,
 };
 pub use drive::{Drive, DriveLaw, DrivePhase, DriveState, Measure, ServoSpec, Target};
 pub use material::{Material, Sample};

@@ -135,28 +135,40 @@ impl EfgBody {
         // nodes, supports, domain quadrature, and per bc its boundary
         // pieces (a, b, outward normal, sub-segments)
         type Pieces = Vec<(Vec2, Vec2, Option<Vec2>, usize)>;
+        let cracked_rectangle = (spec.polygon.is_none() && !spec.cracks.is_empty())
+            .then(|| rectangle_polygon(spec))
+            .transpose()
+            .map_err(invalid)?;
         let (xs, ys, support, domain, mesh, pieces): (_, _, _, _, _, Vec<Pieces>) = if let Some(
             poly,
         ) =
-            &spec.polygon
+            spec.polygon.as_ref().or(cracked_rectangle.as_ref())
         {
-            let mesh = PolygonMesh::refined(&poly.domain, poly.spacing, &poly.refine, spec.d_max)
-                .map_err(invalid)?;
+            let mesh = PolygonMesh::cracked(
+                &poly.domain,
+                poly.spacing,
+                &poly.refine,
+                &spec.cracks,
+                spec.d_max,
+            )
+            .map_err(invalid)?;
             let node: Vec<[f64; 4]> = mesh
                 .nodes
                 .iter()
                 .zip(&mesh.node_spacing)
                 .map(|(p, h)| [p.x, p.y, spec.d_max * h, spec.d_max * h])
                 .collect();
-            let support = Support::new(node).with_visibility(&poly.domain, true);
+            let opaque: Vec<_> = mesh.cracks.iter().map(|c| c.opaque()).collect();
+            let support = Support::new(node).with_cracks(&mesh.domain, &opaque, true);
+            let poly_domain = &mesh.domain;
             let domain = mesh.domain_points(n.saturating_sub(3).max(1));
             let mut pieces = Vec::with_capacity(spec.bc.len());
             for bc in &spec.bc {
-                let Some(e) = poly.domain.edge(bc.edge.as_str()) else {
+                let Some(e) = poly_domain.edge(bc.edge.as_str()) else {
                     return Err(invalid(format!(
                         "unknown edge `{}` (the polygon's named edges: {})",
                         bc.edge,
-                        poly.domain
+                        poly_domain
                             .edges
                             .iter()
                             .map(|e| e.name.as_str())
@@ -166,7 +178,7 @@ impl EfgBody {
                 };
                 if bc.parabolic_shear.is_some() || bc.timoshenko.is_some() {
                     return Err(invalid(format!(
-                        "bc on `{}`: parabolic_shear and timoshenko are for rectangular bodies only",
+                        "bc on `{}`: parabolic_shear and timoshenko are for rectangular bodies without cracks only",
                         bc.edge
                     )));
                 }
@@ -225,7 +237,7 @@ impl EfgBody {
                         if cx { w } else { 0.0 },
                         if cy { w } else { 0.0 },
                     ));
-                    penalty_values.push(prescribed(bc, q.x, timoshenko.as_ref()));
+                    penalty_values.push(prescribed(bc, q.x, timoshenko.as_ref(), &el));
                     penalty_bc.push(bi);
                 }
             }
@@ -386,6 +398,11 @@ impl EfgBody {
             timoshenko,
             info,
         })
+    }
+
+    /// The cracks of the body (none for a body without).
+    pub fn cracks(&self) -> &[super::polygon::CrackNodes] {
+        self.mesh.as_ref().map_or(&[], |m| &m.cracks)
     }
 
     /// Number of nodes.
@@ -805,4 +822,35 @@ impl EfgBody {
         assemble::point_shapes(&self.support, &pts)
             .map_err(|e| EfgError::coverage(e, self.d_max, &self.name))
     }
+}
+
+/// The polygon a rectangle with cracks is meshed as: its four corners
+/// (counter-clockwise from the lower left), the four sides named `bottom`,
+/// `right`, `top`, `left`, at the spacing `min(width/(nx − 1),
+/// height/(ny − 1))` of its node grid.
+fn rectangle_polygon(spec: &BodyParams) -> Result<crate::continuum::PolygonShape, String> {
+    let [nx, ny] = spec.nodes;
+    if nx < 2 || ny < 2 {
+        return Err("the node grid needs at least 2 × 2 nodes".into());
+    }
+    let o = Vec2::from(spec.rectangle.origin);
+    let s = Vec2::from(spec.rectangle.size);
+    let corners = vec![
+        o,
+        Vec2::new(o.x + s.x, o.y),
+        o + s,
+        Vec2::new(o.x, o.y + s.y),
+    ];
+    let edges = Edge::ALL
+        .iter()
+        .enumerate()
+        .map(|(i, e)| (e.name().to_string(), vec![(0, i)]))
+        .collect();
+    let domain =
+        crate::geom::polygon::Domain::new(corners, vec![], edges).map_err(|e| e.to_string())?;
+    Ok(crate::continuum::PolygonShape {
+        domain,
+        spacing: (s.x / (nx - 1) as f64).min(s.y / (ny - 1) as f64),
+        refine: Vec::new(),
+    })
 }

@@ -20,9 +20,10 @@
 //! the node density; each is cut into `sub · k` per side, `k` from the
 //! smallest support that reaches it ([`PolygonMesh::domain_points`]).
 
-use crate::continuum::Refine;
 use crate::continuum::quadrature::{self, QuadPoint};
+use crate::continuum::{CrackShape, Refine};
 use crate::geom::Vec2;
+use crate::geom::crack::{self, Crack, End};
 use crate::geom::polygon::Domain;
 use crate::geom::triangulate::triangulate;
 
@@ -46,7 +47,43 @@ pub struct PolygonMesh {
     pub segment_nodes: Vec<Vec<Vec<usize>>>,
     /// Triangles (counter-clockwise) of the integration triangulation.
     pub triangles: Vec<[usize; 3]>,
+    /// Where each node stands in the geometry: its position, but for a
+    /// crack's face node the point of the crack it stands off from
+    /// ([`FACE_OFFSET`]); the triangles' corners, exactly.
+    pub place: Vec<Vec2>,
+    /// The cracks: stations and face nodes ([`CrackNodes`]).
+    pub cracks: Vec<CrackNodes>,
 }
+
+/// A crack of a mesh: its polyline through the node stations and, per
+/// station, the node on each face.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CrackNodes {
+    /// The crack as given (its vertices).
+    pub crack: Crack,
+    /// Its two ends.
+    pub ends: [End; 2],
+    /// Stations along the crack, from `points[0]` to the last point (the
+    /// crack's vertices among them).
+    pub stations: Vec<Vec2>,
+    /// Per station: the node on the left face (left of the direction of
+    /// the polyline) and the node on the right face; one node at a tip.
+    pub nodes: Vec<[usize; 2]>,
+}
+
+impl CrackNodes {
+    /// The stations with their tip flags, as the visibility criterion
+    /// takes them ([`Support::with_cracks`](super::support::Support::with_cracks)).
+    pub fn opaque(&self) -> (Vec<Vec2>, [bool; 2]) {
+        (self.stations.clone(), self.ends.map(|e| e == End::Tip))
+    }
+}
+
+/// Face nodes stand this fraction of their spacing off the crack, on
+/// their side: the visibility criterion tells the two faces apart by
+/// position alone (a ray between the faces crosses the crack), and the
+/// offset is far below any length the discretisation resolves.
+pub const FACE_OFFSET: f64 = 1e-6;
 
 impl PolygonMesh {
     /// Nodes and triangulation of `domain` at spacing `h`.
@@ -102,9 +139,11 @@ impl PolygonMesh {
             spacing: h,
             node_spacing: vec![h; nodes.len()],
             refined_d_max: None,
+            place: nodes.clone(),
             nodes,
             segment_nodes,
             triangles,
+            cracks: Vec::new(),
         })
     }
 
@@ -117,11 +156,42 @@ impl PolygonMesh {
         refine: &[Refine],
         d_max: f64,
     ) -> Result<PolygonMesh, String> {
-        if refine.is_empty() {
+        Self::cracked(domain, h, refine, &[], d_max)
+    }
+
+    /// [`refined`](Self::refined) with cracks: the domain is split at each
+    /// mouth (so that it is a vertex), nodes are placed along every crack
+    /// at the local spacing (a pair per station, one on each face,
+    /// [`FACE_OFFSET`] off it; one node at a tip), grid nodes keep clear of
+    /// the cracks as of the boundary, and the triangulation has the crack
+    /// pieces as constraints (no triangle straddles a crack; each corner on
+    /// a crack is the face node of the triangle's side).
+    pub fn cracked(
+        domain: &Domain,
+        h: f64,
+        refine: &[Refine],
+        cracks: &[CrackShape],
+        d_max: f64,
+    ) -> Result<PolygonMesh, String> {
+        if refine.is_empty() && cracks.is_empty() {
             return PolygonMesh::new(domain, h);
         }
         if !(h > 0.0 && h.is_finite()) {
             return Err(format!("spacing must be positive, not {h}"));
+        }
+        let list: Vec<Crack> = cracks.iter().map(|c| c.crack.clone()).collect();
+        let (domain, refine) = split_at_mouths(domain, refine, &list)?;
+        let domain = &domain;
+        let refine = &refine[..];
+        for c in cracks {
+            if let Some(sp) = c.spacing
+                && !(sp > 0.0 && sp < h && c.width > 0.0 && c.width.is_finite())
+            {
+                return Err(format!(
+                    "crack spacing {sp} must be in (0, {h}) and width {} > 0",
+                    c.width
+                ));
+            }
         }
         for r in refine {
             if !(r.spacing > 0.0 && r.spacing < h && r.width > 0.0 && r.width.is_finite()) {
@@ -138,11 +208,31 @@ impl PolygonMesh {
                 return Err(format!("refinement names no segment ({l}, {i})"));
             }
         }
-        let size = SizeField { domain, h, refine };
+        let mut bands: Vec<Band> = refine
+            .iter()
+            .map(|r| Band {
+                segments: r
+                    .segments
+                    .iter()
+                    .map(|&(l, i)| domain.loops[l].segment(i))
+                    .collect(),
+                spacing: r.spacing,
+                width: r.width,
+            })
+            .collect();
+        for c in cracks {
+            if let Some(spacing) = c.spacing {
+                bands.push(Band {
+                    segments: (0..c.crack.pieces()).map(|i| c.crack.piece(i)).collect(),
+                    spacing,
+                    width: c.width,
+                });
+            }
+        }
+        let size = SizeField { h, bands: &bands };
         let mut nodes: Vec<Vec2> = Vec::new();
         let mut node_spacing: Vec<f64> = Vec::new();
         let mut segment_nodes = Vec::with_capacity(domain.loops.len());
-        let mut constraints = Vec::new();
         for l in &domain.loops {
             let n = l.len();
             let first = nodes.len();
@@ -163,7 +253,6 @@ impl PolygonMesh {
             }
             for ids in &segs {
                 for w in ids.windows(2) {
-                    constraints.push([w[0], w[1]]);
                     // a boundary node's spacing: at least its pieces' lengths
                     let d = (nodes[w[1]] - nodes[w[0]]).norm();
                     node_spacing[w[0]] = node_spacing[w[0]].max(d);
@@ -172,8 +261,18 @@ impl PolygonMesh {
             }
             segment_nodes.push(segs);
         }
+        let n_boundary = nodes.len();
+        let crack_nodes = crack_face_nodes(
+            &list,
+            domain,
+            &size,
+            &mut nodes,
+            &mut node_spacing,
+            &mut segment_nodes,
+            n_boundary,
+        )?;
         // the levels, finest first: h_r·2^k below h, then h
-        let finest = refine.iter().map(|r| r.spacing).fold(h, f64::min);
+        let finest = bands.iter().map(|r| r.spacing).fold(h, f64::min);
         let mut levels = Vec::new();
         let mut s = finest;
         while s < h * (1.0 - 1e-9) {
@@ -205,14 +304,13 @@ impl PolygonMesh {
             let boxes: Vec<(Vec2, Vec2)> = if k + 1 == levels.len() {
                 vec![(lo, hi)]
             } else {
-                refine
+                bands
                     .iter()
                     .filter(|r| r.spacing < 2.0 * sk)
                     .map(|r| {
                         let reach = r.width + (2.0 * sk - r.spacing) / GRADING;
                         let (mut a, mut b) = (hi, lo);
-                        for &(l, i) in &r.segments {
-                            let (p, q) = domain.loops[l].segment(i);
+                        for &(p, q) in &r.segments {
                             for v in [p, q] {
                                 a = Vec2::new(a.x.min(v.x), a.y.min(v.y));
                                 b = Vec2::new(b.x.max(v.x), b.y.max(v.y));
@@ -242,6 +340,7 @@ impl PolygonMesh {
                         if !domain.contains(p)
                             || level_of(size.at(p)) != k
                             || domain.boundary_distance(p) < 0.5 * sk
+                            || list.iter().any(|c| c.distance(p) < 0.5 * sk)
                             || bins.any_within(&nodes, p, 0.5 * sk)
                         {
                             continue;
@@ -253,7 +352,7 @@ impl PolygonMesh {
                 }
             }
         }
-        let triangles = triangulate(&nodes, &constraints, domain).map_err(|e| e.to_string())?;
+        let (place, triangles) = crack_triangles(&nodes, &segment_nodes, &crack_nodes, domain)?;
         Ok(PolygonMesh {
             domain: domain.clone(),
             spacing: h,
@@ -262,6 +361,8 @@ impl PolygonMesh {
             refined_d_max: Some(d_max),
             segment_nodes,
             triangles,
+            place,
+            cracks: crack_nodes,
         })
     }
 
@@ -284,7 +385,7 @@ impl PolygonMesh {
         let tris: Vec<[Vec2; 3]> = self
             .triangles
             .iter()
-            .map(|t| t.map(|i| self.nodes[i]))
+            .map(|t| t.map(|i| self.place[i]))
             .collect();
         let mut out = Vec::with_capacity(tris.len() * 7 * sub * sub);
         let Some(d_max) = self.refined_d_max else {
@@ -364,24 +465,27 @@ pub const GRADED_PIECE: f64 = 0.5;
 /// by a factor of about `1 + G`.
 pub const GRADING: f64 = 0.5;
 
+/// A refined band: segments, the spacing near them and the band's width.
+struct Band {
+    segments: Vec<(Vec2, Vec2)>,
+    spacing: f64,
+    width: f64,
+}
+
 /// The graded size field `s(x)` of a refined mesh (module doc).
 struct SizeField<'a> {
-    domain: &'a Domain,
     h: f64,
-    refine: &'a [Refine],
+    bands: &'a [Band],
 }
 
 impl SizeField<'_> {
     /// `s(p)`.
     fn at(&self, p: Vec2) -> f64 {
-        self.refine.iter().fold(self.h, |s, r| {
+        self.bands.iter().fold(self.h, |s, r| {
             let d = r
                 .segments
                 .iter()
-                .map(|&(l, i)| {
-                    let (a, b) = self.domain.loops[l].segment(i);
-                    (p - crate::geom::closest_on_segment(p, a, b).1).norm()
-                })
+                .map(|&(a, b)| (p - crate::geom::closest_on_segment(p, a, b).1).norm())
                 .fold(f64::INFINITY, f64::min);
             s.min(r.spacing + GRADING * (d - r.width).max(0.0))
         })
@@ -392,7 +496,7 @@ impl SizeField<'_> {
     /// so that no piece is longer than about the local `s`.
     fn stations(&self, a: Vec2, b: Vec2) -> Vec<f64> {
         let len = (b - a).norm();
-        let finest = self.refine.iter().map(|r| r.spacing).fold(self.h, f64::min);
+        let finest = self.bands.iter().map(|r| r.spacing).fold(self.h, f64::min);
         let m = ((8.0 * len / finest).ceil() as usize).clamp(1, 1 << 20);
         let mut cum = vec![0.0; m + 1];
         let mut prev = 1.0 / self.at(a);
@@ -415,6 +519,267 @@ impl SizeField<'_> {
         }
         out
     }
+}
+
+/// `domain` with a vertex at every crack mouth that is not one yet (the
+/// boundary nodes then split there), and `refine`'s segments renumbered.
+fn split_at_mouths(
+    domain: &Domain,
+    refine: &[Refine],
+    cracks: &[Crack],
+) -> Result<(Domain, Vec<Refine>), String> {
+    let ends = crack::check(domain, cracks).map_err(|e| e.to_string())?;
+    let mut d = domain.clone();
+    let mut refine = refine.to_vec();
+    for (c, e) in cracks.iter().zip(&ends) {
+        for (k, end) in e.iter().enumerate() {
+            if !matches!(end, End::Mouth(..)) {
+                continue;
+            }
+            let p = c.end(k).0;
+            if d.loops.iter().any(|l| l.points.contains(&p)) {
+                continue;
+            }
+            let Some((l, s)) = d.loops.iter().enumerate().find_map(|(l, lp)| {
+                (0..lp.len())
+                    .find(|&s| {
+                        let (a, b) = lp.segment(s);
+                        crate::geom::polygon::on_segment(a, b, p)
+                    })
+                    .map(|s| (l, s))
+            }) else {
+                continue;
+            };
+            d = crack::split(&d, l, s, p);
+            for r in &mut refine {
+                r.segments = r
+                    .segments
+                    .iter()
+                    .flat_map(|&x| crack::split_index(x, l, s))
+                    .collect();
+            }
+        }
+    }
+    Ok((d, refine))
+}
+
+/// The face nodes of `cracks` (module doc of [`PolygonMesh::cracked`]):
+/// stations at the local spacing along each piece; per station a node on
+/// each face [`FACE_OFFSET`] off the crack (offset along the mean normal
+/// of the pieces that meet there), one node at a tip; at a mouth, the
+/// boundary node at the mouth becomes the node of the face on the side of
+/// the segment that starts there, and a new node stands for the other face
+/// (ending the segment before), each moved along its segment.
+fn crack_face_nodes(
+    cracks: &[Crack],
+    domain: &Domain,
+    size: &SizeField,
+    nodes: &mut Vec<Vec2>,
+    node_spacing: &mut Vec<f64>,
+    segment_nodes: &mut [Vec<Vec<usize>>],
+    n_boundary: usize,
+) -> Result<Vec<CrackNodes>, String> {
+    let ends = crack::check(domain, cracks).map_err(|e| e.to_string())?;
+    let mut out = Vec::with_capacity(cracks.len());
+    for (c, ends) in cracks.iter().zip(ends) {
+        let mut stations = Vec::new();
+        let mut vertex = Vec::new(); // the piece index of a crack vertex
+        for i in 0..c.pieces() {
+            let (a, b) = c.piece(i);
+            stations.push(a);
+            vertex.push(Some(i));
+            for t in size.stations(a, b) {
+                stations.push(a + (b - a) * t);
+                vertex.push(None);
+            }
+        }
+        stations.push(*c.points.last().expect("a crack has ≥ 2 points"));
+        vertex.push(Some(c.pieces()));
+        let m = stations.len();
+        let unit = |d: Vec2| d * (1.0 / d.norm());
+        let mut ids = Vec::with_capacity(m);
+        for j in 0..m {
+            let p = stations[j];
+            let h_j = size.at(p);
+            let end = if j == 0 {
+                Some(ends[0])
+            } else if j + 1 == m {
+                Some(ends[1])
+            } else {
+                None
+            };
+            // the unit normal to the left of the crack's direction here
+            let left = match vertex[j] {
+                Some(i) if i > 0 && i < c.pieces() => {
+                    let (a, b) = c.piece(i - 1);
+                    let (_, d) = c.piece(i);
+                    let n = unit(b - a).perp() + unit(d - b).perp();
+                    unit(n)
+                }
+                _ => {
+                    let k = j.min(m - 2);
+                    unit(stations[k + 1] - stations[k]).perp()
+                }
+            };
+            let spacing = |k: usize| {
+                let mut s = h_j;
+                if k > 0 {
+                    s = s.max((stations[k] - stations[k - 1]).norm());
+                }
+                if k + 1 < m {
+                    s = s.max((stations[k + 1] - stations[k]).norm());
+                }
+                s
+            };
+            match end {
+                Some(End::Tip) => {
+                    ids.push([nodes.len(); 2]);
+                    nodes.push(p);
+                    node_spacing.push(spacing(j));
+                }
+                Some(End::Mouth(..)) => {
+                    let Some(id) = (0..n_boundary).find(|&i| nodes[i] == p) else {
+                        return Err(format!(
+                            "crack mouth ({}, {}) has no boundary node",
+                            p.x, p.y
+                        ));
+                    };
+                    let (l, v) = segment_nodes
+                        .iter()
+                        .enumerate()
+                        .find_map(|(l, segs)| {
+                            segs.iter().position(|ids| ids[0] == id).map(|v| (l, v))
+                        })
+                        .ok_or_else(|| "crack mouth off the loops".to_string())?;
+                    let n = segment_nodes[l].len();
+                    let prev = (v + n - 1) % n;
+                    let after = nodes[segment_nodes[l][v][1]];
+                    let before = {
+                        let s = &segment_nodes[l][prev];
+                        nodes[s[s.len() - 2]]
+                    };
+                    let d = FACE_OFFSET * h_j;
+                    nodes[id] = p + unit(after - p) * d;
+                    let other = nodes.len();
+                    nodes.push(p + unit(before - p) * d);
+                    node_spacing.push(node_spacing[id]);
+                    *segment_nodes[l][prev].last_mut().expect("≥ 2 nodes") = other;
+                    let inner = stations[if j == 0 { 1 } else { m - 2 }];
+                    // left of the crack's direction (from points[0] on)
+                    let (a, b) = if j == 0 { (p, inner) } else { (inner, p) };
+                    let id_left = crate::geom::polygon::orient(a, b, nodes[id]) > 0;
+                    ids.push(if id_left { [id, other] } else { [other, id] });
+                }
+                None => {
+                    let d = left * (FACE_OFFSET * h_j);
+                    ids.push([nodes.len(), nodes.len() + 1]);
+                    nodes.push(p + d);
+                    nodes.push(p - d);
+                    node_spacing.push(spacing(j));
+                    node_spacing.push(spacing(j));
+                }
+            }
+        }
+        out.push(CrackNodes {
+            crack: c.clone(),
+            ends,
+            stations,
+            nodes: ids,
+        });
+    }
+    Ok(out)
+}
+
+/// Side of the crack through `stations` that the point `c` near station
+/// `j` is on: 0 left (of the polyline's direction), 1 right.
+fn side_at(stations: &[Vec2], j: usize, c: Vec2) -> usize {
+    let m = stations.len();
+    let p = stations[j];
+    let left = if j == 0 || j + 1 == m {
+        let k = j.min(m - 2);
+        crate::geom::polygon::orient(stations[k], stations[k + 1], c) > 0
+    } else {
+        // the left wedge: from the outgoing piece counter-clockwise to the
+        // incoming one reversed
+        let ang = |d: Vec2, r: Vec2| {
+            let a = r.cross(d).atan2(r.dot(d));
+            if a < 0.0 {
+                a + std::f64::consts::TAU
+            } else {
+                a
+            }
+        };
+        let out = stations[j + 1] - p;
+        ang(c - p, out) < ang(stations[j - 1] - p, out)
+    };
+    if left { 0 } else { 1 }
+}
+
+/// The triangulation of a mesh with cracks: every node at its place (face
+/// nodes at their station, one vertex per station), the boundary pieces
+/// and the crack pieces as constraints; a triangle's corner at a crack
+/// station is the face node of the triangle's side. Returns the places and
+/// the triangles (node indices).
+fn crack_triangles(
+    nodes: &[Vec2],
+    segment_nodes: &[Vec<Vec<usize>>],
+    cracks: &[CrackNodes],
+    domain: &Domain,
+) -> Result<(Vec<Vec2>, Vec<[usize; 3]>), String> {
+    let mut place = nodes.to_vec();
+    // the node standing for each vertex; a station's left node for both
+    let mut vertex_of: Vec<usize> = (0..nodes.len()).collect();
+    let mut station_of: Vec<Option<(usize, usize)>> = vec![None; nodes.len()];
+    for (k, c) in cracks.iter().enumerate() {
+        for (j, &[l, r]) in c.nodes.iter().enumerate() {
+            place[l] = c.stations[j];
+            place[r] = c.stations[j];
+            vertex_of[r] = l;
+            station_of[l] = Some((k, j));
+        }
+    }
+    let mut index = vec![usize::MAX; nodes.len()];
+    let mut verts = Vec::new();
+    let mut node_of_vertex = Vec::new();
+    for i in 0..nodes.len() {
+        if vertex_of[i] == i {
+            index[i] = verts.len();
+            verts.push(place[i]);
+            node_of_vertex.push(i);
+        }
+    }
+    let vid = |i: usize| index[vertex_of[i]];
+    let mut constraints = Vec::new();
+    for segs in segment_nodes {
+        for ids in segs {
+            for w in ids.windows(2) {
+                constraints.push([vid(w[0]), vid(w[1])]);
+            }
+        }
+    }
+    for c in cracks {
+        for w in c.nodes.windows(2) {
+            constraints.push([vid(w[0][0]), vid(w[1][0])]);
+        }
+    }
+    let tris = triangulate(&verts, &constraints, domain).map_err(|e| e.to_string())?;
+    let triangles = tris
+        .into_iter()
+        .map(|t| {
+            let centroid = (verts[t[0]] + verts[t[1]] + verts[t[2]]) * (1.0 / 3.0);
+            t.map(|v| {
+                let n = node_of_vertex[v];
+                match station_of[n] {
+                    Some((k, j)) => {
+                        let c = &cracks[k];
+                        c.nodes[j][side_at(&c.stations, j, centroid)]
+                    }
+                    None => n,
+                }
+            })
+        })
+        .collect();
+    Ok((place, triangles))
 }
 
 /// A uniform bin grid of points (node lookup by neighbourhood).

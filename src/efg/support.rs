@@ -62,12 +62,32 @@ pub struct Visibility {
     /// geodesic distance (shortest path inside Ω̄, bent at vertices).
     geo_start: Vec<u32>,
     geo: Vec<(Vec2, f64)>,
+    /// Index of the first crack piece in `segments` (the domain's loops
+    /// come first).
+    crack_start: usize,
+    /// Per crack piece: is each end opaque (a crack point other than a
+    /// tip)? A ray through an opaque point crosses the crack there.
+    opaque: Vec<[bool; 2]>,
+    /// The crack tips: the only crack points a hidden ray bends around.
+    tips: Vec<Vec2>,
 }
 
 impl Visibility {
     /// Segments that meet the support of node `k`.
     pub fn near(&self, k: usize) -> &[u32] {
         &self.items[self.start[k] as usize..self.start[k + 1] as usize]
+    }
+    /// Is `p` an opaque crack point (a mouth on the boundary)?
+    fn is_opaque(&self, p: Vec2) -> bool {
+        let cracks = &self.segments[self.crack_start..];
+        cracks
+            .iter()
+            .zip(&self.opaque)
+            .any(|(&(c, d), o)| (o[0] && c == p) || (o[1] && d == p))
+    }
+    /// The crack tips.
+    pub fn tips(&self) -> &[Vec2] {
+        &self.tips
     }
 }
 
@@ -208,11 +228,41 @@ impl Support {
     /// Make `segments` opaque: the visibility criterion ([`Visibility`]),
     /// or with `diffraction` the diffraction method.
     pub fn with_visibility(
-        mut self,
+        self,
         domain: &crate::geom::polygon::Domain,
         diffraction: bool,
     ) -> Support {
-        let segments: Vec<(Vec2, Vec2)> = domain.segments().collect();
+        self.with_cracks(domain, &[], diffraction)
+    }
+
+    /// [`with_visibility`](Self::with_visibility) with cracks: each crack
+    /// `pieces` (its polyline, at the nodes' stations) is opaque on both
+    /// sides, everywhere but at its tips (the ends inside Ω), around which
+    /// hidden rays bend (diffraction). A ray through an inner point of a
+    /// crack crosses it (a pair of face nodes does not see across the
+    /// crack at their station).
+    pub fn with_cracks(
+        mut self,
+        domain: &crate::geom::polygon::Domain,
+        cracks: &[(Vec<Vec2>, [bool; 2])],
+        diffraction: bool,
+    ) -> Support {
+        let mut segments: Vec<(Vec2, Vec2)> = domain.segments().collect();
+        let crack_start = segments.len();
+        let mut opaque = Vec::new();
+        let mut tips = Vec::new();
+        for (pts, is_tip) in cracks {
+            let n = pts.len();
+            for i in 0..n - 1 {
+                segments.push((pts[i], pts[i + 1]));
+                opaque.push([i > 0 || !is_tip[0], i + 2 < n || !is_tip[1]]);
+            }
+            for (e, &t) in is_tip.iter().enumerate() {
+                if t {
+                    tips.push(if e == 0 { pts[0] } else { pts[n - 1] });
+                }
+            }
+        }
         let mut start = vec![0u32];
         let mut items = Vec::new();
         for n in &self.node {
@@ -234,6 +284,9 @@ impl Support {
             items,
             geo_start: vec![0],
             geo: Vec::new(),
+            crack_start,
+            opaque,
+            tips,
         };
         if diffraction {
             for k in 0..self.node.len() {
@@ -241,10 +294,18 @@ impl Support {
                 let xi = Vec2::new(n[0], n[1]);
                 let reach = 1.5 * n[2].max(n[3]);
                 let mut verts: Vec<Vec2> = Vec::new();
+                // the loops' vertices (a crack's mouth is opaque, not one)
+                // and the crack tips
                 for &s in v.near(k) {
-                    let (a, b) = v.segments[s as usize];
-                    for c in [a, b] {
-                        if c != xi && (c - xi).norm() < reach && !verts.contains(&c) {
+                    let s = s as usize;
+                    let (a, b) = v.segments[s];
+                    for (e, c) in [a, b].into_iter().enumerate() {
+                        let bend = if s < v.crack_start {
+                            !v.is_opaque(c)
+                        } else {
+                            !v.opaque[s - v.crack_start][e]
+                        };
+                        if bend && c != xi && (c - xi).norm() < reach && !verts.contains(&c) {
                             verts.push(c);
                         }
                     }
@@ -305,15 +366,21 @@ impl Support {
         Self::blocked(v, k, xi, p)
     }
 
-    /// Is the straight path `a → b` blocked by a boundary segment near
-    /// node `k`?
+    /// Is the straight path `a → b` blocked by a boundary segment or a
+    /// crack near node `k`?
     #[inline]
     fn blocked(v: &Visibility, k: usize, a: Vec2, b: Vec2) -> bool {
         use crate::geom::polygon::{on_segment, properly_cross};
         let near = v.near(k);
+        let through = |p: Vec2| p != a && p != b && on_segment(a, b, p);
         if near.iter().any(|&s| {
-            let (c, d) = v.segments[s as usize];
+            let s = s as usize;
+            let (c, d) = v.segments[s];
             properly_cross(a, b, c, d)
+                || (s >= v.crack_start && {
+                    let [oc, od] = v.opaque[s - v.crack_start];
+                    (oc && through(c)) || (od && through(d))
+                })
         }) {
             return true;
         }

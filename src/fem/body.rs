@@ -353,7 +353,7 @@ impl FemBody {
             }
             for node in edge_nodes(bc.side().map_err(FemError::Invalid)?) {
                 let x = Vec2::new(xs[node % nx], ys[node / nx]);
-                let ub = prescribed(bc, x, timoshenko.as_ref());
+                let ub = prescribed(bc, x, timoshenko.as_ref(), &spec.elastic);
                 for (a, on, pr) in [(0, cx, &bc.ux), (1, cy, &bc.uy)] {
                     if on {
                         let drive = ids[a].map(|k| {

@@ -1,6 +1,8 @@
 //! Plane geometry: a small `Vec2` value type and point–segment queries;
-//! polygonal domains ([`polygon`]) and their triangulation ([`triangulate`]).
+//! polygonal domains ([`polygon`]), cracks in them ([`crack`]) and their
+//! triangulation ([`triangulate`]).
 
+pub mod crack;
 pub mod polygon;
 pub mod triangulate;
 

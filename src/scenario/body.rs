@@ -333,6 +333,7 @@ impl BodySpec {
                 .map_or_else(Vec::new, |i| i.static_under.clone()),
             self_weight: self.self_weight,
             loads: self.load.clone(),
+            cracks: Vec::new(),
         }
     }
 }
