@@ -6,10 +6,12 @@
 //! - [`assemble`]: K, M (via the Gram matrix), C, penalty (E4, E5), in parallel.
 //! - [`penalty`]: the penalty points: `K^α`, `F^α(t)`, the springs' energy and force.
 //! - [`body`]: [`EfgBody`], built from a scenario `[[body]]`.
+//! - [`fracture`]: stress intensity factors at the tips of its cracks.
 
 pub mod assemble;
 pub mod body;
 pub mod boundary;
+pub mod fracture;
 pub mod penalty;
 pub mod polygon;
 pub mod shape;

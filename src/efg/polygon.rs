@@ -392,6 +392,19 @@ impl PolygonMesh {
             quadrature::triangle_points(&tris, sub, &mut out);
             return out;
         };
+        let tips: Vec<Vec2> = self
+            .cracks
+            .iter()
+            .flat_map(|c| {
+                [
+                    (0, c.stations[0]),
+                    (1, *c.stations.last().expect("≥ 2 stations")),
+                ]
+                .into_iter()
+                .filter(|&(e, _)| c.ends[e] == End::Tip)
+                .map(|(_, p)| p)
+            })
+            .collect();
         let (lo, _) = self.domain.bounds();
         let reach = d_max * self.spacing;
         let mut bins = Bins::new(lo, reach);
@@ -415,11 +428,20 @@ impl PolygonMesh {
             let longest = (0..3)
                 .map(|k| (tri[(k + 1) % 3] - tri[k]).norm())
                 .fold(0.0, f64::max);
-            let per = if h_max <= h_min * (1.0 + 1e-6) {
+            let mut per = if h_max <= h_min * (1.0 + 1e-6) {
                 UNIFORM_PIECE
             } else {
                 GRADED_PIECE
             };
+            let near_tip = tips.iter().any(|&p| {
+                (0..3).any(|k| {
+                    let q = crate::geom::closest_on_segment(p, tri[k], tri[(k + 1) % 3]).1;
+                    (q - p).norm() < d_max * h_min
+                })
+            });
+            if near_tip {
+                per = per.min(TIP_PIECE);
+            }
             let k = (longest / (per * h_min)).ceil().max(1.0) as usize;
             quadrature::triangle_points(std::slice::from_ref(tri), sub * k, &mut out);
         }
@@ -459,6 +481,14 @@ pub const UNIFORM_PIECE: f64 = 1.5;
 /// the holed-square patch test measured 8.5e−4 / 1.8e−4 / 2.6e−5 stress
 /// error at 1.5 / 0.75 / 0.5.
 pub const GRADED_PIECE: f64 = 0.5;
+
+/// Quadrature near a crack tip (triangles closer to a tip than `d_max ·
+/// h_min`, where the diffraction bends the weights sharply): longest
+/// piece side in units of `h_min`. A uniaxial stress along a crack (which
+/// the crack leaves uniform) is reproduced to 6e−4 of the stress at 1.5
+/// (the uniform piece), 4e−5 at 0.25 (6 × 6-point rule, h = 0.1 of the
+/// crack's half-length).
+pub const TIP_PIECE: f64 = 0.25;
 
 /// Growth of the refined size field per unit distance beyond a band:
 /// `s(x) = h_r + G · (d − w)`, so neighbouring node rows differ in spacing

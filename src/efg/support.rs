@@ -3,6 +3,16 @@
 
 use crate::geom::Vec2;
 
+/// The exponent λ of the diffraction factor `f = ((s₁ + s₂)/s₀)^λ` of a
+/// path bent around a crack tip (Organ, Fleming, Terry & Belytschko 1996
+/// leave λ open; 1 is used around the corners of a polygon). A larger λ
+/// narrows the zone behind the tip where the two faces share nodes, which
+/// otherwise stiffens the crack by a length of order the tip spacing:
+/// measured on the single-edge-cracked strip at a/W = 0.6 (tip spacing
+/// 0.0125 W), the error of `K_I` falls from −2.0 % (λ = 1) to −1.3 %
+/// (λ = 2); on a centre crack from −0.17 % to −0.05 %.
+pub const TIP_LAMBDA: f64 = 2.0;
+
 /// Nodes with their rectangular supports and a neighbour-lookup bin grid.
 #[derive(Debug, Clone)]
 pub struct Support {
@@ -400,7 +410,8 @@ impl Support {
     }
 
     /// For `p` hidden from node `k`: the diffraction factor
-    /// `f = (s₁ + s₂)/s₀` and its gradient `∇f`, where `s₁ + s₂` is the
+    /// `f = (s₁ + s₂)/s₀` (to the power [`TIP_LAMBDA`] when the path
+    /// bends last around a crack tip) and its gradient `∇f`, where `s₁ + s₂` is the
     /// geodesic distance from `x_I` to `p` inside Ω̄: over the boundary
     /// vertices `x_c` that `p` sees, `s₁` = the precomputed geodesic
     /// distance `x_I → x_c` (shortest path bent at vertices),
@@ -440,6 +451,11 @@ impl Support {
             g2.x - len * d0.x / (s0 * s0 * s0),
             g2.y - len * d0.y / (s0 * s0 * s0),
         ];
+        if v.tips.contains(&c) {
+            // around a crack tip: f^λ, ∇(f^λ) = λ f^(λ−1) ∇f
+            let c = TIP_LAMBDA * f.powf(TIP_LAMBDA - 1.0);
+            return Some((f.powf(TIP_LAMBDA), [c * g[0], c * g[1]]));
+        }
         Some((f, g))
     }
 
