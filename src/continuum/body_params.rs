@@ -72,6 +72,22 @@ pub struct CrackShape {
     pub width: f64,
 }
 
+/// Crack growth in an EFG body with cracks ([`crate::efg::growth`]): a tip
+/// grows when the equivalent stress intensity factor of the maximum
+/// hoop-stress criterion reaches the toughness.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fracture {
+    /// Fracture toughness `K_Ic` (stress·√length).
+    pub toughness: f64,
+    /// Length Δa added to a tip per growth; `None`: the outer radius of the
+    /// tip's interaction-integral ring (5 × the tip's node spacing).
+    pub increment: Option<f64>,
+    /// Most growth increments per tip over a run.
+    pub max_increments: usize,
+    /// In time-stepped runs, look at the tips every `every` steps.
+    pub every: usize,
+}
+
 /// Linear isotropic elasticity.
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -182,6 +198,8 @@ pub struct BodyParams {
     /// Cracks (EFG only); a rectangle with cracks is meshed as a polygon
     /// of spacing `min(width/(nx − 1), height/(ny − 1))`.
     pub cracks: Vec<CrackShape>,
+    /// Crack growth (`None`: the cracks stay as they are).
+    pub fracture: Option<Fracture>,
 }
 
 impl BodyParams {
@@ -208,6 +226,7 @@ impl BodyParams {
             self_weight: true,
             loads: Vec::new(),
             cracks: Vec::new(),
+            fracture: None,
         }
     }
 

@@ -19,7 +19,7 @@ pub mod table;
 pub mod timoshenko;
 
 pub use body_params::{
-    BodyParams, CrackShape, Elastic, MassKind, Plane, PolygonShape, Rectangle, Refine,
+    BodyParams, CrackShape, Elastic, Fracture, MassKind, Plane, PolygonShape, Rectangle, Refine,
 };
 pub use conditions::{
     Edge, EdgeCondition, EdgeName, GriffithSpec, KirschSpec, LinearField, MotionField, PointLoad,

@@ -115,6 +115,16 @@ pub struct EfgBody {
     pub timoshenko: Option<Timoshenko>,
     /// Sizes and timings of the build.
     pub info: BuildInfo,
+    /// The parameters the body was built from (its cracks as they are
+    /// now): a growing crack rebuilds the body from them.
+    pub spec: BodyParams,
+    /// `[simulation] gravity` of the build.
+    pub gravity: [f64; 2],
+    /// Energy released by crack growth since t = 0: `Σ G Δa t` with
+    /// `G = (K_I² + K_II²)/E′` at each growth (Irwin).
+    pub fracture_energy: f64,
+    /// Growth increments so far, per crack tip `[crack][end]`.
+    pub increments: Vec<[usize; 2]>,
 }
 
 impl EfgBody {
@@ -397,6 +407,10 @@ impl EfgBody {
             newmark: None,
             timoshenko,
             info,
+            increments: vec![[0, 0]; spec.cracks.len()],
+            spec: spec.clone(),
+            gravity,
+            fracture_energy: 0.0,
         })
     }
 

@@ -7,11 +7,13 @@
 //! - [`penalty`]: the penalty points: `K^α`, `F^α(t)`, the springs' energy and force.
 //! - [`body`]: [`EfgBody`], built from a scenario `[[body]]`.
 //! - [`fracture`]: stress intensity factors at the tips of its cracks.
+//! - [`growth`]: cracks that grow by the maximum hoop-stress criterion.
 
 pub mod assemble;
 pub mod body;
 pub mod boundary;
 pub mod fracture;
+pub mod growth;
 pub mod penalty;
 pub mod polygon;
 pub mod shape;

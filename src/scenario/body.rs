@@ -334,6 +334,7 @@ impl BodySpec {
             self_weight: self.self_weight,
             loads: self.load.clone(),
             cracks: Vec::new(),
+            fracture: None,
         }
     }
 }
