@@ -35,6 +35,9 @@ use crate::geom::polygon::segments_meet;
 use crate::sparse::Cholesky;
 use rayon::prelude::*;
 
+/// A point's new shape row and the old fields there.
+type Projected = (ShapeRow, [[f64; 2]; 3]);
+
 /// One advance of one tip.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Growth {
@@ -207,7 +210,7 @@ impl EfgBody {
         // point order (bitwise the same on any number of threads)
         const CHUNK: usize = 4096;
         for chunk in points.chunks(CHUNK) {
-            let rows: Vec<Result<(ShapeRow, [[f64; 2]; 3]), EfgError>> = chunk
+            let rows: Vec<Result<Projected, EfgError>> = chunk
                 .par_iter()
                 .map_init(ShapeRow::new, |old_row, q| {
                     let mut row = ShapeRow::new();
