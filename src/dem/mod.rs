@@ -249,6 +249,12 @@ impl Granular {
             self.contacts.rolling = rolling;
             self.grid.stale = true;
         }
+        // √m_eff is kept per pair only for critical-ratio dashpots
+        let needs_mass = self.laws.iter().any(ContactLaw::needs_mass);
+        if needs_mass != self.contacts.needs_mass {
+            self.contacts.needs_mass = needs_mass;
+            self.grid.stale = true;
+        }
     }
 
     /// The Verlet skin (pairs with a gap below it are listed).
@@ -606,15 +612,13 @@ impl Granular {
             s
         };
         let roll = &self.contacts.roll;
-        let rolling = self.contacts.rolling && roll.len() == self.contacts.pairs.len();
-        for (k, (q, &fs)) in self
+        let rolling = self.contacts.rolling && roll.len() == self.contacts.len();
+        for (k, ((i, j), &fs)) in self
             .contacts
-            .pairs
-            .iter()
+            .pairs()
             .zip(&self.contacts.shear)
             .enumerate()
         {
-            let (i, j) = (q.i as usize, q.j as usize);
             let dist = (p.pos[j] - p.pos[i]).norm();
             let (ri, rj) = (p.radius[i], p.radius[j]);
             let law = self.law(i, j);
@@ -647,11 +651,10 @@ impl Granular {
         let p = &self.particles;
         let dd = self
             .contacts
-            .pairs
-            .iter()
-            .filter(|q| {
-                let r = p.radius[q.i as usize] + p.radius[q.j as usize];
-                (p.pos[q.j as usize] - p.pos[q.i as usize]).norm2() < r * r
+            .pairs()
+            .filter(|&(i, j)| {
+                let r = p.radius[i] + p.radius[j];
+                (p.pos[j] - p.pos[i]).norm2() < r * r
             })
             .count();
         let dw = self

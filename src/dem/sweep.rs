@@ -21,7 +21,7 @@
 //! order, then walls), so the result is bitwise the same on any number of
 //! threads.
 
-use super::broadphase::{ContactList, Pair, WallPair};
+use super::broadphase::{ContactList, WallPair};
 use super::contact::{self, ContactForce, ContactLaw, Side, effective_mass};
 use super::integrate;
 use super::particles::Particles;
@@ -79,7 +79,10 @@ struct Block<'a> {
     material: &'a [u16],
     /// Positions at the last list rebuild (empty: no Verlet check).
     ref_pos: &'a [Vec2],
-    pairs: &'a [Pair],
+    /// Second disc of each pair.
+    pairs: &'a [u32],
+    /// `√m_eff` of each pair (empty: no law needs it, read as 0).
+    sm: &'a [f64],
     shear: &'a mut [f64],
     /// Rolling histories (same index as `pairs`; empty without rolling).
     roll: &'a mut [f64],
@@ -109,6 +112,11 @@ impl<'a> Block<'a> {
         };
         let kp = first[at] as usize - pair_lo;
         let (pairs, pairs2) = self.pairs.split_at(kp);
+        let (sm, sm2) = if self.sm.is_empty() {
+            (self.sm, self.sm)
+        } else {
+            self.sm.split_at(kp)
+        };
         let (shear, shear2) = self.shear.split_at_mut(kp);
         let (roll, roll2) = if self.roll.is_empty() {
             (self.roll, &mut [][..])
@@ -134,6 +142,7 @@ impl<'a> Block<'a> {
                 material,
                 ref_pos,
                 pairs,
+                sm,
                 shear,
                 roll,
                 walls,
@@ -154,6 +163,7 @@ impl<'a> Block<'a> {
                 material: material2,
                 ref_pos: ref_pos2,
                 pairs: pairs2,
+                sm: sm2,
                 shear: shear2,
                 roll: roll2,
                 walls: walls2,
@@ -189,7 +199,8 @@ impl Granular {
     fn sweep_with<const ADVANCE: bool, const ROLL: bool>(&mut self) -> f64 {
         let n = self.particles.len();
         let ContactList {
-            pairs,
+            j: pairs,
+            sqrt_m_eff: sm,
             shear,
             roll,
             first,
@@ -215,6 +226,7 @@ impl Granular {
                 &self.dash,
                 nm,
                 pairs,
+                sm,
                 shear,
                 roll,
                 cross,
@@ -229,6 +241,7 @@ impl Granular {
                 &self.dash,
                 nm,
                 pairs,
+                sm,
                 shear,
                 cross,
                 cross_buf,
@@ -275,6 +288,7 @@ impl Granular {
             material: &p.material,
             ref_pos,
             pairs,
+            sm,
             shear,
             roll: if ROLL { roll } else { &mut [] },
             walls: wall_pairs,
@@ -294,9 +308,10 @@ fn cross_pairs(
     laws: &[ContactLaw],
     dash: &[[f64; 4]],
     nm: usize,
-    pairs: &[Pair],
+    pairs: &[u32],
+    sm: &[f64],
     shear: &[f64],
-    cross: &[u32],
+    cross: &[(u32, u32)],
     cross_buf: &mut [(ContactForce, f64)],
     dt: f64,
 ) {
@@ -305,12 +320,12 @@ fn cross_pairs(
         .par_iter()
         .zip(cross_buf.par_iter_mut())
         .with_min_len(256)
-        .for_each(|(&k, out)| {
-            let q = &pairs[k as usize];
-            let mut fs = shear[k as usize];
-            let (i, j) = (q.i as usize, q.j as usize);
+        .for_each(|(&(i, k), out)| {
+            let k = k as usize;
+            let mut fs = shear[k];
+            let (i, j) = (i as usize, pairs[k] as usize);
             let l = p.material[i] as usize * nm + p.material[j] as usize;
-            let cf = pair_contact(kin, i, j, &laws[l], &dash[l], q, &mut fs, dt);
+            let cf = pair_contact(kin, i, j, &laws[l], &dash[l], sm_at(sm, k), &mut fs, dt);
             *out = (cf, fs);
         });
 }
@@ -323,10 +338,11 @@ fn cross_pairs_roll(
     laws: &[ContactLaw],
     dash: &[[f64; 4]],
     nm: usize,
-    pairs: &[Pair],
+    pairs: &[u32],
+    sm: &[f64],
     shear: &[f64],
     roll: &[f64],
-    cross: &[u32],
+    cross: &[(u32, u32)],
     cross_buf: &mut [(ContactForce, f64)],
     cross_roll: &mut [(f64, f64)],
     dt: f64,
@@ -340,11 +356,12 @@ fn cross_pairs_roll(
         .par_iter()
         .zip(cross_buf.par_iter_mut().zip(cross_roll.par_iter_mut()))
         .with_min_len(256)
-        .for_each(|(&k, (out, out_r))| {
-            let q = &pairs[k as usize];
-            let mut fs = shear[k as usize];
-            let mut mr = roll[k as usize];
-            let (i, j) = (q.i as usize, q.j as usize);
+        .for_each(|(&(i, k), (out, out_r))| {
+            let k = k as usize;
+            let mut fs = shear[k];
+            let mut mr = roll[k];
+            let (i, j) = (i as usize, pairs[k] as usize);
+            let q = sm_at(sm, k);
             let l = p.material[i] as usize * nm + p.material[j] as usize;
             let (cf, m) = pair_contact_roll(
                 kin, inert, i, j, &laws[l], &dash[l], q, &mut fs, &mut mr, dt,
@@ -419,6 +436,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         material,
         ref_pos,
         pairs,
+        sm,
         shear,
         roll,
         walls,
@@ -479,7 +497,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         let end = ctx.first[lo + d + 1] as usize - pair_lo;
         let mut k = pk;
         while k < end {
-            let j = pairs[k].j as usize;
+            let j = pairs[k] as usize;
             if j >= hi {
                 let (cf, fs) = ctx.cross_buf[ck];
                 if ROLL {
@@ -508,9 +526,8 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                 };
                 // two inner pairs side by side, as below
                 #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-                if single && k + 1 < end && (pairs[k + 1].j as usize) < hi {
-                    let j2 = pairs[k + 1].j as usize - lo;
-                    let (q1, q2) = (&pairs[k], &pairs[k + 1]);
+                if single && k + 1 < end && (pairs[k + 1] as usize) < hi {
+                    let j2 = pairs[k + 1] as usize - lo;
                     if let Some((cf, fs, m, mr)) = lanes::pair_contacts_roll(
                         kin,
                         inert,
@@ -518,7 +535,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                         [jl, j2],
                         [shear[k], shear[k + 1]],
                         [roll[k], roll[k + 1]],
-                        [q1.sqrt_m_eff, q2.sqrt_m_eff],
+                        [sm_at(sm, k), sm_at(sm, k + 1)],
                         &law0,
                         &dash0,
                         ctx.dt,
@@ -540,7 +557,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                         continue;
                     }
                 }
-                let (q, fs, mr) = (&pairs[k], &mut shear[k], &mut roll[k]);
+                let (q, fs, mr) = (sm_at(sm, k), &mut shear[k], &mut roll[k]);
                 let (cf, m) = if single {
                     pair_contact_roll(kin, inert, d, jl, &law0, &dash0, q, fs, mr, ctx.dt)
                 } else {
@@ -560,15 +577,14 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             }
             // two inner pairs of disc d side by side when the lanes apply
             #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-            if single && k + 1 < end && (pairs[k + 1].j as usize) < hi {
-                let j2 = pairs[k + 1].j as usize - lo;
-                let (q1, q2) = (&pairs[k], &pairs[k + 1]);
+            if single && k + 1 < end && (pairs[k + 1] as usize) < hi {
+                let j2 = pairs[k + 1] as usize - lo;
                 if let Some((cf, fs)) = lanes::pair_contacts(
                     kin,
                     [d, d],
                     [jl, j2],
                     [shear[k], shear[k + 1]],
-                    [q1.sqrt_m_eff, q2.sqrt_m_eff],
+                    [sm_at(sm, k), sm_at(sm, k + 1)],
                     &law0,
                     &dash0,
                     ctx.dt,
@@ -586,7 +602,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                     continue;
                 }
             }
-            let (q, fs) = (&pairs[k], &mut shear[k]);
+            let (q, fs) = (sm_at(sm, k), &mut shear[k]);
             let cf = if single {
                 pair_contact(kin, d, jl, &law0, &dash0, q, fs, ctx.dt)
             } else {
@@ -729,11 +745,15 @@ fn sides(p: Kin, i: usize, j: usize) -> (Side, Side) {
 
 /// Dashpot coefficients of a pair from the law's terms and `√m_eff`.
 #[inline(always)]
-fn pair_dashpots(dash: &[f64; 4], q: &Pair) -> (f64, f64) {
-    (
-        dash[0] + dash[1] * q.sqrt_m_eff,
-        dash[2] + dash[3] * q.sqrt_m_eff,
-    )
+fn pair_dashpots(dash: &[f64; 4], sm: f64) -> (f64, f64) {
+    (dash[0] + dash[1] * sm, dash[2] + dash[3] * sm)
+}
+
+/// `√m_eff` of pair `k`, 0 when no law needs it (the list keeps none; the
+/// dashpot terms that would multiply it are then 0).
+#[inline(always)]
+fn sm_at(sm: &[f64], k: usize) -> f64 {
+    if sm.is_empty() { 0.0 } else { sm[k] }
 }
 
 /// One disc–disc contact between the discs at `i` and `j` of `p`; `fs` is
@@ -746,7 +766,7 @@ fn pair_contact(
     j: usize,
     law: &ContactLaw,
     dash: &[f64; 4],
-    q: &Pair,
+    q: f64,
     fs: &mut f64,
     dt: f64,
 ) -> ContactForce {
@@ -771,7 +791,7 @@ fn pair_contact_roll(
     j: usize,
     law: &ContactLaw,
     dash: &[f64; 4],
-    q: &Pair,
+    q: f64,
     fs: &mut f64,
     mr: &mut f64,
     dt: f64,
@@ -1184,18 +1204,13 @@ mod tests {
                 ..Default::default()
             };
             let dash = law.dashpot_terms();
-            let mk = |i: u32, j: u32| Pair {
-                i,
-                j,
-                sqrt_m_eff: 0.7,
-            };
-            let q = [mk(0, 1), mk(2, 3)];
+            let q = [0.7, 0.7];
             let mut fs = [u(-300.0, 300.0), u(-300.0, 300.0)];
             let dt = 1e-3;
             let lanes = lanes::pair_contacts(kin, [0, 2], [1, 3], fs, [0.7, 0.7], &law, &dash, dt)
                 .expect("distinct centres");
             for (l, (i, j)) in [(0, 1), (2, 3)].into_iter().enumerate() {
-                let cf = pair_contact(kin, i, j, &law, &dash, &q[l], &mut fs[l], dt);
+                let cf = pair_contact(kin, i, j, &law, &dash, q[l], &mut fs[l], dt);
                 let bits = |c: &ContactForce| [c.f.x.to_bits(), c.f.y.to_bits(), c.fs.to_bits()];
                 assert_eq!(bits(&cf), bits(&lanes.0[l]), "case {case} lane {l}");
                 assert_eq!(
@@ -1266,12 +1281,7 @@ mod tests {
                 ..Default::default()
             };
             let dash = law.dashpot_terms();
-            let mk = |i: u32, j: u32| Pair {
-                i,
-                j,
-                sqrt_m_eff: 0.7,
-            };
-            let q = [mk(0, 1), mk(2, 3)];
+            let q = [0.7, 0.7];
             let mut fs = [u(-300.0, 300.0), u(-300.0, 300.0)];
             let mut mr = [u(-100.0, 100.0), u(-100.0, 100.0)];
             let dt = 1e-3;
@@ -1290,7 +1300,7 @@ mod tests {
             .expect("distinct centres");
             for (l, (i, j)) in [(0, 1), (2, 3)].into_iter().enumerate() {
                 let (cf, m) = pair_contact_roll(
-                    kin, inert, i, j, &law, &dash, &q[l], &mut fs[l], &mut mr[l], dt,
+                    kin, inert, i, j, &law, &dash, q[l], &mut fs[l], &mut mr[l], dt,
                 );
                 let bits = |c: &ContactForce| [c.f.x.to_bits(), c.f.y.to_bits(), c.fs.to_bits()];
                 assert_eq!(bits(&cf), bits(&cfl[l]), "case {case} lane {l}");
