@@ -182,6 +182,7 @@ impl Granular {
         self.time = s.time;
         self.max_disp = s.max_disp;
         self.external.clear();
+        self.last_check = None;
         let c = &mut self.contacts;
         let p = &self.particles;
         c.shear.clone_from(&s.shear);

@@ -60,6 +60,9 @@ struct Ctx<'a> {
     store: bool,
     /// External forces and moments `(slot, f, moment)`, sorted by slot.
     external: &'a [(u32, Vec2, f64)],
+    /// `(check_radii/Δt)²`: a disc is flagged when `v·v > max_v2 r²` or
+    /// its state is not finite.
+    max_v2: f64,
 }
 
 /// The discs `lo..lo + pos.len()` with their pairs (as first disc) and
@@ -179,8 +182,10 @@ impl Granular {
     /// Leaves the contact force and moment of each disc in
     /// `particles.force`/`torque` and each wall contact in `wall_buf`.
     /// Returns the largest disc displacement since the last rebuild
-    /// (`ADVANCE` only; infinity when there is no reference).
-    pub(super) fn sweep<const ADVANCE: bool>(&mut self) -> f64 {
+    /// (`ADVANCE` only; infinity when there is no reference), and whether
+    /// some disc failed the check of [`Granular::check_radii`] after its
+    /// advance (`ADVANCE` only).
+    pub(super) fn sweep<const ADVANCE: bool>(&mut self) -> (f64, bool) {
         // a list built for another set of discs (or never built) is rebuilt
         if self.contacts.first.len() != self.particles.len() + 1 {
             self.grid.stale = true;
@@ -196,7 +201,7 @@ impl Granular {
     /// [`sweep`](Self::sweep) with (`ROLL`) or without rolling resistance:
     /// without, the kernels are those before rolling resistance existed
     /// (bitwise the same results, nothing more read or written).
-    fn sweep_with<const ADVANCE: bool, const ROLL: bool>(&mut self) -> f64 {
+    fn sweep_with<const ADVANCE: bool, const ROLL: bool>(&mut self) -> (f64, bool) {
         let n = self.particles.len();
         let ContactList {
             j: pairs,
@@ -266,6 +271,7 @@ impl Granular {
             dt: self.dt,
             store: !ADVANCE || self.store_forces,
             external: &self.external,
+            max_v2: self.check_radii * self.check_radii / (self.dt * self.dt),
         };
         let p = &mut self.particles;
         let ref_pos: &[Vec2] = if ADVANCE && self.grid.ref_pos.len() == n {
@@ -295,8 +301,8 @@ impl Granular {
             wall_buf,
         };
         let has_ref = !ref_pos.is_empty();
-        let max2 = sweep_blocks::<ADVANCE, ROLL>(0..n.div_ceil(*block), all, &ctx);
-        if has_ref { max2.sqrt() } else { f64::INFINITY }
+        let (max2, bad) = sweep_blocks::<ADVANCE, ROLL>(0..n.div_ceil(*block), all, &ctx);
+        (if has_ref { max2.sqrt() } else { f64::INFINITY }, bad)
     }
 }
 
@@ -372,15 +378,16 @@ fn cross_pairs_roll(
 }
 
 /// Split the block range in halves and sweep them in parallel; returns the
-/// largest squared displacement (an exact max: thread-count independent).
+/// largest squared displacement (an exact max: thread-count independent)
+/// and whether a disc failed the step check.
 fn sweep_blocks<const ADVANCE: bool, const ROLL: bool>(
     blocks: std::ops::Range<usize>,
     all: Block,
     ctx: &Ctx,
-) -> f64 {
+) -> (f64, bool) {
     if blocks.len() <= 1 {
         return if blocks.is_empty() {
-            0.0
+            (0.0, false)
         } else {
             sweep_block::<ADVANCE, ROLL>(blocks.start, all, ctx)
         };
@@ -392,12 +399,16 @@ fn sweep_blocks<const ADVANCE: bool, const ROLL: bool>(
         || sweep_blocks::<ADVANCE, ROLL>(blocks.start..mid, a, ctx),
         || sweep_blocks::<ADVANCE, ROLL>(mid..blocks.end, b, ctx),
     );
-    x.max(y)
+    (x.0.max(y.0), x.1 || y.1)
 }
 
 /// Sweep one block: its discs in slot order, each one's contacts, then (with
 /// `ADVANCE`) the disc's step.
-fn sweep_block<const ADVANCE: bool, const ROLL: bool>(blk: usize, b: Block, ctx: &Ctx) -> f64 {
+fn sweep_block<const ADVANCE: bool, const ROLL: bool>(
+    blk: usize,
+    b: Block,
+    ctx: &Ctx,
+) -> (f64, bool) {
     ACC.with_borrow_mut(|acc| {
         acc.clear();
         acc.resize(b.pos.len(), (Vec2::ZERO, 0.0));
@@ -420,7 +431,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
     acc: &mut [(Vec2, f64)],
     acc_r: &mut [f64],
     ctx: &Ctx,
-) -> f64 {
+) -> (f64, bool) {
     let Block {
         lo,
         pos,
@@ -484,6 +495,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
     let mut wk = 0usize;
     let mut ek = ctx.external.partition_point(|e| (e.0 as usize) < lo);
     let mut m2 = 0.0f64;
+    let mut bad = false;
     let single = ctx.n_mat == 1;
     // the single-material law, looked up once
     let (law0, dash0) = match (ctx.laws.first(), ctx.dash.first()) {
@@ -672,9 +684,12 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                 let d2 = (pos[d] - ref_pos[d]).norm2();
                 m2 = if d2 > m2 { d2 } else { m2 };
             }
+            // the model's per-step check, while the disc is in registers
+            let (x, v, r) = (pos[d], vel[d], radius[d]);
+            bad |= !(v.dot(v) <= ctx.max_v2 * r * r && (x.x + x.y + omega[d]).is_finite());
         }
     }
-    m2
+    (m2, bad)
 }
 
 /// The per-disc arrays the disc–disc kernel reads, cut to one length so
