@@ -31,11 +31,26 @@ use crate::geom::Vec2;
 use rayon::prelude::*;
 
 thread_local! {
-    /// Per-thread accumulators of the block being swept (grown once).
-    static ACC: std::cell::RefCell<Vec<(Vec2, f64)>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// Per-thread accumulators of the block being swept (grown once). A
+    /// sweep leaves every entry it used at zero again (each disc takes its
+    /// own), so they are not cleared per block; `true` while a sweep runs
+    /// (a sweep that panicked left them dirty: cleared at the next).
+    static ACC: std::cell::RefCell<(Vec<(Vec2, f64)>, bool)> = const { std::cell::RefCell::new((Vec::new(), false)) };
     /// Per-thread accumulators of the rolling moments (rolling resistance
-    /// only).
-    static ACC_ROLL: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// only), kept as `ACC`.
+    static ACC_ROLL: std::cell::RefCell<(Vec<f64>, bool)> = const { std::cell::RefCell::new((Vec::new(), false)) };
+}
+
+/// The first `n` entries of a zeroed per-thread accumulator, marked in use.
+fn zeroed<T: Copy + Default>((v, busy): &mut (Vec<T>, bool), n: usize) -> &mut [T] {
+    if *busy {
+        v.fill(T::default());
+    }
+    if v.len() < n {
+        v.resize(n, T::default());
+    }
+    *busy = true;
+    &mut v[..n]
 }
 
 /// Per-step constants of the sweep.
@@ -409,18 +424,20 @@ fn sweep_block<const ADVANCE: bool, const ROLL: bool>(
     b: Block,
     ctx: &Ctx,
 ) -> (f64, bool) {
-    ACC.with_borrow_mut(|acc| {
-        acc.clear();
-        acc.resize(b.pos.len(), (Vec2::ZERO, 0.0));
-        if ROLL {
-            ACC_ROLL.with_borrow_mut(|acc_r| {
-                acc_r.clear();
-                acc_r.resize(b.pos.len(), 0.0);
-                sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, acc_r, ctx)
+    let n = b.pos.len();
+    ACC.with_borrow_mut(|acc_cell| {
+        let acc = zeroed(acc_cell, n);
+        let r = if ROLL {
+            ACC_ROLL.with_borrow_mut(|roll_cell| {
+                let r = sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, zeroed(roll_cell, n), ctx);
+                roll_cell.1 = false;
+                r
             })
         } else {
             sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, &mut [], ctx)
-        }
+        };
+        acc_cell.1 = false;
+        r
     })
 }
 
@@ -503,9 +520,10 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         _ => (ContactLaw::default(), [0.0; 4]),
     };
     for d in 0..n {
-        let (mut sf, mut st) = acc[d];
+        // taken: the accumulators are left at zero for the next block
+        let (mut sf, mut st) = std::mem::take(&mut acc[d]);
         // rolling moments on d (ROLL only)
-        let mut sr = if ROLL { acc_r[d] } else { 0.0 };
+        let mut sr = if ROLL { std::mem::take(&mut acc_r[d]) } else { 0.0 };
         let end = ctx.first[lo + d + 1] as usize - pair_lo;
         let mut k = pk;
         while k < end {
