@@ -7,13 +7,17 @@
 //! # write the start packing (x,y,r) and the state after `--steps` steps (JSON)
 //! cargo run --release --example dem_peer -- physics 10000 --steps 2000 --packing p.csv
 //! ```
+//! `--beta-n β` replaces the critical-ratio normal dashpot by a constant
+//! one, `c_n = β k_n` (the law of the peer benchmark); `--loose` starts
+//! from the loose lattice instead of the dense packing.
 //!
 //! `bench` steps one assembly alternately on each pool (results are bitwise
 //! the same on any thread count, so every pool continues the same run) and
 //! prints, per thread count, the median, min and max of M particle-steps/s,
 //! and the paired ratio to the first thread count. `physics` runs from the
 //! dense packing at rest and prints the contacts per disc, the kinetic
-//! energy and the force on each wall as JSON (`bench/peers/` compares them
+//! energy and the force on each wall as JSON (contacts per disc: disc–disc
+//! contacts counted at both discs, `2 N_c/N`; wall contacts apart) (`bench/peers/` compares them
 //! with LAMMPS).
 
 #[path = "../benches/common/dem_setup.rs"]
@@ -53,6 +57,14 @@ fn main() {
         dem_setup::dense(n)
     };
     let mut g = dem_setup::assembly(&rows, n);
+    // the peer benchmark's law: a constant normal dashpot c_n = β_n k_n
+    // (LAMMPS `granular` with `damping velocity` has the same)
+    let beta_n: f64 = arg(&args, "--beta-n", 0.0);
+    if beta_n > 0.0 {
+        g.materials[0].zeta_n = 0.0;
+        g.materials[0].beta_n = beta_n;
+        g.update_laws();
+    }
     match mode {
         "bench" => {
             let threads: Vec<usize> = arg(&args, "--threads", "1,2".to_string())
@@ -119,7 +131,8 @@ fn main() {
                 serde_json::json!({
                     "discs": n, "steps": steps, "threads": threads, "dt": g.dt,
                     "box": [lo.x, lo.y, hi.x, hi.y],
-                    "contacts_per_disc": (2 * dd + dw) as f64 / n as f64,
+                    "contacts_per_disc": (2 * dd) as f64 / n as f64,
+                    "wall_contacts": dw,
                     "kinetic": e.kinetic, "rotational": e.rotational,
                     "wall_force": walls, "seconds": secs,
                 })
