@@ -60,6 +60,12 @@ fn main() {
     // the peer benchmark's law: a constant normal dashpot c_n = β_n k_n
     // (LAMMPS `granular` with `damping velocity` has the same)
     let beta_n: f64 = arg(&args, "--beta-n", 0.0);
+    // `--kn`: another normal stiffness (the peer script's self-test of its check)
+    let kn: f64 = arg(&args, "--kn", 0.0);
+    if kn > 0.0 {
+        g.materials[0].kn = kn;
+        g.update_laws();
+    }
     if beta_n > 0.0 {
         g.materials[0].zeta_n = 0.0;
         g.materials[0].beta_n = beta_n;

@@ -25,7 +25,10 @@ What it does, from the repository root:
    within 1 %, the floor's force within 2 %, and the kinetic energy of the
    still-settling bed within a factor 2 (it is chaotic: LAMMPS's own
    value moves by 2× between steps 1 500 and 2 000). It exits 1 when they
-   disagree (``pair granular``, the same law; hooke/history is reported);
+   disagree (``pair granular``, the same law; hooke/history is reported).
+   ``--self-test`` also runs efgdem with twice the normal stiffness and
+   requires the check to fail (it does: −6 % contacts, −4 % floor force,
+   19× the kinetic energy);
 5. timing: for each size, ``--reps`` rounds; in each round, for 1 and 2
    workers (efgdem threads, LAMMPS MPI ranks), efgdem, LAMMPS granular and
    LAMMPS hooke/history one after the other, each from the packing after
@@ -74,7 +77,7 @@ def venv(path, install):
 
 
 def dem_peer(*args):
-    out = sh([str(ROOT / "target/release/examples/dem_peer"), *map(str, args), "--beta-n", BETA_N])
+    out = sh([str(ROOT / "target/release/examples/dem_peer"), *map(str, args), "--beta-n", str(BETA_N)])
     return out
 
 
@@ -96,7 +99,7 @@ def lammps_input(style, data, box, dt, runs, check):
         wall = f"granular {law}"
     else:
         gamma_n = BETA_N * KN / M_EFF_1
-        pair = f"pair_style gran/hooke/history {KN} {KT} {gamma_n} 0.0 {MU} 0"
+        pair = f"pair_style gran/hooke/history {KN} {KT} {gamma_n} 0.0 {MU} 0\npair_coeff * *"
         wall = f"hooke/history {KN} {KT} {gamma_n} 0.0 {MU} 0"
     lines = [
         "units lj", "dimension 2", "atom_style sphere", "boundary f f p",
@@ -107,7 +110,7 @@ def lammps_input(style, data, box, dt, runs, check):
         f"fix sides all wall/gran {wall} xplane {x0} {x1}",
         f"neighbor {0.1 * 1.2} bin", "neigh_modify delay 0 every 1 check yes",
         "fix nve all nve/sphere disc", "fix grav all gravity 9.81 vector 0 -1 0",
-        "fix 2d all enforce2d", f"timestep {dt!r}", "thermo_modify norm no",
+        "fix 2d all enforce2d", f"timestep {dt!r}",
     ]
     if check:
         lines += [
@@ -117,6 +120,7 @@ def lammps_input(style, data, box, dt, runs, check):
         ]
     else:
         lines += ["thermo 0"]
+    lines += ["thermo_modify norm no"]
     lines += [f"run {n}" for n in runs]
     return "\n".join(lines) + "\n"
 
@@ -132,9 +136,9 @@ def loop_times(out):
     return [float(m) for m in re.findall(r"Loop time of ([0-9.eE+-]+) on", out)]
 
 
-def physics_check(lmp, mpiexec, env, work, n, steps):
-    csv, data = work / f"packing_{n}.csv", work / f"packing_{n}.data"
-    e = json.loads(dem_peer("physics", n, "--steps", steps, "--threads", 1))
+def physics_check(lmp, mpiexec, env, work, n, steps, efgdem_kn=KN):
+    data = work / f"packing_{n}.data"
+    e = json.loads(dem_peer("physics", n, "--steps", steps, "--threads", 1, "--kn", efgdem_kn))
     box = e["box"]
     results = {"efgdem": (e["contacts_per_disc"], e["kinetic"], -e["wall_force"][0][1])}
     for style in ("granular", "hooke_history"):
@@ -143,7 +147,8 @@ def physics_check(lmp, mpiexec, env, work, n, steps):
         step, csum, ke, floor = map(float, rows[-1][:4])
         assert int(step) == steps, rows[-1]
         results[style] = (csum / n, ke, floor)
-    print(f"\nphysics after {steps} steps from the packing at rest, {n} discs, 1 worker:")
+    print(f"\nphysics after {steps} steps from the packing at rest, {n} discs, 1 worker"
+          + (f" (efgdem with k_n = {efgdem_kn:g}: must fail)" if efgdem_kn != KN else "") + ":")
     print("| code | contacts/disc | kinetic energy | floor force |\n|---|---|---|---|")
     for k, (c, ke, f) in results.items():
         print(f"| {k} | {c:.4f} | {ke:.4g} | {f:.6g} |")
@@ -177,6 +182,8 @@ def main():
     ap.add_argument("--warm", type=int, default=200)
     ap.add_argument("--check-size", type=int, default=10000, help="0: no physics check")
     ap.add_argument("--check-steps", type=int, default=2000)
+    ap.add_argument("--self-test", action="store_true",
+                    help="also check efgdem with twice the normal stiffness: the check must fail")
     ap.add_argument("--venv", default=str(ROOT / "target/peers-venv"))
     ap.add_argument("--no-install", action="store_true", help="use the venv as it is")
     ap.add_argument("--table", help="write the timing table (Markdown) here")
@@ -198,6 +205,10 @@ def main():
     ok = True
     if a.check_size:
         ok = physics_check(lmp, mpiexec, env, work, a.check_size, a.check_steps)
+        if a.self_test:
+            if physics_check(lmp, mpiexec, env, work, a.check_size, a.check_steps, efgdem_kn=2 * KN):
+                sys.exit("self-test: the check passed a law with twice the stiffness")
+            print("  self-test: the check fails on a law with twice the stiffness, as it must")
     rate = {}
     for n in sizes:
         box, dt = boxes[n]
