@@ -1,5 +1,5 @@
-//! DEM step throughput: 10 000 and 100 000 polydisperse discs
-//! (`common/dem_setup.rs`: r uniform in [0.8, 1.2], ρ = 1,
+//! DEM step throughput (docs/performance.md): 10 000 and 100 000 polydisperse
+//! discs (`common/dem_setup.rs`: r uniform in [0.8, 1.2], ρ = 1,
 //! k_n = k_s = 10⁶, friction 0.5, normal dashpot at ζ = 0.2, gravity) in a
 //! box, (a) settling from a loose start, (b) a dense settled packing, each
 //! on 1 and 2 threads. Throughput is in particle-steps per second.
