@@ -7,7 +7,8 @@
 //! # write the start packing (x,y,r) and the state after `--steps` steps (JSON)
 //! cargo run --release --example dem_peer -- physics 10000 --steps 2000 --packing p.csv
 //! ```
-//! `--beta-n β` replaces the critical-ratio normal dashpot by a constant
+//! `--tile k` puts the dense packing k times side by side (1 000 000 dense
+//! discs: `bench 100000 --tile 10`, without settling them). `--beta-n β` replaces the critical-ratio normal dashpot by a constant
 //! one, `c_n = β k_n` (the law of the peer benchmark); `--loose` starts
 //! from the loose lattice instead of the dense packing.
 //!
@@ -47,16 +48,23 @@ fn median_min_max(v: &[f64]) -> (f64, f64, f64) {
 }
 
 fn main() {
+    // as `efgdem` does
+    efgdem::run::memory::keep_large_allocations_mapped();
     let args: Vec<String> = std::env::args().collect();
     let mode = args.get(1).map(String::as_str).unwrap_or("bench");
     let n: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(10_000);
     let steps: usize = arg(&args, "--steps", 200);
-    let rows = if args.iter().any(|a| a == "--loose") {
-        dem_setup::loose(n)
+    // `--tile k`: the dense packing of n discs k times side by side
+    let tile: usize = arg(&args, "--tile", 1);
+    let mut g = if args.iter().any(|a| a == "--loose") {
+        dem_setup::assembly(&dem_setup::loose(n), n)
+    } else if tile > 1 {
+        let (rows, lo, hi) = dem_setup::dense_tiled(n, tile);
+        dem_setup::assembly_in(&rows, lo, hi)
     } else {
-        dem_setup::dense(n)
+        dem_setup::assembly(&dem_setup::dense(n), n)
     };
-    let mut g = dem_setup::assembly(&rows, n);
+    let n = g.particles.len();
     // the peer benchmark's law: a constant normal dashpot c_n = β_n k_n
     // (LAMMPS `granular` with `damping velocity` has the same)
     let beta_n: f64 = arg(&args, "--beta-n", 0.0);
@@ -80,6 +88,10 @@ fn main() {
             let reps: usize = arg(&args, "--reps", 5);
             let warm: usize = arg(&args, "--warm", 500);
             let pools: Vec<_> = threads.iter().map(|&t| pool(t)).collect();
+            let built = efgdem::run::memory::peak_resident_bytes();
+            // from here on the peak of the stepping alone (Linux: writing
+            // 5 to clear_refs resets the high-water mark)
+            std::fs::write("/proc/self/clear_refs", "5").ok();
             pools[0].install(|| (0..warm).for_each(|_| g.step()));
             let mut rate = vec![Vec::new(); threads.len()];
             let mut ratio = vec![Vec::new(); threads.len()];
@@ -101,6 +113,13 @@ fn main() {
                 g.grid.rebuilds - rebuilds,
                 g.heap_bytes() as f64 / n as f64
             );
+            if let (Some(b), Some(s)) = (built, efgdem::run::memory::peak_resident_bytes()) {
+                println!(
+                    "peak resident memory: {:.0} bytes/disc building, {:.0} stepping",
+                    b as f64 / n as f64,
+                    s as f64 / n as f64
+                );
+            }
             for (k, t) in threads.iter().enumerate() {
                 let (m, lo, hi) = median_min_max(&rate[k]);
                 let (r, rlo, rhi) = median_min_max(&ratio[k]);
@@ -131,7 +150,7 @@ fn main() {
             let (dd, dw) = g.touching();
             let e = g.energies();
             let walls: Vec<[f64; 2]> = g.walls.iter().map(|w| [w.force.x, w.force.y]).collect();
-            let (lo, hi) = dem_setup::bounds(n);
+            let (lo, hi) = (g.walls[0].a, g.walls[2].a);
             println!(
                 "{}",
                 serde_json::json!({

@@ -35,6 +35,23 @@ pub fn bounds(n: usize) -> (Vec2, Vec2) {
     (Vec2::ZERO, Vec2::new(w, rows * 2.64 * 0.87 + 3.0))
 }
 
+/// The dense packing of n discs side by side `k` times (a wider box): a
+/// dense packing of `k n` discs without settling them, and its box.
+pub fn dense_tiled(n: usize, k: usize) -> (Vec<DiscRow>, Vec2, Vec2) {
+    let (lo, hi) = bounds(n);
+    let w = hi.x - lo.x;
+    let one = dense(n);
+    let rows = (0..k)
+        .flat_map(|t| {
+            one.iter().map(move |r| DiscRow {
+                pos: Vec2::new(r.pos.x + t as f64 * w, r.pos.y),
+                ..r.clone()
+            })
+        })
+        .collect();
+    (rows, lo, Vec2::new(lo.x + k as f64 * w, hi.y))
+}
+
 /// n discs on a jittered hexagonal lattice filling the box from the floor.
 pub fn loose(n: usize) -> Vec<DiscRow> {
     let (lo, hi) = bounds(n);
@@ -84,7 +101,12 @@ pub fn dense(n: usize) -> Vec<DiscRow> {
 /// (rolling dashpot η_r = 0.3).
 pub fn assembly(rows: &[DiscRow], n: usize) -> Granular {
     let (lo, hi) = bounds(n);
-    let mut p = Particles::default();
+    assembly_in(rows, lo, hi)
+}
+
+/// [`assembly`] in the box `[lo, hi]`.
+pub fn assembly_in(rows: &[DiscRow], lo: Vec2, hi: Vec2) -> Granular {
+    let mut p = Particles::with_capacity(rows.len());
     for r in rows {
         p.push(r.pos, r.r, 1.0, 1.0, 0);
     }
