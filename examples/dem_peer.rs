@@ -139,7 +139,10 @@ fn main() {
                 let mut s = String::from("x,y,r\n");
                 for id in 0..n {
                     let k = p.slot[id] as usize;
-                    s.push_str(&format!("{:e},{:e},{:e}\n", p.pos[k].x, p.pos[k].y, p.radius[k]));
+                    s.push_str(&format!(
+                        "{:e},{:e},{:e}\n",
+                        p.pos[k].x, p.pos[k].y, p.radius[k]
+                    ));
                 }
                 std::fs::write(path, s).expect("write the packing");
             }

@@ -53,7 +53,10 @@ vtk_every = 0
 fn children_peak() -> u64 {
     // SAFETY: getrusage writes the struct it is given and nothing else.
     let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
-    assert_eq!(unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut ru) }, 0);
+    assert_eq!(
+        unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut ru) },
+        0
+    );
     ru.ru_maxrss as u64 * 1024 // kilobytes on Linux
 }
 
@@ -76,13 +79,18 @@ fn summary_peak_memory_is_the_os_peak() {
     let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
     let s: serde_json::Value = serde_json::from_str(&text).unwrap();
     let reported = s["peak_memory_bytes"].as_f64().expect("peak_memory_bytes");
-    let per_disc = s["peak_bytes_per_disc"].as_f64().expect("peak_bytes_per_disc");
+    let per_disc = s["peak_bytes_per_disc"]
+        .as_f64()
+        .expect("peak_bytes_per_disc");
     let rebuilds = s["neighbour_rebuilds"].as_u64().unwrap();
     println!(
         "summary: {reported:.0} bytes ({per_disc:.0} per disc), OS: {os_peak:.0} bytes; {rebuilds} rebuilds; estimate {:.0} B/disc",
         s["bytes_per_disc"].as_f64().unwrap()
     );
-    assert!(rebuilds >= 9, "a run with rebuilds and a renumbering: {rebuilds}");
+    assert!(
+        rebuilds >= 9,
+        "a run with rebuilds and a renumbering: {rebuilds}"
+    );
     assert!(
         (reported - os_peak).abs() <= 0.1 * os_peak,
         "summary {reported} vs OS {os_peak}"

@@ -154,19 +154,17 @@ impl ContactList {
         if self.needs_mass {
             let mut sm = vec![0.0; self.j.len()];
             let (first, j) = (&self.first, &self.j);
-            sm.par_chunks_mut(CHUNK)
-                .enumerate()
-                .for_each(|(c, out)| {
-                    let k0 = c * CHUNK;
-                    let mut i = first.partition_point(|&f| (f as usize) <= k0) - 1;
-                    for (k, o) in out.iter_mut().enumerate() {
-                        while first[i + 1] as usize <= k0 + k {
-                            i += 1;
-                        }
-                        let jj = j[k0 + k] as usize;
-                        *o = effective_mass(p.inv_mass[i], p.inv_mass[jj]).sqrt();
+            sm.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
+                let k0 = c * CHUNK;
+                let mut i = first.partition_point(|&f| (f as usize) <= k0) - 1;
+                for (k, o) in out.iter_mut().enumerate() {
+                    while first[i + 1] as usize <= k0 + k {
+                        i += 1;
                     }
-                });
+                    let jj = j[k0 + k] as usize;
+                    *o = effective_mass(p.inv_mass[i], p.inv_mass[jj]).sqrt();
+                }
+            });
             self.sqrt_m_eff = sm;
         }
         self.index_cross(p.len());
@@ -677,8 +675,7 @@ impl NeighbourGrid {
                             while o < old.len() && (old[o].disc, old[o].wall) < key {
                                 o += 1;
                             }
-                            let (fs, mr) = if o < old.len() && (old[o].disc, old[o].wall) == key
-                            {
+                            let (fs, mr) = if o < old.len() && (old[o].disc, old[o].wall) == key {
                                 (old[o].fs, old[o].mr)
                             } else {
                                 (0.0, 0.0)

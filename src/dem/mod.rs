@@ -648,12 +648,7 @@ impl Granular {
         };
         let roll = &self.contacts.roll;
         let rolling = self.contacts.rolling && roll.len() == self.contacts.len();
-        for (k, ((i, j), &fs)) in self
-            .contacts
-            .pairs()
-            .zip(&self.contacts.shear)
-            .enumerate()
-        {
+        for (k, ((i, j), &fs)) in self.contacts.pairs().zip(&self.contacts.shear).enumerate() {
             let dist = (p.pos[j] - p.pos[i]).norm();
             let (ri, rj) = (p.radius[i], p.radius[j]);
             let law = self.law(i, j);

@@ -523,7 +523,11 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         // taken: the accumulators are left at zero for the next block
         let (mut sf, mut st) = std::mem::take(&mut acc[d]);
         // rolling moments on d (ROLL only)
-        let mut sr = if ROLL { std::mem::take(&mut acc_r[d]) } else { 0.0 };
+        let mut sr = if ROLL {
+            std::mem::take(&mut acc_r[d])
+        } else {
+            0.0
+        };
         let end = ctx.first[lo + d + 1] as usize - pair_lo;
         let mut k = pk;
         while k < end {
