@@ -318,8 +318,8 @@ impl Cholesky {
     /// Sequential: a solve with one right-hand side reads `L` twice and
     /// does two flops per entry, so it is bound by memory bandwidth, and
     /// splitting its supernodes over threads only adds their
-    /// synchronisation (the 201 × 201 EFG plate's Newmark step took 1.4 ×
-    /// as long on 2 threads as on 1). The factorisation uses the threads.
+    /// synchronisation: a second thread must never make a step slower.
+    /// The factorisation uses the threads.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
         let n = rhs.len();
         let llt = LltRef::new(&self.symbolic, &self.values);
