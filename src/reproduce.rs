@@ -1414,6 +1414,8 @@ fn fig17(job: &mut Job) -> Result<()> {
             contact: None,
             disc: None,
             wall: None,
+            crack: None,
+            tip: None,
         });
     }
     let name = format!("nine_disc_efg_test1_E{E_FIG17:.1e}");

@@ -27,7 +27,7 @@ pub use conditions::{
 };
 pub use drive::{Drive, DriveLaw, DrivePhase, DriveState, Measure, ServoSpec, Target};
 pub use material::{Material, Sample};
-pub use state::{BodyState, BoundaryState, StateError};
+pub use state::{BodyState, BoundaryState, CrackState, StateError};
 pub use table::{Table, TimedLoad};
 
 use crate::continuum::compliance::{BoundaryGreen, Compliance, PointRows};

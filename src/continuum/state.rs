@@ -53,6 +53,20 @@ pub struct BodyState {
     /// drives ([`WithBoundary`](super::WithBoundary)); `None` for a body
     /// of a continuum-only model.
     pub boundary: Option<BoundaryState>,
+    /// The cracks of an EFG body as they have grown (`None`: a body
+    /// without crack growth): a restart rebuilds the body with them.
+    pub cracks: Option<CrackState>,
+}
+
+/// The grown cracks of a body (checkpointed).
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CrackState {
+    /// Each crack's polyline now.
+    pub cracks: Vec<crate::geom::crack::Crack>,
+    /// Growth increments so far per crack `[first end, last end]`.
+    pub increments: Vec<[usize; 2]>,
+    /// Energy released by growth so far.
+    pub fracture_energy: f64,
 }
 
 /// The running state of a drive (checkpointed).

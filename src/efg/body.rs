@@ -17,10 +17,11 @@ use crate::continuum::newmark::{Newmark, NewmarkParams, State};
 use crate::continuum::quadrature::{self, QuadPoint};
 use crate::continuum::timoshenko::Timoshenko;
 use crate::continuum::{
-    BodyParams, BodyState, Drive, DriveState, Edge, Material, Measure, Sample, StateError,
-    TimedLoad,
+    BodyParams, BodyState, CrackState, Drive, DriveState, Edge, Material, Measure, Sample,
+    StateError, TimedLoad,
 };
 use crate::geom::Vec2;
+use crate::geom::crack::Crack;
 use crate::sparse::{Cholesky, RowSelection};
 use std::time::Instant;
 
@@ -659,6 +660,11 @@ impl EfgBody {
             load_work: self.load_work,
             reactions: Vec::new(),
             boundary: None,
+            cracks: self.spec.fracture.map(|_| CrackState {
+                cracks: self.cracks().iter().map(|c| c.crack.clone()).collect(),
+                increments: self.increments.clone(),
+                fracture_energy: self.fracture_energy,
+            }),
         }
     }
 
@@ -666,6 +672,9 @@ impl EfgBody {
     /// same parameters (name and DOFs checked). The operators, the factor
     /// and the prescribed motion (a function of the step) are the build's.
     pub fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError> {
+        if let Some(c) = &s.cracks {
+            self.regrow(c)?;
+        }
         s.check(&self.name, self.n_dofs(), 0)?;
         s.check_drives(&self.name, Some(self.ops.penalty.moving.len()))?;
         self.state.clone_from(&s.state);
@@ -678,6 +687,35 @@ impl EfgBody {
         self.f_point.clone_from(&s.f_point);
         self.motion_work = s.motion_work;
         self.refine_pending = false;
+        Ok(())
+    }
+
+    /// Rebuild the body with the grown cracks of a saved state (unless
+    /// they are the body's), its integrator restarted if it was.
+    fn regrow(&mut self, c: &CrackState) -> Result<(), StateError> {
+        let now: Vec<&Crack> = self.cracks().iter().map(|k| &k.crack).collect();
+        if c.cracks.len() != self.spec.cracks.len() {
+            return Err(StateError::new(format!(
+                "body `{}`: {} saved cracks, the body has {}",
+                self.name,
+                c.cracks.len(),
+                self.spec.cracks.len()
+            )));
+        }
+        if c.cracks.iter().ne(now.into_iter()) {
+            let mut spec = self.spec.clone();
+            for (k, saved) in spec.cracks.iter_mut().zip(&c.cracks) {
+                k.crack = saved.clone();
+            }
+            let bad = |e: EfgError| StateError::new(format!("body `{}`: {e}", self.name));
+            let mut new = EfgBody::new(&spec, self.gravity).map_err(bad)?;
+            if let Some(dt) = self.newmark().map(|_| self.params.dt) {
+                new.start_dynamic(dt).map_err(bad)?;
+            }
+            *self = new;
+        }
+        self.increments.clone_from(&c.increments);
+        self.fracture_energy = c.fracture_energy;
         Ok(())
     }
 

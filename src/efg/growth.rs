@@ -150,6 +150,37 @@ impl EfgBody {
         Ok(out)
     }
 
+    /// A static analysis with growth: solve, then as long as a tip meets
+    /// the criterion grow it and solve again under the same loads (each
+    /// tip at most `max_increments` times). Returns every advance.
+    pub fn solve_static_growing(&mut self) -> Result<Vec<Growth>, EfgError> {
+        self.solve_static()?;
+        let mut all = Vec::new();
+        loop {
+            let g = self.grow()?;
+            if g.is_empty() {
+                return Ok(all);
+            }
+            all.extend(g);
+            self.solve_static()?;
+        }
+    }
+
+    /// In a time-stepped run: [`grow`](Self::grow) when the step count is
+    /// a multiple of the fracture's `every`.
+    pub fn grow_if_due(&mut self) -> Result<Vec<Growth>, EfgError> {
+        match self.spec.fracture {
+            Some(f) if self.step % f.every.max(1) == 0 => self.grow(),
+            _ => Ok(Vec::new()),
+        }
+    }
+
+    /// How many times the body was rebuilt by growth (0: as built from
+    /// the scenario): shape rows bound earlier belong to that generation.
+    pub fn generation(&self) -> usize {
+        self.increments.iter().map(|i| i[0] + i[1]).sum()
+    }
+
     /// May crack `crack` run on from `from` to `to`: `to` inside the body
     /// and at least `clear` from its boundary, the new piece meeting no
     /// other crack?
@@ -187,6 +218,7 @@ impl EfgBody {
         s.state.v = v;
         s.state.a = a;
         s.f_point = vec![0.0; self.n_dofs()];
+        s.cracks = None; // the cracks are this body's
         if old.newmark().is_some() {
             self.start_dynamic(old.params.dt)?;
         }

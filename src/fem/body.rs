@@ -799,6 +799,7 @@ impl FemBody {
             load_work: self.load_work,
             reactions: self.constraints.iter().map(|c| c.reaction).collect(),
             boundary: None,
+            cracks: None,
         }
     }
 

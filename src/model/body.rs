@@ -48,7 +48,7 @@ impl Body {
     /// accumulated point loads); the state becomes `(U, 0, 0)`.
     pub fn solve_static(&mut self) -> Result<(), BodyError> {
         match self {
-            Body::Efg(b) => Ok(b.solve_static()?),
+            Body::Efg(b) => Ok(b.solve_static_growing().map(drop)?),
             Body::Fem(b) => Ok(b.solve_static()?),
         }
     }
@@ -60,10 +60,14 @@ impl Body {
             Body::Fem(b) => Ok(b.start_dynamic(dt)?),
         }
     }
-    /// One Newmark step with the permanent and accumulated point loads.
+    /// One Newmark step with the permanent and accumulated point loads;
+    /// then, for an EFG body with crack growth, the tips grow if due.
     pub fn advance(&mut self) -> Result<(), BodyError> {
         match self {
-            Body::Efg(b) => Ok(b.advance()?),
+            Body::Efg(b) => {
+                b.advance()?;
+                Ok(b.grow_if_due().map(drop)?)
+            }
             Body::Fem(b) => Ok(b.advance()?),
         }
     }
@@ -143,6 +147,14 @@ impl<'a> BodyRef<'a> {
         match self {
             BodyRef::Efg(b) => b.n_nodes(),
             BodyRef::Fem(b) => b.n_nodes(),
+        }
+    }
+    /// How many times the body was rebuilt by crack growth: a point bound
+    /// in another generation must be bound again.
+    pub fn generation(self) -> usize {
+        match self {
+            BodyRef::Efg(b) => b.generation(),
+            BodyRef::Fem(_) => 0,
         }
     }
     /// Bind a sampling point: a shape row (EFG) or an element (FE).

@@ -19,8 +19,27 @@ pub enum Probe {
         body: usize,
         /// The bound reference point.
         at: At,
+        /// The point.
+        point: Vec2,
+        /// The body's generation `at` was bound in ([`BodyRef::generation`]):
+        /// a body rebuilt by crack growth is sampled afresh.
+        generation: usize,
         /// The field's name.
         field: String,
+    },
+    /// A crack quantity of EFG body `body`: `k1`, `k2`, `k_eq` (stress
+    /// intensity factors at the tip, maximum hoop-stress `K_eq`),
+    /// `crack_length` (the polyline's length), `fracture_energy` (body-wide,
+    /// released by growth so far).
+    Crack {
+        /// Body index.
+        body: usize,
+        /// Crack index in the body.
+        crack: usize,
+        /// The crack's end (0: first point, 1: last point).
+        end: usize,
+        /// The quantity's name.
+        quantity: String,
     },
     /// `kinetic_energy`, `strain_energy` or `total_energy` of a body.
     BodyEnergy {
@@ -211,9 +230,27 @@ pub fn value<'a>(
 ) -> f64 {
     let g = || granular.expect("a probe of the discs needs a granular assembly");
     match p {
-        Probe::BodyPoint { body: b, at, field } => {
-            body(*b).sample_at(at).field(field).unwrap_or(f64::NAN)
+        Probe::BodyPoint {
+            body: b,
+            at,
+            point,
+            generation,
+            field,
+        } => {
+            let b = body(*b);
+            let s = if b.generation() == *generation {
+                Some(b.sample_at(at))
+            } else {
+                b.sample(*point).ok()
+            };
+            s.and_then(|s| s.field(field)).unwrap_or(f64::NAN)
         }
+        Probe::Crack {
+            body: b,
+            crack,
+            end,
+            quantity,
+        } => crack_quantity(body(*b), *crack, *end, quantity),
         Probe::BodyEnergy { body: b, quantity } => {
             let b = body(*b);
             match quantity.as_str() {
@@ -284,5 +321,30 @@ pub fn value<'a>(
                 _ => v,
             }
         }
+    }
+}
+
+/// A crack quantity ([`Probe::Crack`]) of a body; NaN where it has no
+/// meaning (an FE body, an end that is a mouth, a failed integral).
+fn crack_quantity(b: BodyRef<'_>, crack: usize, end: usize, q: &str) -> f64 {
+    let BodyRef::Efg(b) = b else {
+        return f64::NAN;
+    };
+    match q {
+        "fracture_energy" => return b.fracture_energy,
+        "crack_length" => return b.cracks().get(crack).map_or(f64::NAN, |c| c.crack.length()),
+        _ => {}
+    }
+    let tip = crate::efg::fracture::Tip { crack, end };
+    if !b.tips().contains(&tip) {
+        return f64::NAN;
+    }
+    let Ok(k) = b.stress_intensity(tip, b.default_ring(tip)) else {
+        return f64::NAN;
+    };
+    match q {
+        "k1" => k[0],
+        "k2" => k[1],
+        _ => crate::continuum::crack_tip::max_hoop_stress(k).1,
     }
 }

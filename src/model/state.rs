@@ -35,8 +35,9 @@ use crate::dem::state::GranularState;
 /// a saved type changes.
 /// (2: walls keep both ends of the Verlet reference, for joined ends;
 /// 3: walls keep the integral velocity of a servo with integral action;
-/// 4: bodies keep their drives' state and the work of timed loads.)
-pub const STATE_FORMAT_VERSION: u32 = 4;
+/// 4: bodies keep their drives' state and the work of timed loads;
+/// 5: EFG bodies keep their grown cracks.)
+pub const STATE_FORMAT_VERSION: u32 = 5;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

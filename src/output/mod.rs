@@ -2,6 +2,7 @@
 //! plots and reports. Files are streamed and flushed as the run goes, so a
 //! run that is stopped keeps what it computed.
 
+pub mod cracks;
 pub mod csv;
 pub mod frames;
 pub mod plot;

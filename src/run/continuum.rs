@@ -59,6 +59,12 @@ fn body_summary(b: &Body) -> Result<Value, BodyError> {
         "kinetic_energy": b.kinetic_energy(),
         "strain_energy": b.strain_energy(),
     });
+    if let Body::Efg(b) = b
+        && !b.cracks().is_empty()
+    {
+        v["cracks"] = crack_summary(b)?;
+        v["fracture_energy"] = json!(b.fracture_energy);
+    }
     if let Some(t) = tim {
         let tip_at = Vec2::new(t.x0 + t.l, t.yc);
         let cells = [2 * (grid[0] - 1), 2 * (grid[1] - 1)];
@@ -80,6 +86,41 @@ fn body_summary(b: &Body) -> Result<Value, BodyError> {
         });
     }
     Ok(v)
+}
+
+/// The cracks of an EFG body: polyline, length, growth increments, and at
+/// each tip `K_I`, `K_II`, `K_eq` and the kink angle of the maximum
+/// hoop-stress criterion (degrees).
+fn crack_summary(b: &crate::efg::EfgBody) -> Result<Value, BodyError> {
+    let states = b.tip_states()?;
+    let cracks = b
+        .cracks()
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let tips: Vec<Value> = states
+                .iter()
+                .filter(|s| s.tip.crack == k)
+                .map(|s| {
+                    json!({
+                        "tip": s.tip.end + 1,
+                        "at": b.tip_frame(s.tip).0.to_array(),
+                        "k1": s.k[0],
+                        "k2": s.k[1],
+                        "k_eq": s.k_eq,
+                        "kink_degrees": s.theta.to_degrees(),
+                    })
+                })
+                .collect();
+            json!({
+                "points": c.crack.points.iter().map(|p| p.to_array()).collect::<Vec<_>>(),
+                "length": c.crack.length(),
+                "increments": b.increments[k],
+                "tips": tips,
+            })
+        })
+        .collect();
+    Ok(Value::Array(cracks))
 }
 
 /// Run a continuum-only scenario.

@@ -111,6 +111,11 @@ pub struct BodySpec {
     /// The paper's Example 1 has gravity on the disc only.
     #[serde(default = "yes")]
     pub self_weight: bool,
+    /// Cracks (EFG bodies): `[[body.crack]]`.
+    #[serde(default)]
+    pub crack: Vec<super::crack::CrackSpec>,
+    /// Crack growth: `[body.fracture]`.
+    pub fracture: Option<super::crack::FractureSpec>,
 }
 
 /// `refine = [{ edges = ["name", …], spacing = h_r, width = w }]`: nodes
@@ -333,8 +338,8 @@ impl BodySpec {
                 .map_or_else(Vec::new, |i| i.static_under.clone()),
             self_weight: self.self_weight,
             loads: self.load.clone(),
-            cracks: Vec::new(),
-            fracture: None,
+            cracks: self.crack.iter().map(|c| c.shape()).collect(),
+            fracture: self.fracture.as_ref().map(|f| f.params()),
         }
     }
 }
@@ -395,12 +400,18 @@ pub const DRIVE_QUANTITIES: &[&str] = &[
     "drive_ux", "drive_uy", "drive_vx", "drive_vy", "drive_fx", "drive_fy",
 ];
 
+/// Crack quantities of an EFG body (no `point`; `crack = n`, `tip = 1|2`):
+/// stress intensity factors `K_I`, `K_II` and `K_eq` at a tip, the crack's
+/// length, the energy released by growth.
+pub const CRACK_QUANTITIES: &[&str] = &["k1", "k2", "k_eq", "crack_length", "fracture_energy"];
+
 /// Is `pr` a probe of a body? In a continuum-only run every point quantity
 /// is; in a coupled run a probe belongs to a body when it has a `point` or
 /// a body-wide quantity (so `vx` of a disc stays a disc probe).
 pub fn is_body_probe(pr: &crate::scenario::Probe, continuum_only: bool) -> bool {
     let q = pr.quantity.as_str();
     BODY_QUANTITIES.contains(&q)
+        || CRACK_QUANTITIES.contains(&q)
         || DRIVE_QUANTITIES.contains(&q)
         || (!continuum_only && CONTACT_FORCE_QUANTITIES.contains(&q))
         || (POINT_QUANTITIES.contains(&q) && (continuum_only || pr.point.is_some()))
@@ -872,6 +883,7 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 None
             }
         };
+        super::crack::validate(i, b, domain.as_ref(), sc.granular.is_some(), p);
         if b.is_polygon() {
             validate_polygon(sc, i, b, domain.as_ref(), p);
         } else {
@@ -1229,6 +1241,9 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 ),
             );
         }
+        if let (true, Some(b)) = (CRACK_QUANTITIES.contains(&q), body) {
+            validate_crack_probe(b, pr, &at, p);
+        }
         if POINT_QUANTITIES.contains(&q) {
             match pr.point {
                 None => p.push(at("quantity"), format!("`{q}` needs a `point = [x, y]`")),
@@ -1253,5 +1268,43 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 }
             }
         }
+    }
+}
+
+/// Checks of a crack probe of body `b`: the crack exists, the end is a tip.
+fn validate_crack_probe(
+    b: &BodySpec,
+    pr: &crate::scenario::Probe,
+    at: &dyn Fn(&str) -> String,
+    p: &mut Problems,
+) {
+    let q = pr.quantity.as_str();
+    if q == "fracture_energy" {
+        return;
+    }
+    let k = pr.crack.unwrap_or(1);
+    if k == 0 || k > b.crack.len() {
+        p.push(
+            at("crack"),
+            format!(
+                "body `{}` has {} crack(s) (`[[body.crack]]`, numbered from 1); got {k}",
+                b.name,
+                b.crack.len()
+            ),
+        );
+        return;
+    }
+    if matches!(q, "k1" | "k2" | "k_eq") {
+        p.check(
+            pr.tip.is_none_or(|t| t == 1 || t == 2),
+            at("tip"),
+            "1 (the crack's first point) or 2 (its last point)",
+        );
+    } else {
+        p.check(
+            pr.tip.is_none(),
+            at("tip"),
+            format!("`{q}` is a quantity of the whole crack: omit `tip`"),
+        );
     }
 }

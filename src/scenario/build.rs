@@ -6,8 +6,8 @@
 //! scenario reports it as `file:line: field: message`.
 
 use super::body::{
-    BODY_QUANTITIES, CONTACT_FORCE_QUANTITIES, DRIVE_QUANTITIES, Method, POINT_QUANTITIES,
-    is_body_probe,
+    BODY_QUANTITIES, CONTACT_FORCE_QUANTITIES, CRACK_QUANTITIES, DRIVE_QUANTITIES, Method,
+    POINT_QUANTITIES, is_body_probe,
 };
 use super::generate::discs_from_csv;
 use super::granular::{
@@ -1015,6 +1015,8 @@ pub fn probes(sc: &Scenario, model: &Model) -> Result<Vec<(String, Probe)>, Inva
                     .ok_or_else(|| bad(&at("quantity"), format!("body {body} has no drive on that component")))
             };
             let probe = match &model.system {
+                _ if CRACK_QUANTITIES.contains(&q.as_str()) => crack_probe(model, body_index()?, pr)
+                    .map_err(|m| bad(&at("tip"), m))?,
                 System::Continuum { .. } if DRIVE_QUANTITIES.contains(&q.as_str()) => {
                     drive(body_index()?)?
                 }
@@ -1024,6 +1026,8 @@ pub fn probes(sc: &Scenario, model: &Model) -> Result<Vec<(String, Probe)>, Inva
                         Some(p) if !BODY_QUANTITIES.contains(&q.as_str()) => Probe::BodyPoint {
                             body,
                             at: bind(body, p)?,
+                            point: Vec2::from(p),
+                            generation: model.body(body).generation(),
                             field: q,
                         },
                         _ => Probe::BodyEnergy { body, quantity: q },
@@ -1058,6 +1062,8 @@ pub fn probes(sc: &Scenario, model: &Model) -> Result<Vec<(String, Probe)>, Inva
                             Probe::BodyPoint {
                                 body,
                                 at: bind(body, p)?,
+                                point: Vec2::from(p),
+                                generation: model.body(body).generation(),
                                 field: q,
                             }
                         }
@@ -1072,6 +1078,40 @@ pub fn probes(sc: &Scenario, model: &Model) -> Result<Vec<(String, Probe)>, Inva
     // then the `[[measure]]` columns
     out.extend(super::measure::probes(sc, model)?);
     Ok(out)
+}
+
+/// A crack probe ([`Probe::Crack`]) of body `body`: crack `pr.crack`
+/// (1-based, default 1), end `pr.tip` (1 first point, 2 last; default the
+/// last point if it is a tip, else the first), which must be a tip for the
+/// stress intensity factors.
+fn crack_probe(model: &Model, body: usize, pr: &super::Probe) -> Result<Probe, String> {
+    let crate::model::body::BodyRef::Efg(b) = model.body(body) else {
+        return Err("crack quantities belong to EFG bodies".into());
+    };
+    let crack = pr.crack.unwrap_or(1).saturating_sub(1);
+    let Some(c) = b.cracks().get(crack) else {
+        return Err(format!("body `{}` has no crack {}", b.name, crack + 1));
+    };
+    let is_tip = |e: usize| c.ends[e] == crate::geom::crack::End::Tip;
+    let end = match pr.tip {
+        Some(t) => t.saturating_sub(1).min(1),
+        None if is_tip(1) => 1,
+        None => 0,
+    };
+    let needs_tip = matches!(pr.quantity.as_str(), "k1" | "k2" | "k_eq");
+    if needs_tip && !is_tip(end) {
+        return Err(format!(
+            "end {} of crack {} is a mouth on the boundary, not a tip",
+            end + 1,
+            crack + 1
+        ));
+    }
+    Ok(Probe::Crack {
+        body,
+        crack,
+        end,
+        quantity: pr.quantity.clone(),
+    })
 }
 
 fn body_name(model: &Model, i: usize) -> &str {

@@ -10,6 +10,7 @@
 pub mod body;
 pub mod build;
 pub mod builder;
+pub mod crack;
 pub mod generate;
 pub mod granular;
 pub mod measure;
@@ -246,6 +247,11 @@ pub struct Probe {
     pub disc: Option<usize>,
     /// A wall name.
     pub wall: Option<String>,
+    /// A crack of the body, 1-based (crack quantities; default 1).
+    pub crack: Option<usize>,
+    /// The crack's end: 1 its first point, 2 its last (stress intensity
+    /// factors; default: the last point if it is a tip, else the first).
+    pub tip: Option<usize>,
 }
 
 /// `[output]`: what is written and how often.
