@@ -138,3 +138,208 @@ fn projection_onto_the_same_body_is_the_identity() {
     println!("projection error {:.2e} of {scale:.2e}", err);
     assert!(err < 1e-8 * scale, "{err}");
 }
+
+/// An edge-cracked strip (width 1, height 2, crack from the left side at
+/// mid-height to `a`) held at fixed grips: top and bottom sides moved
+/// apart by ±δ (and held in x). Mode I by symmetry.
+fn fixed_grips(a: f64) -> EfgBody {
+    let d = Domain::new(
+        [[0.0, -1.0], [1.0, -1.0], [1.0, 1.0], [0.0, 1.0]]
+            .iter()
+            .map(|&p| p.into())
+            .collect(),
+        vec![],
+        vec![
+            ("bottom".into(), vec![(0, 0)]),
+            ("top".into(), vec![(0, 2)]),
+        ],
+    )
+    .unwrap();
+    let grip = |edge: &str, uy: f64| EdgeCondition {
+        ux: Some(efgdem::continuum::Prescribed::Value(0.0)),
+        uy: Some(efgdem::continuum::Prescribed::Value(uy)),
+        ..EdgeCondition::on(edge)
+    };
+    let mut p = plate(d, 0.05, vec![grip("bottom", -1e-3), grip("top", 1e-3)]);
+    p.elastic.plane = efgdem::continuum::Plane::Strain;
+    p.penalty = Some(1e7 * p.elastic.e);
+    p.cracks.push(CrackShape {
+        crack: Crack::new(vec![Vec2::new(0.0, 0.0), Vec2::new(a, 0.0)]),
+        spacing: Some(0.0125),
+        width: 0.05,
+    });
+    p.fracture = Some(Fracture {
+        toughness: 1e-9,
+        increment: None,
+        max_increments: 1,
+        every: 1,
+    });
+    let mut b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
+    b.solve_static().unwrap();
+    b
+}
+
+/// At fixed grips the energy a crack releases as it grows by Δa is the
+/// drop of the stored energy, `Π(a) − Π(a + Δa) = ∫ G t da` (Griffith;
+/// Irwin's `G = K_I²/E′`): the drop between the solutions before and after
+/// one growth matches the trapezoidal `½ (G(a) + G(a + Δa)) Δa t` of the
+/// interaction-integral `K_I` at both lengths, and the growth books
+/// `G(a) Δa t`; the crack runs straight ahead (mode I).
+#[test]
+fn growth_releases_the_energy_the_body_loses_at_fixed_grips() {
+    let mut b = fixed_grips(0.4);
+    let stored = |b: &EfgBody| b.strain_energy();
+    let (pi0, s0) = (stored(&b), b.tip_states().unwrap()[0]);
+    let g = b.grow().unwrap();
+    assert_eq!(g.len(), 1);
+    b.solve_static().unwrap();
+    let (pi1, s1) = (stored(&b), b.tip_states().unwrap()[0]);
+    let m = &b.material;
+    let ep = m.e / (1.0 - m.nu * m.nu);
+    let gr = |s: &efgdem::efg::growth::TipState| (s.k[0].powi(2) + s.k[1].powi(2)) / ep;
+    let da = (g[0].to - g[0].from).norm();
+    let t = m.thickness;
+    let trapezoid = 0.5 * (gr(&s0) + gr(&s1)) * da * t;
+    let drop = pi0 - pi1;
+    println!(
+        "Δa {da}: Π drop {drop:.6e}, trapezoid ∫G t da {trapezoid:.6e} ({:+.3} %), booked {:.6e}, G(a) {:.4e} → G(a+Δa) {:.4e}, kink {:.4}°",
+        100.0 * (drop / trapezoid - 1.0),
+        b.fracture_energy,
+        gr(&s0),
+        gr(&s1),
+        g[0].theta.to_degrees()
+    );
+    assert!((drop / trapezoid - 1.0).abs() < 0.005);
+    assert!((b.fracture_energy / (gr(&s0) * da * t) - 1.0).abs() < 1e-12);
+    assert!(g[0].theta.to_degrees().abs() < 0.1);
+    assert!((g[0].to.y).abs() < 1e-3 * da);
+}
+
+/// After a mixed-mode crack (Griffith's at 45°, `K_II = K_I`) has kinked
+/// once along the maximum hoop-stress direction, its new tips are
+/// (nearly) in pure mode I: the kinked crack runs on almost straight
+/// (the principle of local symmetry, Goldstein & Salganik 1974; to first
+/// order in the kink length the maximum hoop-stress kink has `K_II* = 0`,
+/// Cotterell & Rice 1980).
+#[test]
+fn a_kinked_crack_runs_on_in_mode_one() {
+    let (mut b, k) = griffith(45.0, 1e-3, None);
+    let g = b.grow().unwrap();
+    assert_eq!(g.len(), 2);
+    b.solve_static().unwrap();
+    for s in b.tip_states().unwrap() {
+        println!(
+            "before: K_II/K_I = {:.3}; after the kink: K_I {:.4} K_II {:.4} (K_II/K_I {:.4}), next kink {:.3}°",
+            k[1] / k[0],
+            s.k[0],
+            s.k[1],
+            s.k[1] / s.k[0],
+            s.theta.to_degrees()
+        );
+        assert!((s.k[1] / s.k[0]).abs() < 0.02, "{:?}", s.k);
+        assert!(s.theta.to_degrees().abs() < 2.0);
+    }
+}
+
+/// The single-edge-cracked plate of `examples/cracked_plate.toml`, dynamic:
+/// the traction arrives as a stress wave and the crack grows when the
+/// tip's `K_eq` reaches the toughness, looked at every 5 steps.
+const DYNAMIC_PLATE: &str = r#"
+[simulation]
+analysis = "dynamic"
+dt = 2.0e-6
+steps = 60
+
+[[body]]
+name = "plate"
+rectangle = { origin = [0.0, 0.0], size = [0.1, 0.2] }
+nodes = [11, 21]
+elastic = { E = 30.0e9, nu = 0.2, density = 2400.0, thickness = 0.05, plane = "strain" }
+self_weight = false
+
+[[body.crack]]
+points = [[0.0, 0.1], [0.03, 0.1]]
+spacing = 0.0025
+
+[body.fracture]
+toughness = 1.0e6
+max_increments = 3
+every = 5
+
+[[body.bc]]
+edge = "bottom"
+fixed = true
+
+[[body.bc]]
+edge = "top"
+traction = [0.0, 3.0e6]
+"#;
+
+fn build(src: &str) -> efgdem::model::Model {
+    efgdem::scenario::parse(src, "<crack>")
+        .unwrap()
+        .build()
+        .unwrap()
+}
+
+fn efg(m: &efgdem::model::Model) -> &EfgBody {
+    match m.body(0) {
+        efgdem::model::body::BodyRef::Efg(b) => b,
+        _ => unreachable!(),
+    }
+}
+
+/// A dynamic run whose crack grows restarts bitwise from a checkpoint
+/// taken after a growth (the body is rebuilt with the grown crack before
+/// its state is restored), and runs bitwise the same on 1 and 2 threads.
+#[test]
+fn growing_crack_restarts_bitwise_on_any_thread_count() {
+    use efgdem::model::ModelState;
+    let pool = |n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+    };
+    let (n, k) = (60, 33);
+    let whole: Vec<(Vec<u8>, Vec<[usize; 2]>, usize)> = [1, 2]
+        .into_iter()
+        .map(|t| {
+            pool(t).install(|| {
+                let mut a = build(DYNAMIC_PLATE);
+                let mut first = 0;
+                for s in 1..=n {
+                    a.step().unwrap();
+                    if first == 0 && efg(&a).generation() > 0 {
+                        first = s;
+                    }
+                }
+                (a.save_state().to_bytes(), efg(&a).increments.clone(), first)
+            })
+        })
+        .collect();
+    println!(
+        "increments {:?}, first growth at step {}",
+        whole[0].1, whole[0].2
+    );
+    assert!(whole[0].0 == whole[1].0, "1 and 2 threads agree");
+    assert!(whole[0].2 > 0 && whole[0].2 < k, "a growth before the save");
+    assert!(whole[0].1[0][1] > 1, "and growths after it");
+    assert!(whole[0].1[0][1] >= 2, "{:?}", whole[0].1);
+    let mut b = build(DYNAMIC_PLATE);
+    for _ in 0..k {
+        b.step().unwrap();
+    }
+    let bytes = b.save_state().to_bytes();
+    let mut c = build(DYNAMIC_PLATE);
+    c.restore_state(&ModelState::from_bytes(&bytes).unwrap())
+        .unwrap();
+    assert_eq!(efg(&c).cracks()[0].crack, efg(&b).cracks()[0].crack);
+    for _ in k..n {
+        c.step().unwrap();
+    }
+    assert!(
+        c.save_state().to_bytes() == whole[0].0,
+        "restart is bitwise"
+    );
+}
