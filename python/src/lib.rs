@@ -243,8 +243,10 @@ struct Inner {
     model: Model,
     pool: rayon::ThreadPool,
     probes: Vec<(String, Probe)>,
-    /// Per body: its nodes bound for sampling (on first use).
-    node_at: Vec<Option<Vec<At>>>,
+    /// Per body: its nodes bound for sampling (on first use), and the
+    /// body's generation they were bound in (a body rebuilt by crack
+    /// growth has other nodes).
+    node_at: Vec<Option<(usize, Vec<At>)>>,
     /// The ParaView frames written per output directory (named as
     /// `efgdem run` names them).
     frames: HashMap<PathBuf, Frames>,
@@ -362,15 +364,19 @@ impl Inner {
 
     /// Nodes of body `i` bound for sampling (cached).
     fn nodes_bound(&mut self, i: usize) -> PyResult<&[At]> {
-        if self.node_at[i].is_none() {
+        let generation = self.model.body(i).generation();
+        if self.node_at[i]
+            .as_ref()
+            .is_none_or(|(g, _)| *g != generation)
+        {
             let b = self.model.body(i);
             let at = (0..b.n_nodes())
                 .map(|k| b.bind(node(b, k)))
                 .collect::<Result<Vec<_>, _>>()
                 .map_err(model_error)?;
-            self.node_at[i] = Some(at);
+            self.node_at[i] = Some((generation, at));
         }
-        Ok(self.node_at[i].as_deref().expect("bound above"))
+        Ok(&self.node_at[i].as_ref().expect("bound above").1)
     }
 }
 
@@ -789,7 +795,7 @@ impl PyModel {
         let i = g.body_index(body)?;
         g.nodes_bound(i)?;
         let b = g.model.body(i);
-        let at = g.node_at[i].as_deref().expect("bound");
+        let at = &g.node_at[i].as_ref().expect("bound").1;
         let n = at.len();
         let (mut u, mut v) = (Vec::with_capacity(n), Vec::with_capacity(n));
         let (mut e, mut s) = (Vec::with_capacity(3 * n), Vec::with_capacity(3 * n));

@@ -290,6 +290,20 @@ def test_static_model():
     assert m.probe("tip_uy") == pytest.approx(-0.0089, rel=0.02)
 
 
+def test_cracked_plate_grows_and_its_fields_follow(tmp_path):
+    # the example's edge crack grows 4 increments in the static solve; the
+    # probes, the nodal fields and the frames are those of the grown body
+    m = efgdem.Model.from_scenario(ROOT / "examples" / "cracked_plate.toml")
+    n0 = m.body_fields("plate")["x"].shape[0]
+    m.solve_static()
+    assert m.probe("a") == pytest.approx(0.08, abs=1e-9)
+    assert m.probe("K_II") == pytest.approx(0.0, abs=1e-3 * m.probe("K_I"))
+    f = m.body_fields("plate")
+    assert f["x"].shape[0] > n0 and np.isfinite(f["u"]).all()
+    written = [p.name for p in m.write_frame(tmp_path)]
+    assert "plate_cracks.vtp" in written and "plate.vtu" in written
+
+
 # --- errors -----------------------------------------------------------------
 
 

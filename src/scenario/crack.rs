@@ -131,6 +131,13 @@ pub fn validate(i: usize, b: &BodySpec, polygon: Option<&Domain>, coupled: bool,
         );
         return;
     }
+    if coupled {
+        p.push(
+            at("crack"),
+            "cracks are available in continuum runs (static or dynamic); a coupled run cannot have them yet (discs do not touch crack faces)",
+        );
+        return;
+    }
     let h = body_spacing(b);
     for (k, c) in b.crack.iter().enumerate() {
         let at = |f: &str| format!("body.{i}.crack.{k}.{f}");
@@ -200,11 +207,6 @@ pub fn validate(i: usize, b: &BodySpec, polygon: Option<&Domain>, coupled: bool,
             f.every >= 1,
             at("every"),
             "must be ≥ 1 (steps between looks at the tips)",
-        );
-        p.check(
-            !coupled,
-            at("toughness"),
-            "crack growth is available in static and dynamic continuum analyses; in a coupled run the cracks stay as given (remove `[body.fracture]`)",
         );
     }
 }
