@@ -702,7 +702,7 @@ impl EfgBody {
                 self.spec.cracks.len()
             )));
         }
-        if c.cracks.iter().ne(now.into_iter()) {
+        if c.cracks.iter().ne(now) {
             let mut spec = self.spec.clone();
             for (k, saved) in spec.cracks.iter_mut().zip(&c.cracks) {
                 k.crack = saved.clone();

@@ -170,7 +170,7 @@ impl EfgBody {
     /// a multiple of the fracture's `every`.
     pub fn grow_if_due(&mut self) -> Result<Vec<Growth>, EfgError> {
         match self.spec.fracture {
-            Some(f) if self.step % f.every.max(1) == 0 => self.grow(),
+            Some(f) if self.step.is_multiple_of(f.every.max(1)) => self.grow(),
             _ => Ok(Vec::new()),
         }
     }
