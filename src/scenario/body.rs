@@ -140,7 +140,7 @@ pub enum HoleSpec {
     /// Vertices.
     Points(Vec<[f64; 2]>),
     /// A circle as a regular polygon.
-    Circle(CircleSpec),
+    Circle(#[serde(deserialize_with = "crate::strict::table")] CircleSpec),
 }
 
 /// `{ center = [x, y], radius = r, segments = n }`.

@@ -188,7 +188,7 @@ fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> 
         DiscsSpec::Table(t) => {
             if let Some(csv) = &t.csv {
                 let path = sc.resolve(csv);
-                let text = std::fs::read_to_string(&path).map_err(|e| {
+                let text = super::read_text(&path, super::MAX_CSV_BYTES).map_err(|e| {
                     bad(
                         "granular.discs.csv",
                         format!("cannot read discs file {}: {e}", path.display()),
@@ -655,7 +655,7 @@ fn disc_count(sc: &Scenario) -> f64 {
         DiscsSpec::Table(t) => {
             if let Some(csv) = &t.csv {
                 // data lines (the build reports a file it cannot read)
-                return std::fs::read_to_string(sc.resolve(csv)).map_or(0.0, |text| {
+                return super::read_text(&sc.resolve(csv), super::MAX_CSV_BYTES).map_or(0.0, |text| {
                     text.lines()
                         .filter(|l| !l.trim().is_empty() && !l.trim().starts_with('#'))
                         .count() as f64

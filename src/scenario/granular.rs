@@ -79,7 +79,7 @@ pub enum DiscsSpec {
     /// `[x, y, r]` per disc, disc k (1-based) on row k.
     Inline(Vec<[f64; 3]>),
     /// A CSV file or a generator.
-    Table(DiscsTable),
+    Table(#[serde(deserialize_with = "crate::strict::table")] DiscsTable),
 }
 
 /// `discs = { ... }`.
