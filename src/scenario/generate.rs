@@ -11,7 +11,8 @@ use crate::geom::Vec2;
 /// wrong size) is refused, not read. Errors name the line.
 pub fn discs_from_csv(text: &str) -> Result<Vec<DiscRow>, String> {
     let mut out = Vec::new();
-    let mut width = None;
+    // the number of fields, and where it comes from
+    let mut width: Option<(usize, &str)> = None;
     for (k, line) in text.lines().enumerate() {
         let l = line.trim();
         if l.is_empty() || l.starts_with('#') {
@@ -19,7 +20,7 @@ pub fn discs_from_csv(text: &str) -> Result<Vec<DiscRow>, String> {
         }
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
         if out.is_empty() && f[0].parse::<f64>().is_err() && k == first_data_line(text) {
-            width = Some(f.len()); // header
+            width = Some((f.len(), "header"));
             continue;
         }
         if f.len() < 3 || f.len() > 4 {
@@ -29,13 +30,12 @@ pub fn discs_from_csv(text: &str) -> Result<Vec<DiscRow>, String> {
                 f.len()
             ));
         }
-        let want = *width.get_or_insert(f.len());
+        let (want, from) = *width.get_or_insert((f.len(), "first line"));
         if f.len() != want {
             return Err(format!(
-                "line {}: {} fields where the {} has {want} (every line has the same fields; leave a material empty rather than out)",
+                "line {}: {} fields where the {from} has {want} (every line has the same fields; leave a material empty rather than out)",
                 k + 1,
                 f.len(),
-                if out.is_empty() { "header" } else { "first line" },
             ));
         }
         let num = |s: &str, what: &str| {
