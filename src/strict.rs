@@ -327,6 +327,8 @@ mod tests {
         // inside arrays, and in an untagged enum's variant
         let e = read("list = [[[0.1, 0.1], [0.3, 0.2]]]").unwrap_err();
         assert!(e.contains("expected a table"), "{e}");
+        let d = read("list = [{ origin = [0.0, 1.0], size = [2.0, 3.0] }]").unwrap();
+        assert_eq!(d.list.unwrap()[0].origin, [0.0, 1.0]);
         let d = read("shape = { origin = [0.0, 1.0], size = [2.0, 3.0] }").unwrap();
         assert!(matches!(d.shape, Some(Shape::Rect(_))));
         let d = read("shape = [[0.0, 1.0], [2.0, 3.0]]").unwrap();

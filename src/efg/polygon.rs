@@ -9,11 +9,11 @@
 //! where the outline is coarse; where it is finer than the nodes (a circle
 //! of 1 000 segments, a digitised outline), a vertex is a node only if it
 //! is a corner (the boundary turns by more than [`CORNER`] there) or at
-//! least `h/2` along the loop from the previous node and from the next
-//! corner. Between two nodes the boundary (one segment or several) gets
+//! least [`MIN_VERTEX_GAP`] `· h` along the loop from the previous node and
+//! from the next corner. Between two nodes the boundary (one segment or several) gets
 //! nodes at equal steps of at most `h`. The other vertices stay corners of
 //! the triangles only, so the integration still follows the true boundary,
-//! but nodes are never much closer than `h/2`: nodes at every vertex of a
+//! but nodes are never much closer than `h/4`: nodes at every vertex of a
 //! dense outline make the stiffness matrix numerically singular.
 //!
 //! **Refinement near edges** ([`Refine`], [`PolygonMesh::refined`]): a
@@ -439,6 +439,13 @@ impl SizeField<'_> {
 /// node whatever the spacing (module docs): 30°.
 pub const CORNER: f64 = std::f64::consts::PI / 6.0;
 
+/// Least distance along the loop, in units of the local spacing, of a
+/// vertex that is not a corner from the previous node and the next corner
+/// for it to be a node: ¼. Outlines drawn with chords of `h/2` or `h/4`
+/// keep every vertex as a node; a circle of 1 000 segments at `h/10` each
+/// keeps one in three.
+pub const MIN_VERTEX_GAP: f64 = 0.25;
+
 /// Length of the polyline `poly`.
 fn length(poly: &[Vec2]) -> f64 {
     poly.windows(2).map(|w| (w[1] - w[0]).norm()).sum()
@@ -548,8 +555,9 @@ impl Boundary {
 }
 
 /// Which vertices of a loop are nodes (module docs): corners, and vertices
-/// at least half the local spacing along the loop from the previous node
-/// and from the next corner. Every vertex where the loop is coarse.
+/// at least [`MIN_VERTEX_GAP`] × the local spacing along the loop from the
+/// previous node and from the next corner. Every vertex where the loop is
+/// coarse.
 fn vertex_nodes(pts: &[Vec2], spacing: &dyn Fn(Vec2) -> f64) -> Vec<bool> {
     let n = pts.len();
     let cos_corner = CORNER.cos();
@@ -595,8 +603,8 @@ fn vertex_nodes_from(
             since = 0.0;
             continue;
         }
-        let half = 0.5 * spacing(pts[i]);
-        if since >= half && to_corner[i] >= half {
+        let gap = MIN_VERTEX_GAP * spacing(pts[i]);
+        if since >= gap && to_corner[i] >= gap {
             keep[i] = true;
             since = 0.0;
         }

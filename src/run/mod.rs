@@ -65,13 +65,12 @@ pub enum RunError {
     #[error("{0}")]
     Io(std::io::Error),
     /// The output directory cannot be created or read (exit code 1).
-    #[error("output directory {}: {source}", path.display())]
+    #[error("output directory {}: {error}", path.display())]
     OutDir {
         /// The directory.
         path: PathBuf,
-        /// What failed.
-        #[source]
-        source: std::io::Error,
+        /// What failed (in the message, once).
+        error: std::io::Error,
     },
     /// Another run holds the output directory (exit code 2).
     #[error(
@@ -266,9 +265,9 @@ pub fn check(sc: &Scenario) -> Result<String, RunError> {
             "preparation: {p}; the discs above are the generated ones, before it\n"
         ));
     }
-    let machine = build::machine_memory().map_or_else(|| "unknown".to_string(), build::human_bytes);
+    let limit = build::memory_limit().map_or_else(|| "unknown".to_string(), |(_, what)| what);
     s.push_str(&format!(
-        "memory: {} (estimate; machine: {machine})",
+        "memory: {} (estimate; {limit})",
         build::memory_estimate(sc)
     ));
     Ok(s)

@@ -39,9 +39,9 @@ fn lock_dir(dir: &Path) -> Result<DirLock, RunError> {
     use std::fs::TryLockError;
     use std::io::{Read, Seek, Write};
     let path = dir.join(LOCK_FILE);
-    let io = |source| RunError::OutDir {
+    let io = |error| RunError::OutDir {
         path: dir.to_path_buf(),
-        source,
+        error,
     };
     let mut f = std::fs::OpenOptions::new()
         .read(true)
@@ -80,9 +80,9 @@ fn lock_dir(dir: &Path) -> Result<DirLock, RunError> {
 /// refused, whatever the options.
 pub(super) fn prepare_out_dir(opts: &RunOptions) -> Result<DirLock, RunError> {
     let dir = &opts.out_dir;
-    let io = |source| RunError::OutDir {
+    let io = |error| RunError::OutDir {
         path: dir.clone(),
-        source,
+        error,
     };
     if opts.restart.is_some() {
         if !dir.join("history.csv").is_file() {

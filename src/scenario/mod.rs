@@ -400,17 +400,28 @@ pub const MAX_SCENARIO_BYTES: u64 = 256 << 20;
 /// million discs.
 pub const MAX_CSV_BYTES: u64 = 1 << 30;
 
-/// The bytes of the file `path`, refused (`InvalidData`) if it has more
-/// than `max`: a device such as `/dev/zero`, or a file that is not what it
-/// is said to be, is never read without bound.
+/// The bytes of the file `path`, refused if it is a directory or a device
+/// (`/dev/zero`) or has more than `max` bytes (a pipe that does not end, a
+/// file that is not what it is said to be): nothing is read without bound.
 pub fn read_bounded(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
     let f = std::fs::File::open(path)?;
-    if f.metadata()?.is_dir() {
+    let kind = f.metadata()?.file_type();
+    if kind.is_dir() {
         return Err(std::io::Error::new(
             std::io::ErrorKind::IsADirectory,
             "a directory, not a file",
         ));
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_char_device() || kind.is_block_device() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "a device, not a file",
+            ));
+        }
     }
     let mut bytes = Vec::new();
     f.take(max + 1).read_to_end(&mut bytes)?;
