@@ -1660,7 +1660,7 @@ to = [0.1, 0.0]
 "#;
     let e = refused("settle.toml", text);
     assert!(
-        e.starts_with("settle.toml:8: material[1].kn: material `soft` is the packing's settle_material"),
+        e.starts_with("settle.toml:9: material[1].kn: material `soft` is the packing's settle_material"),
         "{e}"
     );
 }

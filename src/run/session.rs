@@ -50,7 +50,17 @@ fn lock_dir(dir: &Path) -> Result<DirLock, RunError> {
         .truncate(false)
         .open(&path)
         .map_err(|e| io(crate::output::io_at(&path, e)))?;
-    match f.try_lock() {
+    // a process forked by this one keeps the lock until it executes its
+    // program (a moment): ask again for a second before calling it busy
+    let mut held = f.try_lock();
+    for _ in 0..20 {
+        if !matches!(held, Err(TryLockError::WouldBlock)) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        held = f.try_lock();
+    }
+    match held {
         Ok(()) => {}
         Err(TryLockError::WouldBlock) => {
             let mut text = String::new();
