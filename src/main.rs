@@ -123,6 +123,7 @@ macro_rules! say {
 }
 
 fn main() -> ExitCode {
+    efgdem::run::memory::keep_large_allocations_mapped();
     let cli = Cli::parse();
     match dispatch(cli) {
         Ok(()) => ExitCode::SUCCESS,
