@@ -241,7 +241,10 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 efgdem::study::study_dt(&sc, tol, |t| {
                     say!(
                         "{:>12.5e}  {:>8}  {:>8.2}  {}",
-                        t.dt, t.bounded, t.seconds, t.reason
+                        t.dt,
+                        t.bounded,
+                        t.seconds,
+                        t.reason
                     )
                 })
             })??;

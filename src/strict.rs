@@ -323,7 +323,10 @@ mod tests {
         let loose: Doc = toml::from_str("rect = [[0.1, 0.1], [0.3, 0.2]]").unwrap();
         assert_eq!(loose.rect.unwrap().size, [0.3, 0.2]);
         let e = read("rect = [[0.1, 0.1], [0.3, 0.2]]").unwrap_err();
-        assert!(e.contains("invalid type: sequence, expected a table"), "{e}");
+        assert!(
+            e.contains("invalid type: sequence, expected a table"),
+            "{e}"
+        );
         // inside arrays, and in an untagged enum's variant
         let e = read("list = [[[0.1, 0.1], [0.3, 0.2]]]").unwrap_err();
         assert!(e.contains("expected a table"), "{e}");

@@ -157,7 +157,10 @@ fn assert_no_partial_file_accepted(out: &Path, whole: &BTreeMap<String, Vec<u8>>
                     let parsed = efgdem::scenario::generate::discs_from_csv(&text);
                     assert_eq!(parsed.is_ok(), &bytes == reference, "{what}: {name}");
                 }
-                assert!(&bytes == reference, "{what}: {name} differs from the whole run's");
+                assert!(
+                    &bytes == reference,
+                    "{what}: {name} differs from the whole run's"
+                );
             }
         }
     }
@@ -169,12 +172,27 @@ fn packing(dir: &Path) -> PathBuf {
     f
 }
 
-fn restart(file: &Path, out: &Path) -> std::process::Output {
-    bin()
+/// If the stopped run in `out` left a checkpoint: restart it, and check
+/// its outputs are those of the whole run, byte for byte. Whether it did.
+fn restart_matches(file: &Path, out: &Path, whole: &BTreeMap<String, Vec<u8>>, what: &str) -> bool {
+    if !out.join("checkpoint.bin").exists() || !out.join("history.csv").exists() {
+        return false;
+    }
+    let o = bin()
         .args(["run", file.to_str().unwrap(), "-q", "--restart"])
         .arg(out.join("checkpoint.bin"))
         .output()
-        .unwrap()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        deterministic(&files(out)) == *whole,
+        "{what}: outputs differ after the restart"
+    );
+    true
 }
 
 #[test]
@@ -207,21 +225,11 @@ fn a_run_killed_at_any_instant_leaves_no_partial_file_and_restarts_bitwise() {
         let _ = child.wait();
         let what = format!("kill {k}");
         assert_no_partial_file_accepted(&out, &whole, &what);
-        if !out.join("checkpoint.bin").exists() || !out.join("history.csv").exists() {
+        if restart_matches(&file, &out, &whole, &what) {
+            restarted += 1;
+        } else {
             none += 1;
-            continue;
         }
-        let o = restart(&file, &out);
-        assert!(
-            o.status.success(),
-            "{what}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        assert!(
-            deterministic(&files(&out)) == whole,
-            "{what}: outputs differ after the restart"
-        );
-        restarted += 1;
         let _ = std::fs::remove_dir_all(&out);
     }
     println!("{n} kills: {restarted} restarted bitwise, {none} before the first checkpoint");
@@ -288,18 +296,7 @@ fn a_full_disk_leaves_whole_files_names_the_file_and_restarts_bitwise() {
             let s: serde_json::Value = serde_json::from_str(&s).unwrap();
             assert_eq!(s["status"], "failed", "{what}");
         }
-        if out.join("checkpoint.bin").exists() && out.join("history.csv").exists() {
-            let o = restart(&file, &out);
-            assert!(
-                o.status.success(),
-                "{what}: {}",
-                String::from_utf8_lossy(&o.stderr)
-            );
-            assert!(
-                deterministic(&files(&out)) == whole,
-                "{what}: outputs differ after the restart"
-            );
-        }
+        restart_matches(&file, &out, &whole, &what);
     }
     println!("{n} file-size limits: {failed} runs failed cleanly");
     assert!(failed > 0 || n < 5);
@@ -424,7 +421,10 @@ fn an_output_directory_is_held_by_one_run_at_a_time() {
     let hist = out.join("history.csv");
     let t0 = Instant::now();
     while std::fs::read_to_string(&hist).map_or(0, |s| s.lines().count()) < 3 {
-        assert!(t0.elapsed() < Duration::from_secs(60), "the run did not start");
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "the run did not start"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
     let frames_before = std::fs::read_dir(out.join("frames")).unwrap().count();
@@ -461,12 +461,7 @@ fn standard_output_that_fails_is_an_error_not_a_panic() {
         .write(true)
         .open("/dev/full")
         .unwrap();
-    let o = bin()
-        .arg("check")
-        .arg(&file)
-        .stdout(full)
-        .output()
-        .unwrap();
+    let o = bin().arg("check").arg(&file).stdout(full).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(

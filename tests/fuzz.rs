@@ -616,7 +616,9 @@ fn mutate_doc(doc: &mut DocumentMut, rng: &mut Rng) -> bool {
         // a table written as an array of its values (strict tables)
         10 => {
             let inline: Vec<_> = all.iter().filter(|n| n.1 == Kind::Inline).collect();
-            let Some((p, _, Some(Value::InlineTable(t)))) = inline.get(rng.below(inline.len())).map(|n| (*n).clone()) else {
+            let Some((p, _, Some(Value::InlineTable(t)))) =
+                inline.get(rng.below(inline.len())).map(|n| (*n).clone())
+            else {
                 return false;
             };
             let mut a = Array::new();
@@ -630,7 +632,9 @@ fn mutate_doc(doc: &mut DocumentMut, rng: &mut Rng) -> bool {
         11 => {
             let bodies: Vec<_> = all
                 .iter()
-                .filter(|n| n.1 == Kind::TableElem && matches!(n.0.first(), Some(Seg::K(k)) if k == "body"))
+                .filter(|n| {
+                    n.1 == Kind::TableElem && matches!(n.0.first(), Some(Seg::K(k)) if k == "body")
+                })
                 .collect();
             if bodies.is_empty() {
                 return false;
@@ -1491,7 +1495,9 @@ fn regression_absurd_hole_segments_are_refused_at_the_count() {
     let text = plate(&format!("[{}]", big.join(", ")), "").replace("holes = []\n", "");
     let e = refused("outline.toml", &text);
     assert!(
-        e.contains("outline.toml:5: body[0].outline: 100001 vertices: a polygon body has at most 100000"),
+        e.contains(
+            "outline.toml:5: body[0].outline: 100001 vertices: a polygon body has at most 100000"
+        ),
         "{e}"
     );
 }
@@ -1562,7 +1568,8 @@ quantity = "uy"
     let mu = e / (2.0 * (1.0 + nu));
     let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
     let lambda_star = 2.0 * lambda * mu / (lambda + 2.0 * mu);
-    let exact = -by / (2.0 * mu / (a * a) + 2.0 * mu / (b * b) + 2.0 * (lambda_star + mu) / (b * b));
+    let exact =
+        -by / (2.0 * mu / (a * a) + 2.0 * mu / (b * b) + 2.0 * (lambda_star + mu) / (b * b));
     let uy = summary["uy"].as_f64().unwrap();
     assert!(
         ((uy - -exact) / exact).abs() < 0.02,
@@ -1577,8 +1584,10 @@ quantity = "uy"
 fn regression_tables_given_as_arrays_are_refused_with_their_field() {
     let e = refused(
         "rect.toml",
-        &cantilever("48.0, 12.0", "parabolic_shear = -1000.0")
-            .replace("rectangle = { origin = [0.0, -6.0], size = [48.0, 12.0] }", "rectangle = [[0.1, 0.1], [0.3, 0.2]]"),
+        &cantilever("48.0, 12.0", "parabolic_shear = -1000.0").replace(
+            "rectangle = { origin = [0.0, -6.0], size = [48.0, 12.0] }",
+            "rectangle = [[0.1, 0.1], [0.3, 0.2]]",
+        ),
     );
     assert!(
         e.starts_with("rect.toml:5: body[0].rectangle: invalid type: sequence, expected a table"),
@@ -1586,15 +1595,17 @@ fn regression_tables_given_as_arrays_are_refused_with_their_field() {
     );
     let e = refused(
         "el.toml",
-        &cantilever("48.0, 12.0", "parabolic_shear = -1000.0")
-            .replace("elastic = { E = 3.0e7, nu = 0.3 }", "elastic = [3.0e7, 0.3]"),
+        &cantilever("48.0, 12.0", "parabolic_shear = -1000.0").replace(
+            "elastic = { E = 3.0e7, nu = 0.3 }",
+            "elastic = [3.0e7, 0.3]",
+        ),
     );
-    assert!(e.starts_with("el.toml:7: body[0].elastic: invalid type: sequence"), "{e}");
+    assert!(
+        e.starts_with("el.toml:7: body[0].elastic: invalid type: sequence"),
+        "{e}"
+    );
     // in an untagged form too: a circle hole, a prescribed drive
-    let e = refused(
-        "hole.toml",
-        &plate(SQUARE_4X2, "[[2.0, 1.0], 0.5, 24]"),
-    );
+    let e = refused("hole.toml", &plate(SQUARE_4X2, "[[2.0, 1.0], 0.5, 24]"));
     assert!(e.contains("hole.toml:6: body[0].holes"), "{e}");
 }
 
@@ -1627,7 +1638,10 @@ to = [1.0, 0.0]
     );
     assert!(!e.contains("wall[0].to"), "{e}");
     let e = refused("r.toml", &walls("[0.0, 0.0]", "1e-308"));
-    assert!(e.starts_with("r.toml:9: granular.discs[0]: disc 1: its mass"), "{e}");
+    assert!(
+        e.starts_with("r.toml:9: granular.discs[0]: disc 1: its mass"),
+        "{e}"
+    );
     let text = plate(
         "[[5e-324, 0.0], [4.0, 0.0], [4.0, 2.0], [0.0, 2.0]]",
         "{ center = [2.0, 1.0], radius = 0.5 }",
@@ -1660,7 +1674,9 @@ to = [0.1, 0.0]
 "#;
     let e = refused("settle.toml", text);
     assert!(
-        e.starts_with("settle.toml:9: material[1].kn: material `soft` is the packing's settle_material"),
+        e.starts_with(
+            "settle.toml:9: material[1].kn: material `soft` is the packing's settle_material"
+        ),
         "{e}"
     );
 }
@@ -1741,7 +1757,11 @@ quantity = "wall_stress"
 fn regression_a_cut_discs_file_is_refused() {
     let dir = std::env::temp_dir().join(format!("efgdem-cutcsv-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("cut.csv"), "x,y,r\n1.0e0,2.0e0,8.55e-1\n3.0e0,1.58e2,8.").unwrap();
+    std::fs::write(
+        dir.join("cut.csv"),
+        "x,y,r\n1.0e0,2.0e0,8.55e-1\n3.0e0,1.58e2,8.",
+    )
+    .unwrap();
     let text = r#"[simulation]
 steps = 10
 [[material]]
@@ -1758,7 +1778,10 @@ discs = { csv = "cut.csv" }
         Err(RunError::Scenario(e)) => e.to_string(),
         other => panic!("{other:?}"),
     };
-    assert!(e.contains("granular.discs.csv:") && e.contains("line 3: the last line has no line end"), "{e}");
+    assert!(
+        e.contains("granular.discs.csv:") && e.contains("line 3: the last line has no line end"),
+        "{e}"
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -1772,7 +1795,11 @@ fn regression_the_memory_estimate_counts_the_contacts_of_overlapping_discs() {
         let mut s = String::from("[");
         for i in 0..40 {
             for j in 0..40 {
-                s.push_str(&format!("[{}, {}, 0.01], ", i as f64 * spacing, j as f64 * spacing));
+                s.push_str(&format!(
+                    "[{}, {}, 0.01], ",
+                    i as f64 * spacing,
+                    j as f64 * spacing
+                ));
             }
         }
         s.push(']');
@@ -1786,7 +1813,8 @@ fn regression_the_memory_estimate_counts_the_contacts_of_overlapping_discs() {
     };
     let apart = scenario::build::memory_estimate(&scenario::parse(&text(0.02), "a.toml").unwrap());
     assert_eq!(apart.extra_pairs, 0.0);
-    let stacked = scenario::build::memory_estimate(&scenario::parse(&text(0.002), "b.toml").unwrap());
+    let stacked =
+        scenario::build::memory_estimate(&scenario::parse(&text(0.002), "b.toml").unwrap());
     // ~ π (2r + skin)² / s² ≈ 350 neighbours in range, 175 pairs per disc
     let per_disc = stacked.extra_pairs / 1600.0;
     assert!((100.0..250.0).contains(&per_disc), "{per_disc}");

@@ -322,7 +322,8 @@ impl Support {
                     }
                 }
                 let geo = Self::geodesics(&v, k, xi, &verts, reach);
-                v.geo.extend(verts.into_iter().zip(geo).filter(|(_, d)| *d < reach));
+                v.geo
+                    .extend(verts.into_iter().zip(geo).filter(|(_, d)| *d < reach));
                 v.geo_start.push(v.geo.len() as u32);
             }
         }
@@ -338,13 +339,7 @@ impl Support {
     /// every vertex in reach of a dense boundary — a circle of 1 000
     /// segments — the full graph costs `O(m³)` per node, this `O(m²)`
     /// cheap tests and `O(m)` blocking tests).
-    fn geodesics(
-        v: &Visibility,
-        k: usize,
-        xi: Vec2,
-        verts: &[Corner],
-        reach: f64,
-    ) -> Vec<f64> {
+    fn geodesics(v: &Visibility, k: usize, xi: Vec2, verts: &[Corner], reach: f64) -> Vec<f64> {
         let m = verts.len();
         let mut dist: Vec<f64> = verts
             .iter()
@@ -403,7 +398,8 @@ impl Support {
         let near = v.near(k);
         let index = v.domain.index();
         let mine = |s: &crate::geom::segment_index::Segment| {
-            near.binary_search(&((v.first[s.lp] + s.seg) as u32)).is_ok()
+            near.binary_search(&((v.first[s.lp] + s.seg) as u32))
+                .is_ok()
         };
         if index
             .along(a, b)
@@ -445,9 +441,7 @@ impl Support {
             .map(|(c, g)| (g + (p - c.at).norm(), c.at))
             .collect();
         paths.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let best = paths
-            .into_iter()
-            .find(|&(_, c)| !Self::blocked(v, k, c, p));
+        let best = paths.into_iter().find(|&(_, c)| !Self::blocked(v, k, c, p));
         let n = &self.node[k];
         let xi = Vec2::new(n[0], n[1]);
         let (len, c) = best?;

@@ -113,10 +113,7 @@ impl SegmentIndex {
             .iter()
             .map(|s| s.a.x.max(s.b.x))
             .fold(f64::NEG_INFINITY, f64::max);
-        let longest = segs
-            .iter()
-            .map(|s| (s.b - s.a).norm())
-            .fold(0.0, f64::max);
+        let longest = segs.iter().map(|s| (s.b - s.a).norm()).fold(0.0, f64::max);
         SegmentIndex {
             tree: RTree::bulk_load(segs),
             x_max,

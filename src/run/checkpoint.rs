@@ -23,8 +23,6 @@ const VERSION: u32 = 3;
 /// File name of the checkpoint in the output directory.
 pub const FILE: &str = "checkpoint.bin";
 
-
-
 /// What a checkpoint holds.
 #[derive(Serialize, Deserialize)]
 pub(super) struct Checkpoint {

@@ -137,7 +137,9 @@ impl RunError {
             | RunError::NotEmpty(_)
             | RunError::Busy { .. }
             | RunError::Restart { .. }
-            | RunError::Model(ModelError::State(_) | ModelError::Static | ModelError::Usage(_)) => 2,
+            | RunError::Model(ModelError::State(_) | ModelError::Static | ModelError::Usage(_)) => {
+                2
+            }
             RunError::Io(_) | RunError::OutDir { .. } => 1,
             RunError::Model(_) => 3,
             RunError::Interrupted { signal, .. } => 128 + (*signal as u8 & 0x7f),

@@ -341,11 +341,12 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
                 ((r.r * r.r).ln().abs(), disc.as_str()),
                 (g.thickness.ln().abs(), "granular.thickness"),
             ];
-            let (_, at) = suspects
-                .iter()
-                .fold((f64::NEG_INFINITY, "granular.thickness"), |best, &(v, f)| {
+            let (_, at) = suspects.iter().fold(
+                (f64::NEG_INFINITY, "granular.thickness"),
+                |best, &(v, f)| {
                     if v > best.0 { (v, f) } else { best }
-                });
+                },
+            );
             return Err(bad(
                 at,
                 format!(
@@ -722,7 +723,10 @@ fn pairs_per_disc(rows: &[[f64; 3]], skin: Option<f64>) -> f64 {
         let (cx, cy) = key(a);
         for dx in -1..=1 {
             for dy in -1..=1 {
-                for &j in grid.get(&(cx + dx, cy + dy)).map_or(&[][..], |v| v.as_slice()) {
+                for &j in grid
+                    .get(&(cx + dx, cy + dy))
+                    .map_or(&[][..], |v| v.as_slice())
+                {
                     let b = &rows[j as usize];
                     let reach = a[2] + b[2] + skin;
                     if j as usize != i && (a[0] - b[0]).hypot(a[1] - b[1]) < reach {

@@ -87,11 +87,20 @@ mod tests {
         assert_eq!(d[1].material.as_deref(), Some("glass"));
         // a row of another width, a file cut short
         let e = discs_from_csv("x,y,r\n0,0,1\n2.5,0,1,glass\n").unwrap_err();
-        assert!(e.starts_with("line 3: 4 fields where the header has 3"), "{e}");
+        assert!(
+            e.starts_with("line 3: 4 fields where the header has 3"),
+            "{e}"
+        );
         let e = discs_from_csv("0,0,1,a\n2.5,0,1\n").unwrap_err();
-        assert!(e.starts_with("line 2: 3 fields where the first line has 4"), "{e}");
+        assert!(
+            e.starts_with("line 2: 3 fields where the first line has 4"),
+            "{e}"
+        );
         let e = discs_from_csv("x,y,r\n0,0,1\n2.5,0,8.").unwrap_err();
-        assert!(e.starts_with("line 3: the last line has no line end"), "{e}");
+        assert!(
+            e.starts_with("line 3: the last line has no line end"),
+            "{e}"
+        );
         let e = discs_from_csv("0,0,1\n1,abc,1\n").unwrap_err();
         assert!(e.contains("line 2"), "{e}");
         assert!(discs_from_csv("0,0,-1\n").is_err());

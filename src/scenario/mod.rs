@@ -791,9 +791,18 @@ mod tests {
     fn a_type_error_names_its_field() {
         let src = "[[body]]\nname = \"a\"\nrectangle = [[0.1, 0.1], [0.3, 0.2]]\nelastic = { E = \"x\" }\n";
         let off = |s: &str| src.find(s).unwrap();
-        assert_eq!(field_at(src, off("[[0.1")).as_deref(), Some("body.0.rectangle"));
-        assert_eq!(field_at(src, off("0.3")).as_deref(), Some("body.0.rectangle.1.0"));
-        assert_eq!(field_at(src, off("\"x\"")).as_deref(), Some("body.0.elastic.E"));
+        assert_eq!(
+            field_at(src, off("[[0.1")).as_deref(),
+            Some("body.0.rectangle")
+        );
+        assert_eq!(
+            field_at(src, off("0.3")).as_deref(),
+            Some("body.0.rectangle.1.0")
+        );
+        assert_eq!(
+            field_at(src, off("\"x\"")).as_deref(),
+            Some("body.0.elastic.E")
+        );
         assert_eq!(field_at(src, 0), None);
     }
 
