@@ -589,7 +589,9 @@ impl PyModel {
     /// "material": [{...}], "granular": {...}, "wall": [...]}`; `None`
     /// values are left out). Relative paths in it resolve against
     /// `base_dir` (default: the working directory). Raises `ScenarioError`
-    /// (`<dict>: field: message`).
+    /// (`<dict>: field: message`), also for a dict or list that contains
+    /// itself or is nested more than 32 levels deep. `threads` above the
+    /// machine's count are lowered to it (a `RuntimeWarning`).
     #[staticmethod]
     #[pyo3(signature = (scenario, base_dir = None, threads = None))]
     fn from_dict(
@@ -658,8 +660,9 @@ impl PyModel {
     }
 
     /// Restore bytes of `save_state` (of a model built from the same
-    /// scenario). Raises `ModelError` if they do not fit this model (it is
-    /// then left as it was). Live numpy views stay valid.
+    /// scenario). Raises `ModelError` if they do not fit this model or are
+    /// damaged (the bytes carry a checksum: any altered bit is refused);
+    /// the model is then left as it was. Live numpy views stay valid.
     fn restore_state(&self, state: &[u8]) -> PyResult<()> {
         let mut g = self.lock()?;
         let s = efgdem::model::ModelState::from_bytes(state).map_err(model_error)?;
@@ -668,7 +671,8 @@ impl PyModel {
         Ok(())
     }
 
-    /// Solve a static continuum model (`analysis = "static"`).
+    /// Solve a static continuum model (`analysis = "static"`). Raises
+    /// `ModelError` for a model with discs (it has no static solve).
     fn solve_static(&self, py: Python<'_>) -> PyResult<()> {
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
