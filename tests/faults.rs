@@ -307,10 +307,11 @@ fn short_packing() -> String {
     PACKING.replace("steps = 2400", "steps = 300")
 }
 
-/// A checkpoint of [`short_packing`] at step 250 in `dir`, and the run's
-/// options.
-fn checkpointed(dir: &Path) -> (efgdem::scenario::Scenario, RunOptions) {
-    let sc = efgdem::scenario::parse(&short_packing(), "packing.toml").unwrap();
+/// A checkpoint of [`short_packing`] (written to `file`) at step 250 in
+/// `dir`, and the run's options.
+fn checkpointed(file: &Path, dir: &Path) -> (efgdem::scenario::Scenario, RunOptions) {
+    std::fs::write(file, short_packing()).unwrap();
+    let sc = efgdem::scenario::load(file).unwrap();
     let opts = RunOptions {
         quiet: true,
         checkpoint_every: 250,
@@ -323,7 +324,7 @@ fn checkpointed(dir: &Path) -> (efgdem::scenario::Scenario, RunOptions) {
 #[test]
 fn every_single_bit_flip_of_a_checkpoint_is_refused() {
     let root = tmpdir("faults-flip");
-    let (sc, opts) = checkpointed(&root.join("out"));
+    let (sc, opts) = checkpointed(&root.join("packing.toml"), &root.join("out"));
     let good = std::fs::read(opts.out_dir.join("checkpoint.bin")).unwrap();
     let before = std::fs::read(opts.out_dir.join("history.csv")).unwrap();
     let flipped = root.join("flipped.bin");
@@ -389,9 +390,8 @@ fn every_single_bit_flip_of_a_model_state_is_refused() {
 fn a_restart_whose_history_does_not_fit_is_refused_once_with_exit_2() {
     let root = tmpdir("faults-history");
     let file = root.join("packing.toml");
-    std::fs::write(&file, short_packing()).unwrap();
     let out = root.join("out");
-    checkpointed(&out);
+    checkpointed(&file, &out);
     // history.csv cut below what the checkpoint recorded
     let h = std::fs::read(out.join("history.csv")).unwrap();
     std::fs::write(out.join("history.csv"), &h[..h.len() / 3]).unwrap();
