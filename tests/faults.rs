@@ -533,6 +533,19 @@ fn devices_and_endless_files_are_not_read_without_bound() {
         err.contains("granular.discs.csv: cannot read discs file /dev/zero: a device, not a file"),
         "{err}"
     );
+    // a (sparse) scenario file larger than any scenario: refused unread
+    let huge = root.join("huge.toml");
+    std::fs::File::create(&huge)
+        .unwrap()
+        .set_len(efgdem::scenario::MAX_SCENARIO_BYTES + 1)
+        .unwrap();
+    let o = bin().arg("check").arg(&huge).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("cannot read the scenario: larger than 256 MiB"),
+        "{err}"
+    );
     assert!(t0.elapsed() < Duration::from_secs(60));
 }
 

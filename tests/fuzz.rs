@@ -1486,13 +1486,7 @@ fn regression_absurd_hole_segments_are_refused_at_the_count() {
         assert!(t0.elapsed().as_secs_f64() < 5.0, "{n}");
     }
     // an outline of more
-    let big: Vec<String> = (0..100_001)
-        .map(|k| {
-            let a = std::f64::consts::TAU * k as f64 / 100_001.0;
-            format!("[{}, {}]", 2.0 * a.cos(), a.sin())
-        })
-        .collect();
-    let text = plate(&format!("[{}]", big.join(", ")), "").replace("holes = []\n", "");
+    let text = plate(&ellipse_outline(100_001), "").replace("holes = []\n", "");
     let e = refused("outline.toml", &text);
     assert!(
         e.contains(
@@ -1500,21 +1494,118 @@ fn regression_absurd_hole_segments_are_refused_at_the_count() {
         ),
         "{e}"
     );
+    // 100 000 vertices that cross: the simplicity test (was O(N²), over a
+    // minute) finds the crossing at once
+    let mut pts: Vec<&str> = Vec::new();
+    let outline = ellipse_outline(100_000);
+    pts.extend(outline[1..outline.len() - 1].split(", ["));
+    pts.swap(500, 501);
+    let crossing = format!("[{}]", pts.join(", ["));
+    let t0 = std::time::Instant::now();
+    let e = refused(
+        "cross.toml",
+        &plate(&crossing, "").replace("holes = []\n", ""),
+    );
+    assert!(
+        e.starts_with("cross.toml:5: body[0].outline: ") && e.contains("is not simple: segment"),
+        "{e}"
+    );
+    println!(
+        "100 000 crossing vertices refused in {:.2} s",
+        t0.elapsed().as_secs_f64()
+    );
 }
 
-/// A 1 000-segment hole: 400 segments took 30 s and 1 000 did not finish
-/// in 120 s (O(N²) and worse in the number of segments); now O(N log N).
-/// The time is not asserted (a benchmark, see docs/scenario.md); a
-/// regression to the old cost would not finish.
+/// An ellipse of semi-axes 2 and 1 centred at (2, 1) as an outline of `n`
+/// vertices (TOML).
+fn ellipse_outline(n: usize) -> String {
+    let pts: Vec<String> = (0..n)
+        .map(|k| {
+            let t = std::f64::consts::TAU * k as f64 / n as f64;
+            format!("[{:.9}, {:.9}]", 2.0 + 2.0 * t.cos(), 1.0 + t.sin())
+        })
+        .collect();
+    format!("[{}]", pts.join(", "))
+}
+
+/// A 1 000-segment hole (400 segments took 30 s and 1 000 did not finish
+/// in 120 s: O(N²) and worse in the number of segments) and a 10 000-vertex
+/// outline (its simplicity test alone was O(N²)) check and solve, and the
+/// memory estimate of `check` is within 2× of the peak the run measures
+/// (`summary.json`, itself checked against the OS by
+/// `tests/memory_peak.rs`). The check's time is printed, not asserted (a
+/// benchmark on a shared machine: `cargo test --release --test fuzz
+/// large_polygons -- --nocapture`); a regression to the old cost would not
+/// finish.
 #[test]
-fn regression_a_1000_segment_hole_checks() {
-    let text = plate(
-        SQUARE_4X2,
-        "{ center = [2.0, 1.0], radius = 0.5, segments = 1000 }",
-    );
-    let sc = scenario::parse(&text, "hole.toml").unwrap();
-    let report = efgdem::run::check(&sc).unwrap();
-    assert!(report.contains("polygon with 1 hole(s)"), "{report}");
+fn regression_large_polygons_check_and_their_memory_estimate_holds() {
+    let root = std::env::temp_dir().join(format!("efgdem-large-poly-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    std::fs::create_dir_all(&root).unwrap();
+    let cases = [
+        (
+            "hole1000",
+            plate(
+                SQUARE_4X2,
+                "{ center = [2.0, 1.0], radius = 0.5, segments = 1000 }",
+            ),
+            "polygon with 1 hole(s)",
+        ),
+        (
+            "outline10000",
+            plate(&ellipse_outline(10_000), "")
+                .replace("holes = []\n", "")
+                .replace("segments = [0, 0]", "segments = [0, 4999]"),
+            "polygon with 0 hole(s)",
+        ),
+    ];
+    for (name, text, kind) in cases {
+        let file = root.join(format!("{name}.toml"));
+        std::fs::write(&file, &text).unwrap();
+        let t0 = std::time::Instant::now();
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
+            .arg("check")
+            .arg(&file)
+            .output()
+            .unwrap();
+        let secs = t0.elapsed().as_secs_f64();
+        let report = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(report.contains(kind), "{name}: {report}");
+        let out = root.join(name);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
+            .args(["run", "-q"])
+            .arg(&file)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        let peak = summary["peak_memory_bytes"].as_f64().unwrap();
+        let sc = scenario::parse(&text, name).unwrap();
+        let estimate = scenario::build::memory_estimate(&sc).total();
+        println!(
+            "{name}: check {secs:.2} s; memory estimate {:.1} MiB, measured peak {:.1} MiB",
+            estimate / 1048576.0,
+            peak / 1048576.0
+        );
+        assert!(
+            (0.5..=2.0).contains(&(peak / estimate)),
+            "{name}: estimate {estimate:e} B, peak {peak:e} B"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&root);
 }
 
 /// A 1 000-vertex ellipse fixed all round under its own weight was

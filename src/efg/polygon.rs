@@ -494,14 +494,14 @@ struct Boundary {
     extra: Vec<Vec2>,
 }
 
+/// The nodes inside a polyline between two neighbouring boundary nodes
+/// (their index along it and position).
+type InteriorNodes<'a> = dyn Fn(&[Vec2]) -> Vec<(usize, Vec2)> + 'a;
+
 impl Boundary {
     /// `spacing(x)`: the node spacing at `x`; `interior(poly)`: the nodes
     /// inside the polyline between two neighbouring nodes.
-    fn new(
-        domain: &Domain,
-        spacing: &dyn Fn(Vec2) -> f64,
-        interior: &dyn Fn(&[Vec2]) -> Vec<(usize, Vec2)>,
-    ) -> Boundary {
+    fn new(domain: &Domain, spacing: &dyn Fn(Vec2) -> f64, interior: &InteriorNodes) -> Boundary {
         let mut b = Boundary {
             nodes: Vec::new(),
             segments: Vec::with_capacity(domain.loops.len()),

@@ -33,10 +33,32 @@ pub const LOCK_FILE: &str = ".efgdem.lock";
 #[derive(Debug)]
 pub(super) struct DirLock(#[allow(dead_code)] Option<std::fs::File>);
 
+/// Lock `f` for this process without waiting (`flock`, exclusive):
+/// whether it is held now (`false`: another process holds it); `None` on
+/// a file system without locks.
+#[cfg(unix)]
+fn try_flock(f: &std::fs::File) -> std::io::Result<Option<bool>> {
+    use std::os::fd::AsRawFd;
+    // SAFETY: flock on the descriptor `f` owns for as long as it lives
+    if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } == 0 {
+        return Ok(Some(true));
+    }
+    let e = std::io::Error::last_os_error();
+    match e.raw_os_error() {
+        Some(libc::EWOULDBLOCK) => Ok(Some(false)),
+        Some(libc::ENOLCK | libc::EOPNOTSUPP | libc::ENOSYS) => Ok(None),
+        _ => Err(e),
+    }
+}
+
+#[cfg(not(unix))]
+fn try_flock(_: &std::fs::File) -> std::io::Result<Option<bool>> {
+    Ok(None)
+}
+
 /// Hold `dir` for this run: refused with [`RunError::Busy`] while another
 /// run (of this or another process) holds it.
 fn lock_dir(dir: &Path) -> Result<DirLock, RunError> {
-    use std::fs::TryLockError;
     use std::io::{Read, Seek, Write};
     let path = dir.join(LOCK_FILE);
     let io = |error| RunError::OutDir {
@@ -52,17 +74,18 @@ fn lock_dir(dir: &Path) -> Result<DirLock, RunError> {
         .map_err(|e| io(crate::output::io_at(&path, e)))?;
     // a process forked by this one keeps the lock until it executes its
     // program (a moment): ask again for a second before calling it busy
-    let mut held = f.try_lock();
+    let lock = || try_flock(&f).map_err(|e| io(crate::output::io_at(&path, e)));
+    let mut held = lock()?;
     for _ in 0..20 {
-        if !matches!(held, Err(TryLockError::WouldBlock)) {
+        if held != Some(false) {
             break;
         }
         std::thread::sleep(std::time::Duration::from_millis(50));
-        held = f.try_lock();
+        held = lock()?;
     }
     match held {
-        Ok(()) => {}
-        Err(TryLockError::WouldBlock) => {
+        Some(true) => {}
+        Some(false) => {
             let mut text = String::new();
             let _ = f.read_to_string(&mut text);
             return Err(RunError::Busy {
@@ -71,10 +94,7 @@ fn lock_dir(dir: &Path) -> Result<DirLock, RunError> {
             });
         }
         // a file system without locks: run unguarded, as before
-        Err(TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
-            return Ok(DirLock(None));
-        }
-        Err(TryLockError::Error(e)) => return Err(io(crate::output::io_at(&path, e))),
+        None => return Ok(DirLock(None)),
     }
     f.set_len(0)
         .and_then(|_| f.rewind())

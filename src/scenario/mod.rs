@@ -423,16 +423,23 @@ pub fn read_bounded(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
             ));
         }
     }
-    let mut bytes = Vec::new();
-    f.take(max + 1).read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > max {
-        return Err(std::io::Error::new(
+    let too_large = || {
+        std::io::Error::new(
             std::io::ErrorKind::InvalidData,
             format!(
                 "larger than {} MiB, more than such a file can be (is it the right file?)",
                 max >> 20
             ),
-        ));
+        )
+    };
+    // a regular file says its size; anything else (a pipe) is read up to it
+    if kind.is_file() && f.metadata()?.len() > max {
+        return Err(too_large());
+    }
+    let mut bytes = Vec::new();
+    f.take(max + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max {
+        return Err(too_large());
     }
     Ok(bytes)
 }
