@@ -134,16 +134,17 @@ pub fn read(path: &Path) -> std::io::Result<(Vec<String>, Vec<Vec<f64>>)> {
     Ok((header, rows))
 }
 
-/// Write the discs as `x,y,r,vx,vy,omega` in scenario order (readable as a
-/// `discs = { csv = ... }` source: the extra columns are... not accepted,
-/// so only `x,y,r` are written).
+/// Write the discs as `x,y,r,id` in scenario order, `id` the disc's number
+/// (from 1, as probes and the frames' `GlobalIds` give it): a
+/// `discs = { csv = ... }` source (its header names the columns).
 pub fn write_discs_csv(gr: &Granular, path: &std::path::Path) -> std::io::Result<()> {
     let p = &gr.particles;
     let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
-    writeln!(w, "x,y,r")?;
+    writeln!(w, "x,y,r,id")?;
     for id in 0..p.len() {
         let k = p.slot[id] as usize;
-        writeln!(w, "{:e},{:e},{:e}", p.pos[k].x, p.pos[k].y, p.radius[k])?;
+        let (x, y, r) = (p.pos[k].x, p.pos[k].y, p.radius[k]);
+        writeln!(w, "{x:e},{y:e},{r:e},{}", id + 1)?;
     }
     w.flush()
 }

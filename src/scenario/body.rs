@@ -47,9 +47,10 @@ pub struct BodySpec {
     /// `"lumped"` (row sum). EFG bodies always use the consistent Gram matrix.
     #[serde(default)]
     pub mass: MassKind,
-    /// The body's rectangle (or, for a polygon body, filled in with the
+    /// The body's rectangle, `{ origin, size }` or its corners
+    /// ([`super::rect`]) (or, for a polygon body, filled in with the
     /// outline's bounding box when the file is parsed).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "super::rect::origin_size")]
     pub rectangle: Rectangle,
     /// Node grid `[nx, ny]` (row-major, x fastest); rectangles only.
     #[serde(default)]
@@ -143,11 +144,13 @@ pub enum HoleSpec {
     Circle(CircleSpec),
 }
 
-/// `{ center = [x, y], radius = r, segments = n }`.
+/// `{ center = [x, y], radius = r, segments = n }` (`centre` is the same
+/// field).
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CircleSpec {
     /// Centre.
+    #[serde(alias = "centre")]
     pub center: [f64; 2],
     /// Radius.
     pub radius: f64,

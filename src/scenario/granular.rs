@@ -90,8 +90,9 @@ pub struct DiscsTable {
     pub csv: Option<PathBuf>,
     /// Generated packing.
     pub generate: Option<Generator>,
-    /// Box `[[x0, y0], [x1, y1]]` to fill.
-    #[serde(rename = "box")]
+    /// Box `[[x0, y0], [x1, y1]]` (or `{ origin, size }`,
+    /// [`super::rect`]) to fill.
+    #[serde(rename = "box", default, deserialize_with = "super::rect::corners")]
     pub region: Option<[[f64; 2]; 2]>,
     /// One radius, or `[rmin, rmax]` for radii uniform in the range.
     pub radius: Option<Radius>,

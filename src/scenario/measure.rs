@@ -25,9 +25,12 @@ use serde::Deserialize;
 pub struct MeasureSpec {
     /// Prefix of the history columns: `<name>_sxx`, ….
     pub name: String,
-    /// `[[x0, y0], [x1, y1]]`: a rectangle …
+    /// `[[x0, y0], [x1, y1]]` (or `{ origin, size }`, [`super::rect`]): a
+    /// rectangle …
+    #[serde(default, deserialize_with = "super::rect::corners")]
     pub rectangle: Option<[[f64; 2]; 2]>,
-    /// … or the centre of a circle …
+    /// … or the centre of a circle (`center` is the same field) …
+    #[serde(alias = "center")]
     pub centre: Option<[f64; 2]>,
     /// … and its radius.
     pub radius: Option<f64>,

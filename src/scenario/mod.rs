@@ -13,6 +13,7 @@ pub mod builder;
 pub mod generate;
 pub mod granular;
 pub mod measure;
+pub mod rect;
 
 use serde::Deserialize;
 use std::fmt;
