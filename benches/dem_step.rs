@@ -73,6 +73,7 @@ fn dense(n: usize) -> Vec<DiscRow> {
         1.0,
         Vec2::new(0.0, -98.1),
         6_000,
+        &mut |_| true,
     )
     .expect("settles");
     let rows = settle_in_box(
@@ -84,6 +85,7 @@ fn dense(n: usize) -> Vec<DiscRow> {
         1.0,
         Vec2::new(0.0, -9.81),
         10_000,
+        &mut |_| true,
     )
     .expect("settles");
     std::fs::create_dir_all(&dir).ok();

@@ -122,7 +122,10 @@ fn main() -> ExitCode {
                         CouplingError::Unstable { .. } | CouplingError::Subcycling { .. },
                     ),
                 )) => 3,
-                Some(RunError::Interrupted { signal, .. }) => 128 + (*signal as u8 & 0x7f),
+                Some(
+                    RunError::Interrupted { signal, .. }
+                    | RunError::InterruptedPreparing { signal, .. },
+                ) => 128 + (*signal as u8 & 0x7f),
                 _ => 1,
             };
             eprintln!("error: {e:#}");
@@ -184,15 +187,12 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 ..efgdem::run::RunOptions::new(&out)
             };
             let t0 = std::time::Instant::now();
-            in_pool(threads.unwrap_or(sc.simulation.threads), || {
+            let summary = in_pool(threads.unwrap_or(sc.simulation.threads), || {
                 efgdem::run::run(&sc, &opts)
             })?
             .with_context(|| format!("running {}", file.display()))?;
-            eprintln!(
-                "done in {:.3} s; results in {}",
-                t0.elapsed().as_secs_f64(),
-                out.display()
-            );
+            eprintln!("done in {:.3} s", t0.elapsed().as_secs_f64());
+            print!("{}", efgdem::run::recap::recap(&summary, &out));
         }
         Cmd::Reproduce {
             out,

@@ -26,6 +26,8 @@ enum Display {
 /// Progress of a time-stepped run of `total` steps.
 pub struct Progress {
     display: Display,
+    /// What is being stepped, in the plain lines (a run: none).
+    label: Option<String>,
     total: usize,
     /// Recent (instant, step) samples, at least [`TICK`] apart.
     samples: VecDeque<(Instant, usize)>,
@@ -56,15 +58,26 @@ impl Progress {
     /// Progress from step `start` (0, or the step a restart resumes at)
     /// to `total`.
     pub fn new(start: usize, total: usize, quiet: bool) -> Self {
+        Self::with_label(None, start, total, quiet)
+    }
+
+    /// Progress of a preparation (`what`: e.g. `a gravity deposit`) of
+    /// `total` steps; [`update`](Self::update) it with `t` = NaN (no time).
+    pub fn labelled(what: &str, total: usize, quiet: bool) -> Self {
+        Self::with_label(Some(what.to_string()), 0, total, quiet)
+    }
+
+    fn with_label(label: Option<String>, start: usize, total: usize, quiet: bool) -> Self {
         let now = Instant::now();
         let display = if quiet {
             Display::Hidden
         } else if std::io::stderr().is_terminal() {
             let pb = ProgressBar::new(total as u64);
+            let prefix = label.as_ref().map_or(String::new(), |l| format!("{l}: "));
             pb.set_style(
-                ProgressStyle::with_template(
-                    "{elapsed_precise} [{bar:40}] {pos}/{len} steps {msg}",
-                )
+                ProgressStyle::with_template(&format!(
+                    "{prefix}{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} steps {{msg}}"
+                ))
                 .expect("static template")
                 .progress_chars("=> "),
             );
@@ -75,6 +88,7 @@ impl Progress {
         };
         Progress {
             display,
+            label,
             total,
             samples: VecDeque::from([(now, start)]),
             last_tick: now,
@@ -110,8 +124,12 @@ impl Progress {
         self.sample(now, step);
         let rate = self.rate();
         let eta = rate.map(|r| (self.total - step.min(self.total)) as f64 / r);
+        let time = match t.is_nan() {
+            true => String::new(),
+            false => format!("t = {t:.4e} s, "),
+        };
         let msg = format!(
-            "t = {t:.4e} s, {}, eta {}",
+            "{time}{}, eta {}",
             rate.map_or("— steps/s".into(), |r| format!(
                 "{} steps/s",
                 human_rate(r)
@@ -128,7 +146,10 @@ impl Progress {
                 if now - *last >= PLAIN_EVERY {
                     *last = now;
                     eprintln!(
-                        "step {step}/{} ({:.1} %), {msg}",
+                        "{}step {step}/{} ({:.1} %), {msg}",
+                        self.label
+                            .as_ref()
+                            .map_or(String::new(), |l| format!("{l}: ")),
                         self.total,
                         100.0 * step as f64 / self.total.max(1) as f64
                     );

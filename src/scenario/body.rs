@@ -112,6 +112,25 @@ pub struct BodySpec {
     /// The paper's Example 1 has gravity on the disc only.
     #[serde(default = "yes")]
     pub self_weight: bool,
+    /// Coupled runs: what to do with discs the body overlaps when the run
+    /// starts (after the preparation of a generated packing): refuse them
+    /// (default) or remove them.
+    #[serde(default)]
+    pub overlapping_discs: OverlappingDiscs,
+}
+
+/// `overlapping_discs`: discs a body overlaps at the start of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OverlappingDiscs {
+    /// An error (exit 2), located at the body.
+    #[default]
+    Refuse,
+    /// The discs are removed before the run (counted in the run's report
+    /// and `summary.json`); the others are numbered from 1 in their order.
+    /// A body in the region a `deposit` or `grow` fills is then placed
+    /// after the preparation.
+    Remove,
 }
 
 /// `refine = [{ edges = ["name", …], spacing = h_r, width = w }]`: nodes
@@ -1001,6 +1020,11 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 format!("unknown edge `{e}`"),
             );
         }
+        p.check(
+            b.overlapping_discs == OverlappingDiscs::Refuse || sc.granular.is_some(),
+            at("overlapping_discs"),
+            "`remove` needs discs ([granular]) to remove",
+        );
         if b.self_weight && sc.simulation.gravity != [0.0, 0.0] && el.density <= 0.0 {
             p.push(
                 at("elastic.density"),

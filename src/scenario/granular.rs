@@ -117,6 +117,11 @@ pub struct DiscsTable {
     /// e.g. a frictionless one for a dense packing that does not depend on
     /// the friction of the run.
     pub settle_material: Option<String>,
+    /// `deposit` / `grow`: a file (relative to the scenario) that keeps the
+    /// prepared packing: written by the first run, read by the next ones
+    /// when what determines the packing is unchanged, refused otherwise
+    /// ([`super::prepare`]).
+    pub cache: Option<PathBuf>,
 }
 
 fn seed1() -> u64 {
@@ -995,6 +1000,7 @@ fn validate_table(t: &DiscsTable, p: &mut Problems) {
                 (t.region.is_some(), "box"),
                 (t.radius.is_some(), "radius"),
                 (t.count.is_some(), "count"),
+                (t.cache.is_some(), "cache"),
             ] {
                 p.check(!set, at(f), "only for `generate`");
             }
@@ -1041,6 +1047,11 @@ fn validate_table(t: &DiscsTable, p: &mut Problems) {
                 t.settle_material.is_none() || t.method != Packing::Loose,
                 at("settle_material"),
                 "applies to `method = \"deposit\"` or `\"grow\"` only (the material of the preparation)",
+            );
+            p.check(
+                t.cache.is_none() || t.method != Packing::Loose,
+                at("cache"),
+                "applies to `method = \"deposit\"` or `\"grow\"` only (it keeps the prepared packing)",
             );
         }
     }
