@@ -168,9 +168,6 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
         .as_ref()
         .map_or(build::BuildFor::Run, |b| build::BuildFor::Prepared(&b.rows));
     let removed = build::removed_discs(sc, purpose).map_err(|p| sc.located(vec![p]))?;
-    for (body, n) in removed.iter().filter(|r| r.1 > 0) {
-        eprintln!("removed {n} disc(s) overlapping body `{body}`");
-    }
     let probes = sc.probes(&model)?;
     let run = Run {
         sc,

@@ -282,11 +282,14 @@ pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
 fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> {
     let g = spec(sc)?;
     let mut rows = disc_rows(sc, purpose)?;
+    // `check` does not prepare a packing: its discs are not where the
+    // bodies will find them
+    let unprepared = purpose == BuildFor::Check && preparation(sc).is_some();
     let gone: std::collections::HashSet<usize> = overlapped(sc, &rows)
         .into_iter()
         .flat_map(|(_, r)| r)
         .collect();
-    if !gone.is_empty() {
+    if !gone.is_empty() && !unprepared {
         rows = (rows.into_iter().enumerate())
             .filter_map(|(k, r)| (!gone.contains(&k)).then_some(r))
             .collect();

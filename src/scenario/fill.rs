@@ -10,7 +10,8 @@
 //!   carry the weight are far below the margin). A body reaching into that
 //!   layer is certainly in the bed. The surface itself lies higher, where
 //!   the discs' area fills the box at the packing fraction of a random
-//!   deposit, about 0.75–0.85; the message gives that range.
+//!   deposit, about 0.65 (short, frictional) to 0.85 (frictionless); the
+//!   message gives that range.
 //!
 //! A body with `overlapping_discs = "remove"` is placed after the
 //! preparation instead: it is not reported.
@@ -30,7 +31,7 @@ pub const DENSEST: f64 = 0.906_899_682_117_108_9;
 /// The range of packing fractions of a random gravity deposit of discs
 /// (frictional, polydisperse: looser; frictionless: denser), for the
 /// estimated surface.
-pub const DEPOSIT_RANGE: [f64; 2] = [0.75, 0.85];
+pub const DEPOSIT_RANGE: [f64; 2] = [0.65, 0.85];
 
 /// The layer a deposit fills: its direction `up` (against gravity) and the
 /// box's lowest point along it.
