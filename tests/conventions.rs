@@ -17,7 +17,9 @@ fn array(xml: &str, name: &str) -> Vec<f64> {
     let start = xml.find(&tag).unwrap_or_else(|| panic!("no array {name}"));
     let body = &xml[start..];
     let body = &body[body.find('>').unwrap() + 1..body.find("</DataArray>").unwrap()];
-    body.split_whitespace().map(|v| v.parse().unwrap()).collect()
+    body.split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect()
 }
 
 /// 300 discs settling on a floor: slots are renumbered in space-filling
@@ -124,7 +126,13 @@ fn a_disc_has_one_number_in_every_file() {
     }
     let g = model.granular().unwrap();
     // slot order is not scenario order (else this test could not fail)
-    assert!(g.particles.id.iter().enumerate().any(|(k, &i)| k as u32 != i));
+    assert!(
+        g.particles
+            .id
+            .iter()
+            .enumerate()
+            .any(|(k, &i)| k as u32 != i)
+    );
     for id in [1, 150, 300] {
         let slot = g.particles.slot[id - 1] as usize;
         let p = g.particles.pos[slot];
