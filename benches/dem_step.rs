@@ -1,4 +1,4 @@
-//! DEM step throughput (issue 3, "Speed"): 10 000 and 100 000 polydisperse
+//! DEM step throughput (docs/performance.md): 10 000 and 100 000 polydisperse
 //! discs (r uniform in [0.8, 1.2], ρ = 1, k_n = k_s = 10⁶, friction 0.5,
 //! normal dashpot at ζ = 0.2, gravity) in a box,
 //! (a) settling from a loose start, (b) a dense settled packing,

@@ -537,7 +537,7 @@ mod tests {
     use crate::dem::walls::{Wall, WallMotion};
     use crate::geom::Vec2;
 
-    /// Issue 12: after an instability discs fly ~1e19 apart; the grid's cell
+    /// After an instability discs fly ~1e19 apart; the grid's cell
     /// count was computed in `usize` and wrapped around (index out of bounds
     /// in `bin`). A disc at 1e19, 1e300, ±∞ or NaN must not break the
     /// rebuild, and the discs that still touch are still found.

@@ -467,7 +467,7 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
 /// Largest feedback gain `k_n c` of a contact on a body within one body
 /// step that the sub-cycled scheme accepts (`c` the body step's point
 /// compliance at its contact boundary). Measured on an EFG footing driven
-/// into an undamped, frictionless bed (10–100 substeps, README): `|E_diss|`
+/// into an undamped, frictionless bed (10–100 substeps, docs/howto/choose-scheme-and-time-step.md): `|E_diss|`
 /// ≤ 0.6 % of the work at gains 0.003–0.026; 5–544 % at 0.034–0.061 with
 /// 10 substeps (the run-time guard, [`crate::coupling::MAX_CREATED`], stops
 /// those below this limit) but 0.1 % at 0.078 with 50; 5–94 % above 0.15.
