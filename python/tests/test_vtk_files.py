@@ -143,7 +143,7 @@ def test_coupled_run_files_match_history(tmp_path):
         assert set(cd["kind"].tolist()) <= {2}
         assert cd["fn"].sum() == pytest.approx(row["contact_fn"], rel=1e-12, abs=1e-12)
         if len(cd["kind"]):
-            assert cd["disc"].tolist() == [1] * len(cd["kind"]) and set(cd["other"].tolist()) == {0}
+            assert cd["disc"].tolist() == [1] * len(cd["kind"]) and set(cd["other"].tolist()) == {1}
             # the normal force pushes the disc back from the contact point
             # (along the line to it, up to the body's turn within the step)
             nf = cd["normal_force"]
@@ -194,13 +194,14 @@ def test_granular_run_files_match_history(tmp_path):
             assert h[step]["t"] == t
             assert kinds.count(0) + kinds.count(1) == h[step]["contacts"]
         wxyz, _, wd, _, _ = read_vtk(wall_f)
-        assert wd["wall"].tolist() == [0, 1, 2]
+        assert wd["wall"].tolist() == [1, 2, 3]  # numbered from 1, as discs
         if step in h:
             assert wd["force"][0, 1] == h[step]["floor_fy"]
     # the last frame: summary.json and discs_final.csv
     xyz, pd, _, _, _ = read_vtk(sets["discs"][-1][2])
     final = np.loadtxt(out / "discs_final.csv", delimiter=",", skiprows=1)
     assert np.array_equal(xyz[:, :2], final[:, :2]) and np.array_equal(pd["radius"], final[:, 2])
+    assert np.array_equal(final[:, 3], pd["id"])  # x,y,r,id: the same numbers
     _, _, cd, _, _ = read_vtk(sets["contacts"][-1][2])
     kinds = cd["kind"].tolist()
     assert kinds.count(0) == summary["contacts"]["disc_disc"]
@@ -232,7 +233,8 @@ def test_view_script_renders(tmp_path):
         if shutil.which("xvfb-run") is None:
             pytest.skip("no display and no xvfb-run")
         cmd = ["xvfb-run", "-a"] + cmd
-    subprocess.run(cmd, check=True, capture_output=True, timeout=300)
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-3000:]
     Image = pytest.importorskip("PIL.Image")
     im = np.asarray(Image.open(tmp_path / "view.png").convert("RGB")).astype(int)
     assert im.shape == (360, 640, 3)
