@@ -237,10 +237,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         } => {
             let t0 = std::time::Instant::now();
             let report = in_pool(threads, || efgdem::reproduce::reproduce(&out, quiet))??;
-            eprintln!(
-                "done in {:.2} s; report: {}",
-                t0.elapsed().as_secs_f64(),
-                report.display()
+            eprintln!("done in {:.2} s", t0.elapsed().as_secs_f64());
+            println!(
+                "report: {}
+figures: {}/fig*.png (their data: fig*.csv); runs: {}/runs/",
+                report.display(),
+                out.display(),
+                out.display()
             );
         }
         Cmd::StudyDt { file, tol } => {

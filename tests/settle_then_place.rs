@@ -296,3 +296,32 @@ fn ctrl_c_stops_a_preparation_within_a_second() {
     assert!(!root.join("bed.csv").exists());
     std::fs::remove_dir_all(root).unwrap();
 }
+
+/// The numbers `examples/settle_then_place.toml` and
+/// docs/howto/settle-then-place.md quote: the bed's surface (y = 0.292 in
+/// the middle of the box), 68 discs removed for the footing. About a
+/// minute: `cargo test --release --test settle_then_place -- --ignored`.
+#[test]
+#[ignore]
+fn the_example_removes_the_discs_its_page_says() {
+    let root = tmpdir("stp-example");
+    let example = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/settle_then_place.toml"
+    );
+    let file = root.join("settle_then_place.toml");
+    std::fs::copy(example, &file).unwrap();
+    let out = root.join("out");
+    let o = run_with(&file, &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(summary(&out)["removed_discs"]["footing"], 68);
+    let bed = std::fs::read_to_string(root.join("settle_then_place.bed.csv")).unwrap();
+    let rows = efgdem::scenario::generate::discs_from_csv(&bed).unwrap();
+    let top = rows
+        .iter()
+        .filter(|d| d.pos.x > 0.2 && d.pos.x < 0.4)
+        .map(|d| d.pos.y + d.r)
+        .fold(0.0, f64::max);
+    assert!((top - 0.292).abs() < 0.0005, "surface at {top}");
+    std::fs::remove_dir_all(root).unwrap();
+}
