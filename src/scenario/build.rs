@@ -98,6 +98,19 @@ pub fn laws(sc: &Scenario, damping: &DampingSpec) -> (Vec<ContactLaw>, BodyDampi
     (mats, body)
 }
 
+/// The contact law a packing's preparation uses (of its `settle_material`,
+/// or of the discs' material; without dashpots) and the discs' density.
+pub(super) fn settle_law(sc: &Scenario, t: &DiscsTable) -> Result<(ContactLaw, f64), Invalid> {
+    let g = spec(sc)?;
+    let mi = material_index(sc, &g.material, "granular.material")? as usize;
+    let settle = match &t.settle_material {
+        Some(m) => material_index(sc, m, "granular.discs.settle_material")? as usize,
+        None => mi,
+    };
+    let (mats, _) = laws(sc, &DampingSpec::None);
+    Ok((mats[settle], sc.material[mi].density))
+}
+
 pub(super) fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid> {
     sc.material
         .iter()
@@ -250,11 +263,9 @@ pub(super) fn loose_rows(sc: &Scenario, t: &DiscsTable) -> Result<Vec<DiscRow>, 
         let count = t
             .count
             .ok_or_else(|| bad("granular.discs", "`method = \"grow\"` needs `count`"))?;
-        let g = spec(sc)?;
-        let mi = material_index(sc, &g.material, "granular.material")? as usize;
-        let (mats, _) = laws(sc, &DampingSpec::None);
-        let density = sc.material[mi].density;
-        let (lo, hi, law) = (lo, hi, mats[mi]);
+        // no step: the centres and final radii (the law is not used)
+        let (law, density) = settle_law(sc, t)?;
+        let thickness = spec(sc)?.thickness;
         return grow_in_box(
             lo,
             hi,
@@ -264,7 +275,7 @@ pub(super) fn loose_rows(sc: &Scenario, t: &DiscsTable) -> Result<Vec<DiscRow>, 
             0,
             law,
             density,
-            g.thickness,
+            thickness,
             &mut |_| true,
         )
         .map_err(|e| bad("granular.discs", e));

@@ -12,14 +12,13 @@
 //! prepared one bit for bit (shortest round-trip decimals): a run from the
 //! cache gives the same results as one that prepares.
 
-use super::build::{bad, laws, loose_rows, material_index, preparation, spec};
+use super::build::{bad, loose_rows, preparation, settle_law, spec};
 use super::granular::{DiscsSpec, DiscsTable, Packing};
 use super::{Invalid, Scenario};
 use crate::dem::DemError;
 use crate::dem::packing::{DiscRow, Watch, grow_in_box, settle_in_box};
 use crate::geom::Vec2;
 use crate::scenario::generate::discs_from_csv;
-use crate::scenario::granular::DampingSpec;
 use std::path::{Path, PathBuf};
 
 /// A prepared packing.
@@ -80,41 +79,25 @@ pub fn prepare(sc: &Scenario, watch: Watch) -> Result<Option<Bed>, PrepareError>
     }
     let loose = loose_rows(sc, t)?;
     super::fill::check_bodies(sc, &loose)?;
-    let g = spec(sc)?;
-    let mi = material_index(sc, &g.material, "granular.material")? as usize;
-    let settle = match &t.settle_material {
-        Some(m) => material_index(sc, m, "granular.discs.settle_material")? as usize,
-        None => mi,
-    };
-    let (mats, _) = laws(sc, &DampingSpec::None);
+    let thickness = spec(sc)?.thickness;
+    let (law, density) = settle_law(sc, t)?;
     let (lo, hi) = t.region.map_or((Vec2::ZERO, Vec2::ZERO), |[a, b]| {
         (Vec2::from(a), Vec2::from(b))
     });
-    let density = sc.material[mi].density;
     let result = match prep.method {
-        Packing::Grow => grow_in_box(
-            lo,
-            hi,
-            t.radius.map_or((0.0, 0.0), |r| r.range()),
-            loose.len(),
-            t.seed,
-            prep.steps,
-            mats[settle],
-            density,
-            g.thickness,
-            watch,
-        ),
-        _ => settle_in_box(
-            &loose,
-            lo,
-            hi,
-            mats[settle],
-            density,
-            g.thickness,
-            deposit_gravity(sc),
-            prep.steps,
-            watch,
-        ),
+        Packing::Grow => {
+            let radius = t.radius.map_or((0.0, 0.0), |r| r.range());
+            let (n, steps) = (loose.len(), prep.steps);
+            grow_in_box(
+                lo, hi, radius, n, t.seed, steps, law, density, thickness, watch,
+            )
+        }
+        _ => {
+            let g = deposit_gravity(sc);
+            settle_in_box(
+                &loose, lo, hi, law, density, thickness, g, prep.steps, watch,
+            )
+        }
     };
     let rows = result.map_err(|e| match e {
         DemError::Stopped { step } => PrepareError::Stopped {
@@ -159,13 +142,7 @@ pub fn deposit_gravity(sc: &Scenario) -> Vec2 {
 /// header (values in shortest round-trip form).
 fn record(sc: &Scenario) -> Result<Vec<(&'static str, String)>, Invalid> {
     let t = table(sc)?;
-    let g = spec(sc)?;
-    let mi = material_index(sc, &g.material, "granular.material")? as usize;
-    let settle = match &t.settle_material {
-        Some(m) => material_index(sc, m, "granular.discs.settle_material")? as usize,
-        None => mi,
-    };
-    let (mats, _) = laws(sc, &DampingSpec::None);
+    let (law, density) = settle_law(sc, t)?;
     let method = t.method;
     Ok(vec![
         ("efgdem", env!("CARGO_PKG_VERSION").to_string()),
@@ -179,9 +156,9 @@ fn record(sc: &Scenario) -> Result<Vec<(&'static str, String)>, Invalid> {
             "settle_steps",
             format!("{:?}", preparation(sc).map(|p| p.steps)),
         ),
-        ("contact law", format!("{:?}", mats[settle])),
-        ("density", format!("{:?}", sc.material[mi].density)),
-        ("thickness", format!("{:?}", g.thickness)),
+        ("contact law", format!("{law:?}")),
+        ("density", format!("{density:?}")),
+        ("thickness", format!("{:?}", spec(sc)?.thickness)),
         (
             "gravity",
             match method {
