@@ -193,14 +193,18 @@ fn prepare_packing(sc: &Scenario, opts: &RunOptions) -> Result<Option<Bed>, RunE
         return Ok(None);
     };
     let t0 = Instant::now();
-    let mut bar = progress::Progress::labelled(prep.what(), prep.steps, opts.quiet);
+    // made at the first step: a bed read from its cache takes none
+    let mut bar = None;
     let stop = opts.stop.clone();
     let signal = || stop.as_ref().map_or(0, |s| s.load(Ordering::Relaxed));
     let result = prepare(sc, &mut |step| {
-        bar.update(step, f64::NAN);
+        bar.get_or_insert_with(|| progress::Progress::labelled(prep.what(), prep.steps, opts.quiet))
+            .update(step, f64::NAN);
         signal() == 0
     });
-    bar.finish();
+    if let Some(b) = &bar {
+        b.finish();
+    }
     match result {
         Ok(bed) => {
             if let Some(b) = &bed
@@ -225,16 +229,20 @@ fn prepare_packing(sc: &Scenario, opts: &RunOptions) -> Result<Option<Bed>, RunE
         }
         Err(PrepareError::Invalid(p)) => Err(sc.located(vec![p]).into()),
         Err(PrepareError::Stopped { step, steps }) => {
-            let summary = json!({
-                "status": "interrupted",
-                "during": "preparation",
-                "signal": signal(),
-                "preparation": { "method": prep.what(), "steps_done": step, "steps": steps },
-                "last_step": 0,
-            });
-            crate::output::write_json(&opts.out_dir.join("summary.json"), &summary)?;
+            let signal = signal();
+            // a restart's directory keeps the stopped run's summary
+            if opts.restart.is_none() {
+                let summary = json!({
+                    "status": "interrupted",
+                    "during": "preparation",
+                    "signal": signal,
+                    "preparation": { "method": prep.what(), "steps_done": step, "steps": steps },
+                    "last_step": 0,
+                });
+                crate::output::write_json(&opts.out_dir.join("summary.json"), &summary)?;
+            }
             Err(RunError::InterruptedPreparing {
-                signal: signal(),
+                signal,
                 step,
                 steps,
             })

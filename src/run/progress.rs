@@ -84,6 +84,9 @@ impl Progress {
             pb.set_position(start as u64);
             Display::Bar(pb)
         } else {
+            if let Some(l) = &label {
+                eprintln!("{l}: {total} steps …");
+            }
             Display::Plain(now)
         };
         Progress {
