@@ -192,14 +192,21 @@ fn prepare_packing(sc: &Scenario, opts: &RunOptions) -> Result<Option<Bed>, RunE
     let Some(prep) = build::preparation(sc) else {
         return Ok(None);
     };
+    // every problem of the scenario before any step
+    let problems = sc.validate();
+    if !problems.is_empty() {
+        return Err(sc.located(problems).into());
+    }
     let t0 = Instant::now();
     // made at the first step: a bed read from its cache takes none
     let mut bar = None;
     let stop = opts.stop.clone();
     let signal = || stop.as_ref().map_or(0, |s| s.load(Ordering::Relaxed));
     let result = prepare(sc, &mut |step| {
-        bar.get_or_insert_with(|| progress::Progress::labelled(prep.what(), prep.steps, opts.quiet))
-            .update(step, f64::NAN);
+        bar.get_or_insert_with(|| {
+            progress::Progress::labelled(prep.what(), prep.steps, opts.quiet)
+        })
+        .update(step, f64::NAN);
         signal() == 0
     });
     if let Some(b) = &bar {
@@ -308,6 +315,10 @@ impl Run<'_> {
 /// would not fit in the machine's memory is refused before anything is
 /// allocated.
 pub fn check(sc: &Scenario) -> Result<String, RunError> {
+    let problems = sc.validate();
+    if !problems.is_empty() {
+        return Err(sc.located(problems).into());
+    }
     let located = |p| sc.located(vec![p]);
     let cached = crate::scenario::prepare::cached(sc).map_err(located)?;
     let model = match &cached {

@@ -756,7 +756,7 @@ pub fn machine_memory() -> Option<f64> {
 /// Refuse a run that would not fit in the machine's memory, naming the
 /// largest consumer: the discs (`granular.discs`, or its `count`) or a
 /// body (`body.i.nodes`).
-fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
+pub(super) fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
     let Some(machine) = machine_memory() else {
         return Ok(());
     };

@@ -68,6 +68,8 @@ pub fn prepare(sc: &Scenario, watch: Watch) -> Result<Option<Bed>, PrepareError>
     let Some(prep) = preparation(sc) else {
         return Ok(None);
     };
+    // a run that would not fit is refused before anything is generated
+    super::build::check_memory(sc)?;
     let t = table(sc)?;
     let cache = t.cache.as_ref().map(|c| sc.resolve(c));
     if let Some(rows) = read_cache(sc, cache.as_deref())? {
