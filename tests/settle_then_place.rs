@@ -141,6 +141,28 @@ fn a_body_in_the_future_bed_is_refused_before_any_step() {
         out.contains("body `footing`: placed after a gravity deposit; the discs it then overlaps will be removed"),
         "{out}"
     );
+    // above the certain layer but in the settled bed: `run` finds it once
+    // the bed has settled, with the same hint
+    let out = root.join("settled");
+    std::fs::write(
+        &file,
+        bed("[[0.05, 0.115], [0.15, 0.165]]", false, None, 3, 30000),
+    )
+    .unwrap();
+    let o = bin()
+        .args(["check", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run_with(&file, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("overlap body `footing` at the start"), "{err}");
+    assert!(
+        err.contains("set `overlapping_discs = \"remove\"` on the body"),
+        "{err}"
+    );
+    assert!(!err.contains("allow_overlap"), "{err}");
     // above the bed's surface: no complaint without the option either
     std::fs::write(
         &file,

@@ -178,6 +178,9 @@ pub struct CircleSpec {
     pub segments: usize,
 }
 
+/// Most segments of a circular hole.
+pub const MAX_CIRCLE_SEGMENTS: usize = 100_000;
+
 fn default_circle_segments() -> usize {
     32
 }
@@ -214,11 +217,13 @@ impl BodySpec {
             holes.push(match h {
                 HoleSpec::Points(p) => p.iter().map(|&q| q.into()).collect(),
                 HoleSpec::Circle(c) => {
-                    if !(c.radius > 0.0 && c.radius.is_finite()) || c.segments < 3 {
+                    if !(c.radius > 0.0 && c.radius.is_finite())
+                        || !(3..=MAX_CIRCLE_SEGMENTS).contains(&c.segments)
+                    {
                         return Err((
                             format!("holes.{k}"),
                             format!(
-                                "a circle needs radius > 0 and segments ≥ 3 (got radius {}, segments {})",
+                                "a circle needs radius > 0 and 3 ≤ segments ≤ {MAX_CIRCLE_SEGMENTS} (got radius {}, segments {})",
                                 c.radius, c.segments
                             ),
                         ));
