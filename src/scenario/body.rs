@@ -217,9 +217,8 @@ impl BodySpec {
             holes.push(match h {
                 HoleSpec::Points(p) => p.iter().map(|&q| q.into()).collect(),
                 HoleSpec::Circle(c) => {
-                    if !(c.radius > 0.0 && c.radius.is_finite())
-                        || !(3..=MAX_CIRCLE_SEGMENTS).contains(&c.segments)
-                    {
+                    let segments = (3..=MAX_CIRCLE_SEGMENTS).contains(&c.segments);
+                    if !(c.radius > 0.0 && c.radius.is_finite() && segments) {
                         return Err((
                             format!("holes.{k}"),
                             format!(
