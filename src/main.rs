@@ -186,6 +186,23 @@ fn stop_on_signals() -> anyhow::Result<Arc<AtomicUsize>> {
     Ok(stop)
 }
 
+/// A run stopped by a signal or by an instability wrote its summary: its
+/// results up to there, on stdout as for a completed run.
+fn stopped_recap(e: &RunError, out: &std::path::Path) {
+    if !matches!(e, RunError::Interrupted { .. } | RunError::Model(_)) {
+        return;
+    }
+    let Ok(text) = std::fs::read_to_string(out.join("summary.json")) else {
+        return;
+    };
+    let Ok(summary) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return;
+    };
+    if matches!(summary["status"].as_str(), Some("interrupted" | "unstable")) {
+        print!("{}", efgdem::run::recap::recap(&summary, out));
+    }
+}
+
 /// Run `f` on a pool of `n` worker threads (0 = one per core). The whole
 /// command runs *inside* the pool, so that the time loop's parallel phases
 /// start on a worker instead of injecting a job from outside at every step
@@ -224,10 +241,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 ..efgdem::run::RunOptions::new(&out)
             };
             let t0 = std::time::Instant::now();
-            let summary = in_pool(threads.unwrap_or(sc.simulation.threads), || {
+            let result = in_pool(threads.unwrap_or(sc.simulation.threads), || {
                 efgdem::run::run(&sc, &opts)
-            })?
-            .with_context(|| format!("running {}", file.display()))?;
+            })?;
+            if let Err(e) = &result {
+                stopped_recap(e, &out);
+            }
+            let summary = result.with_context(|| format!("running {}", file.display()))?;
             eprintln!("done in {:.3} s", t0.elapsed().as_secs_f64());
             print!("{}", efgdem::run::recap::recap(&summary, &out));
         }

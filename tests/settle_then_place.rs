@@ -5,7 +5,8 @@
 //! "remove"` places the body after the preparation and removes the discs
 //! it overlaps — as many as an independent count of the settled bed finds;
 //! the preparation is kept in its `cache` and reused bit for bit, refused
-//! when it does not match; Ctrl-C stops a preparation at once.
+//! when it does not match; a preparation shows its steps and an ETA, and
+//! Ctrl-C stops it at once.
 #![cfg(unix)]
 
 #[allow(dead_code)]
@@ -289,6 +290,7 @@ fn ctrl_c_stops_a_preparation_within_a_second() {
     let out = root.join("out");
     let child = bin()
         .args(["run", file.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .env("EFGDEM_PROGRESS_EVERY", "0.3")
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
@@ -308,6 +310,20 @@ fn ctrl_c_stops_a_preparation_within_a_second() {
         err.contains("during the preparation of the packing"),
         "{err}"
     );
+    // its progress (not a terminal: plain lines): the steps, a rate, an ETA
+    assert!(
+        err.contains("a gravity deposit: 100000000 steps …"),
+        "{err}"
+    );
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("a gravity deposit: step "))
+        .unwrap_or_else(|| panic!("no progress line: {err}"));
+    assert!(
+        line.contains("/100000000 (") && line.contains(" steps/s, eta "),
+        "{line}"
+    );
+    assert!(!line.contains("eta —"), "{line}");
     let s = summary(&out);
     assert_eq!(s["status"], "interrupted");
     assert_eq!(s["during"], "preparation");

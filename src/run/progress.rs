@@ -2,7 +2,8 @@
 //! simulated time, the step rate and an ETA from the rate of the last
 //! [`WINDOW`] (not the average since the start, which start-up costs and
 //! changing contact counts make wrong); elsewhere (CI, pipes, log files)
-//! one plain line every [`PLAIN_EVERY`]. A spinner while the model is built.
+//! one plain line every [`PLAIN_EVERY`] (or every `EFGDEM_PROGRESS_EVERY`
+//! seconds). A spinner while the model is built.
 
 use indicatif::{ProgressBar, ProgressStyle};
 use std::collections::VecDeque;
@@ -13,14 +14,24 @@ use std::time::{Duration, Instant};
 pub const WINDOW: Duration = Duration::from_secs(20);
 /// Interval of the plain progress lines when stderr is not a terminal.
 pub const PLAIN_EVERY: Duration = Duration::from_secs(10);
+/// The interval of the plain lines: [`PLAIN_EVERY`], or
+/// `EFGDEM_PROGRESS_EVERY` seconds when that is set to a number ≥ 0.
+fn plain_every() -> Duration {
+    std::env::var("EFGDEM_PROGRESS_EVERY")
+        .ok()
+        .and_then(|s| s.trim().parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s >= 0.0)
+        .map_or(PLAIN_EVERY, Duration::from_secs_f64)
+}
+
 /// The display is refreshed at most this often.
 const TICK: Duration = Duration::from_millis(200);
 
 enum Display {
     Hidden,
     Bar(ProgressBar),
-    /// Lines on stderr; when the last one was written.
-    Plain(Instant),
+    /// Lines on stderr; when the last one was written, and how often.
+    Plain(Instant, Duration),
 }
 
 /// Progress of a time-stepped run of `total` steps.
@@ -87,7 +98,7 @@ impl Progress {
             if let Some(l) = &label {
                 eprintln!("{l}: {total} steps …");
             }
-            Display::Plain(now)
+            Display::Plain(now, plain_every())
         };
         Progress {
             display,
@@ -145,8 +156,8 @@ impl Progress {
                 pb.set_position(step as u64);
                 pb.set_message(msg);
             }
-            Display::Plain(last) => {
-                if now - *last >= PLAIN_EVERY {
+            Display::Plain(last, every) => {
+                if now - *last >= *every {
                     *last = now;
                     eprintln!(
                         "{}step {step}/{} ({:.1} %), {msg}",
