@@ -335,9 +335,10 @@ fn ctrl_c_stops_a_preparation_within_a_second() {
     std::fs::remove_dir_all(root).unwrap();
 }
 
-/// The numbers `examples/settle_then_place.toml` and
-/// docs/howto/settle-then-place.md quote: the bed's surface (y = 0.292 in
-/// the middle of the box), 68 discs removed for the footing. About a
+/// The numbers `examples/settle_then_place.toml`,
+/// docs/howto/settle-then-place.md and docs/reference/cli.md quote: the
+/// bed's surface (y = 0.292 in the middle of the box), 68 discs removed
+/// for the footing, the summary `run` prints. About a
 /// minute: `cargo test --release --test settle_then_place -- --ignored`.
 #[test]
 #[ignore]
@@ -349,10 +350,24 @@ fn the_example_removes_the_discs_its_page_says() {
     );
     let file = root.join("settle_then_place.toml");
     std::fs::copy(example, &file).unwrap();
-    let out = root.join("out");
-    let o = run_with(&file, &out, &[]);
+    // the directory docs/reference/cli.md shows
+    let out = root.join("out/settle_then_place");
+    let o = bin()
+        .current_dir(&root)
+        .args([
+            "run",
+            "settle_then_place.toml",
+            "-q",
+            "-o",
+            "out/settle_then_place",
+        ])
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(summary(&out)["removed_discs"]["footing"], 68);
+    // what run printed is what the command line's page shows
+    let shown = doc_block("reference/cli.md", "When it ends, stdout has");
+    assert_eq!(String::from_utf8_lossy(&o.stdout), shown);
     let bed = std::fs::read_to_string(root.join("settle_then_place.bed.csv")).unwrap();
     let rows = efgdem::scenario::generate::discs_from_csv(&bed).unwrap();
     let top = rows
@@ -361,5 +376,45 @@ fn the_example_removes_the_discs_its_page_says() {
         .map(|d| d.pos.y + d.r)
         .fold(0.0, f64::max);
     assert!((top - 0.292).abs() < 0.0005, "surface at {top}");
+    std::fs::remove_dir_all(root).unwrap();
+}
+
+/// The fenced `text` block that follows `after` in a page of docs/.
+fn doc_block(page: &str, after: &str) -> String {
+    let path = format!("{}/docs/{page}", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(&path).unwrap();
+    let rest = &text[text
+        .find(after)
+        .unwrap_or_else(|| panic!("{after} in {page}"))..];
+    let start = rest.find("```text\n").unwrap() + "```text\n".len();
+    rest[start..start + rest[start..].find("```").unwrap()].to_string()
+}
+
+/// The message docs/howto/settle-then-place.md shows for
+/// `examples/footing.toml` with its footing lowered into the future bed.
+#[test]
+fn the_refusal_the_page_shows_is_what_check_says() {
+    let root = tmpdir("stp-doc");
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/footing.toml");
+    let text = std::fs::read_to_string(example).unwrap();
+    let lowered = text
+        .replace("origin = [0.65, 0.54]", "origin = [0.65, 0.40]")
+        .replace("point = [0.8, 0.64]", "point = [0.8, 0.50]");
+    assert_ne!(text, lowered);
+    let file = root.join("footing.toml");
+    std::fs::write(&file, lowered).unwrap();
+    let o = bin()
+        .args(["check", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    let shown = doc_block("howto/settle-then-place.md", "its footing lowered to");
+    let said: String = err
+        .lines()
+        .filter(|l| l.starts_with("error:"))
+        .map(|l| l.replace(&format!("{}", file.display()), "footing.toml") + "\n")
+        .collect();
+    assert_eq!(said, shown);
     std::fs::remove_dir_all(root).unwrap();
 }
