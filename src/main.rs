@@ -365,8 +365,12 @@ fn view(
         .with_context(|| format!("writing into {}", out.display()))?;
     println!("wrote {}", script.display());
     if let Some(png) = screenshot {
-        view::render(&script, png).with_context(|| format!("rendering {}", png.display()))?;
+        let colours =
+            view::render(&script, png).with_context(|| format!("rendering {}", png.display()))?;
         println!("wrote {}", png.display());
+        for c in colours {
+            println!("{c}");
+        }
         return Ok(());
     }
     let how = format!(

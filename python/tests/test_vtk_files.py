@@ -257,3 +257,30 @@ def test_view_script_renders(tmp_path):
     assert o.returncode == 0, o.stderr[-3000:]
     drop = (sag(tmp_path / "view.png"), sag(tmp_path / "warp.png"))
     assert drop[0] <= 2 and 25 < drop[1] < 70, drop
+
+    def colours(args):
+        """{title: (low, high)} of the colour bars `efgdem view --screenshot`
+        reports for the image it renders with `args`."""
+        o = subprocess.run([cli(), "view", str(out), "--screenshot", str(tmp_path / "c.png"),
+                            "--size", "320", "180", *args], capture_output=True, text=True, timeout=300)
+        assert o.returncode == 0, o.stderr[-3000:]
+        bars = [line.split(": ") for line in o.stdout.splitlines() if line.startswith("colours: ")]
+        return {b[1]: tuple(float(v) for v in b[2].split(" to ")) for b in bars}
+
+    # colour ranges over the whole series (default) stay put when an early
+    # frame is shown; --range frame takes the frame's own; the discs' range
+    # ends at the 99th percentile of their speeds
+    beam = [read_vtk(f)[1]["von_mises"] for _, _, f in series(out, "beam")]
+    speeds = np.concatenate([np.linalg.norm(read_vtk(f)[1]["velocity"], axis=1)
+                             for _, _, f in series(out, "discs")])
+    t1, k1 = series(out, "beam")[1][1], 1
+    stress, disc = "von Mises stress [Pa]", "disc speed [m/s], 99% below"
+    whole = colours(["--time", str(t1)])
+    assert whole[stress] == pytest.approx((min(b.min() for b in beam), max(b.max() for b in beam)), rel=1e-8)
+    assert whole[disc] == pytest.approx((0.0, np.percentile(speeds, 99.0)), rel=1e-8)
+    own = colours(["--time", str(t1), "--range", "frame", "--percentile", "100"])
+    assert own[stress] == pytest.approx((beam[k1].min(), beam[k1].max()), rel=1e-8)
+    # the early frame's stresses are a part of the series' range
+    assert own[stress][1] < 0.8 * whole[stress][1], (own, whole)
+    speed1 = np.linalg.norm(read_vtk(series(out, "discs")[k1][2])[1]["velocity"], axis=1).max()
+    assert own["disc speed [m/s]"] == pytest.approx((0.0, speed1), rel=1e-8)

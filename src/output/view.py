@@ -326,6 +326,8 @@ for k, (d, lut, name, rng) in enumerate(bars):
         hi = lo + (abs(lo) if lo else 1.0)
     lut.RescaleTransferFunction(lo, hi)
     lut.AutomaticRescaleRangeMode = "Never" if RANGE == "series" or SCREENSHOT else "Clamp and update every timestep"
+    if SCREENSHOT:  # what the colours of the image mean
+        print("colours: %s: %.9g to %.9g" % (name, lo, hi))
 
 Render(view)
 

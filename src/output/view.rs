@@ -171,8 +171,9 @@ pub enum RenderError {
 }
 
 /// Render `script` (a `view.py`) to the image `png` with `pvbatch`; without
-/// a display, on a virtual X server started for it.
-pub fn render(script: &Path, png: &Path) -> Result<(), RenderError> {
+/// a display, on a virtual X server started for it. Returns the script's
+/// `colours: TITLE: LOW to HIGH` lines, the ranges of the colour bars.
+pub fn render(script: &Path, png: &Path) -> Result<Vec<String>, RenderError> {
     let pvbatch = on_path("pvbatch").ok_or(RenderError::NoParaView)?;
     let virtual_display = match has_display() {
         true => None,
@@ -187,7 +188,6 @@ pub fn render(script: &Path, png: &Path) -> Result<(), RenderError> {
         cmd.env("DISPLAY", &v.display).env_remove("WAYLAND_DISPLAY");
     }
     let out = cmd
-        .stdout(Stdio::null())
         .output()
         .map_err(|e| RenderError::Start(pvbatch.display().to_string(), e))?;
     if !out.status.success() {
@@ -198,5 +198,9 @@ pub fn render(script: &Path, png: &Path) -> Result<(), RenderError> {
             stderr: tail.into_iter().rev().collect::<Vec<_>>().join("\n"),
         });
     }
-    Ok(())
+    Ok(String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter(|l| l.starts_with("colours: "))
+        .map(str::to_string)
+        .collect())
 }
