@@ -12,9 +12,7 @@ use efgdem::output::csv::read;
 /// The number after `key` in `line` (up to a space, `,`, `;` or `)`).
 fn after(line: &str, key: &str) -> f64 {
     let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key} in {line}")) + key.len()..];
-    let end = rest
-        .find(|c: char| c == ' ' || c == ',' || c == ';' || c == ')')
-        .unwrap_or(rest.len());
+    let end = rest.find([' ', ',', ';', ')']).unwrap_or(rest.len());
     rest[..end]
         .parse()
         .unwrap_or_else(|_| panic!("{key}: {:?}", &rest[..end]))

@@ -284,3 +284,34 @@ def test_view_script_renders(tmp_path):
     assert own[stress][1] < 0.8 * whole[stress][1], (own, whole)
     speed1 = np.linalg.norm(read_vtk(series(out, "discs")[k1][2])[1]["velocity"], axis=1).max()
     assert own["disc speed [m/s]"] == pytest.approx((0.0, speed1), rel=1e-8)
+    # --region: the ranges are those of the points in it (the clamped part
+    # of the beam, away from the disc's impact near the tip)
+    part = colours(["--region", "-0.1", "-0.1", "0.7", "0.3", "--percentile", "100"])
+
+    def clamped(f):
+        xyz, pd, _, _, _ = read_vtk(f)
+        return pd["von_mises"][xyz[:, 0] <= 0.7]
+
+    v = np.concatenate([clamped(f) for _, _, f in series(out, "beam")])
+    assert part[stress] == pytest.approx((v.min(), v.max()), rel=1e-8)
+    assert part[stress][1] < 0.99 * whole[stress][1], (part, whole)
+
+    def grid_pixels(args, width=640):
+        """Pixels of the body's grid-line grey (above the colour bars) in
+        the image `width` × 9/16 `width` rendered with `args`."""
+        png = tmp_path / "edges.png"
+        height = width * 9 // 16
+        o = subprocess.run([cli(), "view", str(out), "--screenshot", str(png), "--size", str(width),
+                            str(height), *args], capture_output=True, text=True, timeout=300)
+        assert o.returncode == 0, o.stderr[-3000:]
+        im = np.asarray(Image.open(png).convert("RGB")).astype(int)[:height * 3 // 4]
+        return int((np.abs(im - 89).max(axis=2) <= 6).sum())
+
+    # body grid lines: off, on, and `auto`: on where a cell is 6 pixels or
+    # wider (the beam's cells, 0.053 m × 0.067 m, are ~30 px wide on a
+    # 640-pixel image), off where they are narrower (~4 px at 96 pixels)
+    off, on = grid_pixels(["--edges", "off"]), grid_pixels(["--edges", "on"])
+    assert off < 50 and on > 150, (off, on)
+    assert grid_pixels([]) == on
+    small = [grid_pixels(e, 96) for e in ([], ["--edges", "on"], ["--edges", "off"])]
+    assert small[0] == small[2] < small[1], small
