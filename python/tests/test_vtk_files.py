@@ -296,22 +296,22 @@ def test_view_script_renders(tmp_path):
     assert part[stress] == pytest.approx((v.min(), v.max()), rel=1e-8)
     assert part[stress][1] < 0.99 * whole[stress][1], (part, whole)
 
-    def grid_pixels(args, width=640):
+    def grid_pixels(args):
         """Pixels of the body's grid-line grey (above the colour bars) in
-        the image `width` × 9/16 `width` rendered with `args`."""
+        the 640 × 360 image rendered with `args`."""
         png = tmp_path / "edges.png"
-        height = width * 9 // 16
-        o = subprocess.run([cli(), "view", str(out), "--screenshot", str(png), "--size", str(width),
-                            str(height), *args], capture_output=True, text=True, timeout=300)
+        o = subprocess.run([cli(), "view", str(out), "--screenshot", str(png), "--size", "640", "360",
+                            *args], capture_output=True, text=True, timeout=300)
         assert o.returncode == 0, o.stderr[-3000:]
-        im = np.asarray(Image.open(png).convert("RGB")).astype(int)[:height * 3 // 4]
+        im = np.asarray(Image.open(png).convert("RGB")).astype(int)[:270]
         return int((np.abs(im - 89).max(axis=2) <= 6).sum())
 
     # body grid lines: off, on, and `auto`: on where a cell is 6 pixels or
-    # wider (the beam's cells, 0.053 m × 0.067 m, are ~30 px wide on a
-    # 640-pixel image), off where they are narrower (~4 px at 96 pixels)
+    # wider (the beam's cells, ~0.06 m, are ~30 px on the whole scene), off
+    # where they are narrower (~3.5 px in a 9 m wide --region)
     off, on = grid_pixels(["--edges", "off"]), grid_pixels(["--edges", "on"])
     assert off < 50 and on > 150, (off, on)
     assert grid_pixels([]) == on
-    small = [grid_pixels(e, 96) for e in ([], ["--edges", "on"], ["--edges", "off"])]
+    far = ["--region", "-4", "-2", "5", "2.5"]
+    small = [grid_pixels(far + e) for e in ([], ["--edges", "on"], ["--edges", "off"])]
     assert small[0] == small[2] < small[1], small
