@@ -77,17 +77,53 @@ enum Cmd {
         #[arg(long, default_value_t = 0.02)]
         tol: f64,
     },
-    /// Open a run's results in ParaView, ready to look at: writes
-    /// OUT/view.py (discs as true-size circles coloured by speed, bodies
-    /// deformed and coloured by von Mises stress, force chains, walls, the
-    /// time) and runs `paraview --script=OUT/view.py` if ParaView is on
-    /// PATH. `pvbatch OUT/view.py --screenshot FILE.png` renders an image.
+    /// Look at a run's results in ParaView: writes OUT/view.py (discs as
+    /// true-size circles coloured by speed, bodies deformed and coloured by
+    /// von Mises stress, force chains, walls, the time) and opens it in
+    /// ParaView, or renders an image with --screenshot (on a virtual
+    /// display, Xvfb, when there is none). The options are the script's
+    /// defaults; `pvbatch OUT/view.py --screenshot FILE.png [options]`
+    /// takes them too.
     View {
         /// The output directory of `efgdem run`.
         out: PathBuf,
         /// Only write OUT/view.py; do not start ParaView.
         #[arg(long)]
         no_open: bool,
+        /// Render the view to this PNG file with ParaView's `pvbatch`
+        /// instead of opening the GUI.
+        #[arg(long, value_name = "FILE")]
+        screenshot: Option<PathBuf>,
+        /// The frame shown, by its time (default: the last).
+        #[arg(long, value_name = "T")]
+        time: Option<f64>,
+        /// Image size in pixels (--screenshot; default 1600 900).
+        #[arg(long, num_args = 2, value_names = ["W", "H"])]
+        size: Option<Vec<u32>>,
+        /// Colour the discs by their speed or by their displacement since
+        /// t = 0.
+        #[arg(long, value_parser = ["velocity", "displacement"], default_value = "velocity")]
+        discs: String,
+        /// Colour ranges over all frames (they stay put when you step
+        /// through time) or each frame's own.
+        #[arg(long, value_parser = ["series", "frame"], default_value = "series")]
+        range: String,
+        /// The discs' colour range ends at this percentile of their values
+        /// (faster discs saturate: one fast disc does not turn the others
+        /// blue); 100: the largest value.
+        #[arg(long, value_name = "P", default_value_t = 99.0)]
+        percentile: f64,
+        /// Show only this rectangle (zoom into a part of a large bed).
+        #[arg(long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"], allow_negative_numbers = true)]
+        region: Option<Vec<f64>>,
+        /// Body grid lines: auto (only where a cell is at least 6 pixels
+        /// wide), on or off.
+        #[arg(long, value_parser = ["auto", "on", "off"], default_value = "auto")]
+        edges: String,
+        /// Draw the bodies' displacements this many times larger (small
+        /// static deflections); 1 is true scale.
+        #[arg(long, value_name = "F", default_value_t = 1.0)]
+        warp: f64,
     },
     /// Validate a scenario without running it; print sizes and time-step diagnostics.
     Check {
@@ -160,6 +196,23 @@ fn stop_on_signals() -> anyhow::Result<Arc<AtomicUsize>> {
     Ok(stop)
 }
 
+/// A run stopped by a signal or by an instability wrote its summary: its
+/// results up to there, on stdout as for a completed run.
+fn stopped_recap(e: &RunError, out: &std::path::Path) {
+    if !matches!(e, RunError::Interrupted { .. } | RunError::Model(_)) {
+        return;
+    }
+    let Ok(text) = std::fs::read_to_string(out.join("summary.json")) else {
+        return;
+    };
+    let Ok(summary) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return;
+    };
+    if matches!(summary["status"].as_str(), Some("interrupted" | "unstable")) {
+        say!("{}", efgdem::run::recap::recap(&summary, out).trim_end());
+    }
+}
+
 /// Run `f` on a pool of `n` worker threads (0 = one per core). The whole
 /// command runs *inside* the pool, so that the time loop's parallel phases
 /// start on a worker instead of injecting a job from outside at every step
@@ -202,15 +255,15 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 ..efgdem::run::RunOptions::new(&out)
             };
             let t0 = std::time::Instant::now();
-            in_pool(threads.unwrap_or(sc.simulation.threads), || {
+            let result = in_pool(threads.unwrap_or(sc.simulation.threads), || {
                 efgdem::run::run(&sc, &opts)
-            })?
-            .with_context(|| format!("running {}", file.display()))?;
-            eprintln!(
-                "done in {:.3} s; results in {}",
-                t0.elapsed().as_secs_f64(),
-                out.display()
-            );
+            })?;
+            if let Err(e) = &result {
+                stopped_recap(e, &out);
+            }
+            let summary = result.with_context(|| format!("running {}", file.display()))?;
+            eprintln!("done in {:.3} s", t0.elapsed().as_secs_f64());
+            say!("{}", efgdem::run::recap::recap(&summary, &out).trim_end());
         }
         Cmd::Reproduce {
             out,
@@ -219,10 +272,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
         } => {
             let t0 = std::time::Instant::now();
             let report = in_pool(threads, || efgdem::reproduce::reproduce(&out, quiet))??;
-            eprintln!(
-                "done in {:.2} s; report: {}",
-                t0.elapsed().as_secs_f64(),
-                report.display()
+            eprintln!("done in {:.2} s", t0.elapsed().as_secs_f64());
+            say!(
+                "report: {}
+figures: {}/fig*.png (their data: fig*.csv); runs: {}/runs/",
+                report.display(),
+                out.display(),
+                out.display()
             );
         }
         Cmd::StudyDt { file, tol } => {
@@ -257,7 +313,31 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 None => say!("no bounded dt found down to 1e-4 × the scenario's dt"),
             }
         }
-        Cmd::View { out, no_open } => view(&out, no_open)?,
+        Cmd::View {
+            out,
+            no_open,
+            screenshot,
+            time,
+            size,
+            discs,
+            range,
+            percentile,
+            region,
+            edges,
+            warp,
+        } => {
+            let options = efgdem::output::view::ViewOptions {
+                time,
+                size: size.map(|s| [s[0], s[1]]),
+                discs,
+                range,
+                percentile,
+                region: region.map(|r| [r[0], r[1], r[2], r[3]]),
+                edges,
+                warp,
+            };
+            view(&out, no_open, screenshot.as_deref(), &options)?
+        }
         Cmd::Check { file } => {
             let sc = scenario::load(&file)?;
             let report = efgdem::run::check(&sc)?;
@@ -267,9 +347,30 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `efgdem view OUT`: write OUT/view.py and open it in ParaView.
-fn view(out: &std::path::Path, no_open: bool) -> anyhow::Result<()> {
+/// `efgdem view OUT`: write OUT/view.py, then open it in ParaView or
+/// render it. Without a display the GUI is not started (it would abort):
+/// the message says how to render an image instead.
+fn view(
+    out: &std::path::Path,
+    no_open: bool,
+    screenshot: Option<&std::path::Path>,
+    options: &efgdem::output::view::ViewOptions,
+) -> anyhow::Result<()> {
     use efgdem::output::view;
+    if !(options.percentile > 0.0 && options.percentile <= 100.0) {
+        anyhow::bail!(
+            "--percentile must be in (0, 100], got {}",
+            options.percentile
+        );
+    }
+    if !(options.warp.is_finite() && options.warp > 0.0) {
+        anyhow::bail!("--warp must be a number > 0, got {}", options.warp);
+    }
+    if let Some(r) = options.region
+        && !(r[2] > r[0] && r[3] > r[1])
+    {
+        anyhow::bail!("--region X0 Y0 X1 Y1 needs X1 > X0 and Y1 > Y0, got {r:?}");
+    }
     let found = view::has_frames(out).with_context(|| format!("reading {}", out.display()))?;
     if !found {
         anyhow::bail!(
@@ -277,25 +378,43 @@ fn view(out: &std::path::Path, no_open: bool) -> anyhow::Result<()> {
             out.display()
         );
     }
-    let script =
-        view::write_script(out).with_context(|| format!("writing into {}", out.display()))?;
+    let script = view::write_script(out, options)
+        .with_context(|| format!("writing into {}", out.display()))?;
     say!("wrote {}", script.display());
+    if let Some(png) = screenshot {
+        let colours =
+            view::render(&script, png).with_context(|| format!("rendering {}", png.display()))?;
+        say!("wrote {}", png.display());
+        for c in colours {
+            say!("{c}");
+        }
+        return Ok(());
+    }
     let how = format!(
-        "open it with `paraview --script={0}`, or render an image with `pvbatch {0} --screenshot view.png` (headless: `xvfb-run pvbatch …`)",
+        "render an image with `efgdem view {} --screenshot view.png` (a virtual display is started when there is none), or open the script in ParaView: `paraview --script={}`",
+        out.display(),
         script.display()
     );
-    match (no_open, view::on_path("paraview")) {
-        (false, Some(pv)) => {
-            let status = std::process::Command::new(&pv)
-                .arg(format!("--script={}", script.display()))
-                .status()
-                .with_context(|| format!("starting {}", pv.display()))?;
-            if !status.success() {
-                anyhow::bail!("{} exited with {status}; {how}", pv.display());
-            }
-        }
-        (false, None) => say!("ParaView (`paraview`) is not on PATH; {how}"),
-        (true, _) => say!("{how}"),
+    if no_open {
+        eprintln!("{how}");
+        return Ok(());
+    }
+    if !view::has_display() {
+        anyhow::bail!(
+            "no display to open ParaView on (DISPLAY and WAYLAND_DISPLAY are not set): {how}"
+        );
+    }
+    let Some(pv) = view::on_path("paraview") else {
+        anyhow::bail!(
+            "ParaView (`paraview`) is not on PATH (Debian: apt-get install paraview): {how}"
+        );
+    };
+    let status = std::process::Command::new(&pv)
+        .arg(format!("--script={}", script.display()))
+        .status()
+        .with_context(|| format!("starting {}", pv.display()))?;
+    if !status.success() {
+        anyhow::bail!("{} exited with {status}; {how}", pv.display());
     }
     Ok(())
 }

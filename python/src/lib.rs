@@ -50,11 +50,16 @@ pyo3::create_exception!(
 /// File name that `from_dict` scenarios carry in messages.
 const DICT_FILE: &str = "<dict>";
 
-/// The structured dtype of `Model.contacts()` (packed, 73 bytes a record).
-const CONTACT_FIELDS: [(&str, &str); 11] = [
+/// The structured dtype of `Model.contacts()` (packed, 81 bytes a
+/// record). `disc` and `other` are the numbers the files use (from 1);
+/// `disc_index` and `other_index` the rows of the id-ordered arrays and of
+/// `body_names()` (from 0).
+const CONTACT_FIELDS: [(&str, &str); 13] = [
     ("kind", "u1"),
     ("disc", "<u4"),
     ("other", "<u4"),
+    ("disc_index", "<u4"),
+    ("other_index", "<u4"),
     ("x", "<f8"),
     ("y", "<f8"),
     ("nx", "<f8"),
@@ -70,8 +75,8 @@ const CONTACT_FIELDS: [(&str, &str); 11] = [
 #[derive(Clone, Copy)]
 struct ContactRecord {
     kind: u8,
-    disc: u32,
-    other: u32,
+    /// `disc_id`, `other_id` (from 1), `disc_index`, `other_index` (from 0).
+    ids: [u32; 4],
     f: [f64; 8],
 }
 
@@ -493,13 +498,15 @@ fn read_only<'py, T>(a: Bound<'py, T>) -> PyResult<Bound<'py, T>> {
 /// Disc state comes in two forms:
 ///
 /// * `disc_positions()`, `disc_velocities()`, `disc_radii()`,
-///   `disc_spins()`, `disc_forces()`: **copies in id order** — row `i` is
-///   the scenario's disc `i` (0-based; probes and the TOML number discs from
-///   1). A copy is a snapshot: it stays as it is when the model steps, so
-///   `p1 - p0` is a displacement.
+///   `disc_spins()`, `disc_forces()`: **copies in id order** — row `i`
+///   (an *index*, from 0) is disc number `i + 1` (its *id*: the number the
+///   scenario's probes, `history.csv`, `discs_final.csv` and the frames'
+///   `GlobalIds` use). A copy is a snapshot: it stays as it is when the
+///   model steps, so `p1 - p0` is a displacement.
 /// * `disc_views()`: **zero-copy, read-only views** of the Rust arrays, in
 ///   *slot* order (the DEM renumbers its slots in space-filling order from
-///   time to time; `views["id"][k]` is the id of the disc in slot `k`).
+///   time to time; `views["index"][k]` is the index of the disc in slot
+///   `k`, `disc_ids()[k]` its id).
 ///   They are **live**: they show the state after the latest step, including
 ///   the renumbering, and keep the model alive. Do not read them from another
 ///   thread while `step()` runs (it releases the GIL).
@@ -776,9 +783,22 @@ impl PyModel {
         Ok(by_id(g.model.granular(), |g, s| g.particles.theta[s]).into_pyarray(py))
     }
 
-    /// Scenario id (0-based) of the disc in each slot, shape (n,), uint32 —
-    /// the order of `disc_views()` (a copy).
+    /// The number of the disc in each slot, as the files give it (from 1:
+    /// probes' `disc`, `history.csv`, `discs_final.csv`'s `id`, the frames'
+    /// `id`/`GlobalIds`), shape (n,), uint32 — the order of `disc_views()`
+    /// (a copy). `disc_ids() - 1` is `disc_indices()`.
     fn disc_ids<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<u32>>> {
+        let g = self.lock()?;
+        let ids = g.model.granular().map_or_else(Vec::new, |g| {
+            g.particles.id.iter().map(|&i| i + 1).collect()
+        });
+        Ok(ids.into_pyarray(py))
+    }
+
+    /// The row of the disc in each slot in the id-ordered arrays
+    /// (`disc_positions()` …; from 0), shape (n,), uint32 — the order of
+    /// `disc_views()` (a copy; the same as `disc_views()["index"]`).
+    fn disc_indices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<u32>>> {
         let g = self.lock()?;
         let ids = g
             .model
@@ -789,10 +809,12 @@ impl PyModel {
 
     /// Zero-copy, read-only, live views of the disc arrays in slot order:
     /// a dict with `pos` (n, 2), `vel` (n, 2), `force` (n, 2), `radius`,
-    /// `omega`, `theta` (n,) float64 and `id` (n,) uint32. They reflect the
-    /// state after the latest step (slots are renumbered from time to time:
-    /// always index them together with `id`); copy one (`a.copy()`) to keep
-    /// a snapshot. They keep the model alive.
+    /// `omega`, `theta` (n,) float64 and `index` (n,) uint32, the row of
+    /// each slot's disc in the id-ordered arrays (from 0; its number in the
+    /// files is `index + 1`). They reflect the state after the latest step
+    /// (slots are renumbered from time to time: always index them together
+    /// with `index`); copy one (`a.copy()`) to keep a snapshot. They keep
+    /// the model alive.
     fn disc_views<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
         let py = slf.py();
         let out = PyDict::new(py);
@@ -825,7 +847,7 @@ impl PyModel {
             out.set_item("theta", f64s(&p.theta)?)?;
             let a = ArrayView1::from_shape_ptr(n, p.id.as_ptr());
             out.set_item(
-                "id",
+                "index",
                 read_only(PyArray1::<u32>::borrow_from_array(&a, base.clone()))?,
             )?;
         }
@@ -834,8 +856,11 @@ impl PyModel {
 
     /// Every closed contact (disc–disc, disc–wall, then disc–body) as a
     /// numpy structured array with fields `kind` (u1: 0 disc–disc, 1
-    /// disc–wall, 2 disc–body), `disc` (u4, id of the disc), `other` (u4: a
-    /// disc id, a wall index or a body index), `x`, `y` (contact point),
+    /// disc–wall, 2 disc–body), `disc` (u4, the disc's number, from 1, as
+    /// in the files), `other` (u4: the number of the other disc, wall or
+    /// body, by `kind`, from 1, as in the frames' `other`), `disc_index`,
+    /// `other_index` (u4: the same from 0 — rows of the id-ordered disc
+    /// arrays, of the walls, of `body_names()`), `x`, `y` (contact point),
     /// `nx`, `ny` (unit normal from the disc to the other side), `overlap`,
     /// `fn_elastic` (k_n δ), `fn_total` (with the dashpot) and `fs` (shear
     /// spring force along (−ny, nx)). A copy.
@@ -851,8 +876,12 @@ impl PyModel {
                         ContactKind::DiscWall => 1,
                         ContactKind::DiscBody => 2,
                     },
-                    disc: c.disc as u32,
-                    other: c.other as u32,
+                    ids: [
+                        c.disc as u32 + 1,
+                        c.other as u32 + 1,
+                        c.disc as u32,
+                        c.other as u32,
+                    ],
                     f: [
                         c.point.x,
                         c.point.y,

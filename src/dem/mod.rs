@@ -66,6 +66,13 @@ pub enum DemError {
         /// The critical step `2√(m_min/k_max)` ([`Granular::critical_dt`]).
         dt_crit: f64,
     },
+    /// A preparation ([`packing::settle_in_box`], [`packing::grow_in_box`])
+    /// was stopped by its watch.
+    #[error("the preparation was stopped after {step} steps")]
+    Stopped {
+        /// Steps done.
+        step: usize,
+    },
 }
 
 /// A closed disc–wall contact ([`Granular::wall_contact`]).

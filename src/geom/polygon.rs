@@ -35,12 +35,7 @@ impl Loop {
     }
     /// Twice the signed area (positive counter-clockwise).
     pub fn signed_area2(&self) -> f64 {
-        (0..self.len())
-            .map(|i| {
-                let (a, b) = self.segment(i);
-                a.cross(b)
-            })
-            .sum()
+        signed_area2(&self.points)
     }
 }
 
@@ -499,9 +494,57 @@ pub fn circle(center: Vec2, radius: f64, segments: usize) -> Vec<Vec2> {
         .collect()
 }
 
+/// The part of the loop `points` where `n · x ≤ c` (Sutherland–Hodgman
+/// against one half-plane): a loop of the same orientation, empty if none
+/// of it is there. Clipping a loop by every side of a convex region gives
+/// its intersection with that region, whose signed area is exact even
+/// when the loop is not convex (the cut may leave zero-width spurs).
+pub fn clip_half_plane(points: &[Vec2], n: Vec2, c: f64) -> Vec<Vec2> {
+    let mut out = Vec::with_capacity(points.len() + 2);
+    let side = |p: Vec2| n.dot(p) - c;
+    for (i, &a) in points.iter().enumerate() {
+        let b = points[(i + 1) % points.len()];
+        let (sa, sb) = (side(a), side(b));
+        if sa <= 0.0 {
+            out.push(a);
+        }
+        if (sa < 0.0 && sb > 0.0) || (sa > 0.0 && sb < 0.0) {
+            out.push(a + (b - a) * (sa / (sa - sb)));
+        }
+    }
+    out
+}
+
+/// Twice the signed area of a loop given by its vertices (positive
+/// counter-clockwise).
+pub fn signed_area2(points: &[Vec2]) -> f64 {
+    (0..points.len())
+        .map(|i| points[i].cross(points[(i + 1) % points.len()]))
+        .sum()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn clipping_a_non_convex_loop_keeps_its_area_on_one_side() {
+        // an L of area 3 (unit squares at (0,0), (1,0), (0,1)), cut at y = 0.5
+        let l = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(2.0, 0.0),
+            Vec2::new(2.0, 1.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(1.0, 2.0),
+            Vec2::new(0.0, 2.0),
+        ];
+        assert_eq!(signed_area2(&l), 6.0);
+        let below = clip_half_plane(&l, Vec2::new(0.0, 1.0), 0.5);
+        assert!((signed_area2(&below) - 2.0).abs() < 1e-15);
+        let above = clip_half_plane(&l, Vec2::new(0.0, -1.0), -1.5);
+        assert!((signed_area2(&above) - 1.0).abs() < 1e-15);
+        assert!(clip_half_plane(&l, Vec2::new(0.0, 1.0), -1.0).is_empty());
+    }
 
     fn v(p: &[[f64; 2]]) -> Vec<Vec2> {
         p.iter().map(|&a| a.into()).collect()

@@ -155,15 +155,79 @@ pub fn read(path: &Path) -> std::io::Result<(Vec<String>, Vec<Vec<f64>>)> {
     Ok((h.columns, h.rows))
 }
 
-/// Write the discs as `x,y,r` in scenario order (readable as a `discs =
-/// { csv = ... }` source), atomically: a reader never sees part of it.
+/// The smallest, largest and last value of a `history.csv` column, with
+/// the times of the first two.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Extrema {
+    /// Smallest value.
+    pub min: f64,
+    /// Its time (the first row that has it).
+    pub t_min: f64,
+    /// Largest value.
+    pub max: f64,
+    /// Its time.
+    pub t_max: f64,
+    /// Value of the last row.
+    #[serde(rename = "final")]
+    pub last: f64,
+}
+
+/// [`Extrema`] of the columns `names` of the history at `path` (read row
+/// by row; `t` is the column `t`), `None` for a column it does not have
+/// or without rows.
+pub fn extrema(path: &Path, names: &[&str]) -> std::io::Result<Vec<Option<Extrema>>> {
+    use std::io::BufRead;
+    let file = File::open(path).map_err(|e| io_at(path, e))?;
+    let mut lines = std::io::BufReader::new(file).lines();
+    let header: Vec<String> = match lines.next() {
+        Some(h) => h?.split(',').map(str::to_string).collect(),
+        None => return Ok(vec![None; names.len()]),
+    };
+    let col = |n: &str| header.iter().position(|h| h == n);
+    let (cols, t): (Vec<Option<usize>>, _) = (names.iter().map(|n| col(n)).collect(), col("t"));
+    let mut out: Vec<Option<Extrema>> = vec![None; names.len()];
+    for line in lines {
+        let line = line?;
+        let v: Vec<f64> = line
+            .split(',')
+            .map(|x| x.trim().parse().unwrap_or(f64::NAN))
+            .collect();
+        let time = t.and_then(|t| v.get(t).copied()).unwrap_or(f64::NAN);
+        for (e, c) in out.iter_mut().zip(&cols) {
+            let Some(&x) = c.and_then(|c| v.get(c)) else {
+                continue;
+            };
+            let e = e.get_or_insert(Extrema {
+                min: x,
+                t_min: time,
+                max: x,
+                t_max: time,
+                last: x,
+            });
+            if x < e.min {
+                (e.min, e.t_min) = (x, time);
+            }
+            if x > e.max {
+                (e.max, e.t_max) = (x, time);
+            }
+            e.last = x;
+        }
+    }
+    Ok(out)
+}
+
+/// Write the discs as `x,y,r,id` in scenario order, `id` the disc's number
+/// (from 1, as probes and the frames' `GlobalIds` give it): a
+/// `discs = { csv = ... }` source (its header names the columns), written
+/// atomically: a reader never sees part of it.
 pub fn write_discs_csv(gr: &Granular, path: &Path) -> std::io::Result<()> {
     let p = &gr.particles;
     super::write_atomic(path, true, |w| {
-        writeln!(w, "x,y,r")?;
+        writeln!(w, "x,y,r,id")?;
         for id in 0..p.len() {
             let k = p.slot[id] as usize;
-            writeln!(w, "{:e},{:e},{:e}", p.pos[k].x, p.pos[k].y, p.radius[k])?;
+            let (x, y, r) = (p.pos[k].x, p.pos[k].y, p.radius[k]);
+            writeln!(w, "{x:e},{y:e},{r:e},{}", id + 1)?;
         }
         Ok(())
     })
@@ -184,6 +248,13 @@ mod tests {
             w.row(&[0.1, -2.25e-9]).unwrap();
         }
         let (h, rows) = read(&p).unwrap();
+        let e = extrema(&p, &["f", "g"]).unwrap();
+        assert_eq!(e[1], None);
+        let e = e[0].unwrap();
+        assert_eq!(
+            (e.min, e.t_min, e.max, e.t_max, e.last),
+            (-2.25e-9, 0.1, 1.5, 0.0, -2.25e-9)
+        );
         assert_eq!(h, vec!["t", "f"]);
         assert_eq!(rows, vec![vec![0.0, 1.5], vec![0.1, -2.25e-9]]);
         std::fs::remove_dir_all(dir).unwrap();

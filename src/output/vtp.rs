@@ -115,8 +115,9 @@ pub fn write_discs(
 /// Write the contacts at `path`: per contact two points (the disc's
 /// centre; the other disc's centre or the contact point on the wall or
 /// body) and a line, with cell data `kind` (0 disc–disc, 1 disc–wall,
-/// 2 disc–body), `disc` (1-based), `other` (a disc: 1-based; a wall or a
-/// body: 0-based index in scenario order), `normal_force` and
+/// 2 disc–body), `disc` (its number, from 1), `other` (the number of the
+/// other disc, wall or body, by `kind`: each counted from 1 in scenario
+/// order), `normal_force` and
 /// `tangential_force` (vectors, on the disc; elastic normal part `k_n δ`
 /// and shear spring), `fn` (`k_n δ`, compression positive), `ft` (|shear
 /// force|), `overlap`.
@@ -176,7 +177,7 @@ pub fn write_contacts(
         "",
         &contacts
             .iter()
-            .map(|c| c.other as i32 + (c.kind == ContactKind::DiscDisc) as i32)
+            .map(|c| c.other as i32 + 1)
             .collect::<Vec<_>>(),
     );
     f.close("CellData");
@@ -186,7 +187,7 @@ pub fn write_contacts(
 }
 
 /// Write the walls of `g` at `path`: one line each (its two end points),
-/// with cell data `wall` (0-based index in scenario order), `force` (of
+/// with cell data `wall` (its number, from 1 in scenario order), `force` (of
 /// the discs on the wall in the last step) and `velocity`.
 pub fn write_walls(g: &Granular, format: VtkFormat, path: &Path) -> std::io::Result<()> {
     let w = &g.walls;
@@ -194,7 +195,7 @@ pub fn write_walls(g: &Granular, format: VtkFormat, path: &Path) -> std::io::Res
     piece(&mut f, 2 * w.len(), 0, w.len());
     points(&mut f, &vec3(w.iter().flat_map(|w| [w.a, w.b])));
     f.open("CellData", "Vectors=\"force\"");
-    f.array("wall", 1, "", &(0..w.len() as i32).collect::<Vec<_>>());
+    f.array("wall", 1, "", &(1..=w.len() as i32).collect::<Vec<_>>());
     f.array("force", 3, "", &vec3(w.iter().map(|w| w.force)));
     f.array("velocity", 3, "", &vec3(w.iter().map(|w| w.vel)));
     f.close("CellData");

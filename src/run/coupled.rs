@@ -516,6 +516,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
             "gains": m.subcycling_gains,
         });
     }
+    run.annotate(&mut summary)?;
     ended.record(&mut summary, &model);
     write_json(&dir.join("summary.json"), &summary)?;
     ended.result(summary, &model, dir)

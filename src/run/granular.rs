@@ -102,6 +102,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
         "wall_forces": gr.walls.iter().map(|w| json!({"name": w.name, "force": [w.force.x, w.force.y], "position_from": [w.a.x, w.a.y]})).collect::<Vec<_>>(),
         "warnings": warnings,
     });
+    run.annotate(&mut summary)?;
     ended.record(&mut summary, &model);
     write_json(&out.join("summary.json"), &summary)?;
     ended.result(summary, &model, out)

@@ -7,14 +7,17 @@ mod coupled;
 mod granular;
 pub mod memory;
 pub mod progress;
+pub mod recap;
 mod session;
 
 use crate::model::{Model, ModelError, System};
+use crate::scenario::prepare::{Bed, PrepareError, prepare};
 use crate::scenario::{Scenario, ScenarioError, build};
 use checkpoint::Checkpoint;
+use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::AtomicUsize;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Options of `efgdem run` that are not part of the scenario.
@@ -110,6 +113,20 @@ pub enum RunError {
         /// The checkpoint written at the stop.
         checkpoint: PathBuf,
     },
+    /// A stop was requested during the preparation of the packing: nothing
+    /// is there to continue (`summary.json` says `"status":
+    /// "interrupted"`, `"during": "preparation"`; exit code 128 + signal).
+    #[error(
+        "interrupted by signal {signal} during the preparation of the packing, after {step} of {steps} steps; nothing to continue from: run it again (with `cache` in the packing's table a finished preparation is kept)"
+    )]
+    InterruptedPreparing {
+        /// The signal number (2 SIGINT, 15 SIGTERM).
+        signal: usize,
+        /// Preparation steps taken.
+        step: usize,
+        /// Steps of the whole preparation.
+        steps: usize,
+    },
     /// A checkpoint cannot be used to restart this scenario (exit code 2).
     #[error("cannot restart from {}: {message}", path.display())]
     Restart {
@@ -142,7 +159,9 @@ impl RunError {
             }
             RunError::Io(_) | RunError::OutDir { .. } => 1,
             RunError::Model(_) => 3,
-            RunError::Interrupted { signal, .. } => 128 + (*signal as u8 & 0x7f),
+            RunError::Interrupted { signal, .. } | RunError::InterruptedPreparing { signal, .. } => {
+                128 + (*signal as u8 & 0x7f)
+            }
         }
     }
 }
@@ -185,16 +204,18 @@ pub fn worker_threads(requested: usize) -> (usize, Option<String>) {
 }
 
 /// Build `sc` and run it, writing `summary.json`, `history.csv` and frames
-/// into `opts.out_dir`. Returns the summary that was written.
-pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunError> {
+/// into `opts.out_dir`. Returns the summary that was written. A generated
+/// packing's preparation (deposit, growth) is shown with its step count
+/// and ETA, and stopped by a stop request.
+pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
     let _held = session::prepare_out_dir(opts)?;
     let t0 = Instant::now();
-    let what = match build::preparation(sc) {
-        Some(p) => format!("building the model: {} ({} DEM steps)", p.what(), p.steps),
-        None => "building the model".to_string(),
+    let bed = prepare_packing(sc, opts)?;
+    let spin = progress::spinner("building the model", opts.quiet);
+    let mut model = match &bed {
+        Some(b) => sc.build_prepared(&b.rows)?,
+        None => sc.build()?,
     };
-    let spin = progress::spinner(&what, opts.quiet);
-    let mut model = sc.build()?;
     let restart = match &opts.restart {
         Some(path) => {
             let ck = Checkpoint::read(path, sc)?;
@@ -205,6 +226,10 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunErr
     };
     spin.finish_and_clear();
     let build_s = t0.elapsed().as_secs_f64();
+    let purpose = bed
+        .as_ref()
+        .map_or(build::BuildFor::Run, |b| build::BuildFor::Prepared(&b.rows));
+    let removed = build::removed_discs(sc, purpose).map_err(|p| sc.located(vec![p]))?;
     let probes = sc.probes(&model)?;
     let last_step = std::cell::Cell::new(model.step);
     let run = Run {
@@ -214,6 +239,8 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunErr
         build_s,
         restart,
         last_step: &last_step,
+        bed,
+        removed,
     };
     let result = match model.system {
         System::Continuum { .. } => continuum::run(run, model),
@@ -233,6 +260,78 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunErr
     result
 }
 
+/// The scenario's packing preparation, if any: read from its cache, or
+/// stepped with a progress bar (steps, ETA) that a stop request ends
+/// within a step — `summary.json` then records the interruption.
+fn prepare_packing(sc: &Scenario, opts: &RunOptions) -> Result<Option<Bed>, RunError> {
+    let Some(prep) = build::preparation(sc) else {
+        return Ok(None);
+    };
+    // every problem of the scenario before any step
+    let problems = sc.validate();
+    if !problems.is_empty() {
+        return Err(sc.located(problems).into());
+    }
+    let t0 = Instant::now();
+    // made at the first step: a bed read from its cache takes none
+    let mut bar = None;
+    let stop = opts.stop.clone();
+    let signal = || stop.as_ref().map_or(0, |s| s.load(Ordering::Relaxed));
+    let result = prepare(sc, &mut |step| {
+        bar.get_or_insert_with(|| {
+            progress::Progress::labelled(prep.what(), prep.steps, opts.quiet)
+        })
+        .update(step, f64::NAN);
+        signal() == 0
+    });
+    if let Some(b) = &bar {
+        b.finish();
+    }
+    match result {
+        Ok(bed) => {
+            if let Some(b) = &bed
+                && !opts.quiet
+            {
+                let n = b.rows.len();
+                match (&b.read_from, &b.written_to) {
+                    (Some(f), _) => {
+                        eprintln!("{}: {n} discs read from {}", prep.what(), f.display())
+                    }
+                    (None, w) => eprintln!(
+                        "{}: {n} discs, {} steps in {:.1} s{}",
+                        prep.what(),
+                        prep.steps,
+                        t0.elapsed().as_secs_f64(),
+                        w.as_ref()
+                            .map_or(String::new(), |w| format!("; saved in {}", w.display()))
+                    ),
+                }
+            }
+            Ok(bed)
+        }
+        Err(PrepareError::Invalid(p)) => Err(sc.located(vec![p]).into()),
+        Err(PrepareError::Stopped { step, steps }) => {
+            let signal = signal();
+            // a restart's directory keeps the stopped run's summary
+            if opts.restart.is_none() {
+                let summary = json!({
+                    "status": "interrupted",
+                    "during": "preparation",
+                    "signal": signal,
+                    "preparation": { "method": prep.what(), "steps_done": step, "steps": steps },
+                    "last_step": 0,
+                });
+                crate::output::write_json(&opts.out_dir.join("summary.json"), &summary)?;
+            }
+            Err(RunError::InterruptedPreparing {
+                signal,
+                step,
+                steps,
+            })
+        }
+    }
+}
+
 /// What a driver gets besides the model.
 struct Run<'a> {
     sc: &'a Scenario,
@@ -245,6 +344,45 @@ struct Run<'a> {
     restart: Option<Checkpoint>,
     /// The last step taken (for the summary of a run that fails).
     last_step: &'a std::cell::Cell<usize>,
+    /// The prepared packing, if the scenario has one.
+    bed: Option<Bed>,
+    /// Discs removed for each body with `overlapping_discs = "remove"`.
+    removed: Vec<(String, usize)>,
+}
+
+impl Run<'_> {
+    /// Add what every granular and coupled summary shares: the probes'
+    /// extrema (over the rows of `history.csv`), the preparation and the
+    /// discs removed for bodies.
+    fn annotate(&self, summary: &mut Value) -> Result<(), RunError> {
+        let names: Vec<&str> = self.probes.iter().map(|p| p.0.as_str()).collect();
+        let path = self.opts.out_dir.join("history.csv");
+        let ext = crate::output::csv::extrema(&path, &names)?;
+        summary["probes"] = names
+            .iter()
+            .zip(ext)
+            .filter_map(|(n, e)| Some((n.to_string(), json!(e?))))
+            .collect::<serde_json::Map<_, _>>()
+            .into();
+        if let (Some(b), Some(p)) = (&self.bed, build::preparation(self.sc)) {
+            summary["preparation"] = json!({
+                "method": p.what(),
+                "steps": p.steps,
+                "discs": b.rows.len(),
+                "cache_read": b.read_from,
+                "cache_written": b.written_to,
+            });
+        }
+        if !self.removed.is_empty() {
+            summary["removed_discs"] = self
+                .removed
+                .iter()
+                .map(|(b, n)| (b.clone(), json!(n)))
+                .collect::<serde_json::Map<_, _>>()
+                .into();
+        }
+        Ok(())
+    }
 }
 
 /// What `efgdem check` prints: sizes, coverage, time-step diagnostics, the
@@ -254,7 +392,16 @@ struct Run<'a> {
 /// would not fit in the machine's memory is refused before anything is
 /// allocated.
 pub fn check(sc: &Scenario) -> Result<String, RunError> {
-    let model = sc.build_unprepared()?;
+    let problems = sc.validate();
+    if !problems.is_empty() {
+        return Err(sc.located(problems).into());
+    }
+    let located = |p| sc.located(vec![p]);
+    let cached = crate::scenario::prepare::cached(sc).map_err(located)?;
+    let model = match &cached {
+        Some(rows) => sc.build_prepared(rows)?,
+        None => sc.build_unprepared()?,
+    };
     let mut s = match &model.system {
         System::Continuum { .. } => continuum::check(sc, &model),
         System::Granular(_) => granular::check(sc, &model),
@@ -263,10 +410,32 @@ pub fn check(sc: &Scenario) -> Result<String, RunError> {
     if !s.ends_with('\n') {
         s.push('\n');
     }
-    if let Some(p) = build::preparation(sc) {
-        s.push_str(&format!(
+    let prep = build::preparation(sc);
+    match (&prep, &cached) {
+        (Some(p), Some(rows)) => s.push_str(&format!(
+            "preparation: {} read from its cache ({} discs; the discs above are those)\n",
+            p.what(),
+            rows.len()
+        )),
+        (Some(p), None) => s.push_str(&format!(
             "preparation: {p}; the discs above are the generated ones, before it\n"
-        ));
+        )),
+        _ => {}
+    }
+    let purpose = match &cached {
+        Some(rows) => build::BuildFor::Prepared(rows),
+        None => build::BuildFor::Check,
+    };
+    for (body, n) in build::removed_discs(sc, purpose).map_err(located)? {
+        match (&prep, &cached) {
+            (Some(p), None) => s.push_str(&format!(
+                "body `{body}`: placed after {}; the discs it then overlaps will be removed\n",
+                p.what()
+            )),
+            _ => s.push_str(&format!(
+                "body `{body}`: {n} disc(s) overlapping it will be removed\n"
+            )),
+        }
     }
     let limit = build::memory_limit().map_or_else(|| "unknown".to_string(), |(_, what)| what);
     s.push_str(&format!(

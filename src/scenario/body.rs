@@ -47,9 +47,10 @@ pub struct BodySpec {
     /// `"lumped"` (row sum). EFG bodies always use the consistent Gram matrix.
     #[serde(default)]
     pub mass: MassKind,
-    /// The body's rectangle (or, for a polygon body, filled in with the
+    /// The body's rectangle, `{ origin, size }` or its corners
+    /// ([`super::rect`]) (or, for a polygon body, filled in with the
     /// outline's bounding box when the file is parsed).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "super::rect::origin_size")]
     pub rectangle: Rectangle,
     /// Node grid `[nx, ny]` (row-major, x fastest); rectangles only.
     #[serde(default)]
@@ -111,6 +112,25 @@ pub struct BodySpec {
     /// The paper's Example 1 has gravity on the disc only.
     #[serde(default = "yes")]
     pub self_weight: bool,
+    /// Coupled runs: what to do with discs the body overlaps when the run
+    /// starts (after the preparation of a generated packing): refuse them
+    /// (default) or remove them.
+    #[serde(default)]
+    pub overlapping_discs: OverlappingDiscs,
+}
+
+/// `overlapping_discs`: discs a body overlaps at the start of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OverlappingDiscs {
+    /// An error (exit 2), located at the body.
+    #[default]
+    Refuse,
+    /// The discs are removed before the run (counted in the run's report
+    /// and `summary.json`); the others are numbered from 1 in their order.
+    /// A body in the region a `deposit` or `grow` fills is then placed
+    /// after the preparation.
+    Remove,
 }
 
 /// `refine = [{ edges = ["name", …], spacing = h_r, width = w }]`: nodes
@@ -149,11 +169,13 @@ pub enum HoleSpec {
 /// a body of this size can have.
 pub const MAX_POLYGON_VERTICES: usize = 100_000;
 
-/// `{ center = [x, y], radius = r, segments = n }`.
+/// `{ center = [x, y], radius = r, segments = n }` (`centre` is the same
+/// field).
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CircleSpec {
     /// Centre.
+    #[serde(alias = "centre")]
     pub center: [f64; 2],
     /// Radius.
     pub radius: f64,
@@ -1046,6 +1068,11 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 format!("unknown edge `{e}`"),
             );
         }
+        p.check(
+            b.overlapping_discs == OverlappingDiscs::Refuse || sc.granular.is_some(),
+            at("overlapping_discs"),
+            "`remove` needs discs ([granular]) to remove",
+        );
         if b.self_weight && sc.simulation.gravity != [0.0, 0.0] && el.density <= 0.0 {
             p.push(
                 at("elastic.density"),

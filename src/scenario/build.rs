@@ -21,7 +21,6 @@ use crate::coupling::CoupledModel;
 use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::dem::packing::{
     DiscRow, Lattice, grow_in_box, lattice_capacity, lattice_packing, overlapping_pairs,
-    settle_in_box,
 };
 use crate::dem::particles::Particles;
 use crate::dem::{BodyDamping, DT_WARN, Granular};
@@ -35,14 +34,14 @@ use crate::model::{Model, Probe, System};
 /// Default fraction of the critical step when `simulation.dt` is omitted.
 pub const DT_SAFETY: f64 = 0.1;
 
-fn bad(path: &str, message: impl std::fmt::Display) -> Invalid {
+pub(super) fn bad(path: &str, message: impl std::fmt::Display) -> Invalid {
     Invalid {
         path: path.to_string(),
         message: message.to_string(),
     }
 }
 
-fn spec(sc: &Scenario) -> Result<&GranularSpec, Invalid> {
+pub(super) fn spec(sc: &Scenario) -> Result<&GranularSpec, Invalid> {
     sc.granular
         .as_ref()
         .ok_or_else(|| bad("granular", "the scenario has no [granular] section"))
@@ -99,7 +98,20 @@ pub fn laws(sc: &Scenario, damping: &DampingSpec) -> (Vec<ContactLaw>, BodyDampi
     (mats, body)
 }
 
-fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid> {
+/// The contact law a packing's preparation uses (of its `settle_material`,
+/// or of the discs' material; without dashpots) and the discs' density.
+pub(super) fn settle_law(sc: &Scenario, t: &DiscsTable) -> Result<(ContactLaw, f64), Invalid> {
+    let g = spec(sc)?;
+    let mi = material_index(sc, &g.material, "granular.material")? as usize;
+    let settle = match &t.settle_material {
+        Some(m) => material_index(sc, m, "granular.discs.settle_material")? as usize,
+        None => mi,
+    };
+    let (mats, _) = laws(sc, &DampingSpec::None);
+    Ok((mats[settle], sc.material[mi].density))
+}
+
+pub(super) fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid> {
     sc.material
         .iter()
         .position(|m| m.name == name)
@@ -108,11 +120,15 @@ fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid>
 }
 
 /// What [`model_with`] builds the model for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BuildFor {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BuildFor<'a> {
     /// A run: the gravity deposit or radius growth of a generated packing
-    /// (`method = "deposit"` or `"grow"`) is stepped.
+    /// (`method = "deposit"` or `"grow"`) is stepped, or read from its
+    /// cache ([`super::prepare::prepare`]).
     Run,
+    /// A run whose packing has been prepared: these discs (from
+    /// [`super::prepare::prepare`]).
+    Prepared(&'a [DiscRow]),
     /// `check`: no time stepping — the discs stay where the generator put
     /// them (a deposit's loose packing; a growth's random centres with the
     /// final radii) — and a static analysis factors and solves its bodies
@@ -173,122 +189,99 @@ impl std::fmt::Display for Preparation {
     }
 }
 
-/// The discs the scenario describes (generating or reading them).
+/// The discs the scenario describes (generating, preparing or reading
+/// them), before any is removed for a body.
 fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> {
     let g = spec(sc)?;
-    match &g.discs {
-        DiscsSpec::Inline(rows) => Ok(rows
-            .iter()
-            .map(|r| DiscRow {
-                pos: Vec2::new(r[0], r[1]),
-                r: r[2],
-                material: None,
-            })
-            .collect()),
-        DiscsSpec::Table(t) => {
-            if let Some(csv) = &t.csv {
-                let path = sc.resolve(csv);
-                let text = super::read_text(&path, super::MAX_CSV_BYTES).map_err(|e| {
-                    bad(
-                        "granular.discs.csv",
-                        format!("cannot read discs file {}: {e}", path.display()),
-                    )
-                })?;
-                return discs_from_csv(&text)
-                    .map_err(|e| bad("granular.discs.csv", format!("{}: {e}", path.display())));
-            }
-            let kind = t
-                .generate
-                .ok_or_else(|| bad("granular.discs", "nothing to generate"))?;
-            let [a, b] = t
-                .region
-                .ok_or_else(|| bad("granular.discs", "`box` is missing"))?;
-            let radius = t
-                .radius
-                .ok_or_else(|| bad("granular.discs", "`radius` is missing"))?
-                .range();
-            let (lat, gap, jitter) = match kind {
-                Generator::Square => (Lattice::Square, 0.0, t.jitter.unwrap_or(0.0)),
-                Generator::Hex => (Lattice::Hex, 0.0, t.jitter.unwrap_or(0.0)),
-                Generator::Random => (Lattice::Hex, 0.1, t.jitter.unwrap_or(1.0)),
-            };
-            let (lo, hi) = (Vec2::from(a), Vec2::from(b));
-            let steps = match purpose {
-                BuildFor::Run => t.settle_steps.unwrap_or(SETTLE_STEPS),
-                BuildFor::Check => 0,
-            };
-            if kind == Generator::Random && t.method == Packing::Grow {
-                let count = t
-                    .count
-                    .ok_or_else(|| bad("granular.discs", "`method = \"grow\"` needs `count`"))?;
-                let g = spec(sc)?;
-                let mi = material_index(sc, &g.material, "granular.material")? as usize;
-                let (mats, _) = laws(sc, &DampingSpec::None);
-                let density = sc.material[mi].density;
-                return grow_in_box(
-                    lo,
-                    hi,
-                    radius,
-                    count,
-                    t.seed,
-                    steps,
-                    mats[settle_material(sc, t)?.unwrap_or(mi)],
-                    density,
-                    g.thickness,
-                )
-                .map_err(|e| bad("granular.discs", e));
-            }
-            let rows = lattice_packing(lat, lo, hi, radius, t.count, gap, jitter, t.seed)
-                .map_err(|e| bad("granular.discs", e))?;
-            if kind == Generator::Random && t.method == Packing::Deposit && steps > 0 {
-                return deposit(sc, rows, lo, hi, steps, settle_material(sc, t)?);
+    let t = match &g.discs {
+        DiscsSpec::Inline(rows) => {
+            return Ok(rows
+                .iter()
+                .map(|r| DiscRow {
+                    pos: Vec2::new(r[0], r[1]),
+                    r: r[2],
+                    material: None,
+                })
+                .collect());
+        }
+        DiscsSpec::Table(t) => t,
+    };
+    if let Some(csv) = &t.csv {
+        let path = sc.resolve(csv);
+        let text = super::read_text(&path, super::MAX_CSV_BYTES).map_err(|e| {
+            bad(
+                "granular.discs.csv",
+                format!("cannot read discs file {}: {e}", path.display()),
+            )
+        })?;
+        return discs_from_csv(&text)
+            .map_err(|e| bad("granular.discs.csv", format!("{}: {e}", path.display())));
+    }
+    let prepared = preparation(sc).is_some();
+    match purpose {
+        BuildFor::Prepared(rows) if prepared => Ok(rows.to_vec()),
+        BuildFor::Run if prepared => match super::prepare::prepare(sc, &mut |_| true) {
+            Ok(bed) => Ok(bed.map(|b| b.rows).unwrap_or_default()),
+            Err(super::prepare::PrepareError::Invalid(e)) => Err(e),
+            Err(super::prepare::PrepareError::Stopped { step, .. }) => Err(bad(
+                "granular.discs",
+                format!("the preparation stopped after {step} steps"),
+            )),
+        },
+        _ => {
+            let rows = loose_rows(sc, t)?;
+            if prepared {
+                // `check`: the bodies in the region the preparation will fill
+                super::fill::check_bodies(sc, &rows)?;
             }
             Ok(rows)
         }
     }
 }
 
-/// The index of a packing's `settle_material`, if it names one.
-fn settle_material(sc: &Scenario, t: &DiscsTable) -> Result<Option<usize>, Invalid> {
-    t.settle_material
-        .as_ref()
-        .map(|m| material_index(sc, m, "granular.discs.settle_material").map(|i| i as usize))
-        .transpose()
-}
-
-/// Gravity deposition: settle a loose packing inside the box under gravity
-/// (the scenario's, or −9.81 ŷ if it has none), with the contact law of
-/// material `settle` (default: the discs'). Returns the settled positions
-/// (velocities are dropped).
-fn deposit(
-    sc: &Scenario,
-    rows: Vec<DiscRow>,
-    lo: Vec2,
-    hi: Vec2,
-    steps: usize,
-    settle: Option<usize>,
-) -> Result<Vec<DiscRow>, Invalid> {
-    let g = spec(sc)?;
-    let mi = material_index(sc, &g.material, "granular.material")?;
-    let (mats, _) = laws(sc, &DampingSpec::None);
-    let grav = Vec2::from(sc.simulation.gravity);
-    let grav = if grav.norm2() > 0.0 {
-        grav
-    } else {
-        Vec2::new(0.0, -9.81)
+/// The discs of a generated packing as the generator places them, before
+/// any preparation: on their lattice (`loose`, and a deposit's start), or
+/// a growth's random centres with the final radii.
+pub(super) fn loose_rows(sc: &Scenario, t: &DiscsTable) -> Result<Vec<DiscRow>, Invalid> {
+    let kind = t
+        .generate
+        .ok_or_else(|| bad("granular.discs", "nothing to generate"))?;
+    let [a, b] = t
+        .region
+        .ok_or_else(|| bad("granular.discs", "`box` is missing"))?;
+    let radius = t
+        .radius
+        .ok_or_else(|| bad("granular.discs", "`radius` is missing"))?
+        .range();
+    let (lat, gap, jitter) = match kind {
+        Generator::Square => (Lattice::Square, 0.0, t.jitter.unwrap_or(0.0)),
+        Generator::Hex => (Lattice::Hex, 0.0, t.jitter.unwrap_or(0.0)),
+        Generator::Random => (Lattice::Hex, 0.1, t.jitter.unwrap_or(1.0)),
     };
-    let m = &sc.material[mi as usize];
-    settle_in_box(
-        &rows,
-        lo,
-        hi,
-        mats[settle.unwrap_or(mi as usize)],
-        m.density,
-        g.thickness,
-        grav,
-        steps,
-    )
-    .map_err(|e| bad("granular.discs", e))
+    let (lo, hi) = (Vec2::from(a), Vec2::from(b));
+    if kind == Generator::Random && t.method == Packing::Grow {
+        let count = t
+            .count
+            .ok_or_else(|| bad("granular.discs", "`method = \"grow\"` needs `count`"))?;
+        // no step: the centres and final radii (the law is not used)
+        let (law, density) = settle_law(sc, t)?;
+        let thickness = spec(sc)?.thickness;
+        return grow_in_box(
+            lo,
+            hi,
+            radius,
+            count,
+            t.seed,
+            0,
+            law,
+            density,
+            thickness,
+            &mut |_| true,
+        )
+        .map_err(|e| bad("granular.discs", e));
+    }
+    lattice_packing(lat, lo, hi, radius, t.count, gap, jitter, t.seed)
+        .map_err(|e| bad("granular.discs", e))
 }
 
 /// Build the assembly described by the scenario. `dt` is the scenario's,
@@ -299,7 +292,19 @@ pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
 
 fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> {
     let g = spec(sc)?;
-    let rows = disc_rows(sc, purpose)?;
+    let mut rows = disc_rows(sc, purpose)?;
+    // `check` does not prepare a packing: its discs are not where the
+    // bodies will find them
+    let unprepared = purpose == BuildFor::Check && preparation(sc).is_some();
+    let gone: std::collections::HashSet<usize> = overlapped(sc, &rows)
+        .into_iter()
+        .flat_map(|(_, r)| r)
+        .collect();
+    if !gone.is_empty() && !unprepared {
+        rows = (rows.into_iter().enumerate())
+            .filter_map(|(k, r)| (!gone.contains(&k)).then_some(r))
+            .collect();
+    }
     let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
     let mut p = Particles::default();
@@ -920,7 +925,7 @@ fn address_space_limit() -> Option<(f64, f64)> {
 /// ([`memory_limit`]: the machine's, or the process's limit), naming the
 /// largest consumer: the discs (`granular.discs`, or its `count`) or a
 /// body (`body.i.nodes`, `body.i.spacing` or `body.i.holes`).
-fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
+pub(super) fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
     let Some((limit, what)) = memory_limit() else {
         return Ok(());
     };
@@ -1127,32 +1132,81 @@ fn start_state(sc: &Scenario, g: &Granular, purpose: BuildFor) -> Result<(), Inv
         }
     }
     for (bi, b) in sc.body.iter().enumerate() {
-        let lo = Vec2::from(b.rectangle.origin);
-        let hi = lo + Vec2::from(b.rectangle.size);
-        let domain = b.domain().ok().flatten();
-        let found = hits(&|x, r| {
-            if let Some(d) = &domain {
-                // polygon: overlap = r ± distance to the boundary
-                let dist = d.boundary_distance(x);
-                return if d.contains(x) { r + dist } else { r - dist };
-            }
-            let c = Vec2::new(x.x.clamp(lo.x, hi.x), x.y.clamp(lo.y, hi.y));
-            if c == x {
-                // centre inside: overlap = r + distance to the nearest edge
-                r + (x.x - lo.x).min(hi.x - x.x).min(x.y - lo.y).min(hi.y - x.y)
-            } else {
-                r - (c - x).norm()
-            }
-        });
+        let found = hits(&body_overlap(b));
         if !found.is_empty() {
-            return refuse(
-                format!("body.{bi}"),
-                format!("overlap body `{}`", b.name),
-                found,
+            let message = format!(
+                "{} disc(s) overlap body `{}` at the start: {}; set `overlapping_discs = \"remove\"` on the body to remove them, or move the body or the discs",
+                found.len(),
+                b.name,
+                list(&found)
             );
+            return Err(bad(&format!("body.{bi}"), message));
         }
     }
     Ok(())
+}
+
+/// How much a disc at `x` of radius `r` overlaps body `b` in its reference
+/// configuration: `r` ± the distance from `x` to the boundary (> 0: they
+/// overlap).
+pub fn body_overlap(b: &super::body::BodySpec) -> impl Fn(Vec2, f64) -> f64 {
+    let lo = Vec2::from(b.rectangle.origin);
+    let hi = lo + Vec2::from(b.rectangle.size);
+    let domain = b.domain().ok().flatten();
+    move |x, r| {
+        if let Some(d) = &domain {
+            // polygon: overlap = r ± distance to the boundary
+            let dist = d.boundary_distance(x);
+            return if d.contains(x) { r + dist } else { r - dist };
+        }
+        let c = Vec2::new(x.x.clamp(lo.x, hi.x), x.y.clamp(lo.y, hi.y));
+        if c == x {
+            // centre inside: overlap = r + distance to the nearest edge
+            r + (x.x - lo.x).min(hi.x - x.x).min(x.y - lo.y).min(hi.y - x.y)
+        } else {
+            r - (c - x).norm()
+        }
+    }
+}
+
+/// The discs of `rows` that each body with `overlapping_discs = "remove"`
+/// overlaps by more than [`START_OVERLAP_TOL`] of their radius (what the
+/// start-state check would refuse): `(body index, row indices)`, a disc
+/// counted for the first such body only.
+pub fn overlapped(sc: &Scenario, rows: &[DiscRow]) -> Vec<(usize, Vec<usize>)> {
+    let mut taken = vec![false; rows.len()];
+    let mut out = Vec::new();
+    for (bi, b) in sc.body.iter().enumerate() {
+        if b.overlapping_discs != super::body::OverlappingDiscs::Remove {
+            continue;
+        }
+        let overlap = body_overlap(b);
+        let hit: Vec<usize> = (0..rows.len())
+            .filter(|&k| {
+                !taken[k] && overlap(rows[k].pos, rows[k].r) > START_OVERLAP_TOL * rows[k].r
+            })
+            .collect();
+        for &k in &hit {
+            taken[k] = true;
+        }
+        out.push((bi, hit));
+    }
+    out
+}
+
+/// How many discs each body with `overlapping_discs = "remove"` removes
+/// from the discs the scenario describes (`purpose`: see [`BuildFor`]; for
+/// `check` a prepared packing's discs are those before the preparation,
+/// so the count is known only for other disc sources).
+pub fn removed_discs(sc: &Scenario, purpose: BuildFor) -> Result<Vec<(String, usize)>, Invalid> {
+    if sc.granular.is_none() {
+        return Ok(Vec::new());
+    }
+    let rows = disc_rows(sc, purpose)?;
+    Ok(overlapped(sc, &rows)
+        .into_iter()
+        .map(|(bi, r)| (sc.body[bi].name.clone(), r.len()))
+        .collect())
 }
 
 /// Bind every `[[probe]]` to its target in `model`, in scenario order.

@@ -90,8 +90,9 @@ pub struct DiscsTable {
     pub csv: Option<PathBuf>,
     /// Generated packing.
     pub generate: Option<Generator>,
-    /// Box `[[x0, y0], [x1, y1]]` to fill.
-    #[serde(rename = "box")]
+    /// Box `[[x0, y0], [x1, y1]]` (or `{ origin, size }`,
+    /// [`super::rect`]) to fill.
+    #[serde(rename = "box", default, deserialize_with = "super::rect::corners")]
     pub region: Option<[[f64; 2]; 2]>,
     /// One radius, or `[rmin, rmax]` for radii uniform in the range.
     pub radius: Option<Radius>,
@@ -116,6 +117,11 @@ pub struct DiscsTable {
     /// e.g. a frictionless one for a dense packing that does not depend on
     /// the friction of the run.
     pub settle_material: Option<String>,
+    /// `deposit` / `grow`: a file (relative to the scenario) that keeps the
+    /// prepared packing: written by the first run, read by the next ones
+    /// when what determines the packing is unchanged, refused otherwise
+    /// ([`super::prepare`]).
+    pub cache: Option<PathBuf>,
 }
 
 fn seed1() -> u64 {
@@ -1011,6 +1017,7 @@ fn validate_table(t: &DiscsTable, p: &mut Problems) {
                 (t.region.is_some(), "box"),
                 (t.radius.is_some(), "radius"),
                 (t.count.is_some(), "count"),
+                (t.cache.is_some(), "cache"),
             ] {
                 p.check(!set, at(f), "only for `generate`");
             }
@@ -1057,6 +1064,11 @@ fn validate_table(t: &DiscsTable, p: &mut Problems) {
                 t.settle_material.is_none() || t.method != Packing::Loose,
                 at("settle_material"),
                 "applies to `method = \"deposit\"` or `\"grow\"` only (the material of the preparation)",
+            );
+            p.check(
+                t.cache.is_none() || t.method != Packing::Loose,
+                at("cache"),
+                "applies to `method = \"deposit\"` or `\"grow\"` only (it keeps the prepared packing)",
             );
         }
     }

@@ -10,9 +10,12 @@
 pub mod body;
 pub mod build;
 pub mod builder;
+pub mod fill;
 pub mod generate;
 pub mod granular;
 pub mod measure;
+pub mod prepare;
+pub mod rect;
 
 use serde::Deserialize;
 use std::fmt;
@@ -543,6 +546,19 @@ impl Scenario {
             return Err(self.located(problems));
         }
         build::model_with(self, build::BuildFor::Check).map_err(|p| self.located(vec![p]))
+    }
+
+    /// [`build`](Self::build) with the discs of its packing's preparation
+    /// given: `bed`, from [`prepare::prepare`] (which `build` runs itself).
+    pub fn build_prepared(
+        &self,
+        bed: &[crate::dem::packing::DiscRow],
+    ) -> Result<crate::model::Model, ScenarioError> {
+        let problems = self.validate();
+        if !problems.is_empty() {
+            return Err(self.located(problems));
+        }
+        build::model_with(self, build::BuildFor::Prepared(bed)).map_err(|p| self.located(vec![p]))
     }
 
     /// The `[[probe]]`s bound to their targets in `model` (built from this
