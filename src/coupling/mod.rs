@@ -55,6 +55,7 @@ pub mod interface;
 pub mod segments;
 pub mod state;
 
+use crate::continuum::compliance::Compliance;
 use crate::continuum::{BoundaryChain, Continuum};
 use crate::dem::Granular;
 use crate::dem::contact::{self, ContactLaw, Side, effective_mass};
@@ -153,6 +154,8 @@ pub struct CoupledModel {
     /// The sub-cycled scheme: per body, the gain `k_n c` of a contact on
     /// it within a body step, found at the build (empty otherwise).
     pub subcycling_gains: Vec<f64>,
+    /// The compliant sub-cycled scheme ([`CoupledModel::set_compliant`]).
+    pub compliant: bool,
 }
 
 /// Where the time of the coupled steps goes (seconds, accumulated).
@@ -183,6 +186,10 @@ struct Work {
     forces: Vec<Vec2>,
     /// Per candidate: (disc slot, body, chain, contact point, feature).
     meta: Vec<(usize, usize, usize, Vec2, interface::Feature)>,
+    /// Compliant scheme, per candidate: (chain, segment, parameter), and
+    /// the compliance among them.
+    pts: Vec<(usize, usize, f64)>,
+    dense: Vec<f64>,
 }
 
 /// A disc–body force waiting to be applied.
@@ -283,11 +290,28 @@ impl CoupledModel {
             geometric_stiffness: true,
             timing: StepTiming::default(),
             subcycling_gains: Vec::new(),
+            compliant: false,
         }
+    }
+
+    /// Use the compliant sub-cycled scheme: over a body step of `substeps`
+    /// DEM steps each body's contact boundary is its predicted path plus
+    /// its response, through the body step's compliance, to the change of
+    /// the contact forces; the contacts are solved implicitly against that
+    /// response in every DEM step ([`CoupledModel::step`]).
+    pub fn set_compliant(&mut self) -> Result<(), CouplingError> {
+        for b in &mut self.bodies {
+            b.set_compliant()?;
+        }
+        self.compliant = true;
+        Ok(())
     }
 
     /// One DEM step, and a body step every `substeps` of them.
     pub fn step(&mut self) -> Result<(), CouplingError> {
+        if self.compliant {
+            return self.step_compliant();
+        }
         let t = Instant::now();
         let implicit = self.substeps == 1 && !self.staggered;
         // the DEM's neighbour list (part of its step)
@@ -301,18 +325,7 @@ impl CoupledModel {
                 self.implicit_contacts(false)?;
                 self.primed = true;
             }
-            let g = &self.granular;
-            let ext: Vec<_> = self
-                .contacts
-                .iter()
-                .map(|q| {
-                    let slot = g.slot(q.disc as usize);
-                    let arm = g.particles.pos[slot] + q.normal * g.particles.radius[slot];
-                    // the rolling moment acts on the disc only
-                    (slot, q.force, arm, q.moment)
-                })
-                .collect();
-            self.granular.set_external_with_moments(ext);
+            self.contacts_on_discs();
             let t1 = Instant::now();
             self.granular.step();
             let t2 = Instant::now();
@@ -362,6 +375,203 @@ impl CoupledModel {
             }
         }
         self.timing.body += t3.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The disc–body forces of the present state as external forces of
+    /// the DEM's next (fused) step.
+    fn contacts_on_discs(&mut self) {
+        let g = &self.granular;
+        let ext: Vec<_> = self
+            .contacts
+            .iter()
+            .map(|q| {
+                let slot = g.slot(q.disc as usize);
+                let arm = g.particles.pos[slot] + q.normal * g.particles.radius[slot];
+                // the rolling moment acts on the disc only
+                (slot, q.force, arm, q.moment)
+            })
+            .collect();
+        self.granular.set_external_with_moments(ext);
+    }
+
+    /// One DEM step of the compliant sub-cycled scheme. At the start of a
+    /// body step (`h = nΔt`) each body predicts its step under the held
+    /// loads (the last body step's end loads); the discs then take one DEM
+    /// step with the disc–body forces of the present state, the boundary
+    /// goes to its path at the new fraction `s` of the body step, and the
+    /// contacts are solved implicitly ([`implicit`], as in the exact
+    /// step) with the boundary `Y(s) + S (L − L_held)`, `S` the
+    /// compliance of the body step among the chain points
+    /// ([`Continuum::compliant_system`]): the discs never act on a body
+    /// that does not give way. Each body step ends with the last DEM
+    /// step's loads, at which the body then is exactly where the discs
+    /// last saw it (`Y(1) + S (L − L_held)`). Cost: two body solves per
+    /// body step and a contact solve over the chain points' compliance per
+    /// DEM step; with n = 1 it is the exact step with the contact forces
+    /// shared by the segment ends.
+    fn step_compliant(&mut self) -> Result<(), CouplingError> {
+        let t = Instant::now();
+        self.granular.prepare_contacts();
+        let t0 = Instant::now();
+        self.timing.dem += (t0 - t).as_secs_f64();
+        if self.sub == 0 {
+            let h = self.granular.dt * self.substeps as f64;
+            for b in &mut self.bodies {
+                b.begin_path(h)?;
+            }
+        }
+        let t1 = Instant::now();
+        self.timing.body += (t1 - t0).as_secs_f64();
+        if !self.primed {
+            self.compliant_contacts(false)?;
+            self.primed = true;
+        }
+        self.contacts_on_discs();
+        let t2 = Instant::now();
+        self.granular.step();
+        let t3 = Instant::now();
+        self.timing.transfer += (t2 - t1).as_secs_f64();
+        self.timing.dem += (t3 - t2).as_secs_f64();
+        self.check_finite()?;
+        self.sub += 1;
+        let s = self.sub as f64 / self.substeps as f64;
+        for b in &mut self.bodies {
+            b.set_path(s);
+        }
+        self.compliant_contacts(true)?;
+        self.timing.transfer += t3.elapsed().as_secs_f64();
+        if self.sub == self.substeps {
+            let tb = Instant::now();
+            self.sub = 0;
+            self.set_contact_forces();
+            for b in &mut self.bodies {
+                b.end_path()?;
+            }
+            self.timing.body += tb.elapsed().as_secs_f64();
+        }
+        Ok(())
+    }
+
+    /// The compliant scheme's contacts at the present fraction of the body
+    /// step (discs at the end of their DEM step): the candidates within a
+    /// margin, linearised in the increment of their contact points
+    /// relative to the boundary's path, solved with the bodies'
+    /// compliance; the forces become the bodies' present loads. With
+    /// `advance` false (before the first step) the forces of the present
+    /// state, with the discs at rest relative to the body and no history.
+    fn compliant_contacts(&mut self, advance: bool) -> Result<(), CouplingError> {
+        let dt = self.granular.dt;
+        let nm = self.granular.materials.len();
+        let s = self.sub as f64 / self.substeps as f64;
+        let ds = 1.0 / self.substeps as f64;
+        let mut next = std::mem::take(&mut self.scratch);
+        next.clear();
+        self.rebuild_grids(CANDIDATE_MARGIN, true);
+        let w = &mut self.work;
+        let p = &self.granular.particles;
+        let mut solve_time = 0.0;
+        for (b, body) in self.bodies.iter_mut().enumerate() {
+            w.lin.clear();
+            w.base.clear();
+            w.meta.clear();
+            w.pts.clear();
+            for (c, chain) in body.contact_boundary().iter().enumerate() {
+                if chain.segments() == 0 {
+                    continue;
+                }
+                for (d, t) in touching(
+                    chain,
+                    &self.grids[b][c],
+                    &self.near[b][c],
+                    p,
+                    CANDIDATE_MARGIN,
+                ) {
+                    let r = p.radius[d];
+                    let (fs_old, _) = history(&self.contacts, (p.id[d], b as u16, c as u16));
+                    let law = self.body_laws[b * nm + p.material[d] as usize];
+                    let (cn, cs) = law.dashpots(effective_mass(p.inv_mass[d], 0.0));
+                    let n = -t.normal; // from the disc towards the body
+                    let (vn0, vt0) = if advance {
+                        let v = p.vel[d] - body.path_velocity(c, t.seg, t.s);
+                        (v.dot(n), v.dot(n.perp()) + p.omega[d] * r)
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    w.lin.push(implicit::Linear {
+                        law,
+                        cn,
+                        cs,
+                        n,
+                        delta0: t.overlap - CANDIDATE_MARGIN * r,
+                        vn0,
+                        vt0,
+                        fs_old: if advance { fs_old } else { 0.0 },
+                        dt,
+                        spring: None,
+                    });
+                    w.base.push(t.point);
+                    w.pts.push((c, t.seg, t.s));
+                    w.meta.push((d, b, c, t.point, t.feature));
+                    w.points.push((c, t.material));
+                }
+            }
+            if advance {
+                let ts = Instant::now();
+                body.compliant_system(s, &w.pts, &mut w.free, &mut w.dense)?;
+                w.solver.solve(
+                    &w.lin,
+                    &w.base,
+                    &w.free,
+                    &mut Compliance::Dense(&w.dense),
+                    &mut w.evals,
+                );
+                self.compliance_products += w.solver.products;
+                solve_time += ts.elapsed().as_secs_f64();
+            } else {
+                w.evals.clear();
+                w.evals.extend(w.lin.iter().map(|l| l.eval(Vec2::ZERO)));
+            }
+            w.forces.clear();
+            w.forces.extend(w.evals.iter().map(|e| e.g));
+            if advance {
+                body.compliant_loads(s, ds, &w.pts, &w.forces)?;
+            }
+            for (k, e) in w.evals.iter().enumerate() {
+                if e.regime == 0 {
+                    continue;
+                }
+                let (d, b, c, point, feature) = w.meta[k];
+                let key = (p.id[d], b as u16, c as u16);
+                let law = &self.body_laws[b * nm + p.material[d] as usize];
+                let (mut mr, mut moment) = (0.0, 0.0);
+                if advance && law.rolling() {
+                    mr = history(&self.contacts, key).1;
+                    moment = body_rolling(law, p, d, e.fn_cap, &mut mr, dt);
+                }
+                next.push(BodyContact {
+                    disc: key.0,
+                    body: key.1,
+                    chain: key.2,
+                    fs: e.fs,
+                    mr,
+                    moment,
+                    overlap: e.overlap,
+                    fn_elastic: e.fn_elastic,
+                    fn_total: e.fn_total,
+                    force: -e.g,
+                    point: point + e.w,
+                    normal: w.lin[k].n,
+                    material: w.points[k].1,
+                    feature,
+                });
+            }
+            w.points.clear();
+        }
+        next.sort_by_key(|q| q.key());
+        self.scratch = std::mem::replace(&mut self.contacts, next);
+        self.timing.contact_solve += solve_time;
+        self.timing.transfer -= solve_time;
         Ok(())
     }
 

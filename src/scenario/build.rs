@@ -463,7 +463,10 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
     }
     let mut m = CoupledModel::new(granular, bodies, &mats, substeps);
     m.staggered |= sc.simulation.coupling == CouplingScheme::Staggered;
-    if m.path_scheme() {
+    if sc.simulation.coupling == CouplingScheme::Compliant {
+        m.set_compliant()
+            .map_err(|e| bad("simulation.coupling", e))?;
+    } else if m.path_scheme() {
         check_subcycling(&mut m)?;
     }
     m.geometric_stiffness = sc.simulation.geometric_stiffness;

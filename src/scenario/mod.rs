@@ -153,6 +153,9 @@ pub enum CouplingScheme {
     Implicit,
     /// The body takes the previous state's contact forces as loads.
     Staggered,
+    /// Sub-cycled, the boundary giving way to the contacts through the
+    /// body step's compliance in every DEM step.
+    Compliant,
 }
 
 impl Default for Simulation {
