@@ -256,6 +256,11 @@ pub trait Continuum: Send {
     fn path_extent(&self) -> f64 {
         0.0
     }
+    /// Compliant scheme: how far any chain point is from its path (its
+    /// response to the contacts within the present body step).
+    fn path_correction(&self) -> f64 {
+        0.0
+    }
     /// Sub-cycled scheme: put the contact boundary at the fraction `s ∈
     /// [0, 1)` of the present body step's path.
     fn set_path(&mut self, _s: f64) {}
@@ -1006,6 +1011,10 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         self.path.compliant = true;
         Ok(())
     }
+    fn path_correction(&self) -> f64 {
+        let c = self.path.corr.iter().flatten();
+        c.fold(0.0, |m, c| m.max(c.norm()))
+    }
     /// The free positions and the compliance `S_kl = Σ w_ka w_lb S_ab`
     /// over the segment ends `a`, `b` of the points and their weights
     /// `1 − σ`, `σ`.
@@ -1034,11 +1043,12 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         let m2 = 2 * pts.len();
         out.clear();
         out.resize(m2 * m2, 0.0);
-        for (k, wk) in w.iter().enumerate() {
-            for (l, wl) in w.iter().enumerate().take(k + 1) {
+        // by columns (l), each down its chain points' column (k ≥ l)
+        for (l, wl) in w.iter().enumerate() {
+            for (k, wk) in w.iter().enumerate().skip(l) {
                 let mut blk = [0.0; 4];
-                for &(a, x) in wk {
-                    for &(b, y) in wl {
+                for &(b, y) in wl {
+                    for &(a, x) in wk {
                         let sab = self.chain_s.block(a, b);
                         for (q, v) in blk.iter_mut().zip(sab) {
                             *q += x * y * v;
@@ -1096,14 +1106,17 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             .collect();
         let need: Vec<usize> = diff.iter().map(|d| d.0).collect();
         self.ensure_columns(&need)?;
-        let (mut done, mut swept) = (0.0, 0.0);
-        for a in win {
-            let mut r = Vec2::ZERO;
-            for &(b, d) in &diff {
+        // the response at the window, column by column
+        let mut resp = vec![Vec2::ZERO; win.len()];
+        for &(b, d) in &diff {
+            for (r, &a) in resp.iter_mut().zip(&win) {
                 let k = self.chain_s.block(a, b);
                 r.x += k[0] * d.x + k[1] * d.y;
                 r.y += k[2] * d.x + k[3] * d.y;
             }
+        }
+        let (mut done, mut swept) = (0.0, 0.0);
+        for (a, r) in win.into_iter().zip(resp) {
             let (c, i) = self.locate(a);
             let p = &mut self.path;
             let f0 = old

@@ -221,6 +221,8 @@ pub struct Solver {
     scratch: Vec<Vec2>,
     /// Products `S x` of the last solve.
     pub products: usize,
+    /// Row permutations of [`lu_solve`].
+    perm: (Vec<usize>, Vec<usize>),
 }
 
 impl Solver {
@@ -255,6 +257,86 @@ impl Solver {
         } else {
             self.krylov_newton(contacts, base, free, s, out)
         }
+    }
+
+    /// [`solve`](Self::solve) for a dense `S` (2m × 2m, row-major) of any
+    /// size, each Newton step solved directly over the closed contacts only
+    /// (an open contact takes no force: its unknown follows the others'),
+    /// `(2c)³` for `c` closed contacts. The compliant sub-cycled scheme's
+    /// solve, whose compliance is that of a whole body step.
+    pub fn solve_dense(
+        &mut self,
+        contacts: &[Linear],
+        base: &[Vec2],
+        free: &[Vec2],
+        s: &[f64],
+        out: &mut Vec<Eval>,
+    ) -> usize {
+        let m = contacts.len();
+        let m2 = 2 * m;
+        self.products = 0;
+        out.clear();
+        out.extend(contacts.iter().map(|c| c.eval(Vec2::ZERO)));
+        self.w.clear();
+        self.w.resize(m, Vec2::ZERO);
+        self.r.resize(m, Vec2::ZERO);
+        self.t.resize(m, Vec2::ZERO);
+        self.st.resize(m, Vec2::ZERO);
+        let mut closed: Vec<usize> = Vec::new();
+        for iter in 1..=MAX_NEWTON {
+            // R = w + base − free − S g
+            for (t, e) in self.t.iter_mut().zip(out.iter()) {
+                *t = e.g;
+            }
+            Compliance::Dense(s).mul(&self.t, &mut self.st);
+            self.products += 1;
+            for k in 0..m {
+                self.r[k] = -(self.w[k] + base[k] - free[k] - self.st[k]);
+            }
+            // (I − S_CC J_C) d_C = −R_C over the closed contacts
+            closed.clear();
+            closed.extend((0..m).filter(|&k| out[k].regime != 0));
+            let c2 = 2 * closed.len();
+            self.mat.clear();
+            self.mat.resize(c2 * c2, 0.0);
+            self.rhs.clear();
+            for (i, &k) in closed.iter().enumerate() {
+                self.rhs.extend([self.r[k].x, self.r[k].y]);
+                // column-major: entry (row 2i + a, column q) at q c2 + 2i + a
+                for a in 0..2 {
+                    let row = &s[(2 * k + a) * m2..(2 * k + a + 1) * m2];
+                    let ri = 2 * i + a;
+                    for (j, &l) in closed.iter().enumerate() {
+                        let (x, y) = (row[2 * l], row[2 * l + 1]);
+                        let jac = &out[l].jac;
+                        self.mat[2 * j * c2 + ri] = -(x * jac[0] + y * jac[2]);
+                        self.mat[(2 * j + 1) * c2 + ri] = -(x * jac[1] + y * jac[3]);
+                    }
+                    self.mat[ri * c2 + ri] += 1.0;
+                }
+            }
+            lu_solve(&mut self.mat, &mut self.rhs, c2, &mut self.perm);
+            // d_O = R_O + S_OC J_C d_C: J d on the closed ones, S of it
+            self.t.iter_mut().for_each(|t| *t = Vec2::ZERO);
+            for (i, &k) in closed.iter().enumerate() {
+                let d = Vec2::new(self.rhs[2 * i], self.rhs[2 * i + 1]);
+                self.t[k] = apply2(&out[k].jac, d);
+            }
+            Compliance::Dense(s).mul(&self.t, &mut self.st);
+            self.products += 1;
+            let mut d = std::mem::take(&mut self.d);
+            d.clear();
+            d.extend((0..m).map(|k| self.r[k] + self.st[k]));
+            for (i, &k) in closed.iter().enumerate() {
+                d[k] = Vec2::new(self.rhs[2 * i], self.rhs[2 * i + 1]);
+            }
+            let settled = settle(&mut self.w, contacts, out, |k| d[k]);
+            self.d = d;
+            if settled {
+                return iter;
+            }
+        }
+        MAX_NEWTON
     }
 
     fn dense_newton(
@@ -502,6 +584,36 @@ fn inv2(a: &[f64; 4]) -> [f64; 4] {
 #[inline]
 fn apply2(a: &[f64; 4], x: Vec2) -> Vec2 {
     Vec2::new(a[0] * x.x + a[1] * x.y, a[2] * x.x + a[3] * x.y)
+}
+
+/// Solve `a x = b` in place (`b ← x`) by an LU factorization with partial
+/// pivoting (faer's, sequential: the same on any number of threads); `a`
+/// is n × n column-major and is destroyed.
+fn lu_solve(a: &mut [f64], b: &mut [f64], n: usize, perm: &mut (Vec<usize>, Vec<usize>)) {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::lu::partial_pivoting::{factor, solve};
+    use faer::prelude::{Reborrow, ReborrowMut};
+    if n == 0 {
+        return;
+    }
+    let par = faer::Par::Seq;
+    perm.0.resize(n, 0);
+    perm.1.resize(n, 0);
+    let req = factor::lu_in_place_scratch::<usize, f64>(n, n, par, Default::default())
+        .or(solve::solve_in_place_scratch::<usize, f64>(n, 1, par));
+    let mut mem = MemBuffer::new(req);
+    let stack = MemStack::new(&mut mem);
+    let mut m = faer::MatMut::from_column_major_slice_mut(a, n, n);
+    let (_, p) = factor::lu_in_place(
+        m.rb_mut(),
+        &mut perm.0,
+        &mut perm.1,
+        par,
+        stack,
+        Default::default(),
+    );
+    let rhs = faer::MatMut::from_column_major_slice_mut(b, n, 1);
+    solve::solve_in_place(m.rb(), m.rb(), p, rhs, par, stack);
 }
 
 /// Solve `a x = b` in place (`b ← x`), Gaussian elimination with partial

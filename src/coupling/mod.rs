@@ -55,7 +55,6 @@ pub mod interface;
 pub mod segments;
 pub mod state;
 
-use crate::continuum::compliance::Compliance;
 use crate::continuum::{BoundaryChain, Continuum};
 use crate::dem::Granular;
 use crate::dem::contact::{self, ContactLaw, Side, effective_mass};
@@ -156,6 +155,9 @@ pub struct CoupledModel {
     pub subcycling_gains: Vec<f64>,
     /// The compliant sub-cycled scheme ([`CoupledModel::set_compliant`]).
     pub compliant: bool,
+    /// Compliant scheme, per body: how far its boundary's response to the
+    /// contacts may go before its segments are binned again.
+    allow: Vec<f64>,
 }
 
 /// Where the time of the coupled steps goes (seconds, accumulated).
@@ -291,6 +293,7 @@ impl CoupledModel {
             timing: StepTiming::default(),
             subcycling_gains: Vec::new(),
             compliant: false,
+            allow: Vec::new(),
         }
     }
 
@@ -467,7 +470,13 @@ impl CoupledModel {
         let ds = 1.0 / self.substeps as f64;
         let mut next = std::mem::take(&mut self.scratch);
         next.clear();
-        self.rebuild_grids(CANDIDATE_MARGIN, true);
+        // binned once per body step, again if a boundary's response to the
+        // contacts outgrew the allowance it was binned with
+        let regrid = self.sub <= 1
+            || (self.bodies.iter())
+                .zip(&self.allow)
+                .any(|(b, a)| b.path_correction() > *a);
+        self.rebuild_grids(CANDIDATE_MARGIN, regrid);
         let w = &mut self.work;
         let p = &self.granular.particles;
         let mut solve_time = 0.0;
@@ -519,13 +528,8 @@ impl CoupledModel {
             if advance {
                 let ts = Instant::now();
                 body.compliant_system(s, &w.pts, &mut w.free, &mut w.dense)?;
-                w.solver.solve(
-                    &w.lin,
-                    &w.base,
-                    &w.free,
-                    &mut Compliance::Dense(&w.dense),
-                    &mut w.evals,
-                );
+                w.solver
+                    .solve_dense(&w.lin, &w.base, &w.free, &w.dense, &mut w.evals);
                 self.compliance_products += w.solver.products;
                 solve_time += ts.elapsed().as_secs_f64();
             } else {
@@ -898,13 +902,24 @@ impl CoupledModel {
         let s = g.grid.skin.max(0.1 * r_max);
         self.grids.resize_with(self.bodies.len(), Vec::new);
         self.near.resize_with(self.bodies.len(), Vec::new);
-        for ((body, grids), near) in self.bodies.iter().zip(&mut self.grids).zip(&mut self.near) {
+        self.allow.resize(self.bodies.len(), 0.0);
+        let bodies = self.bodies.iter().zip(&mut self.allow);
+        for (((body, allowance), grids), near) in bodies.zip(&mut self.grids).zip(&mut self.near) {
             let chains = body.contact_boundary();
             grids.resize_with(chains.len(), SegmentGrid::default);
             near.resize_with(chains.len(), Candidates::default);
             for ((chain, sg), cand) in chains.iter().zip(grids.iter_mut()).zip(near.iter_mut()) {
                 if regrid || sg.is_empty() {
-                    let extent = body.path_extent();
+                    // the compliant scheme's boundary also moves with its
+                    // response to the contacts: rebinned when it outgrows
+                    // the allowance
+                    let allow = if self.compliant {
+                        (0.5 * r_max).max(2.0 * body.path_correction())
+                    } else {
+                        0.0
+                    };
+                    *allowance = allow;
+                    let extent = body.path_extent() + allow;
                     sg.rebuild(chain, reach + extent);
                     let e = Vec2::new(extent, extent);
                     (sg.chain_lo, sg.chain_hi) = (sg.chain_lo - e, sg.chain_hi + e);
