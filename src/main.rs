@@ -2,8 +2,6 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
-use efgdem::coupling::CouplingError;
-use efgdem::model::ModelError;
 use efgdem::run::RunError;
 use efgdem::scenario::{self, ScenarioError};
 use std::path::PathBuf;
@@ -116,12 +114,7 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
                 Some(RunError::NotEmpty(_) | RunError::Restart { .. }) => 2,
-                Some(RunError::Model(
-                    ModelError::Unstable(_)
-                    | ModelError::Coupling(
-                        CouplingError::Unstable { .. } | CouplingError::Subcycling { .. },
-                    ),
-                )) => 3,
+                Some(RunError::Model(m)) if m.is_numerical() => 3,
                 Some(RunError::Interrupted { signal, .. }) => 128 + (*signal as u8 & 0x7f),
                 _ => 1,
             };

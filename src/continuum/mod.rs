@@ -241,13 +241,18 @@ pub trait Continuum: Send {
         Ok(())
     }
     /// Sub-cycled scheme: the energy the scheme created since t = 0 (what
-    /// the body received from its end loads, `Σ ½(Fₖ + Fₖ₊₁)·ΔU`, less what
-    /// the discs did on the predicted path, `Σ F̄ₖ·ΔŶ`), the work the discs
-    /// exchanged with the body through the path (`Σ |F̄ₖ·ΔŶ|` per chain
-    /// point). Kept for the energy-conserving Newmark (γ = ½, β = ¼) only,
-    /// whose load work is exactly `½(Fₖ + Fₖ₊₁)·ΔU` (a dissipative one
-    /// damps what the scheme creates, and its load work has other terms):
-    /// zeros otherwise.
+    /// the body received from its end loads, `Σ ½(Fₖ + Fₖ₊₁)·ΔU` at the
+    /// chain points, less what the discs did on the boundary: `Σ F̄ₖ·ΔŶ` on
+    /// the predicted path, or per DEM step the mean of its two loads on the
+    /// chain points' displacement in the compliant scheme), and the work
+    /// the discs exchanged with the body (the sum of the magnitudes of
+    /// their work, chain point by chain point). With γ = ½ (any β) the
+    /// body's load work in Newmark's energy balance is exactly
+    /// `½(Fₖ + Fₖ₊₁)·ΔU` (the balance of `½U̇ᵀMU̇ + ½UᵀKU + (β − ¼)Δt²½ÜᵀMÜ`),
+    /// so what is created is energy the coupled system gained; with γ > ½
+    /// the balance has a numerical dissipation term besides, and the same
+    /// difference measures the interface's mismatch alone (the discs' work
+    /// against the trapezoidal work of the loads the body took).
     fn path_energy(&self) -> (f64, f64) {
         (0.0, 0.0)
     }
@@ -321,12 +326,20 @@ pub trait Continuum: Send {
     ) -> Result<(), SolveError> {
         self.set_compliant()
     }
-    /// The largest compliance `φ(x)ᵀ A⁻¹ φ(x)` of the body step at the
-    /// contact boundary (sampled at up to 32 chain points, both
-    /// directions): a contact of normal stiffness `k_n` there feeds back on
-    /// itself within a body step with the gain `k_n c`
-    /// ([`begin_path`](Self::begin_path) needs it small). 0 if unknown.
-    fn boundary_compliance(&mut self) -> Result<f64, SolveError> {
+    /// Take body steps of `h` (before the first step): the Newmark matrix
+    /// factored again for it. A body that cannot says so.
+    fn set_step(&mut self, _h: f64) -> Result<(), SolveError> {
+        self.set_compliant()
+    }
+    /// The gain with which the contacts, acting together, feed back on
+    /// themselves within one body step: the largest eigenvalue of
+    /// `K^½ S K^½`, `S` the body step's compliance among all the chain
+    /// points and `K` a contact layer along the whole contact boundary,
+    /// one contact of stiffness `k_n` normal and `k_s` tangential per
+    /// `spacing` of boundary (the densest row of the smallest discs: each
+    /// chain point carries the contacts of its share of the boundary). A
+    /// single contact's gain `k_n φᵀA⁻¹φ` is at most this. 0 if unknown.
+    fn collective_gain(&mut self, _kn: f64, _ks: f64, _spacing: f64) -> Result<f64, SolveError> {
         Ok(0.0)
     }
     /// Kinetic and strain energy of the present state.
@@ -371,6 +384,9 @@ pub trait ContactBody: Send + Sync + 'static {
     }
     /// The row `[(node, φ_J(x))]` at the material point `x`.
     fn row(&self, x: Vec2) -> Result<Row, Self::Error>;
+    /// Start (or, before the first step, start again) the time stepping
+    /// with the step `dt`: the Newmark matrix factored for it.
+    fn start_dynamic(&mut self, dt: f64) -> Result<(), Self::Error>;
     /// Nodal displacement, velocity, acceleration.
     fn state(&self) -> &State;
     /// `F += Φᵀ f` for the next step.
@@ -957,32 +973,90 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         }
         Ok(())
     }
-    fn boundary_compliance(&mut self) -> Result<f64, SolveError> {
-        let total: usize = self.rows.iter().map(Vec::len).sum();
-        let stride = total.div_ceil(32).max(1);
+    fn set_step(&mut self, h: f64) -> Result<(), SolveError> {
+        self.body
+            .start_dynamic(h)
+            .map_err(|e| self.solve_error(e))?;
+        self.green = None;
+        self.chain_s = ChainCompliance::new(self.held_resp.len());
+        Ok(())
+    }
+    /// Power iteration on `K^½ S K^½` (one solve per product), from a
+    /// uniform push along the normals, to 1e-3 or 60 products.
+    fn collective_gain(&mut self, kn: f64, ks: f64, spacing: f64) -> Result<f64, SolveError> {
+        // per chain point: K^½ (2 × 2, symmetric) from its normal and share
+        let mut half: Vec<[f64; 4]> = Vec::new();
+        for ch in &self.chains {
+            let p = &ch.reference;
+            for i in 0..p.len() {
+                let seg = |a: usize| p[a + 1] - p[a];
+                let (prev, next) = (
+                    (i > 0).then(|| seg(i - 1)),
+                    (i + 1 < p.len()).then(|| seg(i)),
+                );
+                let len = 0.5 * (prev.map_or(0.0, |d| d.norm()) + next.map_or(0.0, |d| d.norm()));
+                let tan = prev.unwrap_or(Vec2::ZERO) + next.unwrap_or(Vec2::ZERO);
+                let t = if tan.norm() > 0.0 {
+                    tan * (1.0 / tan.norm())
+                } else {
+                    Vec2::new(1.0, 0.0)
+                };
+                let n = Vec2::new(t.y, -t.x);
+                let w = (len / spacing).sqrt();
+                let (a, b) = (w * kn.sqrt(), w * ks.sqrt());
+                half.push([
+                    a * n.x * n.x + b * t.x * t.x,
+                    a * n.x * n.y + b * t.x * t.y,
+                    a * n.x * n.y + b * t.x * t.y,
+                    a * n.y * n.y + b * t.y * t.y,
+                ]);
+            }
+        }
+        let rows: Vec<&Row> = self.rows.iter().flatten().collect();
+        let name = self.body.name().to_string();
         let Some(nm) = self.body.newmark_mut() else {
             return Ok(0.0);
         };
-        let mut x = vec![0.0; nm.n()];
-        let mut c_max: f64 = 0.0;
-        for row in self.rows.iter().flatten().step_by(stride) {
-            for a in 0..2 {
-                x.iter_mut().for_each(|v| *v = 0.0);
-                for &(j, phi) in row {
-                    let i = 2 * j as usize + a;
-                    if !nm.imposed().get(i).copied().unwrap_or(false) {
-                        x[i] = phi;
-                    }
+        let apply =
+            |k: &[f64; 4], v: Vec2| Vec2::new(k[0] * v.x + k[1] * v.y, k[2] * v.x + k[3] * v.y);
+        let mut x: Vec<Vec2> = half.iter().map(|k| apply(k, Vec2::new(0.3, 1.0))).collect();
+        let mut load = vec![0.0; nm.n()];
+        let mut lambda = 0.0;
+        for _ in 0..60 {
+            let norm = x.iter().map(|v| v.dot(*v)).sum::<f64>().sqrt();
+            if !(norm > 0.0 && norm.is_finite()) {
+                return Ok(0.0);
+            }
+            load.iter_mut().for_each(|l| *l = 0.0);
+            for ((row, k), v) in rows.iter().zip(&half).zip(&x) {
+                add_row_load(&mut load, row, apply(k, *v * (1.0 / norm)));
+            }
+            for (l, &imposed) in load.iter_mut().zip(nm.imposed()) {
+                if imposed {
+                    *l = 0.0;
                 }
-                nm.solve_in_place(&mut x);
-                let c: f64 = row
-                    .iter()
-                    .map(|&(j, phi)| phi * x[2 * j as usize + a])
-                    .sum();
-                c_max = c_max.max(c);
+            }
+            nm.solve_in_place(&mut load);
+            let y: Vec<Vec2> = rows
+                .iter()
+                .zip(&half)
+                .map(|(row, k)| apply(k, interpolate(row, &load)))
+                .collect();
+            let next = y.iter().zip(&x).map(|(a, b)| a.dot(*b)).sum::<f64>() / norm;
+            x = y;
+            let done = (next - lambda).abs() <= 1e-3 * next.abs();
+            lambda = next;
+            if done {
+                break;
             }
         }
-        Ok(c_max)
+        if !lambda.is_finite() {
+            return Err(SolveError {
+                body: name,
+                message: "the collective contact gain is not finite".to_string(),
+            });
+        }
+        Ok(lambda)
     }
     fn path_extent(&self) -> f64 {
         let p = &self.path;
@@ -1154,7 +1228,10 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         }
         self.ensure_point_fs();
         // the average over the step belongs to its middle: the load at its
-        // end is extrapolated from it and the last step's average
+        // end is extrapolated from it and the last step's average, except
+        // where a point starts or stops being loaded (a contact's first
+        // body step would be off by a quarter of its work, its last would
+        // pull)
         let p = &self.path;
         let held = || p.held.iter().flatten();
         let ends: Vec<Vec2> = p
@@ -1162,7 +1239,13 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             .iter()
             .flatten()
             .zip(held())
-            .map(|(f, f0)| *f * 1.5 - *f0 * 0.5)
+            .map(|(f, f0)| {
+                if *f0 == Vec2::ZERO || *f == Vec2::ZERO {
+                    *f
+                } else {
+                    *f * 1.5 - *f0 * 0.5
+                }
+            })
             .collect();
         let delta: Vec<Vec2> = ends.iter().zip(held()).map(|(f, f0)| *f - *f0).collect();
         self.body
@@ -1175,10 +1258,6 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         self.pre = None;
         // the energy account of the step: what the body received against
         // what the discs did on the path
-        let trapezoidal = self.body.newmark_mut().is_some_and(|nm| {
-            let p = nm.params;
-            p.gamma == 0.5 && p.beta == 0.25
-        });
         let p = &mut self.path;
         let (mut received, mut done, mut exchanged) = (0.0, 0.0, 0.0);
         for (((((f1, f0), avg), y0), yp), y1) in ends
@@ -1195,10 +1274,8 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             exchanged += w.abs();
             *f0 = f1;
         }
-        if trapezoidal {
-            p.created += received - done;
-            p.exchanged += exchanged;
-        }
+        p.created += received - done;
+        p.exchanged += exchanged;
         std::mem::swap(&mut p.held, &mut p.acc);
         p.acc.iter_mut().flatten().for_each(|f| *f = Vec2::ZERO);
         p.end.clear();

@@ -193,16 +193,51 @@ impl Linear {
 /// Contacts up to which the Newton matrix `I − S J` is formed and factored
 /// densely (`8m³/3` flops); beyond, it is solved by GMRES with products `S x`.
 const DENSE_MAX: usize = 48;
-/// Semi-smooth Newton iterations at most (the regimes settle in 1–3).
-const MAX_NEWTON: usize = 30;
+/// Semi-smooth Newton iterations at most, by default (the regimes settle
+/// in 1–5; `[simulation] contact_iterations`).
+pub const MAX_NEWTON: usize = 30;
 /// GMRES: Krylov vectors per restart, restarts, relative tolerance.
 const KRYLOV: usize = 40;
 const RESTARTS: usize = 25;
 const GMRES_RTOL: f64 = 1e-13;
 
+/// Why a contact solve did not converge.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Unsolved {
+    /// The contacts' regimes (open, stick, slide) still changed at the
+    /// last Newton iteration allowed.
+    Newton {
+        /// Iterations taken (the cap).
+        iterations: usize,
+    },
+    /// A Newton step's linear system kept a residual above the tolerance
+    /// after every GMRES restart.
+    Gmres {
+        /// Relative residual reached.
+        residual: f64,
+    },
+}
+
+impl std::fmt::Display for Unsolved {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unsolved::Newton { iterations } => write!(
+                f,
+                "the contacts' regimes still changed after {iterations} Newton iterations (simulation.contact_iterations)"
+            ),
+            Unsolved::Gmres { residual } => write!(
+                f,
+                "GMRES left a relative residual of {residual:.2e} (above {GMRES_RTOL:e}) after {RESTARTS} restarts of {KRYLOV}"
+            ),
+        }
+    }
+}
+
 /// The contact solve and its scratch (kept between steps).
 #[derive(Default)]
 pub struct Solver {
+    /// Newton iterations allowed (0: [`MAX_NEWTON`]).
+    pub max_newton: usize,
     w: Vec<Vec2>,
     s: Vec<f64>,
     mat: Vec<f64>,
@@ -244,7 +279,7 @@ impl Solver {
         free: &[Vec2],
         s: &mut Compliance,
         out: &mut Vec<Eval>,
-    ) -> usize {
+    ) -> Result<usize, Unsolved> {
         let m = contacts.len();
         self.products = 0;
         out.clear();
@@ -271,7 +306,7 @@ impl Solver {
         free: &[Vec2],
         s: &[f64],
         out: &mut Vec<Eval>,
-    ) -> usize {
+    ) -> Result<usize, Unsolved> {
         let m = contacts.len();
         let m2 = 2 * m;
         self.products = 0;
@@ -283,7 +318,7 @@ impl Solver {
         self.t.resize(m, Vec2::ZERO);
         self.st.resize(m, Vec2::ZERO);
         let mut closed: Vec<usize> = Vec::new();
-        for iter in 1..=MAX_NEWTON {
+        for iter in 1..=self.newton_cap() {
             // R = w + base − free − S g
             for (t, e) in self.t.iter_mut().zip(out.iter()) {
                 *t = e.g;
@@ -333,10 +368,12 @@ impl Solver {
             let settled = settle(&mut self.w, contacts, out, |k| d[k]);
             self.d = d;
             if settled {
-                return iter;
+                return Ok(iter);
             }
         }
-        MAX_NEWTON
+        Err(Unsolved::Newton {
+            iterations: self.newton_cap(),
+        })
     }
 
     fn dense_newton(
@@ -345,13 +382,14 @@ impl Solver {
         base: &[Vec2],
         free: &[Vec2],
         out: &mut [Eval],
-    ) -> usize {
+    ) -> Result<usize, Unsolved> {
         let m2 = 2 * contacts.len();
+        let cap = self.newton_cap();
         let (s, w) = (&self.s, &mut self.w);
         self.mat.resize(m2 * m2, 0.0);
         self.rhs.resize(m2, 0.0);
         let (mat, rhs) = (&mut self.mat, &mut self.rhs);
-        for iter in 1..=MAX_NEWTON {
+        for iter in 1..=cap {
             // residual R = w + base − free − S g, Newton matrix I − S J
             for i in 0..m2 {
                 let mut sg = 0.0;
@@ -373,10 +411,10 @@ impl Solver {
             }
             gauss_solve(mat, rhs, m2);
             if settle(w, contacts, out, |k| Vec2::new(rhs[2 * k], rhs[2 * k + 1])) {
-                return iter;
+                return Ok(iter);
             }
         }
-        MAX_NEWTON
+        Err(Unsolved::Newton { iterations: cap })
     }
 
     fn krylov_newton(
@@ -386,14 +424,14 @@ impl Solver {
         free: &[Vec2],
         s: &mut Compliance,
         out: &mut [Eval],
-    ) -> usize {
+    ) -> Result<usize, Unsolved> {
         let m = contacts.len();
         s.diagonal(&mut self.diag);
         for v in [&mut self.r, &mut self.t, &mut self.st, &mut self.d] {
             v.clear();
             v.resize(m, Vec2::ZERO);
         }
-        for iter in 1..=MAX_NEWTON {
+        for iter in 1..=self.newton_cap() {
             // R = w + base − free − S g; the Newton step solves (I − S J) d = −R
             for (t, e) in self.t.iter_mut().zip(out.iter()) {
                 *t = e.g;
@@ -408,15 +446,19 @@ impl Solver {
                 let a = mul2(sk, &e.jac);
                 inv2(&[1.0 - a[0], -a[1], -a[2], 1.0 - a[3]])
             }));
-            self.gmres(s, out);
+            if let Some(residual) = self.gmres(s, out) {
+                return Err(Unsolved::Gmres { residual });
+            }
             let d = std::mem::take(&mut self.d);
             let settled = settle(&mut self.w, contacts, out, |k| d[k]);
             self.d = d;
             if settled {
-                return iter;
+                return Ok(iter);
             }
         }
-        MAX_NEWTON
+        Err(Unsolved::Newton {
+            iterations: self.newton_cap(),
+        })
     }
 
     /// `y ← (I − S J) P x` (P the preconditioner), using `t`, `st`.
@@ -435,13 +477,15 @@ impl Solver {
 
     /// Restarted GMRES with right preconditioning for `(I − S J) d = r`
     /// (modified Gram–Schmidt, Givens rotations); the solution in `d`.
-    fn gmres(&mut self, s: &mut Compliance, out: &[Eval]) {
+    /// Returns the relative residual if it is still above the tolerance
+    /// after the last restart.
+    fn gmres(&mut self, s: &mut Compliance, out: &[Eval]) -> Option<f64> {
         let m = self.r.len();
         let dot = |a: &[Vec2], b: &[Vec2]| a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum::<f64>();
         self.d.iter_mut().for_each(|v| *v = Vec2::ZERO);
         let b_norm = dot(&self.r, &self.r).sqrt();
         if b_norm == 0.0 {
-            return;
+            return None;
         }
         let tol = GMRES_RTOL * b_norm;
         let mut basis = std::mem::take(&mut self.basis);
@@ -538,10 +582,22 @@ impl Solver {
                 *rq = self.r[q] - (self.d[q] - self.st[q]);
             }
         }
+        let left = dot(&res, &res).sqrt();
         self.res = res;
         self.scratch = scratch;
         self.basis = basis;
         self.hess = hess;
+        // NaN is not converged either
+        (left.is_nan() || left > tol).then_some(left / b_norm)
+    }
+
+    /// The Newton iterations allowed.
+    fn newton_cap(&self) -> usize {
+        if self.max_newton == 0 {
+            MAX_NEWTON
+        } else {
+            self.max_newton
+        }
     }
 }
 /// `w += d`, re-evaluate; true when no contact changed regime.
@@ -790,7 +846,9 @@ mod tests {
         let base = [Vec2::new(0.01, 0.02)];
         let free = [Vec2::new(0.0101, 0.0199)];
         let mut out = Vec::new();
-        let it = Solver::default().solve(&[c], &base, &free, &mut Compliance::Dense(&s), &mut out);
+        let it = Solver::default()
+            .solve(&[c], &base, &free, &mut Compliance::Dense(&s), &mut out)
+            .unwrap();
         assert!(it < 10);
         let g = out[0].g;
         let u = base[0]

@@ -52,6 +52,7 @@ pub mod candidates;
 pub mod energy;
 pub mod implicit;
 pub mod interface;
+pub mod scheme;
 pub mod segments;
 pub mod state;
 
@@ -150,14 +151,27 @@ pub struct CoupledModel {
     pub compliance_products: usize,
     /// Wall time spent so far in each part of the step.
     pub timing: StepTiming,
-    /// The sub-cycled scheme: per body, the gain `k_n c` of a contact on
-    /// it within a body step, found at the build (empty otherwise).
-    pub subcycling_gains: Vec<f64>,
     /// The compliant sub-cycled scheme ([`CoupledModel::set_compliant`]).
     pub compliant: bool,
     /// Compliant scheme, per body: how far its boundary's response to the
     /// contacts may go before its segments are binned again.
     allow: Vec<f64>,
+    /// Per body: body steps in a row its sub-cycled scheme has been above
+    /// [`MAX_CREATED`] (saved with the state).
+    pub over: Vec<u32>,
+    /// The scheme and substeps, and why ([`scheme::apply`]).
+    pub choice: Option<scheme::Choice>,
+    /// The body step (in DEM steps) the bodies are factored for.
+    pub factored: usize,
+}
+
+impl CoupledModel {
+    /// Newton iterations a contact solve may take before the run stops
+    /// ([`CouplingError::NotConverged`]; default
+    /// [`implicit::MAX_NEWTON`]).
+    pub fn set_contact_iterations(&mut self, n: usize) {
+        self.work.solver.max_newton = n;
+    }
 }
 
 /// Where the time of the coupled steps goes (seconds, accumulated).
@@ -231,23 +245,61 @@ pub enum CouplingError {
         /// DEM steps done when it was detected (with sub-cycling, n per
         /// body step).
         step: usize,
-        /// The DEM critical time step `2√(m_min/k_max)` (ERRATA E11).
+        /// The critical time step of the contacts in use
+        /// ([`Granular::critical_step`]).
         dt_crit: f64,
     },
-    /// The sub-cycled scheme created energy ([`MAX_CREATED`]).
+    /// A body's sub-cycled scheme created energy ([`MAX_CREATED`]).
     #[error(
-        "the sub-cycled scheme created {created:.3e} J by t = {time:.6} s, {pct:.1} % of the run's work ({work:.3e} J; above {limit} %): a body is too soft against the contacts for its step; use fewer `substeps`, or 1 (the exact implicit step)",
-        pct = 100.0 * created / work,
+        "body `{body}`: the sub-cycled scheme ({scheme}) created {created:.3e} J by step {step} (t = {time:.6} s), {pct:.2} % of the {exchanged:.3e} J the body exchanged with the discs, above {limit} % for {GUARD_STEPS} body steps in a row: the body is too soft against the contacts for this scheme and step; {remedy}",
+        pct = 100.0 * created / exchanged,
         limit = 100.0 * MAX_CREATED
     )]
     Subcycling {
+        /// Name of the body.
+        body: String,
+        /// `"predicted"` or `"compliant"`.
+        scheme: &'static str,
+        /// DEM steps taken.
+        step: usize,
         /// Time of the discs when it was found.
         time: f64,
-        /// Energy created so far.
+        /// Energy the scheme created on this body so far.
         created: f64,
-        /// The run's largest work or stored energy so far.
-        work: f64,
+        /// Work the body exchanged with the discs so far.
+        exchanged: f64,
+        /// What to do about it.
+        remedy: &'static str,
     },
+    /// A contact solve did not converge.
+    #[error(
+        "body `{body}`: the contact solve did not converge at step {step} (t = {time:.6} s): {why}; the run stops rather than go on with forces that are not a solution"
+    )]
+    NotConverged {
+        /// Name of the body.
+        body: String,
+        /// DEM steps taken (the step being solved is the next).
+        step: usize,
+        /// Time of the discs.
+        time: f64,
+        /// What failed.
+        why: implicit::Unsolved,
+    },
+}
+
+/// The Newton iterations of a contact solve, or the error naming the body
+/// and the step.
+fn unsolved(
+    r: Result<usize, implicit::Unsolved>,
+    body: &str,
+    g: &Granular,
+) -> Result<usize, CouplingError> {
+    r.map_err(|why| CouplingError::NotConverged {
+        body: body.to_string(),
+        step: g.step,
+        time: g.time,
+        why,
+    })
 }
 
 impl CoupledModel {
@@ -291,9 +343,11 @@ impl CoupledModel {
             compliance_products: 0,
             geometric_stiffness: true,
             timing: StepTiming::default(),
-            subcycling_gains: Vec::new(),
             compliant: false,
             allow: Vec::new(),
+            over: Vec::new(),
+            choice: None,
+            factored: substeps.max(1),
         }
     }
 
@@ -376,8 +430,47 @@ impl CoupledModel {
                     b.advance()?;
                 }
             }
+            if path {
+                self.energy_guard()?;
+            }
         }
         self.timing.body += t3.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The sub-cycled schemes' guard, at the end of every body step: a
+    /// body whose scheme has created more than [`MAX_CREATED`] of the work
+    /// it exchanged with the discs for [`GUARD_STEPS`] body steps in a row
+    /// stops the run.
+    fn energy_guard(&mut self) -> Result<(), CouplingError> {
+        self.over.resize(self.bodies.len(), 0);
+        for (body, over) in self.bodies.iter().zip(&mut self.over) {
+            let (created, exchanged) = body.path_energy();
+            if created > MAX_CREATED * exchanged {
+                *over += 1;
+            } else {
+                *over = 0;
+            }
+            if *over >= GUARD_STEPS {
+                let (scheme, remedy) = if self.compliant {
+                    ("compliant", "use fewer `substeps`, or 1 (the exact step)")
+                } else {
+                    (
+                        "predicted",
+                        "use `coupling = \"compliant\"`, fewer `substeps`, or 1 (the exact step)",
+                    )
+                };
+                return Err(CouplingError::Subcycling {
+                    body: body.name().to_string(),
+                    scheme,
+                    step: self.granular.step,
+                    time: self.granular.time,
+                    created,
+                    exchanged,
+                    remedy,
+                });
+            }
+        }
         Ok(())
     }
 
@@ -452,6 +545,7 @@ impl CoupledModel {
                 b.end_path()?;
             }
             self.timing.body += tb.elapsed().as_secs_f64();
+            self.energy_guard()?;
         }
         Ok(())
     }
@@ -528,8 +622,9 @@ impl CoupledModel {
             if advance {
                 let ts = Instant::now();
                 body.compliant_system(s, &w.pts, &mut w.free, &mut w.dense)?;
-                w.solver
-                    .solve_dense(&w.lin, &w.base, &w.free, &w.dense, &mut w.evals);
+                let solved =
+                    (w.solver).solve_dense(&w.lin, &w.base, &w.free, &w.dense, &mut w.evals);
+                self.newton_iterations = unsolved(solved, body.name(), &self.granular)?;
                 self.compliance_products += w.solver.products;
                 solve_time += ts.elapsed().as_secs_f64();
             } else {
@@ -590,6 +685,20 @@ impl CoupledModel {
         })
     }
 
+    /// The scheme the model steps with.
+    pub fn scheme(&self) -> scheme::Scheme {
+        use scheme::Scheme;
+        if self.staggered {
+            Scheme::Staggered
+        } else if self.compliant {
+            Scheme::Compliant
+        } else if self.substeps > 1 {
+            Scheme::Predicted
+        } else {
+            Scheme::Exact
+        }
+    }
+
     /// The sub-cycled scheme: more than one DEM step per body step, the
     /// boundary on its predicted path (not the staggered transfer).
     pub fn path_scheme(&self) -> bool {
@@ -627,7 +736,7 @@ impl CoupledModel {
         } else {
             Err(CouplingError::Unstable {
                 step: self.granular.step,
-                dt_crit: self.granular.critical_dt(),
+                dt_crit: self.granular.critical_step(&self.body_laws).dt,
             })
         }
     }
@@ -712,9 +821,11 @@ impl CoupledModel {
                 let tc = Instant::now();
                 body_time += (tc - tb).as_secs_f64();
                 let mut s = body.compliance();
-                self.newton_iterations =
-                    w.solver
-                        .solve(&w.lin, &w.base, &w.free, &mut s, &mut w.evals);
+                let solved = w
+                    .solver
+                    .solve(&w.lin, &w.base, &w.free, &mut s, &mut w.evals);
+                drop(s);
+                self.newton_iterations = unsolved(solved, body.name(), &self.granular)?;
                 self.compliance_products += w.solver.products;
                 solve_time += tc.elapsed().as_secs_f64();
             } else {
@@ -960,17 +1071,17 @@ impl CoupledModel {
     }
 }
 
-/// A run with the sub-cycled scheme stops once the scheme has created more
-/// than this fraction of the run's largest work or stored energy so far,
-/// at every row of `history.csv` for 100 body steps in a row
-/// ([`CoupledModel::subcycling_energy`], checked by the driver). On an
-/// undamped footing the stable runs create 0.003–0.6 % of the work, the
-/// unstable ones (a body soft against the contacts, with a body step that
-/// resolves the contacts' own oscillation) 5–500 % and growing; a bed
-/// settling on a plate 0.2 %; `examples/footing.toml` at 20 substeps
-/// 1.1 % (its contacts are made and broken all the time, and a contact's
-/// first body step is off by a quarter of its work).
+/// A sub-cycled body stops the run ([`CouplingError::Subcycling`]) once
+/// the energy its scheme created exceeds this fraction of the work it
+/// exchanged with the discs at the end of [`GUARD_STEPS`] body steps in a
+/// row (checked at every body step, [`CoupledModel::step`]). A contact's
+/// first body step of the predicted scheme is off by a quarter of its own
+/// work (the end load's extrapolation starts from zero): a bump the later
+/// work soon dwarfs, hence the run of body steps rather than one.
 pub const MAX_CREATED: f64 = 0.02;
+
+/// Body steps in a row above [`MAX_CREATED`] that stop a run.
+pub const GUARD_STEPS: u32 = 100;
 
 /// Discs within `(1 + CANDIDATE_MARGIN) r` of a boundary enter the implicit
 /// contact solve (as open contacts unless the step closes them).

@@ -28,6 +28,9 @@ pub struct CoupledState {
     pub newton_iterations: usize,
     /// Products `S x` of all contact solves so far (diagnostics).
     pub compliance_products: usize,
+    /// Per body: body steps in a row above the sub-cycling energy guard's
+    /// limit ([`crate::coupling::MAX_CREATED`]).
+    pub over: Vec<u32>,
 }
 
 impl CoupledModel {
@@ -42,6 +45,7 @@ impl CoupledModel {
             primed: self.primed,
             newton_iterations: self.newton_iterations,
             compliance_products: self.compliance_products,
+            over: self.over.clone(),
         }
     }
 
@@ -85,6 +89,7 @@ impl CoupledModel {
         self.primed = s.primed;
         self.newton_iterations = s.newton_iterations;
         self.compliance_products = s.compliance_products;
+        self.over.clone_from(&s.over);
         Ok(())
     }
 }

@@ -35,8 +35,10 @@ use crate::dem::state::GranularState;
 /// a saved type changes.
 /// (2: walls keep both ends of the Verlet reference, for joined ends;
 /// 3: walls keep the integral velocity of a servo with integral action;
-/// 4: bodies keep their drives' state and the work of timed loads.)
-pub const STATE_FORMAT_VERSION: u32 = 4;
+/// 4: bodies keep their drives' state and the work of timed loads;
+/// 5: the compliant sub-cycled scheme's boundary path, the sub-cycling
+/// energy guard's count.)
+pub const STATE_FORMAT_VERSION: u32 = 5;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
