@@ -82,6 +82,9 @@ fn run(e: f64, scheme: Scheme, n: usize) -> Result<(f64, f64, f64, f64, f64), St
         gains: Vec::new(),
         automatic: false,
         why: String::new(),
+        warning: None,
+        exact_overhead: 0.0,
+        max_contacts: 0,
     };
     scheme::apply(c, &choice).map_err(|e| e.to_string())?;
     let mut meter = WorkMeter::new(m.coupled().expect("coupled"));
@@ -138,7 +141,7 @@ fn main() {
     for &e in &moduli {
         let exact = run(e, Scheme::Exact, 1).expect("the exact step runs");
         println!(
-            "| {e:.0e} | exact | 1 | — | {:.2} | {:.2} % | — | {:.0} N |",
+            "| {e:e} | exact | 1 | — | {:.2} | {:.2} % | — | {:.0} N |",
             exact.4,
             100.0 * exact.0,
             exact.2
@@ -147,14 +150,14 @@ fn main() {
             for &n in &ns {
                 match run(e, s, n) {
                     Ok((d, c, f, g, w)) => println!(
-                        "| {e:.0e} | {} | {n} | {g:.3} | {w:.2} | {:.2} % | {:.2} % | {:+.2} % |",
+                        "| {e:e} | {} | {n} | {g:.3} | {w:.2} | {:.2} % | {:.2} % | {:+.2} % |",
                         s.name(),
                         100.0 * d,
                         100.0 * c,
                         100.0 * (f / exact.2 - 1.0)
                     ),
                     Err(err) => println!(
-                        "| {e:.0e} | {} | {n} | | | stopped: {} | | |",
+                        "| {e:e} | {} | {n} | | | stopped: {} | | |",
                         s.name(),
                         err.chars().take(120).collect::<String>()
                     ),

@@ -342,6 +342,11 @@ pub trait Continuum: Send {
     fn collective_gain(&mut self, _kn: f64, _ks: f64, _spacing: f64) -> Result<f64, SolveError> {
         Ok(0.0)
     }
+    /// Stored entries of the factor of the body step's Newmark matrix (the
+    /// cost of a body solve; 0 if not dynamic).
+    fn factor_nnz(&mut self) -> usize {
+        0
+    }
     /// Kinetic and strain energy of the present state.
     fn energies(&self) -> BodyEnergies;
     /// The total force of the discs on the body at the present state, set
@@ -1088,6 +1093,9 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     fn path_correction(&self) -> f64 {
         let c = self.path.corr.iter().flatten();
         c.fold(0.0, |m, c| m.max(c.norm()))
+    }
+    fn factor_nnz(&mut self) -> usize {
+        self.body.newmark_mut().map_or(0, |nm| nm.factor_nnz())
     }
     /// The free positions and the compliance `S_kl = Σ w_ka w_lb S_ab`
     /// over the segment ends `a`, `b` of the points and their weights

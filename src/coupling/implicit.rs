@@ -314,20 +314,33 @@ impl Solver {
         out.extend(contacts.iter().map(|c| c.eval(Vec2::ZERO)));
         self.w.clear();
         self.w.resize(m, Vec2::ZERO);
-        self.r.resize(m, Vec2::ZERO);
-        self.t.resize(m, Vec2::ZERO);
-        self.st.resize(m, Vec2::ZERO);
+        for v in [
+            &mut self.r,
+            &mut self.t,
+            &mut self.st,
+            &mut self.res,
+            &mut self.scratch,
+        ] {
+            v.clear();
+            v.resize(m, Vec2::ZERO);
+        }
+        let mut trial: Vec<Eval> = Vec::with_capacity(m);
         let mut closed: Vec<usize> = Vec::new();
+        let norm = |r: &[Vec2]| r.iter().map(|v| v.dot(*v)).sum::<f64>();
+        // −R = −(w + base − free − S g), into r
+        let minus_residual =
+            |w: &[Vec2], e: &[Eval], t: &mut [Vec2], st: &mut [Vec2], r: &mut [Vec2]| {
+                for (t, e) in t.iter_mut().zip(e) {
+                    *t = e.g;
+                }
+                Compliance::Dense(s).mul(t, st);
+                for k in 0..m {
+                    r[k] = -(w[k] + base[k] - free[k] - st[k]);
+                }
+            };
+        minus_residual(&self.w, out, &mut self.t, &mut self.st, &mut self.r);
+        self.products += 1;
         for iter in 1..=self.newton_cap() {
-            // R = w + base − free − S g
-            for (t, e) in self.t.iter_mut().zip(out.iter()) {
-                *t = e.g;
-            }
-            Compliance::Dense(s).mul(&self.t, &mut self.st);
-            self.products += 1;
-            for k in 0..m {
-                self.r[k] = -(self.w[k] + base[k] - free[k] - self.st[k]);
-            }
             // (I − S_CC J_C) d_C = −R_C over the closed contacts
             closed.clear();
             closed.extend((0..m).filter(|&k| out[k].regime != 0));
@@ -351,7 +364,7 @@ impl Solver {
                 }
             }
             lu_solve(&mut self.mat, &mut self.rhs, c2, &mut self.perm);
-            // d_O = R_O + S_OC J_C d_C: J d on the closed ones, S of it
+            // d_O = −R_O + S_OC J_C d_C: J d on the closed ones, S of it
             self.t.iter_mut().for_each(|t| *t = Vec2::ZERO);
             for (i, &k) in closed.iter().enumerate() {
                 let d = Vec2::new(self.rhs[2 * i], self.rhs[2 * i + 1]);
@@ -365,7 +378,38 @@ impl Solver {
             for (i, &k) in closed.iter().enumerate() {
                 d[k] = Vec2::new(self.rhs[2 * i], self.rhs[2 * i + 1]);
             }
-            let settled = settle(&mut self.w, contacts, out, |k| d[k]);
+            // the full Newton step if it lowers the residual, else halves
+            // of it (the contact laws are piecewise affine: a full step can
+            // swap regimes back and forth and cycle)
+            let phi = norm(&self.r);
+            let mut step = 1.0;
+            let settled = loop {
+                for k in 0..m {
+                    self.scratch[k] = self.w[k] + d[k] * step;
+                }
+                trial.clear();
+                trial.extend(contacts.iter().zip(&self.scratch).map(|(c, w)| c.eval(*w)));
+                minus_residual(
+                    &self.scratch,
+                    &trial,
+                    &mut self.t,
+                    &mut self.st,
+                    &mut self.res,
+                );
+                self.products += 1;
+                if norm(&self.res) <= (1.0 - 1e-4 * step) * phi || step < 1.0 / 64.0 {
+                    let same = trial
+                        .iter()
+                        .zip(out.iter())
+                        .all(|(a, b)| a.regime == b.regime);
+                    std::mem::swap(&mut self.w, &mut self.scratch);
+                    std::mem::swap(&mut self.r, &mut self.res);
+                    out.clear();
+                    out.extend_from_slice(&trial);
+                    break step == 1.0 && same;
+                }
+                step *= 0.5;
+            };
             self.d = d;
             if settled {
                 return Ok(iter);

@@ -446,7 +446,10 @@ impl CoupledModel {
         self.over.resize(self.bodies.len(), 0);
         for (body, over) in self.bodies.iter().zip(&mut self.over) {
             let (created, exchanged) = body.path_energy();
-            if created > MAX_CREATED * exchanged {
+            // against what the body holds too: a contact at rest exchanges
+            // almost no work, and a fraction of nothing is noise
+            let e = body.energies();
+            if created > MAX_CREATED * exchanged && created > MAX_CREATED * (e.kinetic + e.strain) {
                 *over += 1;
             } else {
                 *over = 0;
@@ -1073,8 +1076,9 @@ impl CoupledModel {
 
 /// A sub-cycled body stops the run ([`CouplingError::Subcycling`]) once
 /// the energy its scheme created exceeds this fraction of the work it
-/// exchanged with the discs at the end of [`GUARD_STEPS`] body steps in a
-/// row (checked at every body step, [`CoupledModel::step`]). A contact's
+/// exchanged with the discs (and of the kinetic and strain energy it
+/// holds) at the end of [`GUARD_STEPS`] body steps in a row (checked at
+/// every body step, [`CoupledModel::step`]). A contact's
 /// first body step of the predicted scheme is off by a quarter of its own
 /// work (the end load's extrapolation starts from zero): a bump the later
 /// work soon dwarfs, hence the run of body steps rather than one.

@@ -80,15 +80,100 @@ pub struct Choice {
     pub automatic: bool,
     /// Why, in a sentence.
     pub why: String,
+    /// A scheme the scenario named against the measured map.
+    pub warning: Option<String>,
+    /// The exact step's body solves against the DEM step, estimated
+    /// ([`exact_overhead`]).
+    pub exact_overhead: f64,
+    /// Contacts the bodies' chains can carry at once: their length over
+    /// the mean disc diameter ([`max_contacts`]).
+    pub max_contacts: usize,
 }
 
+/// Contacts the bodies' contact chains can carry at once: their length
+/// over the mean disc diameter.
+pub fn max_contacts(m: &CoupledModel) -> usize {
+    let p = &m.granular.particles;
+    let d = 2.0 * p.radius.iter().sum::<f64>() / p.len().max(1) as f64;
+    let length: f64 = (m.bodies.iter())
+        .flat_map(|b| b.contact_boundary())
+        .flat_map(|c| c.reference.windows(2).map(|s| (s[1] - s[0]).norm()))
+        .sum();
+    if d > 0.0 {
+        (length / d).ceil() as usize
+    } else {
+        0
+    }
+}
+
+/// The compliant scheme's contact solve grows with the cube of the
+/// contacts in it: the choice uses it only on bodies whose chains carry at
+/// most this many ([`max_contacts`]).
+pub const COMPLIANT_MAX_CONTACTS: usize = 300;
+
 /// The predicted scheme is safe while every body's collective gain is at
-/// most this (measured map: docs/howto/choose-scheme-and-time-step.md).
+/// most this, whatever the body step (measured map:
+/// docs/howto/choose-scheme-and-time-step.md, `examples/scheme_map.rs`).
 pub const PREDICTED_MAX_GAIN: f64 = 0.02;
+
+/// ... and up to this gain when the body step is long enough against the
+/// contacts' own period to average their oscillation out
+/// (`ω_c h ≥` [`PREDICTED_FILTER_OMEGA_H`]); below it the lag drives the
+/// oscillation the step resolves (measured: gains 0.03–0.1 with
+/// `ω_c h` ≤ 0.7 create 1.5–4 % of the work exchanged and grow).
+pub const PREDICTED_FILTERED_GAIN: f64 = 0.1;
+
+/// `ω_c h` from which the body step averages the contacts' oscillation.
+pub const PREDICTED_FILTER_OMEGA_H: f64 = 1.3;
+
+/// Longest body step of the predicted scheme the map covers, in `ω_c h`.
+pub const PREDICTED_MAX_OMEGA_H: f64 = 10.0;
+
+/// Is the predicted scheme safe with the collective gain `gain` at a body
+/// step of `omega_h` (`ω_c h`)?
+pub fn predicted_safe(gain: f64, omega_h: f64) -> bool {
+    omega_h <= PREDICTED_MAX_OMEGA_H
+        && (gain <= PREDICTED_MAX_GAIN
+            || (omega_h >= PREDICTED_FILTER_OMEGA_H && gain <= PREDICTED_FILTERED_GAIN))
+}
+
+/// The predicted scheme's rule, for messages.
+fn predicted_rule() -> String {
+    format!(
+        "Γ ≤ {PREDICTED_MAX_GAIN}, or Γ ≤ {PREDICTED_FILTERED_GAIN} with {PREDICTED_FILTER_OMEGA_H} ≤ ω_c h ≤ {PREDICTED_MAX_OMEGA_H}"
+    )
+}
 
 /// The compliant scheme takes body steps up to `ω_c h` = this (measured
 /// map: docs/howto/choose-scheme-and-time-step.md).
 pub const COMPLIANT_MAX_OMEGA_H: f64 = 3.0;
+
+/// The choice keeps the exact step for assemblies of fewer discs than
+/// this: their DEM step costs little, and the exact step resolves each
+/// contact's impulse on the body (a sub-cycled body sees the contacts'
+/// forces only as body-step averages or end values, which a single impact
+/// shorter than a body step does not survive).
+pub const AUTO_MIN_DISCS: usize = 1000;
+
+/// The choice keeps the exact step when its two body solves per DEM step
+/// are estimated to cost at most this fraction of the DEM step
+/// ([`exact_overhead`]).
+pub const EXACT_OVERHEAD: f64 = 0.3;
+
+/// The exact step's body solves per DEM step against the DEM step, from
+/// the factors' entries and the discs (two triangular pairs over the factor
+/// per body, memory bound, against the discs' sweep: calibrated on the
+/// soft footing of docs/performance.md, where the estimate is within 30 %
+/// of the measured split).
+pub fn exact_overhead(m: &mut CoupledModel) -> f64 {
+    let nnz: usize = m.bodies.iter_mut().map(|b| b.factor_nnz()).sum();
+    let n = m.granular.particles.len().max(1);
+    OVERHEAD_PER_ENTRY * nnz as f64 / n as f64
+}
+
+/// Cost of a body's two solves per factor entry against the DEM step per
+/// disc ([`exact_overhead`]).
+const OVERHEAD_PER_ENTRY: f64 = 0.15;
 
 /// Substep counts the choice examines, largest first.
 pub const CANDIDATES: [usize; 6] = [100, 50, 20, 10, 5, 2];
@@ -144,8 +229,19 @@ fn worst(g: &[f64]) -> f64 {
 /// ([`apply`] sets the chosen one). A scheme named with a substep count
 /// that is not safe is refused: [`Err`] with the reason.
 pub fn choose(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, String>, SolveError> {
+    let r = choose_for(m, req)?;
+    let (overhead, contacts) = (exact_overhead(m), max_contacts(m));
+    Ok(r.map(|mut c| {
+        (c.exact_overhead, c.max_contacts) = (overhead, contacts);
+        c
+    }))
+}
+
+fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, String>, SolveError> {
     let dt = m.granular.dt;
     let omega_dt = contact_omega(m) * dt;
+    let overhead = exact_overhead(m);
+    let contacts = max_contacts(m);
     let compliant_n = || {
         let n = if omega_dt > 0.0 {
             (COMPLIANT_MAX_OMEGA_H / omega_dt).floor()
@@ -162,6 +258,9 @@ pub fn choose(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
         gains: examined,
         automatic,
         why,
+        warning: None,
+        exact_overhead: 0.0,
+        max_contacts: 0,
     };
     let gain_text = |n: usize, g: &[f64]| {
         format!(
@@ -202,22 +301,36 @@ pub fn choose(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
         }
         (Some(Scheme::Predicted), Some(n)) | (None, Some(n)) => {
             let g = gains(m, n)?;
-            let safe = worst(&g) <= PREDICTED_MAX_GAIN || no_bodies;
+            let safe = predicted_safe(worst(&g), omega_dt * n as f64) || no_bodies;
             let text = gain_text(n, &g);
             examined.push((n, g));
             if safe {
-                let why = format!("{text} ≤ {PREDICTED_MAX_GAIN}");
+                let why = format!("{text}: safe ({})", predicted_rule());
                 let auto = req.scheme.is_none();
                 Ok(Ok(choice(Scheme::Predicted, n, examined, auto, why)))
             } else if req.scheme.is_none() {
                 let why = format!(
-                    "the predicted scheme's {text} is above {PREDICTED_MAX_GAIN}: the boundary gives way to the contacts in every DEM step instead"
+                    "the predicted scheme's {text} is not safe (it needs {}): the boundary gives way to the contacts in every DEM step instead",
+                    predicted_rule()
                 );
                 Ok(Ok(choice(Scheme::Compliant, n, examined, true, why)))
             } else {
-                Ok(Err(format!(
-                    "the predicted scheme is not safe for this body: {text}, above {PREDICTED_MAX_GAIN} (its lag can drive the contacts); use coupling = \"compliant\", fewer substeps, or substeps = 1"
-                )))
+                // forced: the user's choice, with a warning; the run-time
+                // guard stops it if its scheme creates energy
+                let mut c = choice(
+                    Scheme::Predicted,
+                    n,
+                    examined,
+                    false,
+                    "named by the scenario".into(),
+                );
+                c.warning = Some(format!(
+                    "the predicted scheme is not safe for this body by the measured map: {text}; it needs {} (its lag can drive the contacts' own oscillation); a run stops once a body's scheme creates more than {} % of the work it exchanges for {} body steps in a row; coupling = \"compliant\" is stable",
+                    predicted_rule(),
+                    100.0 * super::MAX_CREATED,
+                    super::GUARD_STEPS
+                ));
+                Ok(Ok(c))
             }
         }
         (scheme @ (None | Some(Scheme::Predicted)), None) => {
@@ -225,11 +338,27 @@ pub fn choose(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
                 let why = "exact: no disc–body contact stiffness to sub-cycle against".into();
                 return Ok(Ok(choice(Scheme::Exact, 1, examined, true, why)));
             }
+            let discs = m.granular.particles.len();
+            if scheme.is_none() && (discs < AUTO_MIN_DISCS || overhead <= EXACT_OVERHEAD) {
+                let why = if discs < AUTO_MIN_DISCS {
+                    format!(
+                        "exact: {discs} discs (fewer than {AUTO_MIN_DISCS}: the DEM step costs little, and the exact step resolves each contact's impulse on the body)"
+                    )
+                } else {
+                    format!(
+                        "exact: its body solves are estimated at {overhead:.2} × the DEM step of {discs} discs (at most {EXACT_OVERHEAD}: sub-cycling would gain little)"
+                    )
+                };
+                return Ok(Ok(choice(Scheme::Exact, 1, examined, true, why)));
+            }
             // the predicted scheme at the largest safe n
             let mut predicted = None;
             for n in CANDIDATES {
+                if omega_dt * n as f64 > PREDICTED_MAX_OMEGA_H {
+                    continue;
+                }
                 let g = gains(m, n)?;
-                let ok = worst(&g) <= PREDICTED_MAX_GAIN;
+                let ok = predicted_safe(worst(&g), omega_dt * n as f64);
                 examined.push((n, g));
                 if ok {
                     predicted = Some(n);
@@ -241,14 +370,16 @@ pub fn choose(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
                 return Ok(match predicted {
                     Some(n) => {
                         let why = format!(
-                            "{}: the largest substep count examined with Γ ≤ {PREDICTED_MAX_GAIN}",
-                            last.unwrap_or_default()
+                            "{}: the largest substep count examined that is safe ({})",
+                            last.unwrap_or_default(),
+                            predicted_rule()
                         );
                         Ok(choice(Scheme::Predicted, n, examined, true, why))
                     }
                     None => Err(format!(
-                        "no substep count is safe for the predicted scheme: {} is above {PREDICTED_MAX_GAIN}; use coupling = \"compliant\" or \"exact\"",
-                        last.unwrap_or_default()
+                        "no substep count is safe for the predicted scheme ({}; it needs {}); use coupling = \"compliant\" or \"exact\"",
+                        last.unwrap_or_default(),
+                        predicted_rule()
                     )),
                 });
             }
@@ -256,22 +387,30 @@ pub fn choose(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
             Ok(Ok(match predicted {
                 Some(n) if n >= nc.min(PREDICTED_WORTH) || nc < 2 => {
                     let why = format!(
-                        "predicted, {n} substeps: {} ≤ {PREDICTED_MAX_GAIN}",
-                        last.unwrap_or_default()
+                        "predicted, {n} substeps: {}, safe ({})",
+                        last.unwrap_or_default(),
+                        predicted_rule()
                     );
                     choice(Scheme::Predicted, n, examined, true, why)
                 }
-                _ if nc >= 2 => {
+                _ if nc >= 2 && contacts <= COMPLIANT_MAX_CONTACTS => {
                     let why = format!(
                         "compliant, {nc} substeps: the predicted scheme is not safe at a useful step ({}); {nc} is the largest with ω_c h ≤ {COMPLIANT_MAX_OMEGA_H} (ω_c Δt = {omega_dt:.3})",
                         last.unwrap_or_default()
                     );
                     choice(Scheme::Compliant, nc, examined, true, why)
                 }
-                _ => {
+                _ if nc < 2 => {
                     let why = format!(
                         "exact: the contacts' own period is resolved by few DEM steps (ω_c Δt = {omega_dt:.3}: a body step of 2 would reach ω_c h = {:.2} > {COMPLIANT_MAX_OMEGA_H}) and the predicted scheme is not safe ({})",
                         2.0 * omega_dt,
+                        last.unwrap_or_default()
+                    );
+                    choice(Scheme::Exact, 1, examined, true, why)
+                }
+                _ => {
+                    let why = format!(
+                        "exact: the predicted scheme is not safe ({}), and the bodies' chains can carry {contacts} contacts at once, more than the compliant scheme's {COMPLIANT_MAX_CONTACTS} (its contact solve grows with their cube)",
                         last.unwrap_or_default()
                     );
                     choice(Scheme::Exact, 1, examined, true, why)

@@ -379,6 +379,9 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     if let Some(w) = m.granular.dt_warning(&m.body_laws) {
         eprintln!("warning: {w}");
     }
+    if let Some(w) = m.choice.as_ref().and_then(|c| c.warning.as_ref()) {
+        eprintln!("warning: {w}");
+    }
     let mut cols: Vec<&str> = vec!["step", "t"];
     cols.extend(probes.iter().map(|p| p.0.as_str()));
     cols.extend([
@@ -527,6 +530,10 @@ fn scheme_lines(m: &CoupledModel) -> String {
         if c.automatic { "chosen" } else { "as named" },
         c.why
     );
+    s += &format!(
+        "  the exact step's body solves are estimated at {:.2} × the DEM step; the bodies' chains can carry {} contacts at once\n",
+        c.exact_overhead, c.max_contacts
+    );
     for (n, g) in &c.gains {
         let per: Vec<String> = (m.bodies.iter().zip(g))
             .map(|(b, g)| format!("`{}` {g:.4}", b.name()))
@@ -540,10 +547,12 @@ fn scheme_lines(m: &CoupledModel) -> String {
     }
     if m.path_scheme() {
         s += &format!(
-            "  a run stops if a body's scheme creates more than {} % of the work it exchanges with the discs for {GUARD_STEPS} body steps in a row
-",
+            "  a run stops if a body's scheme creates more than {} % of the work it exchanges with the discs for {GUARD_STEPS} body steps in a row\n",
             100.0 * MAX_CREATED
         );
+    }
+    if let Some(w) = &c.warning {
+        s += &format!("warning: {w}\n");
     }
     s
 }

@@ -426,7 +426,10 @@ fn bodies(sc: &Scenario, dt: Option<f64>, trial: bool) -> Result<Vec<Body>, Inva
 /// scheme and its substeps chosen ([`scheme::choose`]), each body's
 /// Newmark matrix factored for `dt × substeps`.
 fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
-    let granular = granular_with(sc, purpose)?;
+    // the scheme is chosen with the discs as generated (the preparation
+    // moves them, it does not change their masses or radii): a scenario
+    // `run` would refuse is refused before any preparation, as `check` does
+    let granular = granular_with(sc, BuildFor::Check)?;
     let substeps = sc.simulation.substeps.fixed().unwrap_or(1).max(1);
     let body_dt = granular.dt * substeps as f64;
     let mode = match sc.simulation.contact_solve {
@@ -509,6 +512,9 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
             bad(at, why)
         })?;
     scheme::apply(&mut m, &choice).map_err(|e| bad("simulation.coupling", e))?;
+    if purpose == BuildFor::Run && preparation(sc).is_some() {
+        m.granular = granular_with(sc, purpose)?;
+    }
     Ok(m)
 }
 
