@@ -196,6 +196,11 @@ const DENSE_MAX: usize = 48;
 /// Semi-smooth Newton iterations at most, by default (the regimes settle
 /// in 1–5; `[simulation] contact_iterations`).
 pub const MAX_NEWTON: usize = 30;
+/// Full Newton steps before the steps are damped ([`Solver::line_search`]).
+const UNDAMPED: usize = 10;
+/// A damped Newton step has converged when the residual is this fraction
+/// of the increments and free motions.
+const RESIDUAL_TOL: f64 = 1e-10;
 /// GMRES: Krylov vectors per restart, restarts, relative tolerance.
 const KRYLOV: usize = 40;
 const RESTARTS: usize = 25;
@@ -314,33 +319,21 @@ impl Solver {
         out.extend(contacts.iter().map(|c| c.eval(Vec2::ZERO)));
         self.w.clear();
         self.w.resize(m, Vec2::ZERO);
-        for v in [
-            &mut self.r,
-            &mut self.t,
-            &mut self.st,
-            &mut self.res,
-            &mut self.scratch,
-        ] {
+        for v in [&mut self.r, &mut self.t, &mut self.st] {
             v.clear();
             v.resize(m, Vec2::ZERO);
         }
-        let mut trial: Vec<Eval> = Vec::with_capacity(m);
         let mut closed: Vec<usize> = Vec::new();
-        let norm = |r: &[Vec2]| r.iter().map(|v| v.dot(*v)).sum::<f64>();
-        // −R = −(w + base − free − S g), into r
-        let minus_residual =
-            |w: &[Vec2], e: &[Eval], t: &mut [Vec2], st: &mut [Vec2], r: &mut [Vec2]| {
-                for (t, e) in t.iter_mut().zip(e) {
-                    *t = e.g;
-                }
-                Compliance::Dense(s).mul(t, st);
-                for k in 0..m {
-                    r[k] = -(w[k] + base[k] - free[k] - st[k]);
-                }
-            };
-        minus_residual(&self.w, out, &mut self.t, &mut self.st, &mut self.r);
-        self.products += 1;
         for iter in 1..=self.newton_cap() {
+            // −R = −(w + base − free − S g)
+            for (t, e) in self.t.iter_mut().zip(out.iter()) {
+                *t = e.g;
+            }
+            Compliance::Dense(s).mul(&self.t, &mut self.st);
+            self.products += 1;
+            for k in 0..m {
+                self.r[k] = -(self.w[k] + base[k] - free[k] - self.st[k]);
+            }
             // (I − S_CC J_C) d_C = −R_C over the closed contacts
             closed.clear();
             closed.extend((0..m).filter(|&k| out[k].regime != 0));
@@ -372,46 +365,13 @@ impl Solver {
             }
             Compliance::Dense(s).mul(&self.t, &mut self.st);
             self.products += 1;
-            let mut d = std::mem::take(&mut self.d);
-            d.clear();
-            d.extend((0..m).map(|k| self.r[k] + self.st[k]));
+            let mut d: Vec<Vec2> = (0..m).map(|k| self.r[k] + self.st[k]).collect();
             for (i, &k) in closed.iter().enumerate() {
                 d[k] = Vec2::new(self.rhs[2 * i], self.rhs[2 * i + 1]);
             }
-            // the full Newton step if it lowers the residual, else halves
-            // of it (the contact laws are piecewise affine: a full step can
-            // swap regimes back and forth and cycle)
-            let phi = norm(&self.r);
-            let mut step = 1.0;
-            let settled = loop {
-                for k in 0..m {
-                    self.scratch[k] = self.w[k] + d[k] * step;
-                }
-                trial.clear();
-                trial.extend(contacts.iter().zip(&self.scratch).map(|(c, w)| c.eval(*w)));
-                minus_residual(
-                    &self.scratch,
-                    &trial,
-                    &mut self.t,
-                    &mut self.st,
-                    &mut self.res,
-                );
-                self.products += 1;
-                if norm(&self.res) <= (1.0 - 1e-4 * step) * phi || step < 1.0 / 64.0 {
-                    let same = trial
-                        .iter()
-                        .zip(out.iter())
-                        .all(|(a, b)| a.regime == b.regime);
-                    std::mem::swap(&mut self.w, &mut self.scratch);
-                    std::mem::swap(&mut self.r, &mut self.res);
-                    out.clear();
-                    out.extend_from_slice(&trial);
-                    break step == 1.0 && same;
-                }
-                step *= 0.5;
-            };
-            self.d = d;
-            if settled {
+            // the compliance of a whole body step makes the contacts
+            // strongly coupled: damped steps from the first
+            if self.line_search(contacts, base, free, &mut Compliance::Dense(s), out, &d) {
                 return Ok(iter);
             }
         }
@@ -429,11 +389,11 @@ impl Solver {
     ) -> Result<usize, Unsolved> {
         let m2 = 2 * contacts.len();
         let cap = self.newton_cap();
-        let (s, w) = (&self.s, &mut self.w);
         self.mat.resize(m2 * m2, 0.0);
         self.rhs.resize(m2, 0.0);
-        let (mat, rhs) = (&mut self.mat, &mut self.rhs);
         for iter in 1..=cap {
+            let (s, w) = (&self.s, &self.w);
+            let (mat, rhs) = (&mut self.mat, &mut self.rhs);
             // residual R = w + base − free − S g, Newton matrix I − S J
             for i in 0..m2 {
                 let mut sg = 0.0;
@@ -454,7 +414,19 @@ impl Solver {
                 mat[i * m2 + i] += 1.0;
             }
             gauss_solve(mat, rhs, m2);
-            if settle(w, contacts, out, |k| Vec2::new(rhs[2 * k], rhs[2 * k + 1])) {
+            let rhs = &self.rhs;
+            let d = |k: usize| Vec2::new(rhs[2 * k], rhs[2 * k + 1]);
+            let settled = if iter <= UNDAMPED {
+                settle(&mut self.w, contacts, out, d)
+            } else {
+                let d: Vec<Vec2> = (0..m2 / 2).map(d).collect();
+                let dense = std::mem::take(&mut self.s);
+                let settled =
+                    self.line_search(contacts, base, free, &mut Compliance::Dense(&dense), out, &d);
+                self.s = dense;
+                settled
+            };
+            if settled {
                 return Ok(iter);
             }
         }
@@ -494,7 +466,11 @@ impl Solver {
                 return Err(Unsolved::Gmres { residual });
             }
             let d = std::mem::take(&mut self.d);
-            let settled = settle(&mut self.w, contacts, out, |k| d[k]);
+            let settled = if iter <= UNDAMPED {
+                settle(&mut self.w, contacts, out, |k| d[k])
+            } else {
+                self.line_search(contacts, base, free, s, out, &d)
+            };
             self.d = d;
             if settled {
                 return Ok(iter);
@@ -503,6 +479,64 @@ impl Solver {
         Err(Unsolved::Newton {
             iterations: self.newton_cap(),
         })
+    }
+
+    /// A damped Newton step: `w += t d` with `t` halved from 1 until the
+    /// residual `|w + base − free − S g|` drops (Armijo), at least 1/64;
+    /// true when the full step was taken and no contact changed regime
+    /// (then `w` solves the system exactly). The semi-smooth Newton steps
+    /// of the piecewise-affine contact laws can swap regimes back and forth
+    /// without end; halving them settles the cycle.
+    fn line_search(
+        &mut self,
+        contacts: &[Linear],
+        base: &[Vec2],
+        free: &[Vec2],
+        s: &mut Compliance,
+        out: &mut [Eval],
+        d: &[Vec2],
+    ) -> bool {
+        let m = contacts.len();
+        for v in [&mut self.t, &mut self.st, &mut self.scratch] {
+            v.resize(m, Vec2::ZERO);
+        }
+        let mut residual = |w: &[Vec2], e: &[Eval], t: &mut [Vec2], st: &mut [Vec2]| {
+            for (t, e) in t.iter_mut().zip(e) {
+                *t = e.g;
+            }
+            s.mul(t, st);
+            (0..m)
+                .map(|k| {
+                    let r = w[k] + base[k] - free[k] - st[k];
+                    r.dot(r)
+                })
+                .sum::<f64>()
+        };
+        let phi = residual(&self.w, out, &mut self.t, &mut self.st);
+        let mut step = 1.0;
+        loop {
+            for k in 0..m {
+                self.scratch[k] = self.w[k] + d[k] * step;
+            }
+            let trial: Vec<Eval> = (contacts.iter().zip(&self.scratch))
+                .map(|(c, w)| c.eval(*w))
+                .collect();
+            let now = residual(&self.scratch, &trial, &mut self.t, &mut self.st);
+            self.products += 2;
+            if now <= (1.0 - 1e-4 * step) * phi || step < 1.0 / 64.0 {
+                let same = trial.iter().zip(out.iter()).all(|(a, b)| a.regime == b.regime);
+                self.w.copy_from_slice(&self.scratch);
+                out.copy_from_slice(&trial);
+                // a solution on a regime's boundary (a contact just
+                // closing, a shear force just at its cap) is reached by
+                // the residual, not by a regime that stays put
+                let scale: f64 = (0..m)
+                    .map(|k| (free[k] - base[k]).dot(free[k] - base[k]) + self.w[k].dot(self.w[k]))
+                    .sum();
+                return (step == 1.0 && same) || now <= RESIDUAL_TOL * RESIDUAL_TOL * scale;
+            }
+            step *= 0.5;
+        }
     }
 
     /// `y ← (I − S J) P x` (P the preconditioner), using `t`, `st`.
