@@ -220,10 +220,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                     )
                 })
             })??;
-            println!("DEM critical step 2√(m_min/k_max): {:.5e}", r.dt_critical);
+            println!(
+                "largest dt studied (2√(m_min/k_max), or the limit of a first collision): {:.5e}",
+                r.dt_critical
+            );
             match r.dt_max {
                 Some(dt) => println!(
-                    "largest bounded dt: {dt:.5e} ({:.3} × the DEM critical step)",
+                    "largest bounded dt: {dt:.5e} ({:.3} × the largest studied)",
                     dt / r.dt_critical
                 ),
                 None => println!("no bounded dt found down to 1e-4 × the scenario's dt"),

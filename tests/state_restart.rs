@@ -116,6 +116,7 @@ servo = { stress = 2000.0, max_velocity = 0.6 }
         r#"
 [simulation]
 steps = 2000
+dt = 6.4e-5
 gravity = [0.0, -9.81]
 
 [[material]]

@@ -157,8 +157,9 @@ pub struct CoupledModel {
     /// contacts may go before its segments are binned again.
     allow: Vec<f64>,
     /// Per body: body steps in a row its sub-cycled scheme has been above
-    /// [`MAX_CREATED`] (saved with the state).
-    pub over: Vec<u32>,
+    /// [`MAX_CREATED`], and the energy created and work exchanged when the
+    /// row began (saved with the state).
+    pub over: Vec<(u32, f64, f64)>,
     /// The scheme and substeps, and why ([`scheme::apply`]).
     pub choice: Option<scheme::Choice>,
     /// The body step (in DEM steps) the bodies are factored for.
@@ -440,21 +441,28 @@ impl CoupledModel {
 
     /// The sub-cycled schemes' guard, at the end of every body step: a
     /// body whose scheme has created more than [`MAX_CREATED`] of the work
-    /// it exchanged with the discs for [`GUARD_STEPS`] body steps in a row
-    /// stops the run.
+    /// it exchanged with the discs (and of the energy it holds) for
+    /// [`GUARD_STEPS`] body steps in a row, and more than that fraction of
+    /// the work exchanged over those steps, stops the run.
     fn energy_guard(&mut self) -> Result<(), CouplingError> {
-        self.over.resize(self.bodies.len(), 0);
+        self.over.resize(self.bodies.len(), (0, 0.0, 0.0));
         for (body, over) in self.bodies.iter().zip(&mut self.over) {
             let (created, exchanged) = body.path_energy();
             // against what the body holds too: a contact at rest exchanges
             // almost no work, and a fraction of nothing is noise
             let e = body.energies();
             if created > MAX_CREATED * exchanged && created > MAX_CREATED * (e.kinetic + e.strain) {
-                *over += 1;
+                if over.0 == 0 {
+                    *over = (0, created, exchanged);
+                }
+                over.0 += 1;
             } else {
-                *over = 0;
+                *over = (0, 0.0, 0.0);
             }
-            if *over >= GUARD_STEPS {
+            // over the row, the scheme went on creating: a bump of the
+            // first contacts stays put, an unstable scheme's creation grows
+            let (row_created, row_exchanged) = (created - over.1, exchanged - over.2);
+            if over.0 >= GUARD_STEPS && row_created > MAX_CREATED * row_exchanged.max(0.0) {
                 let (scheme, remedy) = if self.compliant {
                     ("compliant", "use fewer `substeps`, or 1 (the exact step)")
                 } else {
@@ -1077,11 +1085,13 @@ impl CoupledModel {
 /// A sub-cycled body stops the run ([`CouplingError::Subcycling`]) once
 /// the energy its scheme created exceeds this fraction of the work it
 /// exchanged with the discs (and of the kinetic and strain energy it
-/// holds) at the end of [`GUARD_STEPS`] body steps in a row (checked at
-/// every body step, [`CoupledModel::step`]). A contact's
+/// holds) at the end of [`GUARD_STEPS`] body steps in a row, and created
+/// more than this fraction of the work exchanged over those steps too
+/// (checked at every body step, [`CoupledModel::step`]). A contact's
 /// first body step of the predicted scheme is off by a quarter of its own
-/// work (the end load's extrapolation starts from zero): a bump the later
-/// work soon dwarfs, hence the run of body steps rather than one.
+/// work (the end load's extrapolation starts from zero): a bump that stays
+/// put while the later work dwarfs it, hence the row of body steps and the
+/// creation over the row rather than one step's total.
 pub const MAX_CREATED: f64 = 0.02;
 
 /// Body steps in a row above [`MAX_CREATED`] that stop a run.

@@ -29,8 +29,9 @@ pub struct CoupledState {
     /// Products `S x` of all contact solves so far (diagnostics).
     pub compliance_products: usize,
     /// Per body: body steps in a row above the sub-cycling energy guard's
-    /// limit ([`crate::coupling::MAX_CREATED`]).
-    pub over: Vec<u32>,
+    /// limit ([`crate::coupling::MAX_CREATED`]), and the energy created and
+    /// work exchanged when the row began.
+    pub over: Vec<(u32, f64, f64)>,
 }
 
 impl CoupledModel {

@@ -40,6 +40,15 @@ pub struct Critical {
     pub dt: f64,
     /// Which mode limits it, for messages.
     pub mode: String,
+    /// The limit of the normal mode that two of the lightest discs meeting
+    /// (or one meeting a wall or a body) always have, dashpot included:
+    /// above it a run is unstable at its first collision, whatever the
+    /// packing (`efgdem check` and `run` refuse it). Between
+    /// [`dt`](Self::dt) and this, packings of some shapes stay stable (the
+    /// modes above need six equal neighbours, or a stick contact whose
+    /// shear spring the friction cap does not clip); a run that goes
+    /// unstable there is stopped by the per-step check.
+    pub certain: f64,
 }
 
 /// Spectral radius up to which the step map counts as stable: the
@@ -169,11 +178,13 @@ pub fn pair(law: &ContactLaw, d: Disc) -> Critical {
         Critical {
             dt: normal,
             mode: "the normal mode of a pair of the lightest discs".into(),
+            certain: f64::INFINITY,
         }
     } else {
         Critical {
             dt: shear,
             mode: "the shear–rotation mode of a pair of the lightest discs".into(),
+            certain: f64::INFINITY,
         }
     }
 }
@@ -203,11 +214,13 @@ pub fn on_wall(law: &ContactLaw, d: Disc) -> Critical {
         Critical {
             dt: normal,
             mode: "the normal mode of the lightest disc on a wall or body".into(),
+            certain: f64::INFINITY,
         }
     } else {
         Critical {
             dt: shear,
             mode: "the shear–rotation mode of the lightest disc on a wall or body".into(),
+            certain: f64::INFINITY,
         }
     }
 }
@@ -310,6 +323,7 @@ pub fn estimate(d: Disc, n: usize, pairs: &[ContactLaw], walls: &[ContactLaw]) -
     let mut best = Critical {
         dt: f64::INFINITY,
         mode: "no contact stiffness".into(),
+        certain: f64::INFINITY,
     };
     let mut keep = |c: Critical| {
         if c.dt < best.dt {
@@ -328,6 +342,12 @@ pub fn estimate(d: Disc, n: usize, pairs: &[ContactLaw], walls: &[ContactLaw]) -
     for law in walls.iter().filter(stiff) {
         keep(on_wall(law, d));
     }
+    // the normal modes of a first collision
+    let pair_normal = |law: &ContactLaw| single(law.kn, law.dashpots(0.5 * d.m).0, 0.5 * d.m);
+    let wall_normal = |law: &ContactLaw| single(law.kn, law.dashpots(d.m).0, d.m);
+    let pairs = pairs.iter().filter(|_| n >= 2).map(pair_normal);
+    best.certain = (pairs.chain(walls.iter().map(wall_normal))).fold(f64::INFINITY, f64::min);
+    best.certain = best.certain.max(best.dt);
     best
 }
 

@@ -802,13 +802,13 @@ pub const START_OVERLAP_TOL: f64 = 1e-3;
 fn start_state(sc: &Scenario, g: &Granular, purpose: BuildFor) -> Result<(), Invalid> {
     let (mats, _) = laws(sc, &spec(sc)?.damping);
     let crit = g.critical_step(&body_laws(sc, &mats));
-    if g.dt > crit.dt {
+    if g.dt > crit.certain {
         return Err(bad(
             "simulation.dt",
             format!(
-                "dt = {:e} is {:.2} × the critical step {:e} of the contacts in use (that of {}): the central difference is unstable; use at most {:e} ({DT_WARN} × critical; the default is {DT_SAFETY} ×)",
+                "dt = {:e} is above {:e}, the stability limit of the normal mode of two of the lightest discs meeting (or one meeting a wall): the central difference is unstable at the first collision; the critical step of the contacts in use is {:e} (that of {}): use at most {:e} ({DT_WARN} × it; the default is {DT_SAFETY} ×)",
                 g.dt,
-                g.dt / crit.dt,
+                crit.certain,
                 crit.dt,
                 crit.mode,
                 DT_WARN * crit.dt
