@@ -1,4 +1,5 @@
-//! Cost of the coupled step against the DEM step on the same bed (issue 10):
+//! Cost of the coupled step against the DEM step on the same bed
+//! (manual: docs/performance.md, "Coupled steps"):
 //! an EFG strip footing pressed into a bed of discs, for footing widths that
 //! give about 10, 100, 1 000 and 5 000 simultaneous disc–footing contacts
 //! and footing bodies of about 1 000 and 10 000 nodes.

@@ -1,5 +1,5 @@
-//! The silo of `examples/silo.toml` against Janssen (issue 15 §3; README
-//! "Silo (Janssen)"). Runs the scenario through the library (the
+//! The silo of `examples/silo.toml` against Janssen (manual:
+//! docs/validation.md; about 1.5 minutes on 2 cores). Runs the scenario through the library (the
 //! time-averaged wall tractions need every state, not the history), then
 //! writes into the output directory `wall_left.csv`, `wall_right.csv`
 //! (traction profiles), `bands.csv`, `janssen.csv`, `silo.json`,

@@ -1,5 +1,5 @@
 //! Post-processing of the strip footing test `examples/strip_footing.toml`
-//! (issue 15, example 2): the load–settlement curve against the bearing
+//! (manual: docs/validation.md): the load–settlement curve against the bearing
 //! capacity of the footing with the friction angle measured by the
 //! biaxial example on the same material.
 //!
@@ -31,7 +31,7 @@ fn main() {
 }
 
 /// Friction angles of the biaxial example's material (μ = 0.5, μ_r = 0.1;
-/// README, "Biaxial test").
+/// docs/tutorial/biaxial.md).
 const PHI_PEAK: f64 = 23.7;
 const PHI_CS: f64 = 21.4;
 

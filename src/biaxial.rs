@@ -1,4 +1,4 @@
-//! Post-processing of a biaxial test (issue 13 §5): from the scenario and
+//! Post-processing of a biaxial test: from the scenario and
 //! the `history.csv` of its run, the strains, the principal stresses, the
 //! deviatoric stress `q = σ₁ − σ₃`, the mobilised friction angle
 //! `sin φ = (σ₁ − σ₃)/(σ₁ + σ₃)`, the peak and critical-state friction

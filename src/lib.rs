@@ -2,8 +2,9 @@
 //!
 //! A Rust implementation of Wang, Deng, Taheri & Ge (2020), *A mesh-free
 //! approach for multiscale modeling in continuum–granular systems*, with the
-//! corrections listed in `shared/paper/ERRATA.md` (tags E1–E13 in the doc
-//! comments).
+//! the paper's misprints corrected: the doc comments cite each correction by
+//! its tag ("ERRATA E1" … "E13"), explained in the manual's theory page,
+//! `docs/theory.md#errata` (anchors `#e1` … `#e13`).
 //!
 //! ## A disc on a beam, in code
 //!

@@ -97,6 +97,7 @@ enum Cmd {
 }
 
 fn main() -> ExitCode {
+    efgdem::run::memory::keep_large_allocations_mapped();
     let cli = Cli::parse();
     match dispatch(cli) {
         Ok(()) => ExitCode::SUCCESS,

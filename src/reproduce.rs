@@ -61,8 +61,7 @@ pub const E_FIG17: f64 = 1.0e12;
 /// `time`: the instant the figure shows; `setting`: a parameter of the
 /// figure; `none`: what the paper does not give), `x`, `y`, their units,
 /// `tag` (the mark on the figure), `label` (its legend entry), `source`
-/// (section, the paper's own line numbers and those of
-/// `wang2020-efg-de.md`) and `quote` (the sentence). `efgdem reproduce`
+/// (section and the paper's own line numbers) and `quote` (the sentence). `efgdem reproduce`
 /// copies it to `DIR/paper_values.csv`.
 pub const PAPER_VALUES: &str = include_str!("../assets/paper_values.csv");
 
@@ -1206,7 +1205,7 @@ fn example2(job: &mut Job) -> Result<()> {
             row(&format!("EFG, E = {e:.1e}"), &d)?;
             sweep.push((e, name, d));
         }
-        // the FE–DE cross-check of §4.2.1 (issue 5): Q4 plate on the same grid
+        // the FE–DE cross-check of §4.2.1: Q4 plate on the same grid
         let fem_sc = parse(
             NINE_DISC_FEM[t],
             &format!("examples/fem_nine_disc_test{tn}.toml (built in)"),

@@ -271,7 +271,7 @@ impl Cholesky {
         )
         .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
         let par = par(symbolic.len_val());
-        let solve_mem = MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, par))
+        let solve_mem = MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq))
             .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
         let mut c = Cholesky {
             values: vec![0.0; symbolic.len_val()],
@@ -314,13 +314,19 @@ impl Cholesky {
     }
 
     /// Overwrite `rhs` with `A⁻¹ rhs`. Does not allocate.
+    ///
+    /// Sequential: a solve with one right-hand side reads `L` twice and
+    /// does two flops per entry, so it is bound by memory bandwidth, and
+    /// splitting its supernodes over threads only adds their
+    /// synchronisation: a second thread must never make a step slower.
+    /// The factorisation uses the threads.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
         let n = rhs.len();
         let llt = LltRef::new(&self.symbolic, &self.values);
         llt.solve_in_place_with_conj(
             Conj::No,
             MatMut::from_column_major_slice_mut(rhs, n, 1),
-            self.par,
+            Par::Seq,
             MemStack::new(&mut self.solve_mem),
         );
     }

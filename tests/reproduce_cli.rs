@@ -105,7 +105,7 @@ fn reproduce_writes_every_figure_and_the_report() {
     for v in &paper {
         if v.figure != "fig12_thin_disc" {
             assert!(
-                v.source.contains("wang2020-efg-de.md l"),
+                v.source.contains("paper l"),
                 "{} {}: no line in the source",
                 v.figure,
                 v.label

@@ -1003,6 +1003,7 @@ fn scenario_toml(scenario: &Bound<'_, PyDict>) -> PyResult<String> {
 #[pymodule]
 #[pyo3(name = "efgdem")]
 fn efgdem_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    efgdem::run::memory::keep_large_allocations_mapped();
     let py = m.py();
     m.add_class::<PyModel>()?;
     m.add("ScenarioError", py.get_type::<ScenarioError>())?;

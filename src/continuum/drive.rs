@@ -1,5 +1,5 @@
-//! Drives: prescribed edge components that change in time (issue 15,
-//! "Loads and drives"). A drive moves one displacement component of an
+//! Drives: prescribed edge components that change in time (manual:
+//! scenario format, "Servo drives"). A drive moves one displacement component of an
 //! edge's points by `ū_c(x_g, tₙ) = ū_c(x_g, 0) + s_g · d(n)`, `s_g` a
 //! per-point scale (1 for a rigid translation, `a + b x + c y` for a
 //! linear field scaled in time) and `d(n)` the drive's position after n

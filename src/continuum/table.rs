@@ -1,6 +1,6 @@
 //! Piecewise-linear tables in time, `[[t₀, v₀], [t₁, v₁], …]`: the value
 //! of a load multiplier, a prescribed displacement or a prescribed
-//! velocity at time t (issue 15, "Loads and drives").
+//! velocity at time t (manual: scenario format, "Tables in time").
 //!
 //! Convention: the times are non-decreasing (two equal times make a jump:
 //! at the jump the later value holds); before `t₀` the value is `v₀`,

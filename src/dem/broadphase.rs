@@ -12,25 +12,11 @@
 //! Shear histories survive rebuilds and renumberings: the new pair list is
 //! merged with the old one on the sorted keys `(i, j)`, `i < j` (slots).
 
-use super::contact::ContactForce;
+use super::contact::{ContactForce, effective_mass};
 use super::particles::Particles;
 use super::walls::Wall;
 use crate::geom::Vec2;
 use rayon::prelude::*;
-
-/// A disc–disc pair closer than the skin, `i < j` (slots). `sqrt_m_eff`
-/// caches `√(m_i m_j/(m_i + m_j))` for critical-ratio dashpots. Its shear
-/// history is kept apart ([`ContactList::shear`]) so that the pair list
-/// is only read during a step (no write-back of 16 bytes per pair).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pair {
-    /// Slot of the first disc (`i < j`).
-    pub i: u32,
-    /// Slot of the second disc.
-    pub j: u32,
-    /// `√m_eff` of the pair, cached for the critical-ratio dashpots.
-    pub sqrt_m_eff: f64,
-}
 
 /// A disc–wall pair closer than the skin, its shear history and its
 /// rolling-spring history `mr` (the moment on the disc; 0 without rolling
@@ -47,32 +33,47 @@ pub struct WallPair {
     pub mr: f64,
 }
 
-/// The flat contact arrays, and the index of the "cross" pairs whose
-/// second disc lies in a later sweep block than the first (see
-/// [`sweep`](super::sweep)).
+/// The flat contact arrays (structure of arrays, indexed by pair `k`),
+/// and the index of the "cross" pairs whose second disc lies in a later
+/// sweep block than the first (see [`sweep`](super::sweep)).
+///
+/// Disc–disc pairs closer than the skin are stored as a compressed sparse
+/// row list over the first disc `i` (slots, `i < j`): the pairs of disc `i`
+/// are `k ∈ first[i]..first[i + 1]`, with second discs `j[k]` ascending.
+/// So the list is sorted by `(i, j)`; [`pairs`](Self::pairs) yields the
+/// `(i, j)` of each `k`. Per pair the sweep reads 4 bytes of list (`j`), 8
+/// of shear history, and 8 of `√m_eff` only when a law has critical-ratio
+/// dashpots; the list itself is only read during a step.
 #[derive(Debug, Clone, Default)]
 pub struct ContactList {
-    /// Sorted by `(i, j)`.
-    pub pairs: Vec<Pair>,
+    /// Pairs whose first disc is `i`: `first[i]..first[i + 1]` (`n + 1`
+    /// offsets; empty before the first build).
+    pub first: Vec<u32>,
+    /// Second disc (slot) of each pair, ascending within a first disc.
+    pub j: Vec<u32>,
+    /// `√m_eff = √(m_i m_j/(m_i + m_j))` of each pair when some law has
+    /// critical-ratio dashpots ([`needs_mass`](Self::needs_mass)); empty
+    /// otherwise.
+    pub sqrt_m_eff: Vec<f64>,
+    /// Some law needs `√m_eff` (set by the assembly from its laws).
+    pub needs_mass: bool,
     /// Shear history of each pair (force along `t = perp(n)`, n from i to
-    /// j; 0 when open), same index as `pairs`.
+    /// j; 0 when open).
     pub shear: Vec<f64>,
     /// Some law has rolling resistance: `roll` is kept (set by the
     /// assembly from its laws).
     pub rolling: bool,
     /// Rolling-spring history of each pair when `rolling` (the moment on
-    /// disc i, [`rolling`](super::contact::rolling); 0 when open), same
-    /// index as `pairs`; empty otherwise, so that the sweep without
-    /// rolling resistance reads and writes nothing more.
+    /// disc i, [`rolling`](super::contact::rolling); 0 when open); empty
+    /// otherwise, so that the sweep without rolling resistance reads and
+    /// writes nothing more.
     pub roll: Vec<f64>,
-    /// Pairs whose first disc is `k`: `first[k]..first[k + 1]`.
-    pub first: Vec<u32>,
     /// Disc–wall pairs, sorted by `(disc, wall)`.
     pub walls: Vec<WallPair>,
     /// Force of each wall pair in the current step (same index as `walls`).
     pub wall_buf: Vec<ContactForce>,
-    /// Indices into `pairs` of the cross pairs, ascending.
-    pub cross: Vec<u32>,
+    /// The cross pairs `(i, k)`: first disc and pair index, ascending.
+    pub cross: Vec<(u32, u32)>,
     /// Force and new shear history of each cross pair in the current step.
     pub cross_buf: Vec<(ContactForce, f64)>,
     /// Rolling moment on the first disc and new rolling history of each
@@ -106,27 +107,100 @@ pub fn block_size(n: usize) -> usize {
 }
 
 impl ContactList {
-    /// Index the cross pairs of the sweep blocks (after `pairs` and
-    /// `first` were built for `n` discs).
+    /// Number of listed disc–disc pairs.
+    pub fn len(&self) -> usize {
+        self.j.len()
+    }
+
+    /// No disc–disc pair is listed.
+    pub fn is_empty(&self) -> bool {
+        self.j.is_empty()
+    }
+
+    /// `(i, j)` of each listed pair, in list order (`k = 0, 1, …`).
+    pub fn pairs(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.first.windows(2).enumerate().flat_map(move |(i, w)| {
+            self.j[w[0] as usize..w[1] as usize]
+                .iter()
+                .map(move |&j| (i, j as usize))
+        })
+    }
+
+    /// A list of `n` discs and no pairs.
+    fn empty_rows(&mut self, n: usize) {
+        self.first.clear();
+        self.first.resize(n + 1, 0);
+    }
+
+    /// Set the pairs from `(i, j)` keys sorted by `(i, j)` (a saved state)
+    /// with their histories, for `n` discs; `√m_eff` and the cross index
+    /// follow.
+    pub(crate) fn set_pairs(&mut self, n: usize, keys: &[[u32; 2]], p: &Particles) {
+        self.empty_rows(n);
+        for &[i, _] in keys {
+            self.first[i as usize + 1] += 1;
+        }
+        for d in 0..n {
+            self.first[d + 1] += self.first[d];
+        }
+        self.j = keys.iter().map(|&[_, j]| j).collect();
+        self.finish(p);
+    }
+
+    /// After `first`, `j` and the histories are set: `√m_eff` when needed
+    /// and the cross index.
+    fn finish(&mut self, p: &Particles) {
+        self.sqrt_m_eff = Vec::new();
+        if self.needs_mass {
+            let mut sm = vec![0.0; self.j.len()];
+            let (first, j) = (&self.first, &self.j);
+            sm.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
+                let k0 = c * CHUNK;
+                let mut i = first.partition_point(|&f| (f as usize) <= k0) - 1;
+                for (k, o) in out.iter_mut().enumerate() {
+                    while first[i + 1] as usize <= k0 + k {
+                        i += 1;
+                    }
+                    let jj = j[k0 + k] as usize;
+                    *o = effective_mass(p.inv_mass[i], p.inv_mass[jj]).sqrt();
+                }
+            });
+            self.sqrt_m_eff = sm;
+        }
+        self.index_cross(p.len());
+    }
+
+    /// Index the cross pairs of the sweep blocks (after `first` and `j`
+    /// were built for `n` discs).
     pub(crate) fn index_cross(&mut self, n: usize) {
         let bs = block_size(n);
         self.block = bs;
         let nb = n.div_ceil(bs);
+        let per_block: Vec<Vec<(u32, u32)>> = (0..nb)
+            .into_par_iter()
+            .map(|b| {
+                let hi = ((b + 1) * bs).min(n);
+                let mut out = Vec::new();
+                for i in b * bs..hi {
+                    let (p0, p1) = (self.first[i] as usize, self.first[i + 1] as usize);
+                    // j ascending: the cross pairs end the row
+                    let c0 = p0 + self.j[p0..p1].partition_point(|&j| (j as usize) < hi);
+                    out.extend((c0..p1).map(|k| (i as u32, k as u32)));
+                }
+                out
+            })
+            .collect();
         self.cross.clear();
         self.cross_first.clear();
         self.cross_first.push(0);
         self.cross_in_start.clear();
         self.cross_in_start.resize(nb + 1, 0);
-        for b in 0..nb {
-            let hi = ((b + 1) * bs).min(n);
-            let (p0, p1) = (self.first[b * bs] as usize, self.first[hi] as usize);
-            for (k, q) in self.pairs[p0..p1].iter().enumerate() {
-                if q.j as usize >= hi {
-                    self.cross.push((p0 + k) as u32);
-                    self.cross_in_start[q.j as usize / bs + 1] += 1;
-                }
-            }
+        for c in &per_block {
+            self.cross.extend_from_slice(c);
             self.cross_first.push(self.cross.len() as u32);
+            for &(_, k) in c {
+                self.cross_in_start[self.j[k as usize] as usize / bs + 1] += 1;
+            }
         }
         for b in 0..nb {
             self.cross_in_start[b + 1] += self.cross_in_start[b];
@@ -134,8 +208,8 @@ impl ContactList {
         self.cross_in.clear();
         self.cross_in.resize(self.cross.len(), (0, 0));
         let mut fill: Vec<u32> = self.cross_in_start[..nb].to_vec();
-        for (c, &k) in self.cross.iter().enumerate() {
-            let j = self.pairs[k as usize].j;
+        for (c, &(_, k)) in self.cross.iter().enumerate() {
+            let j = self.j[k as usize];
             let f = &mut fill[j as usize / bs];
             self.cross_in[*f as usize] = (j, c as u32);
             *f += 1;
@@ -152,13 +226,12 @@ impl ContactList {
     /// Bytes held (capacity).
     pub fn heap_bytes(&self) -> usize {
         use std::mem::size_of;
-        self.pairs.capacity() * size_of::<Pair>()
-            + (self.shear.capacity() + self.roll.capacity()) * 8
+        (self.first.capacity() + self.j.capacity() + self.cross_first.capacity()) * 4
+            + (self.sqrt_m_eff.capacity() + self.shear.capacity() + self.roll.capacity()) * 8
+            + (self.cross.capacity() + self.cross_in.capacity()) * 8
             + self.cross_roll.capacity() * 16
-            + (self.first.capacity() + self.cross.capacity() + self.cross_first.capacity()) * 4
             + self.cross_in_start.capacity() * 4
             + self.cross_buf.capacity() * size_of::<(ContactForce, f64)>()
-            + self.cross_in.capacity() * 8
             + self.walls.capacity() * size_of::<WallPair>()
             + self.wall_buf.capacity() * size_of::<ContactForce>()
     }
@@ -168,10 +241,81 @@ impl ContactList {
         let (i, j) = if a < b { (a, b) } else { (b, a) };
         let lo = *self.first.get(i as usize)? as usize;
         let hi = *self.first.get(i as usize + 1)? as usize;
-        self.pairs[lo..hi]
-            .binary_search_by_key(&j, |p| p.j)
-            .ok()
-            .map(|k| lo + k)
+        self.j[lo..hi].binary_search(&j).ok().map(|k| lo + k)
+    }
+
+    /// Renumber the discs (`new_of_old[old slot]`): every pair gets the new
+    /// slots of its discs (in order, `i < j`; a rolling history flips sign
+    /// when its pair's order flips), the list is sorted again, and the
+    /// wall pairs follow. `√m_eff` and the cross index are left stale (a
+    /// rebuild follows).
+    fn renumber(&mut self, new_of_old: &[u32]) {
+        let n = new_of_old.len();
+        if self.first.len() != n + 1 {
+            // never built (or built for other discs): nothing to carry over
+            self.empty_rows(n);
+            self.j.clear();
+            self.shear.clear();
+            self.roll.clear();
+            self.walls.clear();
+            return;
+        }
+        let m = self.j.len();
+        let rolling = self.rolling && self.roll.len() == m;
+        let key = |i: usize, k: usize| {
+            let (a, b) = (new_of_old[i], new_of_old[self.j[k] as usize]);
+            (a.min(b), a.max(b), a > b)
+        };
+        // counting sort by the new first disc
+        let mut first = vec![0u32; n + 1];
+        for i in 0..n {
+            for k in self.first[i] as usize..self.first[i + 1] as usize {
+                first[key(i, k).0 as usize + 1] += 1;
+            }
+        }
+        for d in 0..n {
+            first[d + 1] += first[d];
+        }
+        let mut fill = first.clone();
+        let mut j = vec![0u32; m];
+        let mut shear = vec![0.0; m];
+        let mut roll = vec![0.0; if rolling { m } else { 0 }];
+        for i in 0..n {
+            for k in self.first[i] as usize..self.first[i + 1] as usize {
+                let (a, b, flip) = key(i, k);
+                let at = fill[a as usize] as usize;
+                fill[a as usize] += 1;
+                j[at] = b;
+                shear[at] = self.shear[k];
+                if rolling {
+                    roll[at] = if flip { -self.roll[k] } else { self.roll[k] };
+                }
+            }
+        }
+        drop(fill);
+        // sort each row by j (rows are short: insertion sort)
+        for r in first.windows(2) {
+            let (lo, hi) = (r[0] as usize, r[1] as usize);
+            for a in lo + 1..hi {
+                let mut b = a;
+                while b > lo && j[b - 1] > j[b] {
+                    j.swap(b - 1, b);
+                    shear.swap(b - 1, b);
+                    if rolling {
+                        roll.swap(b - 1, b);
+                    }
+                    b -= 1;
+                }
+            }
+        }
+        (self.first, self.j, self.shear) = (first, j, shear);
+        if rolling {
+            self.roll = roll;
+        }
+        for w in &mut self.walls {
+            w.disc = new_of_old[w.disc as usize];
+        }
+        self.walls.sort_unstable_by_key(|w| (w.disc, w.wall));
     }
 }
 
@@ -254,14 +398,24 @@ impl NeighbourGrid {
     /// cannot fit (infinite extent) is a single cell.
     fn bin(&mut self, p: &Particles) {
         let n = p.len();
-        let (mut lo, mut hi) = (
+        let none = (
             Vec2::new(f64::INFINITY, f64::INFINITY),
             Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
         );
-        for q in p.pos.iter().filter(|q| q.x.is_finite() && q.y.is_finite()) {
-            lo = Vec2::new(lo.x.min(q.x), lo.y.min(q.y));
-            hi = Vec2::new(hi.x.max(q.x), hi.y.max(q.y));
-        }
+        let join = |(a, b): (Vec2, Vec2), (c, d): (Vec2, Vec2)| {
+            (
+                Vec2::new(a.x.min(c.x), a.y.min(c.y)),
+                Vec2::new(b.x.max(d.x), b.y.max(d.y)),
+            )
+        };
+        // min and max are exact: the same box on any thread count
+        let (mut lo, mut hi) = p
+            .pos
+            .par_iter()
+            .with_min_len(CHUNK)
+            .filter(|q| q.x.is_finite() && q.y.is_finite())
+            .map(|&q| (q, q))
+            .reduce(|| none, join);
         if !(lo.x <= hi.x && lo.y <= hi.y) {
             // no disc, or none with a finite centre
             lo = Vec2::ZERO;
@@ -295,12 +449,14 @@ impl NeighbourGrid {
         self.h = h;
         self.origin = lo;
         let ncell = self.nx * self.ny;
+        let (nx, ny) = (self.nx, self.ny);
         self.cell_of.clear();
-        self.cell_of.extend(p.pos.iter().map(|q| {
-            let cx = (((q.x - lo.x) / h) as usize).min(self.nx - 1);
-            let cy = (((q.y - lo.y) / h) as usize).min(self.ny - 1);
-            (cy * self.nx + cx) as u32
-        }));
+        self.cell_of
+            .par_extend(p.pos.par_iter().with_min_len(CHUNK).map(|q| {
+                let cx = (((q.x - lo.x) / h) as usize).min(nx - 1);
+                let cy = (((q.y - lo.y) / h) as usize).min(ny - 1);
+                (cy * nx + cx) as u32
+            }));
         self.cell_start.clear();
         self.cell_start.resize(ncell + 1, 0);
         for &c in &self.cell_of {
@@ -338,52 +494,27 @@ impl NeighbourGrid {
 
     /// Rebuild the pair lists (and renumber the discs every
     /// `reorder_every` rebuilds), carrying shear histories over.
+    ///
+    /// Memory: `√m_eff` is dropped first (it is recomputed), and the new
+    /// list is built beside the old one only as long as the histories are
+    /// merged, so the peak is about the steady list twice.
     pub fn rebuild(&mut self, p: &mut Particles, walls: &[Wall], list: &mut ContactList) {
+        list.sqrt_m_eff = Vec::new();
+        list.cross_buf = Vec::new();
+        list.cross_roll = Vec::new();
         self.bin(p);
         if self.reorder_every > 0 && self.rebuilds.is_multiple_of(self.reorder_every) {
             let order = self.strip_order();
             let new_of_old = p.permute(&order);
-            let renumber = |q: &Pair| {
-                let (a, b) = (new_of_old[q.i as usize], new_of_old[q.j as usize]);
-                let (i, j) = if a < b { (a, b) } else { (b, a) };
-                Pair { i, j, ..*q }
-            };
-            if list.roll.len() == list.pairs.len() && list.rolling {
-                // the rolling histories travel with their pairs (the moment
-                // on the first disc: negated when the pair's order flips)
-                let mut moved: Vec<(Pair, (f64, f64))> = list
-                    .pairs
-                    .iter()
-                    .zip(list.shear.iter().zip(&list.roll))
-                    .map(|(q, (&fs, &mr))| {
-                        let r = renumber(q);
-                        let flip = new_of_old[q.i as usize] > new_of_old[q.j as usize];
-                        (r, (fs, if flip { -mr } else { mr }))
-                    })
-                    .collect();
-                moved.sort_unstable_by_key(|(q, _)| (q.i, q.j));
-                let hist: Vec<(f64, f64)>;
-                (list.pairs, hist) = moved.into_iter().unzip();
-                (list.shear, list.roll) = hist.into_iter().unzip();
-            } else {
-                let mut moved: Vec<(Pair, f64)> = list
-                    .pairs
-                    .iter()
-                    .zip(&list.shear)
-                    .map(|(q, &fs)| (renumber(q), fs))
-                    .collect();
-                moved.sort_unstable_by_key(|(q, _)| (q.i, q.j));
-                (list.pairs, list.shear) = moved.into_iter().unzip();
-            }
-            for w in &mut list.walls {
-                w.disc = new_of_old[w.disc as usize];
-            }
-            list.walls.sort_unstable_by_key(|w| (w.disc, w.wall));
+            drop(order);
+            list.renumber(&new_of_old);
+            drop(new_of_old);
             self.bin(p);
         }
         self.rebuilds += 1;
         self.search(p, list);
         self.search_walls(p, walls, list);
+        list.finish(p);
         self.ref_pos.clear();
         self.ref_pos.extend_from_slice(&p.pos);
         self.wall_ref = walls.iter().map(|w| [w.a, w.b]).collect();
@@ -391,8 +522,9 @@ impl NeighbourGrid {
     }
 
     /// Disc–disc candidates: for each disc, the discs of higher slot in the
-    /// 3×3 neighbouring cells with a gap below the skin; merged with the old
-    /// list to keep shear histories.
+    /// 3×3 neighbouring cells with a gap below the skin (sorted), in
+    /// parallel over chunks of discs; then each disc's new row is merged
+    /// with its old row to keep the shear (and rolling) histories.
     fn search(&self, p: &Particles, list: &mut ContactList) {
         let n = p.len();
         let skin = self.skin;
@@ -403,7 +535,7 @@ impl NeighbourGrid {
                 let lo = c * CHUNK;
                 let hi = (lo + CHUNK).min(n);
                 let mut counts = Vec::with_capacity(hi - lo);
-                let mut js = Vec::with_capacity(4 * (hi - lo));
+                let mut js = Vec::with_capacity(3 * (hi - lo));
                 for i in lo..hi {
                     let start = js.len();
                     let pi = p.pos[i];
@@ -431,60 +563,88 @@ impl NeighbourGrid {
                 (counts, js)
             })
             .collect();
-        let total: usize = chunks.iter().map(|c| c.1.len()).sum();
-        let old = std::mem::take(&mut list.pairs);
-        let old_shear = std::mem::take(&mut list.shear);
-        let old_roll = std::mem::take(&mut list.roll);
-        let roll_kept = old_roll.len() == old.len();
-        let mut pairs = Vec::with_capacity(total + total / 8);
-        let mut shear = Vec::with_capacity(total + total / 8);
-        let mut roll = Vec::with_capacity(if list.rolling { total + total / 8 } else { 0 });
-        list.first.clear();
-        list.first.reserve(n + 1);
-        list.first.push(0);
-        let mut i = 0u32;
-        let mut o = 0usize;
-        for (counts, js) in &chunks {
-            let mut at = 0usize;
-            for &cnt in counts {
-                for &j in &js[at..at + cnt as usize] {
-                    // merge: advance the old list to (i, j)
-                    while o < old.len() && (old[o].i, old[o].j) < (i, j) {
-                        o += 1;
-                    }
-                    let found = o < old.len() && old[o].i == i && old[o].j == j;
-                    let fs = if found { old_shear[o] } else { 0.0 };
-                    if list.rolling {
-                        roll.push(if found && roll_kept { old_roll[o] } else { 0.0 });
-                    }
-                    let m_eff = super::contact::effective_mass(
-                        p.inv_mass[i as usize],
-                        p.inv_mass[j as usize],
-                    );
-                    pairs.push(Pair {
-                        i,
-                        j,
-                        sqrt_m_eff: m_eff.sqrt(),
-                    });
-                    shear.push(fs);
-                }
-                at += cnt as usize;
-                list.first.push(pairs.len() as u32);
-                i += 1;
+        // the new rows: offsets, then the second discs chunk by chunk
+        let mut first = Vec::with_capacity(n + 1);
+        first.push(0u32);
+        for (counts, _) in &chunks {
+            for &c in counts {
+                first.push(first[first.len() - 1] + c);
             }
         }
-        list.pairs = pairs;
+        let total = first[n] as usize;
+        let mut j = vec![0u32; total];
+        {
+            let mut rest = &mut j[..];
+            let mut parts = Vec::with_capacity(chunks.len());
+            for (_, js) in &chunks {
+                let (a, b) = rest.split_at_mut(js.len());
+                parts.push(a);
+                rest = b;
+            }
+            parts
+                .into_par_iter()
+                .zip(chunks.par_iter())
+                .for_each(|(out, (_, js))| out.copy_from_slice(js));
+        }
+        drop(chunks);
+        // histories: merge each disc's new row with its old one
+        let old_ok = list.first.len() == n + 1;
+        let rolling = list.rolling;
+        let roll_kept = old_ok && list.roll.len() == list.j.len();
+        let mut shear = vec![0.0; total];
+        let mut roll = vec![0.0; if rolling { total } else { 0 }];
+        if old_ok {
+            let old = &*list;
+            let merge = |lo: usize, hi: usize, sh: &mut [f64], ro: &mut [f64]| {
+                let base = first[lo] as usize;
+                for i in lo..hi {
+                    let (o0, o1) = (old.first[i] as usize, old.first[i + 1] as usize);
+                    let mut o = o0;
+                    for k in first[i] as usize..first[i + 1] as usize {
+                        let jj = j[k];
+                        while o < o1 && old.j[o] < jj {
+                            o += 1;
+                        }
+                        if o < o1 && old.j[o] == jj {
+                            sh[k - base] = old.shear[o];
+                            if roll_kept && !ro.is_empty() {
+                                ro[k - base] = old.roll[o];
+                            }
+                        }
+                    }
+                }
+            };
+            // split the new histories at chunk boundaries of the discs
+            let mut tasks = Vec::with_capacity(n.div_ceil(CHUNK));
+            let (mut sh_rest, mut ro_rest) = (&mut shear[..], &mut roll[..]);
+            for c in 0..n.div_ceil(CHUNK) {
+                let (lo, hi) = (c * CHUNK, ((c + 1) * CHUNK).min(n));
+                let len = (first[hi] - first[lo]) as usize;
+                let (a, b) = sh_rest.split_at_mut(len);
+                sh_rest = b;
+                let (ra, rb) = if rolling {
+                    ro_rest.split_at_mut(len)
+                } else {
+                    (&mut [][..], ro_rest)
+                };
+                ro_rest = rb;
+                tasks.push((lo, hi, a, ra));
+            }
+            tasks
+                .into_par_iter()
+                .for_each(|(lo, hi, sh, ro)| merge(lo, hi, sh, ro));
+        }
+        list.first = first;
+        list.j = j;
         list.shear = shear;
         list.roll = roll;
-        list.index_cross(n);
     }
 
     /// Disc–wall candidates: each disc against each wall's bounding box
-    /// (enlarged by the disc's reach), then the exact distance.
+    /// (enlarged by the disc's reach), then the exact distance; in parallel
+    /// over chunks of discs, histories carried over from the old list.
     fn search_walls(&self, p: &Particles, walls: &[Wall], list: &mut ContactList) {
         let old = std::mem::take(&mut list.walls);
-        let mut out = Vec::new();
-        let mut o = 0usize;
         let reach_max = p.max_radius() + self.skin;
         let boxes: Vec<(Vec2, Vec2)> = walls
             .iter()
@@ -495,33 +655,44 @@ impl NeighbourGrid {
                 )
             })
             .collect();
-        for (d, (&q, &r)) in p.pos.iter().zip(&p.radius).enumerate() {
-            for (w, wall) in walls.iter().enumerate() {
-                let (lo, hi) = boxes[w];
-                if q.x < lo.x || q.x > hi.x || q.y < lo.y || q.y > hi.y {
-                    continue;
-                }
-                let reach = r + self.skin;
-                if (wall.closest(q) - q).norm2() < reach * reach {
-                    let key = (d as u32, w as u32);
-                    while o < old.len() && (old[o].disc, old[o].wall) < key {
-                        o += 1;
+        let n = p.len();
+        let chunks: Vec<Vec<WallPair>> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let (lo, hi) = (c * CHUNK, ((c + 1) * CHUNK).min(n));
+                let mut o = old.partition_point(|q| (q.disc as usize) < lo);
+                let mut out = Vec::new();
+                for d in lo..hi {
+                    let (q, r) = (p.pos[d], p.radius[d]);
+                    for (w, wall) in walls.iter().enumerate() {
+                        let (blo, bhi) = boxes[w];
+                        if q.x < blo.x || q.x > bhi.x || q.y < blo.y || q.y > bhi.y {
+                            continue;
+                        }
+                        let reach = r + self.skin;
+                        if (wall.closest(q) - q).norm2() < reach * reach {
+                            let key = (d as u32, w as u32);
+                            while o < old.len() && (old[o].disc, old[o].wall) < key {
+                                o += 1;
+                            }
+                            let (fs, mr) = if o < old.len() && (old[o].disc, old[o].wall) == key {
+                                (old[o].fs, old[o].mr)
+                            } else {
+                                (0.0, 0.0)
+                            };
+                            out.push(WallPair {
+                                disc: key.0,
+                                wall: key.1,
+                                fs,
+                                mr,
+                            });
+                        }
                     }
-                    let (fs, mr) = if o < old.len() && (old[o].disc, old[o].wall) == key {
-                        (old[o].fs, old[o].mr)
-                    } else {
-                        (0.0, 0.0)
-                    };
-                    out.push(WallPair {
-                        disc: key.0,
-                        wall: key.1,
-                        fs,
-                        mr,
-                    });
                 }
-            }
-        }
-        list.walls = out;
+                out
+            })
+            .collect();
+        list.walls = chunks.concat();
         list.wall_buf.clear();
         list.wall_buf
             .resize(list.walls.len(), ContactForce::default());
@@ -537,7 +708,7 @@ mod tests {
     use crate::dem::walls::{Wall, WallMotion};
     use crate::geom::Vec2;
 
-    /// Issue 12: after an instability discs fly ~1e19 apart; the grid's cell
+    /// After an instability discs fly ~1e19 apart; the grid's cell
     /// count was computed in `usize` and wrapped around (index out of bounds
     /// in `bin`). A disc at 1e19, 1e300, ±∞ or NaN must not break the
     /// rebuild, and the discs that still touch are still found.
@@ -572,10 +743,8 @@ mod tests {
             // the chain 0-1-2 and 4-5-6 and 8-9 still touch: 2 + 2 + 1 pairs
             let near = g
                 .contacts
-                .pairs
-                .iter()
-                .filter(|q| {
-                    let (i, j) = (q.i as usize, q.j as usize);
+                .pairs()
+                .filter(|&(i, j)| {
                     g.particles.pos[i].x.is_finite()
                         && g.particles.pos[j].x.is_finite()
                         && (g.particles.pos[i] - g.particles.pos[j]).norm() < 2.0

@@ -293,8 +293,7 @@ pub fn contacts(
         fab[2] += n.x * n.y;
         nc += 1;
     };
-    for (k, q) in g.contacts.pairs.iter().enumerate() {
-        let (i, j) = (q.i as usize, q.j as usize);
+    for (k, (i, j)) in g.contacts.pairs().enumerate() {
         let (in_i, in_j) = (region.contains(p.pos[i]), region.contains(p.pos[j]));
         if !in_i && !in_j {
             continue;

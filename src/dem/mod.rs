@@ -90,6 +90,15 @@ pub struct WallContact {
     pub total: f64,
 }
 
+/// The disc check done inside [`Granular::step`] (no extra pass over the
+/// discs): at which step, with which bound, and whether every disc passed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct StepCheck {
+    step: usize,
+    radii_per_step: f64,
+    clean: bool,
+}
+
 /// Damping that acts on each disc's motion rather than in the contacts.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum BodyDamping {
@@ -177,6 +186,12 @@ pub struct Granular {
     /// External forces of the next [`step`](Self::step): `(slot, force,
     /// moment)`, sorted by slot ([`set_external`](Self::set_external)).
     external: Vec<(u32, Vec2, f64)>,
+    /// The disc check of [`step`](Self::step): radii per step a disc may
+    /// move before it is flagged ([`step_check`](Self::step_check); the
+    /// model sets its stability limit here).
+    pub check_radii: f64,
+    /// What the last [`step`](Self::step) found ([`step_check`](Self::step_check)).
+    last_check: Option<StepCheck>,
     /// Each disc's position when the assembly was made (by id): the
     /// reference of [`displacement`](Self::displacement). Not part of the
     /// saved state: a restart rebuilds the assembly, which sets it again.
@@ -218,6 +233,8 @@ impl Granular {
             max_disp: 0.0,
             store_forces: true,
             external: Vec::new(),
+            check_radii: 1.0,
+            last_check: None,
             start,
         };
         g.update_laws();
@@ -254,6 +271,12 @@ impl Granular {
         let rolling = self.laws.iter().chain(&self.wall_laws).any(|l| l.rolling());
         if rolling != self.contacts.rolling {
             self.contacts.rolling = rolling;
+            self.grid.stale = true;
+        }
+        // √m_eff is kept per pair only for critical-ratio dashpots
+        let needs_mass = self.laws.iter().any(ContactLaw::needs_mass);
+        if needs_mass != self.contacts.needs_mass {
+            self.contacts.needs_mass = needs_mass;
             self.grid.stale = true;
         }
     }
@@ -346,10 +369,27 @@ impl Granular {
     /// [`integrate`](Self::integrate).
     pub fn step(&mut self) {
         self.prepare_contacts();
-        self.max_disp = self.sweep::<true>();
+        let (max_disp, bad) = self.sweep::<true>();
+        self.max_disp = max_disp;
         self.external.clear();
         self.wall_totals();
         self.move_walls();
+        self.last_check = Some(StepCheck {
+            step: self.step,
+            radii_per_step: self.check_radii,
+            clean: !bad,
+        });
+    }
+
+    /// Did the last [`step`](Self::step), which brought the assembly to
+    /// its present step, find every disc finite and moving at most
+    /// `radii_per_step` radii per step (`v·v ≤ (radii_per_step/Δt)² r²`)?
+    /// `None` when the present state was not made by `step` with that
+    /// bound (then check the discs themselves).
+    pub fn step_check(&self, radii_per_step: f64) -> Option<bool> {
+        self.last_check
+            .filter(|c| c.step == self.step && c.radii_per_step == radii_per_step)
+            .map(|c| c.clean)
     }
 
     /// External forces for the next [`step`](Self::step) (e.g. the
@@ -571,7 +611,8 @@ impl Granular {
     /// [`DemError::Unstable`] at the present step unless every disc state
     /// is finite.
     pub fn check_finite(&self) -> Result<(), DemError> {
-        if self.is_finite() {
+        // a clean check of the step that made this state covers it
+        if self.step_check(self.check_radii) == Some(true) || self.is_finite() {
             Ok(())
         } else {
             Err(DemError::Unstable {
@@ -654,15 +695,8 @@ impl Granular {
             s
         };
         let roll = &self.contacts.roll;
-        let rolling = self.contacts.rolling && roll.len() == self.contacts.pairs.len();
-        for (k, (q, &fs)) in self
-            .contacts
-            .pairs
-            .iter()
-            .zip(&self.contacts.shear)
-            .enumerate()
-        {
-            let (i, j) = (q.i as usize, q.j as usize);
+        let rolling = self.contacts.rolling && roll.len() == self.contacts.len();
+        for (k, ((i, j), &fs)) in self.contacts.pairs().zip(&self.contacts.shear).enumerate() {
             let dist = (p.pos[j] - p.pos[i]).norm();
             let (ri, rj) = (p.radius[i], p.radius[j]);
             let law = self.law(i, j);
@@ -695,11 +729,10 @@ impl Granular {
         let p = &self.particles;
         let dd = self
             .contacts
-            .pairs
-            .iter()
-            .filter(|q| {
-                let r = p.radius[q.i as usize] + p.radius[q.j as usize];
-                (p.pos[q.j as usize] - p.pos[q.i as usize]).norm2() < r * r
+            .pairs()
+            .filter(|&(i, j)| {
+                let r = p.radius[i] + p.radius[j];
+                (p.pos[j] - p.pos[i]).norm2() < r * r
             })
             .count();
         let dw = self

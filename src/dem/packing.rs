@@ -151,7 +151,7 @@ pub fn settle_in_box(
     gravity: Vec2,
     steps: usize,
 ) -> Result<Vec<DiscRow>, DemError> {
-    let mut p = Particles::default();
+    let mut p = Particles::with_capacity(rows.len());
     for r in rows {
         p.push(r.pos, r.r, density, thickness, 0);
     }

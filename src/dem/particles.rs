@@ -62,6 +62,29 @@ impl Particles {
         self.pos.is_empty()
     }
 
+    /// No discs, with room for `n` (an assembly's arrays are then
+    /// allocated once, at their size: no growth by doubling, whose copies
+    /// would set the peak memory of a large model's build).
+    pub fn with_capacity(n: usize) -> Self {
+        Particles {
+            pos: Vec::with_capacity(n),
+            vel: Vec::with_capacity(n),
+            theta: Vec::with_capacity(n),
+            omega: Vec::with_capacity(n),
+            radius: Vec::with_capacity(n),
+            mass: Vec::with_capacity(n),
+            inertia: Vec::with_capacity(n),
+            inv_mass: Vec::with_capacity(n),
+            inv_inertia: Vec::with_capacity(n),
+            force: Vec::with_capacity(n),
+            torque: Vec::with_capacity(n),
+            fixity: Vec::with_capacity(n),
+            material: Vec::with_capacity(n),
+            id: Vec::with_capacity(n),
+            slot: Vec::with_capacity(n),
+        }
+    }
+
     /// Append a disc of radius `r`, density `rho` and thickness `t` at rest.
     /// Mass `m = ρ π r² t`, inertia `I = m r²/2`.
     pub fn push(&mut self, pos: Vec2, r: f64, rho: f64, thickness: f64, material: u16) {

@@ -23,8 +23,7 @@
 //! (cleared by every step) and `store_forces` (the driver's choice).
 
 use super::Granular;
-use super::broadphase::{Pair, WallPair};
-use super::contact::effective_mass;
+use super::broadphase::WallPair;
 use crate::continuum::StateError;
 use crate::geom::Vec2;
 
@@ -133,7 +132,7 @@ impl Granular {
                     integral: w.integral,
                 })
                 .collect(),
-            pairs: c.pairs.iter().map(|q| [q.i, q.j]).collect(),
+            pairs: c.pairs().map(|(i, j)| [i as u32, j as u32]).collect(),
             shear: c.shear.clone(),
             rolling: c.rolling,
             roll: c.roll.clone(),
@@ -183,25 +182,12 @@ impl Granular {
         self.time = s.time;
         self.max_disp = s.max_disp;
         self.external.clear();
+        self.last_check = None;
         let c = &mut self.contacts;
         let p = &self.particles;
-        c.pairs.clear();
-        c.pairs.extend(s.pairs.iter().map(|&[i, j]| Pair {
-            i,
-            j,
-            sqrt_m_eff: effective_mass(p.inv_mass[i as usize], p.inv_mass[j as usize]).sqrt(),
-        }));
         c.shear.clone_from(&s.shear);
         c.roll.clone_from(&s.roll);
-        c.first.clear();
-        c.first.push(0);
-        let mut k = 0;
-        for d in 0..n as u32 {
-            while k < c.pairs.len() && c.pairs[k].i == d {
-                k += 1;
-            }
-            c.first.push(k as u32);
-        }
+        c.set_pairs(n, &s.pairs, p);
         c.walls.clear();
         c.walls.extend(s.wall_pairs.iter().map(|w| WallPair {
             disc: w.disc,
@@ -211,7 +197,6 @@ impl Granular {
         }));
         c.wall_buf.clear();
         c.wall_buf.resize(c.walls.len(), Default::default());
-        c.index_cross(n);
         self.grid.ref_pos.clone_from(&s.ref_pos);
         self.grid.wall_ref.clone_from(&s.wall_ref);
         self.grid.rebuilds = s.rebuilds;

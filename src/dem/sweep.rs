@@ -21,7 +21,7 @@
 //! order, then walls), so the result is bitwise the same on any number of
 //! threads.
 
-use super::broadphase::{ContactList, Pair, WallPair};
+use super::broadphase::{ContactList, WallPair};
 use super::contact::{self, ContactForce, ContactLaw, Side, effective_mass};
 use super::integrate;
 use super::particles::Particles;
@@ -31,11 +31,26 @@ use crate::geom::Vec2;
 use rayon::prelude::*;
 
 thread_local! {
-    /// Per-thread accumulators of the block being swept (grown once).
-    static ACC: std::cell::RefCell<Vec<(Vec2, f64)>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// Per-thread accumulators of the block being swept (grown once). A
+    /// sweep leaves every entry it used at zero again (each disc takes its
+    /// own), so they are not cleared per block; `true` while a sweep runs
+    /// (a sweep that panicked left them dirty: cleared at the next).
+    static ACC: std::cell::RefCell<(Vec<(Vec2, f64)>, bool)> = const { std::cell::RefCell::new((Vec::new(), false)) };
     /// Per-thread accumulators of the rolling moments (rolling resistance
-    /// only).
-    static ACC_ROLL: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// only), kept as `ACC`.
+    static ACC_ROLL: std::cell::RefCell<(Vec<f64>, bool)> = const { std::cell::RefCell::new((Vec::new(), false)) };
+}
+
+/// The first `n` entries of a zeroed per-thread accumulator, marked in use.
+fn zeroed<T: Copy + Default>((v, busy): &mut (Vec<T>, bool), n: usize) -> &mut [T] {
+    if *busy {
+        v.fill(T::default());
+    }
+    if v.len() < n {
+        v.resize(n, T::default());
+    }
+    *busy = true;
+    &mut v[..n]
 }
 
 /// Per-step constants of the sweep.
@@ -60,6 +75,9 @@ struct Ctx<'a> {
     store: bool,
     /// External forces and moments `(slot, f, moment)`, sorted by slot.
     external: &'a [(u32, Vec2, f64)],
+    /// `(check_radii/Δt)²`: a disc is flagged when `v·v > max_v2 r²` or
+    /// its state is not finite.
+    max_v2: f64,
 }
 
 /// The discs `lo..lo + pos.len()` with their pairs (as first disc) and
@@ -79,7 +97,10 @@ struct Block<'a> {
     material: &'a [u16],
     /// Positions at the last list rebuild (empty: no Verlet check).
     ref_pos: &'a [Vec2],
-    pairs: &'a [Pair],
+    /// Second disc of each pair.
+    pairs: &'a [u32],
+    /// `√m_eff` of each pair (empty: no law needs it, read as 0).
+    sm: &'a [f64],
     shear: &'a mut [f64],
     /// Rolling histories (same index as `pairs`; empty without rolling).
     roll: &'a mut [f64],
@@ -109,6 +130,11 @@ impl<'a> Block<'a> {
         };
         let kp = first[at] as usize - pair_lo;
         let (pairs, pairs2) = self.pairs.split_at(kp);
+        let (sm, sm2) = if self.sm.is_empty() {
+            (self.sm, self.sm)
+        } else {
+            self.sm.split_at(kp)
+        };
         let (shear, shear2) = self.shear.split_at_mut(kp);
         let (roll, roll2) = if self.roll.is_empty() {
             (self.roll, &mut [][..])
@@ -134,6 +160,7 @@ impl<'a> Block<'a> {
                 material,
                 ref_pos,
                 pairs,
+                sm,
                 shear,
                 roll,
                 walls,
@@ -154,6 +181,7 @@ impl<'a> Block<'a> {
                 material: material2,
                 ref_pos: ref_pos2,
                 pairs: pairs2,
+                sm: sm2,
                 shear: shear2,
                 roll: roll2,
                 walls: walls2,
@@ -169,8 +197,10 @@ impl Granular {
     /// Leaves the contact force and moment of each disc in
     /// `particles.force`/`torque` and each wall contact in `wall_buf`.
     /// Returns the largest disc displacement since the last rebuild
-    /// (`ADVANCE` only; infinity when there is no reference).
-    pub(super) fn sweep<const ADVANCE: bool>(&mut self) -> f64 {
+    /// (`ADVANCE` only; infinity when there is no reference), and whether
+    /// some disc failed the check of [`Granular::check_radii`] after its
+    /// advance (`ADVANCE` only).
+    pub(super) fn sweep<const ADVANCE: bool>(&mut self) -> (f64, bool) {
         // a list built for another set of discs (or never built) is rebuilt
         if self.contacts.first.len() != self.particles.len() + 1 {
             self.grid.stale = true;
@@ -186,10 +216,11 @@ impl Granular {
     /// [`sweep`](Self::sweep) with (`ROLL`) or without rolling resistance:
     /// without, the kernels are those before rolling resistance existed
     /// (bitwise the same results, nothing more read or written).
-    fn sweep_with<const ADVANCE: bool, const ROLL: bool>(&mut self) -> f64 {
+    fn sweep_with<const ADVANCE: bool, const ROLL: bool>(&mut self) -> (f64, bool) {
         let n = self.particles.len();
         let ContactList {
-            pairs,
+            j: pairs,
+            sqrt_m_eff: sm,
             shear,
             roll,
             first,
@@ -215,6 +246,7 @@ impl Granular {
                 &self.dash,
                 nm,
                 pairs,
+                sm,
                 shear,
                 roll,
                 cross,
@@ -229,6 +261,7 @@ impl Granular {
                 &self.dash,
                 nm,
                 pairs,
+                sm,
                 shear,
                 cross,
                 cross_buf,
@@ -253,6 +286,7 @@ impl Granular {
             dt: self.dt,
             store: !ADVANCE || self.store_forces,
             external: &self.external,
+            max_v2: self.check_radii * self.check_radii / (self.dt * self.dt),
         };
         let p = &mut self.particles;
         let ref_pos: &[Vec2] = if ADVANCE && self.grid.ref_pos.len() == n {
@@ -275,14 +309,15 @@ impl Granular {
             material: &p.material,
             ref_pos,
             pairs,
+            sm,
             shear,
             roll: if ROLL { roll } else { &mut [] },
             walls: wall_pairs,
             wall_buf,
         };
         let has_ref = !ref_pos.is_empty();
-        let max2 = sweep_blocks::<ADVANCE, ROLL>(0..n.div_ceil(*block), all, &ctx);
-        if has_ref { max2.sqrt() } else { f64::INFINITY }
+        let (max2, bad) = sweep_blocks::<ADVANCE, ROLL>(0..n.div_ceil(*block), all, &ctx);
+        (if has_ref { max2.sqrt() } else { f64::INFINITY }, bad)
     }
 }
 
@@ -294,9 +329,10 @@ fn cross_pairs(
     laws: &[ContactLaw],
     dash: &[[f64; 4]],
     nm: usize,
-    pairs: &[Pair],
+    pairs: &[u32],
+    sm: &[f64],
     shear: &[f64],
-    cross: &[u32],
+    cross: &[(u32, u32)],
     cross_buf: &mut [(ContactForce, f64)],
     dt: f64,
 ) {
@@ -305,12 +341,12 @@ fn cross_pairs(
         .par_iter()
         .zip(cross_buf.par_iter_mut())
         .with_min_len(256)
-        .for_each(|(&k, out)| {
-            let q = &pairs[k as usize];
-            let mut fs = shear[k as usize];
-            let (i, j) = (q.i as usize, q.j as usize);
+        .for_each(|(&(i, k), out)| {
+            let k = k as usize;
+            let mut fs = shear[k];
+            let (i, j) = (i as usize, pairs[k] as usize);
             let l = p.material[i] as usize * nm + p.material[j] as usize;
-            let cf = pair_contact(kin, i, j, &laws[l], &dash[l], q, &mut fs, dt);
+            let cf = pair_contact(kin, i, j, &laws[l], &dash[l], sm_at(sm, k), &mut fs, dt);
             *out = (cf, fs);
         });
 }
@@ -323,10 +359,11 @@ fn cross_pairs_roll(
     laws: &[ContactLaw],
     dash: &[[f64; 4]],
     nm: usize,
-    pairs: &[Pair],
+    pairs: &[u32],
+    sm: &[f64],
     shear: &[f64],
     roll: &[f64],
-    cross: &[u32],
+    cross: &[(u32, u32)],
     cross_buf: &mut [(ContactForce, f64)],
     cross_roll: &mut [(f64, f64)],
     dt: f64,
@@ -340,11 +377,12 @@ fn cross_pairs_roll(
         .par_iter()
         .zip(cross_buf.par_iter_mut().zip(cross_roll.par_iter_mut()))
         .with_min_len(256)
-        .for_each(|(&k, (out, out_r))| {
-            let q = &pairs[k as usize];
-            let mut fs = shear[k as usize];
-            let mut mr = roll[k as usize];
-            let (i, j) = (q.i as usize, q.j as usize);
+        .for_each(|(&(i, k), (out, out_r))| {
+            let k = k as usize;
+            let mut fs = shear[k];
+            let mut mr = roll[k];
+            let (i, j) = (i as usize, pairs[k] as usize);
+            let q = sm_at(sm, k);
             let l = p.material[i] as usize * nm + p.material[j] as usize;
             let (cf, m) = pair_contact_roll(
                 kin, inert, i, j, &laws[l], &dash[l], q, &mut fs, &mut mr, dt,
@@ -355,15 +393,16 @@ fn cross_pairs_roll(
 }
 
 /// Split the block range in halves and sweep them in parallel; returns the
-/// largest squared displacement (an exact max: thread-count independent).
+/// largest squared displacement (an exact max: thread-count independent)
+/// and whether a disc failed the step check.
 fn sweep_blocks<const ADVANCE: bool, const ROLL: bool>(
     blocks: std::ops::Range<usize>,
     all: Block,
     ctx: &Ctx,
-) -> f64 {
+) -> (f64, bool) {
     if blocks.len() <= 1 {
         return if blocks.is_empty() {
-            0.0
+            (0.0, false)
         } else {
             sweep_block::<ADVANCE, ROLL>(blocks.start, all, ctx)
         };
@@ -375,24 +414,30 @@ fn sweep_blocks<const ADVANCE: bool, const ROLL: bool>(
         || sweep_blocks::<ADVANCE, ROLL>(blocks.start..mid, a, ctx),
         || sweep_blocks::<ADVANCE, ROLL>(mid..blocks.end, b, ctx),
     );
-    x.max(y)
+    (x.0.max(y.0), x.1 || y.1)
 }
 
 /// Sweep one block: its discs in slot order, each one's contacts, then (with
 /// `ADVANCE`) the disc's step.
-fn sweep_block<const ADVANCE: bool, const ROLL: bool>(blk: usize, b: Block, ctx: &Ctx) -> f64 {
-    ACC.with_borrow_mut(|acc| {
-        acc.clear();
-        acc.resize(b.pos.len(), (Vec2::ZERO, 0.0));
-        if ROLL {
-            ACC_ROLL.with_borrow_mut(|acc_r| {
-                acc_r.clear();
-                acc_r.resize(b.pos.len(), 0.0);
-                sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, acc_r, ctx)
+fn sweep_block<const ADVANCE: bool, const ROLL: bool>(
+    blk: usize,
+    b: Block,
+    ctx: &Ctx,
+) -> (f64, bool) {
+    let n = b.pos.len();
+    ACC.with_borrow_mut(|acc_cell| {
+        let acc = zeroed(acc_cell, n);
+        let r = if ROLL {
+            ACC_ROLL.with_borrow_mut(|roll_cell| {
+                let r = sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, zeroed(roll_cell, n), ctx);
+                roll_cell.1 = false;
+                r
             })
         } else {
             sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, &mut [], ctx)
-        }
+        };
+        acc_cell.1 = false;
+        r
     })
 }
 
@@ -403,7 +448,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
     acc: &mut [(Vec2, f64)],
     acc_r: &mut [f64],
     ctx: &Ctx,
-) -> f64 {
+) -> (f64, bool) {
     let Block {
         lo,
         pos,
@@ -419,6 +464,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         material,
         ref_pos,
         pairs,
+        sm,
         shear,
         roll,
         walls,
@@ -466,6 +512,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
     let mut wk = 0usize;
     let mut ek = ctx.external.partition_point(|e| (e.0 as usize) < lo);
     let mut m2 = 0.0f64;
+    let mut bad = false;
     let single = ctx.n_mat == 1;
     // the single-material law, looked up once
     let (law0, dash0) = match (ctx.laws.first(), ctx.dash.first()) {
@@ -473,13 +520,18 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         _ => (ContactLaw::default(), [0.0; 4]),
     };
     for d in 0..n {
-        let (mut sf, mut st) = acc[d];
+        // taken: the accumulators are left at zero for the next block
+        let (mut sf, mut st) = std::mem::take(&mut acc[d]);
         // rolling moments on d (ROLL only)
-        let mut sr = if ROLL { acc_r[d] } else { 0.0 };
+        let mut sr = if ROLL {
+            std::mem::take(&mut acc_r[d])
+        } else {
+            0.0
+        };
         let end = ctx.first[lo + d + 1] as usize - pair_lo;
         let mut k = pk;
         while k < end {
-            let j = pairs[k].j as usize;
+            let j = pairs[k] as usize;
             if j >= hi {
                 let (cf, fs) = ctx.cross_buf[ck];
                 if ROLL {
@@ -508,9 +560,8 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                 };
                 // two inner pairs side by side, as below
                 #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-                if single && k + 1 < end && (pairs[k + 1].j as usize) < hi {
-                    let j2 = pairs[k + 1].j as usize - lo;
-                    let (q1, q2) = (&pairs[k], &pairs[k + 1]);
+                if single && k + 1 < end && (pairs[k + 1] as usize) < hi {
+                    let j2 = pairs[k + 1] as usize - lo;
                     if let Some((cf, fs, m, mr)) = lanes::pair_contacts_roll(
                         kin,
                         inert,
@@ -518,7 +569,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                         [jl, j2],
                         [shear[k], shear[k + 1]],
                         [roll[k], roll[k + 1]],
-                        [q1.sqrt_m_eff, q2.sqrt_m_eff],
+                        [sm_at(sm, k), sm_at(sm, k + 1)],
                         &law0,
                         &dash0,
                         ctx.dt,
@@ -540,7 +591,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                         continue;
                     }
                 }
-                let (q, fs, mr) = (&pairs[k], &mut shear[k], &mut roll[k]);
+                let (q, fs, mr) = (sm_at(sm, k), &mut shear[k], &mut roll[k]);
                 let (cf, m) = if single {
                     pair_contact_roll(kin, inert, d, jl, &law0, &dash0, q, fs, mr, ctx.dt)
                 } else {
@@ -560,15 +611,14 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             }
             // two inner pairs of disc d side by side when the lanes apply
             #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-            if single && k + 1 < end && (pairs[k + 1].j as usize) < hi {
-                let j2 = pairs[k + 1].j as usize - lo;
-                let (q1, q2) = (&pairs[k], &pairs[k + 1]);
+            if single && k + 1 < end && (pairs[k + 1] as usize) < hi {
+                let j2 = pairs[k + 1] as usize - lo;
                 if let Some((cf, fs)) = lanes::pair_contacts(
                     kin,
                     [d, d],
                     [jl, j2],
                     [shear[k], shear[k + 1]],
-                    [q1.sqrt_m_eff, q2.sqrt_m_eff],
+                    [sm_at(sm, k), sm_at(sm, k + 1)],
                     &law0,
                     &dash0,
                     ctx.dt,
@@ -586,7 +636,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                     continue;
                 }
             }
-            let (q, fs) = (&pairs[k], &mut shear[k]);
+            let (q, fs) = (sm_at(sm, k), &mut shear[k]);
             let cf = if single {
                 pair_contact(kin, d, jl, &law0, &dash0, q, fs, ctx.dt)
             } else {
@@ -656,9 +706,12 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                 let d2 = (pos[d] - ref_pos[d]).norm2();
                 m2 = if d2 > m2 { d2 } else { m2 };
             }
+            // the model's per-step check, while the disc is in registers
+            let (x, v, r) = (pos[d], vel[d], radius[d]);
+            bad |= !(v.dot(v) <= ctx.max_v2 * r * r && (x.x + x.y + omega[d]).is_finite());
         }
     }
-    m2
+    (m2, bad)
 }
 
 /// The per-disc arrays the disc–disc kernel reads, cut to one length so
@@ -729,11 +782,15 @@ fn sides(p: Kin, i: usize, j: usize) -> (Side, Side) {
 
 /// Dashpot coefficients of a pair from the law's terms and `√m_eff`.
 #[inline(always)]
-fn pair_dashpots(dash: &[f64; 4], q: &Pair) -> (f64, f64) {
-    (
-        dash[0] + dash[1] * q.sqrt_m_eff,
-        dash[2] + dash[3] * q.sqrt_m_eff,
-    )
+fn pair_dashpots(dash: &[f64; 4], sm: f64) -> (f64, f64) {
+    (dash[0] + dash[1] * sm, dash[2] + dash[3] * sm)
+}
+
+/// `√m_eff` of pair `k`, 0 when no law needs it (the list keeps none; the
+/// dashpot terms that would multiply it are then 0).
+#[inline(always)]
+fn sm_at(sm: &[f64], k: usize) -> f64 {
+    if sm.is_empty() { 0.0 } else { sm[k] }
 }
 
 /// One disc–disc contact between the discs at `i` and `j` of `p`; `fs` is
@@ -746,7 +803,7 @@ fn pair_contact(
     j: usize,
     law: &ContactLaw,
     dash: &[f64; 4],
-    q: &Pair,
+    q: f64,
     fs: &mut f64,
     dt: f64,
 ) -> ContactForce {
@@ -771,7 +828,7 @@ fn pair_contact_roll(
     j: usize,
     law: &ContactLaw,
     dash: &[f64; 4],
-    q: &Pair,
+    q: f64,
     fs: &mut f64,
     mr: &mut f64,
     dt: f64,
@@ -1184,18 +1241,13 @@ mod tests {
                 ..Default::default()
             };
             let dash = law.dashpot_terms();
-            let mk = |i: u32, j: u32| Pair {
-                i,
-                j,
-                sqrt_m_eff: 0.7,
-            };
-            let q = [mk(0, 1), mk(2, 3)];
+            let q = [0.7, 0.7];
             let mut fs = [u(-300.0, 300.0), u(-300.0, 300.0)];
             let dt = 1e-3;
             let lanes = lanes::pair_contacts(kin, [0, 2], [1, 3], fs, [0.7, 0.7], &law, &dash, dt)
                 .expect("distinct centres");
             for (l, (i, j)) in [(0, 1), (2, 3)].into_iter().enumerate() {
-                let cf = pair_contact(kin, i, j, &law, &dash, &q[l], &mut fs[l], dt);
+                let cf = pair_contact(kin, i, j, &law, &dash, q[l], &mut fs[l], dt);
                 let bits = |c: &ContactForce| [c.f.x.to_bits(), c.f.y.to_bits(), c.fs.to_bits()];
                 assert_eq!(bits(&cf), bits(&lanes.0[l]), "case {case} lane {l}");
                 assert_eq!(
@@ -1266,12 +1318,7 @@ mod tests {
                 ..Default::default()
             };
             let dash = law.dashpot_terms();
-            let mk = |i: u32, j: u32| Pair {
-                i,
-                j,
-                sqrt_m_eff: 0.7,
-            };
-            let q = [mk(0, 1), mk(2, 3)];
+            let q = [0.7, 0.7];
             let mut fs = [u(-300.0, 300.0), u(-300.0, 300.0)];
             let mut mr = [u(-100.0, 100.0), u(-100.0, 100.0)];
             let dt = 1e-3;
@@ -1290,7 +1337,7 @@ mod tests {
             .expect("distinct centres");
             for (l, (i, j)) in [(0, 1), (2, 3)].into_iter().enumerate() {
                 let (cf, m) = pair_contact_roll(
-                    kin, inert, i, j, &law, &dash, &q[l], &mut fs[l], &mut mr[l], dt,
+                    kin, inert, i, j, &law, &dash, q[l], &mut fs[l], &mut mr[l], dt,
                 );
                 let bits = |c: &ContactForce| [c.f.x.to_bits(), c.f.y.to_bits(), c.fs.to_bits()];
                 assert_eq!(bits(&cf), bits(&cfl[l]), "case {case} lane {l}");

@@ -1,5 +1,5 @@
 //! Bearing capacity of a strip footing on a cohesionless soil, and the
-//! load–settlement curve of a footing test (issue 15, example 2:
+//! load–settlement curve of a footing test (
 //! `examples/strip_footing.toml`, post-processed by
 //! `examples/strip_footing_post.rs`).
 //!

@@ -1,4 +1,4 @@
-//! Geotechnical examples of issue 15 (`examples/silo.toml`,
+//! Geotechnical examples (`examples/silo.toml`,
 //! `examples/retaining_wall.toml`, `examples/strip_footing.toml`): drivers that run a coupled scenario
 //! through the library, average what a geotechnical engineer reads (the
 //! earth pressure on a wall from the disc–body contacts, the stress and

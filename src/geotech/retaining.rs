@@ -1,7 +1,7 @@
 //! A flexible cantilever retaining wall, at rest or translated away from
-//! its backfill (issue 15 §1; `examples/retaining_wall.toml`,
+//! its backfill (`examples/retaining_wall.toml`,
 //! `examples/retaining_wall_active.toml`, `examples/retaining_wall.rs`,
-//! README "Flexible retaining wall").
+//! manual: validation, "Retaining wall").
 //!
 //! **The scenario** ([`Wall::from_scenario`]): a coupled run with one
 //! rectangular body (the wall, clamped on its bottom edge, the backfill

@@ -1,5 +1,5 @@
-//! A silo with flexible walls against Janssen (issue 15 §3;
-//! `examples/silo.toml`, `examples/silo.rs`, README "Silo (Janssen)").
+//! A silo with flexible walls against Janssen
+//! (`examples/silo.toml`, `examples/silo.rs`; manual: validation, "Silo").
 //!
 //! **The scenario** ([`Silo::from_scenario`]): a coupled run with two
 //! rectangular bodies side by side (the walls; the one on the left

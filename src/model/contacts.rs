@@ -55,8 +55,7 @@ pub fn all(g: Option<&Granular>, m: Option<&CoupledModel>) -> Vec<ContactView> {
     let mut out = Vec::new();
     if let Some(g) = g {
         let p = &g.particles;
-        for (k, q) in g.contacts.pairs.iter().enumerate() {
-            let (i, j) = (q.i as usize, q.j as usize);
+        for (k, (i, j)) in g.contacts.pairs().enumerate() {
             let (n, dist) = normal_between(p.pos[i], p.pos[j]);
             let delta = p.radius[i] + p.radius[j] - dist;
             if delta <= 0.0 {

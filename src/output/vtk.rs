@@ -1,4 +1,4 @@
-//! VTK XML files, written by hand (see the README, "What is written by
+//! VTK XML files, written by hand (see docs/reference/rust-api.md, "What is written by
 //! hand"): the `.pvd` time series, and [`VtkFile`], which writes the
 //! arrays of a `.vtu`/`.vtp` in one of the [`VtkFormat`]s — by default
 //! binary, appended raw after the XML, each array zlib-compressed in 32 KiB
@@ -137,7 +137,7 @@ scalar!(u8, "UInt8", "{}");
 const BLOCK: usize = 1 << 15;
 /// zlib level of the compressed blocks: 1, the fastest. On disc frames
 /// (doubles that differ in their last bits) higher levels gain a few
-/// percent in size at several times the time (README, "ParaView files").
+/// percent in size at several times the time (docs/performance.md, "ParaView files").
 const LEVEL: u32 = 1;
 
 /// One VTK XML file being put together: the XML in `xml`, the binary

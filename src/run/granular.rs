@@ -98,7 +98,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
         "run_seconds": wall_s,
         "particle_steps_per_second": if wall_s > 0.0 { (n * (model.step - start)) as f64 / wall_s } else { 0.0 },
         "neighbour_rebuilds": gr.grid.rebuilds,
-        "contacts": { "disc_disc": dd, "disc_wall": dw, "listed_pairs": gr.contacts.pairs.len() },
+        "contacts": { "disc_disc": dd, "disc_wall": dw, "listed_pairs": gr.contacts.len() },
         "bytes_per_disc": gr.heap_bytes() as f64 / n.max(1) as f64,
         "energies": e,
         "wall_forces": gr.walls.iter().map(|w| json!({"name": w.name, "force": [w.force.x, w.force.y], "position_from": [w.a.x, w.a.y]})).collect::<Vec<_>>(),

@@ -5,6 +5,7 @@ pub mod checkpoint;
 mod continuum;
 mod coupled;
 mod granular;
+pub mod memory;
 pub mod progress;
 mod session;
 

@@ -87,6 +87,13 @@ impl Ended {
     /// signal or instability.
     pub fn record(&self, summary: &mut Value, model: &Model) {
         summary["last_step"] = json!(model.step);
+        // measured, not estimated: the process's peak resident memory
+        let peak = super::memory::peak_resident_bytes();
+        summary["peak_memory_bytes"] = json!(peak);
+        if let (Some(peak), Some(g)) = (peak, model.granular()) {
+            let n = g.particles.len().max(1);
+            summary["peak_bytes_per_disc"] = json!(peak as f64 / n as f64);
+        }
         summary["status"] = json!(match self {
             Ended::Completed => "completed",
             Ended::Interrupted(_) => "interrupted",

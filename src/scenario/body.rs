@@ -729,7 +729,7 @@ fn validate_drive(sc: &Scenario, v: &Prescribed, gamma: f64, at: &str, p: &mut P
             gamma > 0.5,
             at,
             format!(
-                "a servo drive needs a dissipative Newmark, γ > ½ (got γ = {gamma}), e.g. `newmark = {{ gamma = 0.6, beta = 0.3025 }}`: with γ = ½ the driven edge rings at the step frequency undamped (the accelerations of a prescribed edge grow after every change of speed) and the servo feeds the ringing (README, \"Loads and drives\")"
+                "a servo drive needs a dissipative Newmark, γ > ½ (got γ = {gamma}), e.g. `newmark = {{ gamma = 0.6, beta = 0.3025 }}`: with γ = ½ the driven edge rings at the step frequency undamped (the accelerations of a prescribed edge grow after every change of speed) and the servo feeds the ringing (manual: scenario format, \"Servo drives\")"
             ),
         );
         match &sv.force {

@@ -319,7 +319,7 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
     let rows = disc_rows(sc, purpose)?;
     let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
-    let mut p = Particles::default();
+    let mut p = Particles::with_capacity(rows.len());
     let v0 = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
     for (k, r) in rows.iter().enumerate() {
         let mi = match &r.material {
