@@ -85,6 +85,11 @@ fn scenario(substeps: usize, modulus: &str, end: f64) -> String {
 /// mean vertical force of the discs on the footing over 0.015–0.045 s.
 fn energy_error(src: &str) -> (f64, f64, f64) {
     let mut m: Model = parse(src, "footing.toml").unwrap().build().unwrap();
+    energy_error_of(&mut m)
+}
+
+/// [`energy_error`] of a model built.
+fn energy_error_of(m: &mut Model) -> (f64, f64, f64) {
     let substeps = m.coupled().unwrap().substeps;
     let mut meter = WorkMeter::new(m.coupled().unwrap());
     let (mut diss, mut work, mut push, mut n) = (0.0f64, 0.0f64, 0.0, 0);
@@ -307,4 +312,46 @@ fn a_contact_solve_that_does_not_converge_stops_the_run() {
         "{err}"
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// [`scenario`] without `substeps` (the automatic choice) on a bed 1.2 m
+/// wide (1 200 discs: above the size where the choice keeps the exact
+/// step), or with `coupling = "exact"`.
+fn wide(modulus: &str, exact: bool) -> String {
+    let src = scenario(1, modulus, 0.05)
+        .replace("substeps = 1\n", if exact { "coupling = \"exact\"\n" } else { "" })
+        .replace("[0.5, 0.085]", "[1.2, 0.085]")
+        .replace("from = [0.5, 0.0]\nto = [0.5, 0.3]", "from = [1.2, 0.0]\nto = [1.2, 0.3]");
+    assert!(src.contains("[1.2, 0.3]"));
+    src
+}
+
+/// The automatic scheme on the soft (E = 0.1 GPa) and the stiff (30 GPa)
+/// footing, pushed into the wide bed: it sub-cycles both, its own account
+/// of the energy it created stays within 1 % of the work the footing
+/// exchanged, the whole system's |E_diss| (the only dissipation is
+/// numerical) within 1 % of the work, and the footing's mean reaction
+/// over the push within 1 % of the exact step's.
+#[test]
+fn the_automatic_scheme_keeps_the_energy_and_the_reaction_of_the_exact_step() {
+    for modulus in ["1.0e8", "30.0e9"] {
+        let src = wide(modulus, false);
+        let m: Model = parse(&src, "wide.toml").unwrap().build().unwrap();
+        let choice = m.coupled().unwrap().choice.clone().unwrap();
+        assert!(choice.automatic && choice.scheme != Scheme::Exact, "{}", choice.why);
+        drop(m);
+        let mut m: Model = parse(&src, "wide.toml").unwrap().build().unwrap();
+        let (d, w, f) = energy_error_of(&mut m);
+        let (created, exchanged) = m.coupled().unwrap().subcycling_energy();
+        let (d1, w1, f1) = energy_error(&wide(modulus, true));
+        println!(
+            "E = {modulus}: {} × {}: created {created:.3e} of {exchanged:.3e} exchanged; |E_diss| {d:.3e} of {w:.3e} (exact {d1:.3e} of {w1:.3e}); reaction {f:.1} vs exact {f1:.1} N/m",
+            choice.scheme.name(),
+            choice.substeps
+        );
+        assert!(w > 5.0 && exchanged > 1.0, "the drive works: {w} {exchanged}");
+        assert!(created.abs() <= 0.01 * exchanged, "{created} of {exchanged}");
+        assert!(d <= 0.01 * w, "|E_diss| {d} of {w}");
+        assert!((f - f1).abs() <= 0.01 * f1.abs(), "reaction {f} vs {f1}");
+    }
 }

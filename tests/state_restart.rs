@@ -529,8 +529,8 @@ fn bed_on_efg_plate_restarts_bitwise() {
 #[test]
 fn bed_on_fem_plate_substepped_restarts_bitwise() {
     let src = bed_on_plate("fem-q4", "substeps = 3");
-    // a plate ten times stiffer: sub-cycling refuses the softer one
-    // (k_n c = 0.065 > 0.05)
+    // a plate ten times stiffer: the predicted scheme is safe for it (the
+    // softer one gets the compliant scheme)
     let src = src
         .replace(
             "contact_edges",
@@ -552,6 +552,19 @@ fn bed_on_fem_plate_substepped_restarts_bitwise() {
         "loads pending"
     );
     check_bed(&src, n, k);
+}
+
+/// The automatic scheme (`coupling = "auto"`) given `substeps = 4` on the
+/// soft plate picks the compliant sub-cycled scheme; saved in the middle
+/// of a body step (its boundary's response pending), restored, bitwise
+/// equal — and equal on 1 and 2 threads ([`restarts_across_thread_counts`]).
+#[test]
+fn bed_on_compliant_plate_restarts_bitwise() {
+    let src = bed_on_plate("efg", "substeps = 4");
+    let m = build(&src);
+    let choice = m.coupled().unwrap().choice.clone().unwrap();
+    assert_eq!(choice.scheme.name(), "compliant", "{}", choice.why);
+    check_bed(&src, 800, 450);
 }
 
 /// A state saved before the first step (nothing built yet: no neighbour
@@ -578,7 +591,11 @@ fn restarts_across_thread_counts() {
             .build()
             .unwrap()
     };
-    for src in [packing(0.1, true), bed_on_plate("efg", "")] {
+    for src in [
+        packing(0.1, true),
+        bed_on_plate("efg", ""),
+        bed_on_plate("efg", "substeps = 4"),
+    ] {
         let (n, k) = (500, 260);
         let mut whole = Vec::new();
         for threads in [1, 2] {

@@ -263,6 +263,7 @@ pub fn hexagonal(law: &ContactLaw, d: Disc) -> Critical {
     Critical {
         dt,
         mode: "a hexagonal packing of the lightest discs (six contacts each)".into(),
+        certain: f64::INFINITY,
     }
 }
 
