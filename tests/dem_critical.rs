@@ -23,10 +23,39 @@ cohesion = 1.0e9
 
 const DAMPING: &str = r#"damping = { kind = "critical-ratio", zeta = 0.2, zeta_shear = 0.1 }"#;
 
-/// Two discs (r = 1 cm) overlapping by 5e-4 r, no gravity.
+/// Two discs (r = 1 cm) pressed together by two frictionless walls, no
+/// gravity, every contact overlapping by 5e-4 r. The walls' contacts have
+/// no shear spring (`ks = 0`) and a soft normal one: they hold the pair in
+/// contact without touching its shear–rotation mode (tangential motion and
+/// rotations), which a free pair's collision, a few steps long, would not
+/// show.
 fn pair(dt: &str) -> String {
     format!(
-        "[simulation]\nsteps = 1000000\n{dt}\n{MATERIAL}\n[granular]\nmaterial = \"m\"\ndiscs = [[0.0, 0.0, 0.01], [0.019995, 0.0, 0.01]]\n{DAMPING}\n"
+        r#"[simulation]
+steps = 1000000
+{dt}
+{MATERIAL}
+[[material]]
+name = "wall"
+kn = 1.0e5
+
+[granular]
+material = "m"
+discs = [[0.01, 0.0, 0.01], [0.029995, 0.0, 0.01]]
+{DAMPING}
+
+[[wall]]
+name = "left"
+from = [5.0e-6, -1.0]
+to = [5.0e-6, 1.0]
+material = "wall"
+
+[[wall]]
+name = "right"
+from = [0.03999, -1.0]
+to = [0.03999, 1.0]
+material = "wall"
+"#
     )
 }
 
@@ -69,12 +98,12 @@ fn granular(m: &mut Model) -> &mut Granular {
     }
 }
 
-/// The pair set in motion: sliding and spinning against each other and
-/// approaching (every mode of the pair excited).
+/// The pair set in motion: sliding and spinning against each other (its
+/// shear–rotation mode excited, its contacts staying closed).
 fn kick(m: &mut Model) {
     let p = &mut granular(m).particles;
-    p.vel[0] = efgdem::geom::Vec2::new(-1e-3, 0.01);
-    p.omega[0] = 1.0;
+    p.vel[0] = efgdem::geom::Vec2::new(0.0, 1e-3);
+    p.omega[0] = 0.1;
 }
 
 /// Step `n` times; the largest total energy seen (every 1000 steps).

@@ -564,7 +564,15 @@ fn bed_on_compliant_plate_restarts_bitwise() {
     let m = build(&src);
     let choice = m.coupled().unwrap().choice.clone().unwrap();
     assert_eq!(choice.scheme.name(), "compliant", "{}", choice.why);
-    check_bed(&src, 800, 450);
+    let (a, c, bytes) = restart(&src, 800, 450);
+    let s = ModelState::from_bytes(&bytes).unwrap();
+    let SystemState::Coupled(m) = &s.system else {
+        panic!("a coupled state")
+    };
+    assert_eq!(m.sub, 450 % 4, "saved within a body step");
+    let on_body = m.contacts.iter().filter(|q| q.fs != 0.0).count();
+    assert!(on_body >= 5, "{on_body} disc–body contacts with shear");
+    assert_same(&a, &c);
 }
 
 /// A state saved before the first step (nothing built yet: no neighbour

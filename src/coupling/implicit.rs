@@ -382,7 +382,15 @@ impl Solver {
             // the compliance of a whole body step makes the contacts
             // strongly coupled: damped steps from the first
             let touch = iter > UNDAMPED;
-            if self.line_search(contacts, base, free, &mut Compliance::Dense(s), out, &d, touch) {
+            if self.line_search(
+                contacts,
+                base,
+                free,
+                &mut Compliance::Dense(s),
+                out,
+                &d,
+                touch,
+            ) {
                 return Ok(iter);
             }
         }

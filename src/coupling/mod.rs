@@ -156,10 +156,9 @@ pub struct CoupledModel {
     /// Compliant scheme, per body: how far its boundary's response to the
     /// contacts may go before its segments are binned again.
     allow: Vec<f64>,
-    /// Per body: body steps in a row its sub-cycled scheme has been above
-    /// [`MAX_CREATED`], and the energy created and work exchanged when the
-    /// row began (saved with the state).
-    pub over: Vec<(u32, f64, f64)>,
+    /// Per body, the sub-cycling energy guard's record (saved with the
+    /// state).
+    pub over: Vec<GuardRecord>,
     /// The scheme and substeps, and why ([`scheme::apply`]).
     pub choice: Option<scheme::Choice>,
     /// The body step (in DEM steps) the bodies are factored for.
@@ -445,24 +444,30 @@ impl CoupledModel {
     /// [`GUARD_STEPS`] body steps in a row, and more than that fraction of
     /// the work exchanged over those steps, stops the run.
     fn energy_guard(&mut self) -> Result<(), CouplingError> {
-        self.over.resize(self.bodies.len(), (0, 0.0, 0.0));
-        for (body, over) in self.bodies.iter().zip(&mut self.over) {
+        self.over.resize(self.bodies.len(), GuardRecord::default());
+        let mut interface = vec![0.0; self.bodies.len()];
+        for q in &self.contacts {
+            interface[q.body as usize] += self.contact_energy(q);
+        }
+        for ((body, g), interface) in self.bodies.iter().zip(&mut self.over).zip(interface) {
             let (created, exchanged) = body.path_energy();
-            // against what the body holds too: a contact at rest exchanges
-            // almost no work, and a fraction of nothing is noise
+            // against what the body and its contacts hold too: a stiff
+            // body barely moving exchanges almost no work, and a fraction
+            // of nothing is noise
             let e = body.energies();
-            if created > MAX_CREATED * exchanged && created > MAX_CREATED * (e.kinetic + e.strain) {
-                if over.0 == 0 {
-                    *over = (0, created, exchanged);
+            g.held = g.held.max(e.kinetic + e.strain + interface);
+            if created > MAX_CREATED * exchanged.max(g.held) {
+                if g.over == 0 {
+                    (g.created, g.exchanged) = (created, exchanged);
                 }
-                over.0 += 1;
+                g.over += 1;
             } else {
-                *over = (0, 0.0, 0.0);
+                g.over = 0;
             }
             // over the row, the scheme went on creating: a bump of the
             // first contacts stays put, an unstable scheme's creation grows
-            let (row_created, row_exchanged) = (created - over.1, exchanged - over.2);
-            if over.0 >= GUARD_STEPS && row_created > MAX_CREATED * row_exchanged.max(0.0) {
+            let (row_created, row_exchanged) = (created - g.created, exchanged - g.exchanged);
+            if g.over >= GUARD_STEPS && row_created > MAX_CREATED * row_exchanged.max(0.0) {
                 let (scheme, remedy) = if self.compliant {
                     ("compliant", "use fewer `substeps`, or 1 (the exact step)")
                 } else {
@@ -1061,33 +1066,34 @@ impl CoupledModel {
 
     /// Contact spring energy of the disc–body contacts, `½k_nδ² + F_s²/(2k_s)`.
     pub fn body_contact_energy(&self) -> f64 {
+        self.contacts.iter().map(|q| self.contact_energy(q)).sum()
+    }
+
+    /// Spring energy of one disc–body contact ([`body_contact_energy`](Self::body_contact_energy)).
+    fn contact_energy(&self, q: &BodyContact) -> f64 {
         let nm = self.granular.materials.len();
-        self.contacts
-            .iter()
-            .map(|q| {
-                let slot = self.granular.slot(q.disc as usize);
-                let law = &self.body_laws
-                    [q.body as usize * nm + self.granular.particles.material[slot] as usize];
-                let mut e = 0.5 * law.kn * q.overlap * q.overlap;
-                if law.ks > 0.0 {
-                    e += 0.5 * q.fs * q.fs / law.ks;
-                }
-                if q.mr != 0.0 {
-                    let r = self.granular.particles.radius[slot];
-                    e += contact::rolling_energy(law, r, q.mr);
-                }
-                e
-            })
-            .sum()
+        let slot = self.granular.slot(q.disc as usize);
+        let law =
+            &self.body_laws[q.body as usize * nm + self.granular.particles.material[slot] as usize];
+        let mut e = 0.5 * law.kn * q.overlap * q.overlap;
+        if law.ks > 0.0 {
+            e += 0.5 * q.fs * q.fs / law.ks;
+        }
+        if q.mr != 0.0 {
+            let r = self.granular.particles.radius[slot];
+            e += contact::rolling_energy(law, r, q.mr);
+        }
+        e
     }
 }
 
 /// A sub-cycled body stops the run ([`CouplingError::Subcycling`]) once
 /// the energy its scheme created exceeds this fraction of the work it
-/// exchanged with the discs (and of the kinetic and strain energy it
-/// holds) at the end of [`GUARD_STEPS`] body steps in a row, and created
-/// more than this fraction of the work exchanged over those steps too
-/// (checked at every body step, [`CoupledModel::step`]). A contact's
+/// exchanged with the discs and of the largest energy it and its contacts
+/// have held (kinetic, strain, the disc–body contact springs) at the end
+/// of [`GUARD_STEPS`] body steps in a row, and created more than this
+/// fraction of the work exchanged over those steps too (checked at every
+/// body step, [`CoupledModel::step`]). A contact's
 /// first body step of the predicted scheme is off by a quarter of its own
 /// work (the end load's extrapolation starts from zero): a bump that stays
 /// put while the later work dwarfs it, hence the row of body steps and the
@@ -1096,6 +1102,21 @@ pub const MAX_CREATED: f64 = 0.02;
 
 /// Body steps in a row above [`MAX_CREATED`] that stop a run.
 pub const GUARD_STEPS: u32 = 100;
+
+/// A body's record in the sub-cycling energy guard
+/// ([`CoupledModel::step`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GuardRecord {
+    /// Body steps in a row above [`MAX_CREATED`].
+    pub over: u32,
+    /// Energy created when the row began.
+    pub created: f64,
+    /// Work exchanged when the row began.
+    pub exchanged: f64,
+    /// The largest energy the body and its contacts have held (kinetic,
+    /// strain, the disc–body contact springs).
+    pub held: f64,
+}
 
 /// Discs within `(1 + CANDIDATE_MARGIN) r` of a boundary enter the implicit
 /// contact solve (as open contacts unless the step closes them).

@@ -28,10 +28,8 @@ pub struct CoupledState {
     pub newton_iterations: usize,
     /// Products `S x` of all contact solves so far (diagnostics).
     pub compliance_products: usize,
-    /// Per body: body steps in a row above the sub-cycling energy guard's
-    /// limit ([`crate::coupling::MAX_CREATED`]), and the energy created and
-    /// work exchanged when the row began.
-    pub over: Vec<(u32, f64, f64)>,
+    /// Per body, the sub-cycling energy guard's record.
+    pub over: Vec<super::GuardRecord>,
 }
 
 impl CoupledModel {

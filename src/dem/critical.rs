@@ -319,7 +319,8 @@ fn bloch(
 /// The critical step of discs whose lightest is `d` (`n` of them), with
 /// the disc–disc laws `pairs` and the disc–wall and disc–body laws
 /// `walls` in use: the smallest of the modes of the [module docs](self)
-/// (the hexagonal packing only with three discs or more).
+/// (the hexagonal packing only with three discs or more; a lone disc is
+/// taken on a wall of its own law).
 pub fn estimate(d: Disc, n: usize, pairs: &[ContactLaw], walls: &[ContactLaw]) -> Critical {
     let mut best = Critical {
         dt: f64::INFINITY,
@@ -340,14 +341,17 @@ pub fn estimate(d: Disc, n: usize, pairs: &[ContactLaw], walls: &[ContactLaw]) -
             keep(hexagonal(law, d));
         }
     }
-    for law in walls.iter().filter(stiff) {
+    // a lone disc can only meet something rigid: its own law on a wall
+    let lone = if n < 2 { pairs } else { &[] };
+    for law in walls.iter().chain(lone).filter(stiff) {
         keep(on_wall(law, d));
     }
     // the normal modes of a first collision
     let pair_normal = |law: &ContactLaw| single(law.kn, law.dashpots(0.5 * d.m).0, 0.5 * d.m);
     let wall_normal = |law: &ContactLaw| single(law.kn, law.dashpots(d.m).0, d.m);
     let pairs = pairs.iter().filter(|_| n >= 2).map(pair_normal);
-    best.certain = (pairs.chain(walls.iter().map(wall_normal))).fold(f64::INFINITY, f64::min);
+    let walls = walls.iter().chain(lone).map(wall_normal);
+    best.certain = pairs.chain(walls).fold(f64::INFINITY, f64::min);
     best.certain = best.certain.max(best.dt);
     best
 }

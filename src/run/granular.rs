@@ -76,7 +76,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
     let wall_s = t0.elapsed().as_secs_f64();
     let gr = granular(&model);
     // a disc source for another run: not the state of a blow-up
-    if !matches!(ended, Ended::Unstable(_)) {
+    if !matches!(ended, Ended::Unstable(_) | Ended::Failed(_)) {
         write_discs_csv(gr, &out.join("discs_final.csv"))?;
     }
     let n = gr.particles.len();
