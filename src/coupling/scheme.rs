@@ -273,7 +273,6 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
         )
     };
     let no_bodies = m.bodies.is_empty() || omega_dt == 0.0;
-    let _ = &no_bodies;
     match (req.scheme, req.substeps) {
         (Some(Scheme::Staggered), n) => Ok(Ok(choice(
             Scheme::Staggered,
