@@ -653,6 +653,20 @@ impl<B: ContactBody> WithBoundary<B> {
         self.body.row(x).unwrap_or_default()
     }
 
+    /// The body step with the loads changed by `delta` at the chain
+    /// points (point forces and chain loads), committed; the boundary and
+    /// its prediction refreshed.
+    fn take_step(&mut self, delta: &[Vec2]) -> Result<(), SolveError> {
+        self.body
+            .add_point_forces(&self.point_fs, delta)
+            .map_err(|e| self.solve_error(e))?;
+        add_chain_loads(&mut self.body, &self.rows, delta);
+        self.body.commit().map_err(|e| self.solve_error(e))?;
+        self.refresh();
+        self.pre = None;
+        Ok(())
+    }
+
     fn solve_error(&self, e: impl std::fmt::Display) -> SolveError {
         SolveError {
             body: self.body.name().to_string(),
@@ -773,13 +787,7 @@ impl<B: ContactBody> WithBoundary<B> {
             .zip(p.held.iter().flatten())
             .map(|(f, h)| *f - *h)
             .collect();
-        self.body
-            .add_point_forces(&self.point_fs, &delta)
-            .map_err(|e| self.solve_error(e))?;
-        add_chain_loads(&mut self.body, &self.rows, &delta);
-        self.body.commit().map_err(|e| self.solve_error(e))?;
-        self.refresh();
-        self.pre = None;
+        self.take_step(&delta)?;
         let p = &mut self.path;
         let current = self.chains.iter().flat_map(|c| &c.current);
         let received: f64 = p
@@ -1256,14 +1264,8 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             })
             .collect();
         let delta: Vec<Vec2> = ends.iter().zip(held()).map(|(f, f0)| *f - *f0).collect();
-        self.body
-            .add_point_forces(&self.point_fs, &delta)
-            .map_err(|e| self.solve_error(e))?;
         // the step's loads: the held ones went in before the prediction
-        add_chain_loads(&mut self.body, &self.rows, &delta);
-        self.body.commit().map_err(|e| self.solve_error(e))?;
-        self.refresh();
-        self.pre = None;
+        self.take_step(&delta)?;
         // the energy account of the step: what the body received against
         // what the discs did on the path
         let p = &mut self.path;

@@ -652,35 +652,8 @@ impl CoupledModel {
             if advance {
                 body.compliant_loads(s, ds, &w.pts, &w.forces)?;
             }
-            for (k, e) in w.evals.iter().enumerate() {
-                if e.regime == 0 {
-                    continue;
-                }
-                let (d, b, c, point, feature) = w.meta[k];
-                let key = (p.id[d], b as u16, c as u16);
-                let law = &self.body_laws[b * nm + p.material[d] as usize];
-                let (mut mr, mut moment) = (0.0, 0.0);
-                if advance && law.rolling() {
-                    mr = history(&self.contacts, key).1;
-                    moment = body_rolling(law, p, d, e.fn_cap, &mut mr, dt);
-                }
-                next.push(BodyContact {
-                    disc: key.0,
-                    body: key.1,
-                    chain: key.2,
-                    fs: e.fs,
-                    mr,
-                    moment,
-                    overlap: e.overlap,
-                    fn_elastic: e.fn_elastic,
-                    fn_total: e.fn_total,
-                    force: -e.g,
-                    point: point + e.w,
-                    normal: w.lin[k].n,
-                    material: w.points[k].1,
-                    feature,
-                });
-            }
+            let laws = (&self.body_laws[..], nm);
+            closed_contacts(w, laws, &self.contacts, p, advance, dt, &mut next);
             w.points.clear();
         }
         next.sort_by_key(|q| q.key());
@@ -856,37 +829,8 @@ impl CoupledModel {
                 body_time += tb.elapsed().as_secs_f64();
             }
             // the contacts (the geometric stiffness unknowns follow them)
-            for (k, e) in w.evals.iter().enumerate().take(w.meta.len()) {
-                if e.regime == 0 {
-                    continue;
-                }
-                let (d, b, c, point, feature) = w.meta[k];
-                let key = (p.id[d], b as u16, c as u16);
-                // rolling resistance on the disc (the body feels no moment),
-                // limited by the contact's normal force at t + Δt
-                let law = &self.body_laws[b * nm + p.material[d] as usize];
-                let (mut mr, mut moment) = (0.0, 0.0);
-                if advance && law.rolling() {
-                    mr = history(&self.contacts, key).1;
-                    moment = body_rolling(law, p, d, e.fn_cap, &mut mr, dt);
-                }
-                next.push(BodyContact {
-                    disc: key.0,
-                    body: key.1,
-                    chain: key.2,
-                    fs: e.fs,
-                    mr,
-                    moment,
-                    overlap: e.overlap,
-                    fn_elastic: e.fn_elastic,
-                    fn_total: e.fn_total,
-                    force: -e.g,
-                    point: point + e.w,
-                    normal: w.lin[k].n,
-                    material: w.points[k].1,
-                    feature,
-                });
-            }
+            let laws = (&self.body_laws[..], nm);
+            closed_contacts(w, laws, &self.contacts, p, advance, dt, &mut next);
         }
         next.sort_by_key(|q| q.key());
         self.scratch = std::mem::replace(&mut self.contacts, next);
@@ -1116,6 +1060,52 @@ pub struct GuardRecord {
     /// The largest energy the body and its contacts have held (kinetic,
     /// strain, the disc–body contact springs).
     pub held: f64,
+}
+
+/// The closed contacts of a solve (`w.evals` over the candidates of
+/// `w.meta`; the geometric stiffness unknowns after them are skipped) as
+/// [`BodyContact`]s into `next`, with the rolling resistance on the disc
+/// (the body feels no moment), limited by the contact's normal force at
+/// t + Δt, from the history in `old`. `laws`: the disc–body laws and the
+/// number of disc materials ([`CoupledModel::body_laws`]).
+fn closed_contacts(
+    w: &Work,
+    (laws, nm): (&[ContactLaw], usize),
+    old: &[BodyContact],
+    p: &Particles,
+    advance: bool,
+    dt: f64,
+    next: &mut Vec<BodyContact>,
+) {
+    for (k, e) in w.evals.iter().enumerate().take(w.meta.len()) {
+        if e.regime == 0 {
+            continue;
+        }
+        let (d, b, c, point, feature) = w.meta[k];
+        let key = (p.id[d], b as u16, c as u16);
+        let law = &laws[b * nm + p.material[d] as usize];
+        let (mut mr, mut moment) = (0.0, 0.0);
+        if advance && law.rolling() {
+            mr = history(old, key).1;
+            moment = body_rolling(law, p, d, e.fn_cap, &mut mr, dt);
+        }
+        next.push(BodyContact {
+            disc: key.0,
+            body: key.1,
+            chain: key.2,
+            fs: e.fs,
+            mr,
+            moment,
+            overlap: e.overlap,
+            fn_elastic: e.fn_elastic,
+            fn_total: e.fn_total,
+            force: -e.g,
+            point: point + e.w,
+            normal: w.lin[k].n,
+            material: w.points[k].1,
+            feature,
+        });
+    }
 }
 
 /// Discs within `(1 + CANDIDATE_MARGIN) r` of a boundary enter the implicit
