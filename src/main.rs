@@ -304,10 +304,13 @@ figures: {}/fig*.png (their data: fig*.csv); runs: {}/runs/",
                     )
                 })
             })??;
-            say!("DEM critical step 2√(m_min/k_max): {:.5e}", r.dt_critical);
+            say!(
+                "largest dt studied (2√(m_min/k_max), or the limit of a first collision): {:.5e}",
+                r.dt_critical
+            );
             match r.dt_max {
                 Some(dt) => say!(
-                    "largest bounded dt: {dt:.5e} ({:.3} × the DEM critical step)",
+                    "largest bounded dt: {dt:.5e} ({:.3} × the largest studied)",
                     dt / r.dt_critical
                 ),
                 None => say!("no bounded dt found down to 1e-4 × the scenario's dt"),

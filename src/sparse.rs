@@ -331,6 +331,11 @@ impl Cholesky {
         );
     }
 
+    /// Order of the factored matrix.
+    pub fn n(&self) -> usize {
+        self.symbolic.nrows()
+    }
+
     /// Overwrite the `k` columns of `rhs` (column-major, `n × k`) with
     /// `A⁻¹ rhs`, sequentially, with a workspace of its own: callable from
     /// several threads at once (the start-up solves of

@@ -30,6 +30,7 @@
 
 pub mod broadphase;
 pub mod contact;
+pub mod critical;
 pub mod integrate;
 pub mod measure;
 pub mod packing;
@@ -40,8 +41,13 @@ pub mod walls;
 
 use crate::geom::Vec2;
 
-/// `efgdem check` and `run` warn above this fraction of the critical step (E11).
-pub const DT_WARN: f64 = 0.2;
+/// `efgdem check` and `run` warn above this fraction of the critical step
+/// ([`Granular::critical_step`]).
+pub const DT_WARN: f64 = 0.8;
+
+/// Default time step, as a fraction of the critical step
+/// ([`Granular::critical_step`]), when a scenario gives none.
+pub const DT_SAFETY: f64 = 0.5;
 use broadphase::{ContactList, NeighbourGrid};
 use contact::{ContactLaw, effective_mass, normal_between};
 use particles::Particles;
@@ -63,7 +69,8 @@ pub enum DemError {
     Unstable {
         /// Steps done when it was detected.
         step: usize,
-        /// The critical step `2√(m_min/k_max)` ([`Granular::critical_dt`]).
+        /// The critical step of the contacts in use
+        /// ([`Granular::critical_step`]).
         dt_crit: f64,
     },
     /// A preparation ([`packing::settle_in_box`], [`packing::grow_in_box`])
@@ -296,20 +303,61 @@ impl Granular {
             .fold(0.0, f64::max)
     }
 
-    /// A warning when Δt exceeds [`DT_WARN`] × the critical step (ERRATA E11).
-    pub fn dt_warning(&self) -> Option<String> {
-        let crit = self.critical_dt();
-        (self.dt > DT_WARN * crit).then(|| {
-        format!(
-            "dt = {:e} is {:.3} × the critical step 2√(m_min/k_max) = {crit:e}; above {DT_WARN} × it the central difference may be unstable (ERRATA E11)",
-            self.dt,
-            self.dt / crit
-        )
-    })
+    /// A warning when Δt exceeds [`DT_WARN`] × the critical step
+    /// ([`critical_step`](Self::critical_step), with the disc–body laws
+    /// `bodies`).
+    pub fn dt_warning(&self, bodies: &[ContactLaw]) -> Option<String> {
+        let crit = self.critical_step(bodies);
+        (self.dt > DT_WARN * crit.dt).then(|| {
+            format!(
+                "dt = {:e} is {:.3} × the critical step {:e} (of {}); above {DT_WARN} × it a dense packing, a packing of unequal discs or a contact whose overlap changes fast may not stay stable (a run that goes unstable stops with exit code 3); the default is {DT_SAFETY} ×",
+                self.dt,
+                self.dt / crit.dt,
+                crit.dt,
+                crit.mode
+            )
+        })
     }
 
-    /// Critical time step of the central difference, `2√(m_min/k_max)`
-    /// (ERRATA E11); use a fraction 0.1–0.2 of it.
+    /// The critical step of the central difference for the contact laws
+    /// in use ([`critical`]): the lightest disc's pair, wall and
+    /// hexagonal-packing modes, dashpots included; `bodies` are the
+    /// disc–body laws (a body taken as a rigid wall).
+    pub fn critical_step(&self, bodies: &[ContactLaw]) -> critical::Critical {
+        let p = &self.particles;
+        let Some(k) = (0..p.len()).min_by(|&a, &b| p.mass[a].total_cmp(&p.mass[b])) else {
+            return critical::Critical {
+                dt: f64::INFINITY,
+                mode: "no discs".into(),
+                certain: f64::INFINITY,
+            };
+        };
+        let d = critical::Disc {
+            m: p.mass[k],
+            r: p.radius[k],
+        };
+        // the laws of the materials present
+        let nm = self.materials.len();
+        let mut present = vec![false; nm];
+        for &m in &p.material {
+            present[m as usize] = true;
+        }
+        let pairs: Vec<ContactLaw> = (0..nm * nm)
+            .filter(|&ab| present[ab / nm] && present[ab % nm])
+            .map(|ab| self.laws[ab])
+            .collect();
+        let walls: Vec<ContactLaw> = (0..self.walls.len() * nm)
+            .filter(|&wa| present[wa % nm])
+            .map(|wa| self.wall_laws[wa])
+            .chain(bodies.iter().copied())
+            .collect();
+        critical::estimate(d, p.len(), &pairs, &walls)
+    }
+
+    /// `2√(m_min/k_max)`: the critical step of the lightest disc on a wall
+    /// of the stiffest law, undamped — not a bound for a pair or a packing
+    /// ([`critical_step`](Self::critical_step)); the packing preparations
+    /// use a fraction of it.
     pub fn critical_dt(&self) -> f64 {
         let k = self.k_max();
         let m = self.particles.min_mass();
@@ -577,7 +625,7 @@ impl Granular {
         } else {
             Err(DemError::Unstable {
                 step: self.step,
-                dt_crit: self.critical_dt(),
+                dt_crit: self.critical_step(&[]).dt,
             })
         }
     }

@@ -108,6 +108,9 @@ impl ContactBody for EfgBody {
         self.shape_row(x, &mut r)?;
         Ok(r.idx.iter().copied().zip(r.phi.iter().copied()).collect())
     }
+    fn start_dynamic(&mut self, dt: f64) -> Result<(), EfgError> {
+        EfgBody::start_dynamic(self, dt)
+    }
     fn state(&self) -> &State {
         &self.state
     }

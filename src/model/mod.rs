@@ -50,6 +50,22 @@ pub enum ModelError {
     Usage(String),
 }
 
+impl ModelError {
+    /// A numerical failure of the run (exit code 3 of `efgdem run`): the
+    /// state stopped being physical, a sub-cycled body created energy, a
+    /// contact solve did not converge.
+    pub fn is_numerical(&self) -> bool {
+        use crate::coupling::CouplingError as C;
+        matches!(
+            self,
+            ModelError::Unstable(_)
+                | ModelError::Coupling(
+                    C::Unstable { .. } | C::Subcycling { .. } | C::NotConverged { .. }
+                )
+        )
+    }
+}
+
 /// What is simulated.
 pub enum System {
     /// Continuum bodies only; `dynamic` false: a static analysis.
@@ -180,6 +196,15 @@ impl Model {
     /// The coupled model (disc–body contacts, timing), if coupled.
     pub fn coupled(&self) -> Option<&CoupledModel> {
         match &self.system {
+            System::Coupled(m) => Some(m),
+            _ => None,
+        }
+    }
+
+    /// The coupled model, to change before the first step (e.g. its
+    /// scheme, [`crate::coupling::scheme::apply`]).
+    pub fn coupled_mut(&mut self) -> Option<&mut CoupledModel> {
+        match &mut self.system {
             System::Coupled(m) => Some(m),
             _ => None,
         }

@@ -38,8 +38,10 @@ use crate::dem::state::GranularState;
 /// (2: walls keep both ends of the Verlet reference, for joined ends;
 /// 3: walls keep the integral velocity of a servo with integral action;
 /// 4: bodies keep their drives' state and the work of timed loads;
-/// 5: a CRC-32 of the bytes at their end.)
-pub const STATE_FORMAT_VERSION: u32 = 5;
+/// 5: a CRC-32 of the bytes at their end;
+/// 6: the compliant sub-cycled scheme's boundary path, the sub-cycling
+/// energy guard's count.)
+pub const STATE_FORMAT_VERSION: u32 = 6;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

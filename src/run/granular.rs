@@ -3,7 +3,7 @@
 
 use super::session::{Ended, Outputs, Session, due};
 use super::{Run, RunError};
-use crate::dem::DT_WARN;
+use crate::dem::{DT_SAFETY, DT_WARN};
 use crate::model::{Model, System};
 use crate::output::csv::write_discs_csv;
 use crate::output::write_json;
@@ -19,7 +19,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
     let (sc, out) = (run.sc, &run.opts.out_dir);
     let steps = model.steps;
     let mut warnings = Vec::new();
-    if let Some(w) = model.granular().and_then(|g| g.dt_warning()) {
+    if let Some(w) = model.granular().and_then(|g| g.dt_warning(&[])) {
         eprintln!("warning: {w}");
         warnings.push(w);
     }
@@ -76,20 +76,22 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
     let wall_s = t0.elapsed().as_secs_f64();
     let gr = granular(&model);
     // a disc source for another run: not the state of a blow-up
-    if !matches!(ended, Ended::Unstable(_)) {
+    if !matches!(ended, Ended::Unstable(_) | Ended::Failed(_)) {
         write_discs_csv(gr, &out.join("discs_final.csv"))?;
     }
     let n = gr.particles.len();
     let (dd, dw) = gr.touching();
     let e = gr.energies();
+    let crit = gr.critical_step(&[]);
     let mut summary = json!({
         "kind": "granular",
         "discs": n,
         "walls": gr.walls.len(),
         "steps": steps,
         "dt": gr.dt,
-        "critical_dt": gr.critical_dt(),
-        "dt_over_critical": gr.dt / gr.critical_dt(),
+        "critical_dt": crit.dt,
+        "critical_mode": crit.mode,
+        "dt_over_critical": gr.dt / crit.dt,
         "time": gr.time,
         "threads": rayon::current_num_threads(),
         "build_seconds": run.build_s,
@@ -117,24 +119,35 @@ pub(super) fn check(sc: &Scenario, model: &Model) -> String {
         .radius
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), &r| (a.min(r), b.max(r)));
-    let crit = gr.critical_dt();
+    let crit = gr.critical_step(&[]);
     let steps = model.steps;
     let mut s = format!(
         "granular: {n} discs (radius {rmin:e} … {rmax:e}), {} walls, {} materials\n\
-         time step: dt = {:e}, critical 2√(m_min/k_max) = {crit:e} (dt/critical = {:.4}; warn above {DT_WARN})\n\
+         {}\n\
          steps: {steps} (end time {:e})\n\
          damping: {}",
         gr.walls.len(),
         gr.materials.len(),
-        gr.dt,
-        gr.dt / crit,
+        time_step_line(gr.dt, &crit),
         steps as f64 * gr.dt,
         sc.granular.as_ref().map(|g| g.damping).unwrap_or_default(),
     );
-    if let Some(w) = gr.dt_warning() {
+    if let Some(w) = gr.dt_warning(&[]) {
         s.push_str(&format!("\nwarning: {w}"));
     }
     s
+}
+
+/// What `efgdem check` says of the time step: Δt against the critical
+/// step of the contacts in use, the mode that sets it, and its basis.
+pub(super) fn time_step_line(dt: f64, crit: &crate::dem::critical::Critical) -> String {
+    format!(
+        "time step: dt = {dt:e} is {:.3} × the critical step {:e} of the contacts in use, set by {} (linear modes of the central difference, dashpots included; the default dt is {DT_SAFETY} ×, warn above {DT_WARN} ×; refused above {:e}, the limit of two of the lightest discs meeting)",
+        dt / crit.dt,
+        crit.dt,
+        crit.mode,
+        crit.certain
+    )
 }
 
 fn granular(model: &Model) -> &crate::dem::Granular {

@@ -170,6 +170,10 @@ pub(super) enum Ended {
     Interrupted(usize),
     /// The state stopped being physical; the last step is not recorded.
     Unstable(Box<Instability>),
+    /// Another numerical failure of a step ([`ModelError::is_numerical`]:
+    /// a sub-cycled body that creates energy, a contact solve that does
+    /// not converge); the failed step is not recorded.
+    Failed(Box<ModelError>),
 }
 
 impl Ended {
@@ -187,7 +191,7 @@ impl Ended {
         summary["status"] = json!(match self {
             Ended::Completed => "completed",
             Ended::Interrupted(_) => "interrupted",
-            Ended::Unstable(_) => "unstable",
+            Ended::Unstable(_) | Ended::Failed(_) => "unstable",
         });
         match self {
             Ended::Completed => {}
@@ -196,6 +200,7 @@ impl Ended {
                 summary["checkpoint"] = json!(checkpoint::FILE);
             }
             Ended::Unstable(i) => summary["instability"] = json!(i),
+            Ended::Failed(e) => summary["failure"] = json!(e.to_string()),
         }
     }
 
@@ -209,6 +214,7 @@ impl Ended {
                 checkpoint: checkpoint::path(out_dir),
             }),
             Ended::Unstable(i) => Err(RunError::Model(ModelError::Unstable(i))),
+            Ended::Failed(e) => Err(RunError::Model(*e)),
         }
     }
 }
@@ -272,6 +278,7 @@ impl<'a> Session<'a> {
         match r {
             Ok(()) => Ok(None),
             Err(ModelError::Unstable(i)) => Ok(Some(Ended::Unstable(i))),
+            Err(e) if e.is_numerical() => Ok(Some(Ended::Failed(Box::new(e)))),
             Err(e) => Err(e.into()),
         }
     }

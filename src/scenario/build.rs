@@ -14,10 +14,11 @@ use super::granular::{
     CONTACT_QUANTITIES, DISC_QUANTITIES, DampingSpec, DiscsSpec, DiscsTable, GLOBAL_QUANTITIES,
     Generator, GranularSpec, Packing, SlipNormalSpec, WALL_QUANTITIES, slip_normal,
 };
-use super::{Analysis, ContactSolve, CouplingScheme, Invalid, Scenario};
+use super::{Analysis, ContactSolve, CouplingScheme, Invalid, Scenario, Substeps};
 use crate::continuum::ComplianceMode;
 use crate::continuum::Continuum;
 use crate::coupling::CoupledModel;
+use crate::coupling::scheme::{self, Scheme};
 use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::dem::packing::{
     DiscRow, Lattice, grow_in_box, lattice_capacity, lattice_packing, overlapping_pairs,
@@ -31,8 +32,7 @@ use crate::geom::Vec2;
 use crate::model::body::Body;
 use crate::model::{Model, Probe, System};
 
-/// Default fraction of the critical step when `simulation.dt` is omitted.
-pub const DT_SAFETY: f64 = 0.1;
+pub use crate::dem::DT_SAFETY;
 
 pub(super) fn bad(path: &str, message: impl std::fmt::Display) -> Invalid {
     Invalid {
@@ -284,6 +284,23 @@ pub(super) fn loose_rows(sc: &Scenario, t: &DiscsTable) -> Result<Vec<DiscRow>, 
         .map_err(|e| bad("granular.discs", e))
 }
 
+/// The disc–body contact laws of the scenario's bodies: a body's
+/// `contact_material`, or else each disc material's own law (as for walls).
+pub fn body_laws(sc: &Scenario, mats: &[ContactLaw]) -> Vec<ContactLaw> {
+    let named = |b: &super::body::BodySpec| {
+        let m = b.contact_material.as_ref()?;
+        sc.material.iter().position(|x| &x.name == m)
+    };
+    let mut out = Vec::new();
+    for b in &sc.body {
+        match named(b) {
+            Some(i) => out.push(mats[i]),
+            None => out.extend_from_slice(mats),
+        }
+    }
+    out
+}
+
 /// Build the assembly described by the scenario. `dt` is the scenario's,
 /// or [`DT_SAFETY`] × the critical step.
 pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
@@ -369,7 +386,10 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
     gr.damping = body;
     gr.gravity = Vec2::from(sc.simulation.gravity);
     gr.thickness = g.thickness;
-    gr.dt = sc.simulation.dt.unwrap_or(DT_SAFETY * gr.critical_dt());
+    gr.dt = match sc.simulation.dt {
+        Some(dt) => dt,
+        None => DT_SAFETY * gr.critical_step(&body_laws(sc, &gr.materials)).dt,
+    };
     if !gr.dt.is_finite() || gr.dt <= 0.0 {
         return Err(bad(
             "simulation.dt",
@@ -433,11 +453,15 @@ fn bodies(sc: &Scenario, dt: Option<f64>, trial: bool) -> Result<Vec<Body>, Inva
         .collect()
 }
 
-/// The coupled model: discs, walls and bodies (EFG or FE) with each
-/// body's Newmark matrix factored for `dt × substeps`.
+/// The coupled model: discs, walls and bodies (EFG or FE), the coupled
+/// scheme and its substeps chosen ([`scheme::choose`]), each body's
+/// Newmark matrix factored for `dt × substeps`.
 fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
-    let granular = granular_with(sc, purpose)?;
-    let substeps = sc.simulation.substeps.max(1);
+    // the scheme is chosen with the discs as generated (the preparation
+    // moves them, it does not change their masses or radii): a scenario
+    // `run` would refuse is refused before any preparation, as `check` does
+    let granular = granular_with(sc, BuildFor::Check)?;
+    let substeps = sc.simulation.substeps.fixed().unwrap_or(1).max(1);
     let body_dt = granular.dt * substeps as f64;
     let mode = match sc.simulation.contact_solve {
         ContactSolve::Boundary => ComplianceMode::Boundary,
@@ -493,49 +517,36 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
         });
     }
     let mut m = CoupledModel::new(granular, bodies, &mats, substeps);
-    m.staggered |= sc.simulation.coupling == CouplingScheme::Staggered;
-    if m.path_scheme() {
-        check_subcycling(&mut m)?;
-    }
     m.geometric_stiffness = sc.simulation.geometric_stiffness;
-    Ok(m)
-}
-
-/// Largest feedback gain `k_n c` of a contact on a body within one body
-/// step that the sub-cycled scheme accepts (`c` the body step's point
-/// compliance at its contact boundary). Measured on an EFG footing driven
-/// into an undamped, frictionless bed (10–100 substeps, docs/howto/choose-scheme-and-time-step.md): `|E_diss|`
-/// ≤ 0.6 % of the work at gains 0.003–0.026; 5–544 % at 0.034–0.061 with
-/// 10 substeps (the run-time guard, [`crate::coupling::MAX_CREATED`], stops
-/// those below this limit) but 0.1 % at 0.078 with 50; 5–94 % above 0.15.
-pub const MAX_SUBCYCLING_GAIN: f64 = 0.05;
-
-/// The sub-cycled scheme predicts a body's boundary path under the last
-/// body step's loads: it needs bodies stiff against the contacts over a
-/// body step (`k_n c` small), or it creates energy.
-fn check_subcycling(m: &mut CoupledModel) -> Result<(), Invalid> {
-    let nm = m.granular.materials.len();
-    for b in 0..m.bodies.len() {
-        let kn = m.body_laws[b * nm..(b + 1) * nm]
-            .iter()
-            .fold(0.0f64, |k, l| k.max(l.kn));
-        let c = m.bodies[b]
-            .boundary_compliance()
-            .map_err(|e| bad(&format!("body.{b}"), e))?;
-        let gain = kn * c;
-        m.subcycling_gains.push(gain);
-        if gain > MAX_SUBCYCLING_GAIN {
-            return Err(bad(
-                "simulation.substeps",
-                format!(
-                    "body `{}` is too soft against the discs for {} DEM steps per body step: a contact (k_n = {kn:e}) feeds back on itself with the gain k_n·c = {gain:.3} within a body step (above {MAX_SUBCYCLING_GAIN} the predicted boundary path can create energy); use fewer substeps, 1 (the exact implicit step), or a stiffer body",
-                    m.bodies[b].name(),
-                    m.substeps
-                ),
-            ));
-        }
+    m.set_contact_iterations(sc.simulation.contact_iterations);
+    let request = scheme::Request {
+        scheme: match sc.simulation.coupling {
+            CouplingScheme::Auto => None,
+            CouplingScheme::Exact => Some(Scheme::Exact),
+            CouplingScheme::Predicted => Some(Scheme::Predicted),
+            CouplingScheme::Compliant => Some(Scheme::Compliant),
+            CouplingScheme::Staggered => Some(Scheme::Staggered),
+            CouplingScheme::Implicit => Some(match sc.simulation.substeps.fixed() {
+                None | Some(1) => Scheme::Exact,
+                Some(_) => Scheme::Predicted,
+            }),
+        },
+        substeps: sc.simulation.substeps.fixed(),
+    };
+    let choice = scheme::choose(&mut m, request)
+        .map_err(|e| bad("body.0", e))?
+        .map_err(|why| {
+            let at = match sc.simulation.substeps {
+                Substeps::Fixed(_) => "simulation.substeps",
+                Substeps::Auto => "simulation.coupling",
+            };
+            bad(at, why)
+        })?;
+    scheme::apply(&mut m, &choice).map_err(|e| bad("simulation.coupling", e))?;
+    if purpose == BuildFor::Run && preparation(sc).is_some() {
+        m.granular = granular_with(sc, purpose)?;
     }
-    Ok(())
+    Ok(m)
 }
 
 /// Build the model (see [`Scenario::build`]); problems carry field paths.
@@ -970,15 +981,18 @@ pub const START_OVERLAP_TOL: f64 = 1e-3;
 /// checked against the bodies only, by `run`, once settled), and a time
 /// step above the DEM critical step.
 fn start_state(sc: &Scenario, g: &Granular, purpose: BuildFor) -> Result<(), Invalid> {
-    let crit = g.critical_dt();
-    if g.dt > crit {
+    let (mats, _) = laws(sc, &spec(sc)?.damping);
+    let crit = g.critical_step(&body_laws(sc, &mats));
+    if g.dt > crit.certain {
         return Err(bad(
             "simulation.dt",
             format!(
-                "dt = {:e} is {:.2} × the DEM critical step 2√(m_min/k_max) = {crit:e}: the central difference is unstable; use at most {:e} ({DT_WARN} × critical)",
+                "dt = {:e} is above {:e}, the stability limit of the normal mode of two of the lightest discs meeting (or one meeting a wall): the central difference is unstable at the first collision; the critical step of the contacts in use is {:e} (that of {}): use at most {:e} ({DT_WARN} × it; the default is {DT_SAFETY} ×)",
                 g.dt,
-                g.dt / crit,
-                DT_WARN * crit
+                crit.certain,
+                crit.dt,
+                crit.mode,
+                DT_WARN * crit.dt
             ),
         ));
     }

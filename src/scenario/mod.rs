@@ -107,13 +107,17 @@ pub struct Simulation {
     /// Worker threads; 0 = all cores. Results do not depend on it.
     #[serde(default)]
     pub threads: usize,
-    /// Coupled runs: DEM steps per body (Newmark) step; the body sees the
-    /// contact loads averaged over them (ERRATA E11). Default 1.
-    #[serde(default = "one")]
-    pub substeps: usize,
-    /// Coupled runs: how disc–body contact forces reach the bodies.
+    /// Coupled runs: DEM steps per body (Newmark) step, or `"auto"` (the
+    /// default: chosen with the scheme, [`crate::coupling::scheme`]).
+    #[serde(default)]
+    pub substeps: Substeps,
+    /// Coupled runs: the coupled scheme (default `"auto"`).
     #[serde(default)]
     pub coupling: CouplingScheme,
+    /// Coupled runs: Newton iterations a contact solve may take before the
+    /// run stops (default 30).
+    #[serde(default = "newton_cap")]
+    pub contact_iterations: usize,
     /// Coupled runs: how a body gives the compliance of the implicit contact
     /// step.
     #[serde(default)]
@@ -144,18 +148,75 @@ pub enum ContactSolve {
     Direct,
 }
 
-/// `[simulation] coupling`: `"implicit"` (default: contact springs solved
-/// inside each body's Newmark step) or `"staggered"` (the body takes the
-/// contact forces of the previous state as loads — the plain explicit
-/// transfer, kept for comparison and used with `substeps` > 1).
+fn newton_cap() -> usize {
+    crate::coupling::implicit::MAX_NEWTON
+}
+
+/// `[simulation] substeps`: a count, or `"auto"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Substeps {
+    /// Chosen with the scheme.
+    #[default]
+    Auto,
+    /// This many DEM steps per body step.
+    Fixed(usize),
+}
+
+impl<'de> Deserialize<'de> for Substeps {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            N(i64),
+            S(String),
+        }
+        match Raw::deserialize(d)? {
+            Raw::N(n) if n >= 0 => Ok(Substeps::Fixed(n as usize)),
+            Raw::N(n) => Err(serde::de::Error::custom(format!(
+                "expected a positive integer or \"auto\", got {n}"
+            ))),
+            Raw::S(s) if s == "auto" => Ok(Substeps::Auto),
+            Raw::S(s) => Err(serde::de::Error::custom(format!(
+                "expected a positive integer or \"auto\", got \"{s}\""
+            ))),
+        }
+    }
+}
+
+impl Substeps {
+    /// The count, if one is given.
+    pub fn fixed(&self) -> Option<usize> {
+        match self {
+            Substeps::Auto => None,
+            Substeps::Fixed(n) => Some(*n),
+        }
+    }
+}
+
+/// `[simulation] coupling`: the coupled scheme
+/// ([`crate::coupling::scheme`]): `"auto"` (default: the fastest safe one,
+/// with `substeps`), `"exact"`, `"predicted"`, `"compliant"`,
+/// `"staggered"` (the body takes the contact forces of the previous state
+/// as loads — the plain explicit transfer, kept for comparison), or
+/// `"implicit"` (the exact step with `substeps = 1`, the predicted scheme
+/// with more).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum CouplingScheme {
-    /// Contact springs solved inside each body's Newmark step.
+    /// Chosen with `substeps`.
     #[default]
-    Implicit,
+    Auto,
+    /// A body step per DEM step, the contacts implicit in it.
+    Exact,
+    /// Sub-cycled, the boundary on its predicted path.
+    Predicted,
+    /// Sub-cycled, the boundary giving way to the contacts through the
+    /// body step's compliance in every DEM step.
+    Compliant,
     /// The body takes the previous state's contact forces as loads.
     Staggered,
+    /// The exact step with one substep, the predicted scheme with more.
+    Implicit,
 }
 
 impl Default for Simulation {
@@ -167,8 +228,9 @@ impl Default for Simulation {
             end_time: None,
             gravity: [0.0, 0.0],
             threads: 0,
-            substeps: 1,
-            coupling: CouplingScheme::Implicit,
+            substeps: Substeps::Auto,
+            coupling: CouplingScheme::Auto,
+            contact_iterations: newton_cap(),
             contact_solve: ContactSolve::Boundary,
             geometric_stiffness: true,
         }
@@ -614,10 +676,20 @@ impl Scenario {
             "must be two finite numbers [gx, gy]",
         );
         p.check(self.output.every >= 1, "output.every", "must be ≥ 1");
+        if let Some(n) = sim.substeps.fixed() {
+            p.check(
+                (1..=100_000).contains(&n),
+                "simulation.substeps",
+                format!("must be \"auto\" or between 1 and 100000 (got {n})"),
+            );
+        }
         p.check(
-            (1..=100_000).contains(&sim.substeps),
-            "simulation.substeps",
-            format!("must be between 1 and 100000 (got {})", sim.substeps),
+            (1..=1000).contains(&sim.contact_iterations),
+            "simulation.contact_iterations",
+            format!(
+                "must be between 1 and 1000 (got {})",
+                sim.contact_iterations
+            ),
         );
         let mut names = std::collections::HashSet::new();
         for (i, m) in self.material.iter().enumerate() {
