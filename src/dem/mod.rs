@@ -28,6 +28,7 @@
 //! histories are kept here, keyed by slot pairs `(i < j)` / `(disc, wall)`
 //! and remapped on renumbering.
 
+pub mod bonds;
 pub mod broadphase;
 pub mod contact;
 pub mod integrate;
@@ -42,6 +43,7 @@ use crate::geom::Vec2;
 
 /// `efgdem check` and `run` warn above this fraction of the critical step (E11).
 pub const DT_WARN: f64 = 0.2;
+use bonds::Bonds;
 use broadphase::{ContactList, NeighbourGrid};
 use contact::{ContactLaw, effective_mass, normal_between};
 use particles::Particles;
@@ -127,12 +129,14 @@ pub struct Energies {
     pub spring: f64,
     /// `−Σ m g·x` (relative to the origin).
     pub gravity: f64,
+    /// Strain energy of the intact parallel bonds ([`bonds::bond_energy`]).
+    pub bond: f64,
 }
 
 impl Energies {
-    /// Kinetic + rotational + spring + gravity potential.
+    /// Kinetic + rotational + spring + gravity potential + bond energy.
     pub fn total(&self) -> f64 {
-        self.kinetic + self.rotational + self.spring + self.gravity
+        self.kinetic + self.rotational + self.spring + self.gravity + self.bond
     }
 }
 
@@ -168,6 +172,8 @@ pub struct Granular {
     pub contacts: ContactList,
     /// The contact search grid and its Verlet skin.
     pub grid: NeighbourGrid,
+    /// Parallel bonds between discs ([`bonds`]; none unless a rule is set).
+    pub bonds: Bonds,
     /// Largest disc displacement since the last rebuild.
     pub max_disp: f64,
     /// Keep each disc's contact force and moment of the step in
@@ -223,6 +229,7 @@ impl Granular {
             time: 0.0,
             contacts: ContactList::default(),
             grid: NeighbourGrid::new(skin),
+            bonds: Bonds::default(),
             max_disp: 0.0,
             store_forces: true,
             external: Vec::new(),
@@ -302,15 +309,21 @@ impl Granular {
     }
 
     /// Critical time step of the central difference, `2√(m_min/k_max)`
-    /// (ERRATA E11); use a fraction 0.1–0.2 of it.
+    /// (ERRATA E11), and with parallel bonds at most that of each bonded
+    /// disc against its bond's stiffness ([`Bonds::critical_dt`]); use a
+    /// fraction 0.1–0.2 of it.
     pub fn critical_dt(&self) -> f64 {
         let k = self.k_max();
         let m = self.particles.min_mass();
-        if k > 0.0 && m.is_finite() {
+        let contacts = if k > 0.0 && m.is_finite() {
             2.0 * (m / k).sqrt()
         } else {
             f64::INFINITY
-        }
+        };
+        contacts.min(
+            self.bonds
+                .critical_dt(&self.particles, self.thickness, self.k_max()),
+        )
     }
 
     /// One full time step: the three phases in order, with the external
@@ -378,13 +391,44 @@ impl Granular {
     }
 
     /// Phase 1: rebuild the neighbour list when the Verlet criterion says
-    /// so (or it was never built).
+    /// so (or it was never built); bond the discs when the bond rule's step
+    /// has come ([`bonds::BondRule`]).
     pub fn prepare_contacts(&mut self) {
         if self.grid.needs_rebuild(self.max_disp, &self.walls) {
-            self.grid
-                .rebuild(&mut self.particles, &self.walls, &mut self.contacts);
-            self.max_disp = 0.0;
+            self.rebuild();
         }
+        if let Some(rule) = &self.bonds.rule
+            && !self.bonds.list.created
+            && self.step >= rule.at_step
+        {
+            self.make_bonds();
+        }
+    }
+
+    /// Rebuild the neighbour list now (the discs may be renumbered).
+    fn rebuild(&mut self) {
+        self.grid
+            .rebuild(&mut self.particles, &self.walls, &mut self.contacts);
+        self.max_disp = 0.0;
+        self.bonds.invalidate();
+    }
+
+    /// Apply the bond rule to the present state: every listed pair whose
+    /// gap is below the rule's (the list is rebuilt first with a skin that
+    /// reaches that gap, if the present one does not).
+    fn make_bonds(&mut self) {
+        let Some(rule) = &self.bonds.rule else { return };
+        let reach = rule.gap * self.particles.max_radius();
+        let skin = self.grid.skin;
+        if reach >= skin {
+            self.grid.skin = reach * 1.01;
+            self.rebuild();
+            self.grid.skin = skin;
+            self.grid.stale = true;
+        } else if self.contacts.first.len() != self.particles.len() + 1 {
+            self.rebuild();
+        }
+        self.bonds.create(&self.particles, self.contacts.pairs());
     }
 
     /// Phase 2: evaluate every listed contact and *overwrite* each disc's
@@ -668,6 +712,7 @@ impl Granular {
                 e.spring += contact::rolling_energy(law, p.radius[d], q.mr);
             }
         }
+        e.bond = self.bonds.energy(self.thickness);
         e
     }
 
@@ -700,8 +745,12 @@ impl Granular {
         (dd, dw)
     }
 
-    /// Heap bytes held by the assembly (discs + contact list + grid).
+    /// Heap bytes held by the assembly (discs + contact list + grid +
+    /// bonds).
     pub fn heap_bytes(&self) -> usize {
-        self.particles.heap_bytes() + self.contacts.heap_bytes() + self.grid.heap_bytes()
+        self.particles.heap_bytes()
+            + self.contacts.heap_bytes()
+            + self.grid.heap_bytes()
+            + self.bonds.heap_bytes()
     }
 }

@@ -7,7 +7,7 @@
 //! - granular: [`GranularState`] — discs in their slot order with the
 //!   slot → id map, walls, the contact list with its shear and rolling
 //!   histories, the Verlet bookkeeping (reference positions, rebuild
-//!   counter, stale flag, largest displacement), clock;
+//!   counter, stale flag, largest displacement), parallel bonds, clock;
 //! - continuum: each body's [`BodyState`] — `U`, `U̇`, `Ü`, clock, pending
 //!   point loads, work of moving edges, drives (position, velocity, servo
 //!   integral, last measurement), work of timed loads, FE support
@@ -35,8 +35,9 @@ use crate::dem::state::GranularState;
 /// a saved type changes.
 /// (2: walls keep both ends of the Verlet reference, for joined ends;
 /// 3: walls keep the integral velocity of a servo with integral action;
-/// 4: bodies keep their drives' state and the work of timed loads.)
-pub const STATE_FORMAT_VERSION: u32 = 4;
+/// 4: bodies keep their drives' state and the work of timed loads;
+/// 5: the granular state keeps the parallel bonds.)
+pub const STATE_FORMAT_VERSION: u32 = 5;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
