@@ -121,7 +121,7 @@ fn two_bonded_discs_have_the_analytic_stiffness_and_strength_in_each_mode() {
     // bending: the discs turn in opposite senses (no shear at the bond's
     // centre); M = k̄_n I θ_rel; σ = |M|R̄/I = k̄_n R̄ θ_rel reaches σ_c
     let w = 1e-3;
-    let mut g = pair(law(20.0, ShearStrength::Fixed(1e9)));
+    let mut g = pair(law(19.5, ShearStrength::Fixed(1e9)));
     drive(&mut g, 0, Vec2::ZERO, -w);
     drive(&mut g, 1, Vec2::ZERO, w);
     let f = until_broken(&mut g, 5000);
@@ -131,11 +131,10 @@ fn two_bonded_discs_have_the_analytic_stiffness_and_strength_in_each_mode() {
         assert!(force.norm() < 1e-10 * KN * i * theta);
     }
     let b = g.bonds.list.broken[0];
-    // θ_rel = σ_c/(k̄_n R̄) = 4e-7 = 2 k w dt: k = 20 exactly is a tie,
-    // which breaks (σ ≥ σ_c)
-    assert_eq!(b.mode, BreakMode::Tension);
+    // θ_rel = σ_c/(k̄_n R̄) = 3.9e-7 = 2 k w dt at k = 19.5: breaks at 20
+    assert_eq!((b.mode, b.step), (BreakMode::Tension, 20));
     let theta = |k: usize| 2.0 * k as f64 * w * dt;
-    assert!(KN * r * theta(b.step - 1) < 20.0 && KN * r * theta(b.step) >= 20.0);
+    assert!(KN * r * theta(19) < 19.5 && KN * r * theta(20) >= 19.5);
 
     // cohesion–friction: compressed by u_n, then sheared: τ_c = c + σ_n tan φ
     let (c, tan_phi) = (10.0, 0.5);
@@ -204,9 +203,8 @@ fn chain_tip_deflection(n: usize, p_y: f64, kn_i: f64, ks_a: f64) -> f64 {
 /// mass over the beam's (Blevins, *Formulas for natural frequency and
 /// mode shape*, Table 8-8); ω = λ² √(EI/(μL⁴)).
 fn tip_mass_lambda(alpha: f64) -> f64 {
-    let f = |l: f64| {
-        1.0 + l.cos() * l.cosh() + alpha * l * (l.cos() * l.sinh() - l.sin() * l.cosh())
-    };
+    let f =
+        |l: f64| 1.0 + l.cos() * l.cosh() + alpha * l * (l.cos() * l.sinh() - l.sin() * l.cosh());
     let (mut lo, mut hi) = (1.0, 1.9);
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
@@ -371,9 +369,8 @@ fn a_bonded_triangular_lattice_has_the_closed_form_elastic_constants() {
     let nu_lattice = (kn - ks) / (3.0 * kn + ks);
     // grips: the first and last disc of every row; the middle row's left
     // end fixed in y too
-    let (left, right): (Vec<usize>, Vec<usize>) = (0..rows)
-        .map(|j| (j * cols, j * cols + cols - 1))
-        .unzip();
+    let (left, right): (Vec<usize>, Vec<usize>) =
+        (0..rows).map(|j| (j * cols, j * cols + cols - 1)).unzip();
     for &id in left.iter().chain(&right) {
         let s = g.slot(id);
         g.particles.fixity[s] = FIX_X;
@@ -414,8 +411,18 @@ fn a_bonded_triangular_lattice_has_the_closed_form_elastic_constants() {
             })
             .collect();
         let u = |id: usize| p.pos[g.slot(id)] - x0[id];
-        let exx = slope(&inner.iter().map(|&id| (x0[id].x, u(id).x)).collect::<Vec<_>>());
-        let eyy = slope(&inner.iter().map(|&id| (x0[id].y, u(id).y)).collect::<Vec<_>>());
+        let exx = slope(
+            &inner
+                .iter()
+                .map(|&id| (x0[id].x, u(id).x))
+                .collect::<Vec<_>>(),
+        );
+        let eyy = slope(
+            &inner
+                .iter()
+                .map(|&id| (x0[id].y, u(id).y))
+                .collect::<Vec<_>>(),
+        );
         let sigma = love_stress_xx(&g, |id| {
             let j = id / cols;
             inner.contains(&id) && j >= 2 && j + 2 < rows
@@ -438,66 +445,44 @@ fn a_bonded_triangular_lattice_has_the_closed_form_elastic_constants() {
     assert!(g.bonds.list.broken.is_empty());
 }
 
-/// Item 4: an undamped, frictionless bonded lattice torn apart by grips
-/// at constant speed, its bonds breaking (strengths scattered): the
-/// discrete energy balance — kinetic `½ m v_{n−½}·v_{n+½}`, contact and
-/// bond energy of the state, energy released by broken bonds — equals the
-/// work of the grips step by step to `1e-6` of the work.
-#[test]
-fn the_energy_account_closes_with_bonds_breaking() {
-    let (cols, rows) = (12, 7);
-    let law = BondLaw {
-        kn: 1e8,
-        ks: 0.5e8,
-        tensile: 2e4,
-        shear: ShearStrength::Fixed(2e4),
-        scatter: 0.2,
-        seed: 5,
-        ..Default::default()
-    };
-    let contact = ContactLaw {
-        kn: std::env::var("DIAG_KN").map(|s| s.parse().unwrap()).unwrap_or(1e8),
-        ..Default::default()
-    };
-    let mut g = lattice(cols, rows, law, contact);
-    let mut prev_err = 0.0f64;
-    let grips: Vec<(usize, f64)> = (0..rows)
-        .flat_map(|j| [(j * cols, -1.0), (j * cols + cols - 1, 1.0)])
-        .collect();
-    let v = 2e-4 / g.dt * 1e-3;
-    for &(id, sign) in &grips {
+/// The discrete energy balance of an undamped assembly whose grips (disc
+/// ids with their prescribed velocities) move at constant speed for
+/// `steps` steps: kinetic `½ m v_{n−½}·v_{n+½}` of the free discs, contact
+/// and bond energy of the state and the energy released by broken bonds,
+/// against the work of the grips (trapezoidal, `½(F_{n−1} + F_n)·v Δt`:
+/// exact for a quadratic energy). Returns the worst imbalance and the
+/// largest work.
+fn energy_imbalance(g: &mut Granular, grips: &[(usize, Vec2)], steps: usize) -> (f64, f64) {
+    for &(id, v) in grips {
         let s = g.slot(id);
         g.particles.fixity[s] = ALL;
-        drive(&mut g, id, Vec2::new(sign * v, 0.0), 0.0);
+        drive(g, id, v, 0.0);
     }
     let is_grip = |id: u32| grips.iter().any(|&(g, _)| g == id as usize);
-    let mut h0 = None;
-    let mut work = 0.0;
+    let (mut h0, mut work) = (None, 0.0);
+    let mut f_prev = vec![Vec2::ZERO; grips.len()];
     let (mut worst, mut w_max) = (0.0f64, 0.0f64);
-    for _ in 0..6000 {
+    for _ in 0..steps {
         g.prepare_contacts();
         let u_contact = g.energies().spring;
         let (v0, w0) = (g.particles.vel.clone(), g.particles.omega.clone());
         g.step();
         let p = &g.particles;
         let mut kin = 0.0;
+        for (k, &(id, v)) in grips.iter().enumerate() {
+            let f = p.force[g.slot(id)];
+            work -= 0.5 * (f_prev[k] + f).dot(v) * g.dt;
+            f_prev[k] = f;
+        }
         for s in 0..p.len() {
-            if is_grip(p.id[s]) {
-                work -= p.force[s].dot(p.vel[s]) * g.dt;
-            } else {
-                kin += 0.5 * p.mass[s] * v0[s].dot(p.vel[s])
-                    + 0.5 * p.inertia[s] * w0[s] * p.omega[s];
+            if !is_grip(p.id[s]) {
+                kin +=
+                    0.5 * p.mass[s] * v0[s].dot(p.vel[s]) + 0.5 * p.inertia[s] * w0[s] * p.omega[s];
             }
         }
-        let l = &g.bonds.list;
-        let h = kin + u_contact + g.bonds.energy(1.0) + l.released;
+        let h = kin + u_contact + g.bonds.energy(1.0) + g.bonds.list.released;
         let h0 = *h0.get_or_insert(h - work);
         worst = worst.max((h - h0 - work).abs());
-        let err = h - h0 - work;
-        if (err - prev_err).abs() > 1e-4 {
-            println!("step {} jump {:.3e} broken {} touching {:?}", g.step, err - prev_err, g.bonds.list.broken.len(), g.touching());
-        }
-        prev_err = err;
         w_max = w_max.max(work.abs());
     }
     let l = &g.bonds.list;
@@ -509,6 +494,147 @@ fn the_energy_account_closes_with_bonds_breaking() {
         l.released,
         worst / w_max
     );
-    assert!(l.broken.len() > 10, "too few bonds broke");
-    assert!(worst < 1e-6 * w_max);
+    (worst, w_max)
+}
+
+/// A bond law that breaks at strains of about 2e-4 (strengths scattered).
+fn weak_law() -> BondLaw {
+    BondLaw {
+        kn: 1e8,
+        ks: 0.5e8,
+        tensile: 2e4,
+        shear: ShearStrength::Fixed(2e4),
+        scatter: 0.2,
+        seed: 5,
+        ..Default::default()
+    }
+}
+
+/// Soft contacts: where broken pieces collide, the leapfrog's discrete
+/// energy is exact only to the contact law's own activation error (a
+/// contact switches on within a step; up to 3e-3 of the work here with a
+/// contact stiffness equal to the bonds', tested for contacts alone in
+/// `dem_assembly`), which would hide the bonds' account.
+fn soft_contacts() -> ContactLaw {
+    ContactLaw {
+        kn: 1.0,
+        ..Default::default()
+    }
+}
+
+/// Item 4: a bonded row of discs torn apart by its two end discs at
+/// constant speed, undamped: the stress waves break bonds (strengths
+/// scattered), and the discrete energy balance — kinetic, bond energy,
+/// energy released by broken bonds — equals the work of the grips step by
+/// step to `1e-9` of the work (the bonds do not turn: the law is linear
+/// and the leapfrog's discrete energy exact; measured 1.5e-11).
+#[test]
+fn the_energy_account_closes_with_bonds_breaking() {
+    let cols = 40;
+    let mut g = lattice(cols, 1, weak_law(), soft_contacts());
+    let v = 2e-6 / g.dt;
+    let grips = [(0, Vec2::new(-v, 0.0)), (cols - 1, Vec2::new(v, 0.0))];
+    let (worst, work) = energy_imbalance(&mut g, &grips, 4000);
+    assert!(!g.bonds.list.broken.is_empty(), "no bond broke");
+    assert!(worst < 1e-9 * work);
+}
+
+/// Item 4 in 2D: a bonded lattice torn apart by grips at constant speed,
+/// undamped. The bond law is incremental in the frame of the bond
+/// (Potyondy & Cundall's small-strain law): it carries its forces with the
+/// turning bond and is conservative only to first order in the bonds'
+/// rotations, so the balance closes to a fraction of the bonds' strains
+/// (measured 1.0e-5 of the work at strains of 2e-4), not to rounding; the
+/// bound `1e-4` still catches a bond force on the wrong disc or energy
+/// released twice (those are of the order of the work).
+#[test]
+fn the_energy_account_closes_to_the_small_strain_order_in_a_torn_lattice() {
+    let (cols, rows) = (12, 7);
+    let mut g = lattice(cols, rows, weak_law(), soft_contacts());
+    let v = 2e-7 / g.dt;
+    let grips: Vec<(usize, Vec2)> = (0..rows)
+        .flat_map(|j| {
+            [
+                (j * cols, Vec2::new(-v, 0.0)),
+                (j * cols + cols - 1, Vec2::new(v, 0.0)),
+            ]
+        })
+        .collect();
+    let (worst, work) = energy_imbalance(&mut g, &grips, 6000);
+    assert!(g.bonds.list.broken.len() > 10, "too few bonds broke");
+    assert!(worst < 1e-4 * work);
+}
+
+/// A 40 × 30 bonded lattice under gravity torn apart by its end discs,
+/// with a small skin (the discs are renumbered at the rebuilds) and local
+/// damping, stepped `steps` times from `from` (or from the start).
+fn torn(steps: usize, from: Option<&efgdem::dem::state::GranularState>) -> Granular {
+    let (cols, rows) = (40, 30);
+    let mut g = lattice(cols, rows, weak_law(), soft_contacts());
+    g.gravity = Vec2::new(0.0, -9.81);
+    g.damping = BodyDamping::Local { alpha: 0.05 };
+    g.set_skin(1e-3);
+    let v = 2e-6 / g.dt;
+    for j in 0..rows {
+        for (id, sign) in [(j * cols, -1.0), (j * cols + cols - 1, 1.0)] {
+            let s = g.slot(id);
+            g.particles.fixity[s] = ALL;
+            drive(&mut g, id, Vec2::new(sign * v, 0.0), 0.0);
+        }
+    }
+    if let Some(s) = from {
+        g.restore_state(s).unwrap();
+    }
+    for _ in 0..steps {
+        g.step();
+    }
+    g
+}
+
+/// Item 6 (bonds): 1 and 2 threads, and a run restarted from a saved
+/// state, give bitwise the same discs, bonds and breakage events.
+#[test]
+fn bonds_are_bitwise_independent_of_threads_and_restart() {
+    let on = |threads: usize, f: &(dyn Fn() -> Granular + Sync)| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(f)
+    };
+    let a = on(1, &|| torn(3000, None));
+    let b = on(2, &|| torn(3000, None));
+    let saved = on(2, &|| torn(500, None)).save_state();
+    let c = on(2, &|| torn(2500, Some(&saved)));
+    let l = &a.bonds.list;
+    println!(
+        "{} of {} bonds broken (steps {}..={}), {} rebuilds",
+        l.broken.len(),
+        l.made,
+        l.broken[0].step,
+        l.broken[l.broken.len() - 1].step,
+        a.grid.rebuilds
+    );
+    assert!(l.made > 3000 && l.broken.len() > 20 && a.grid.rebuilds > 2);
+    assert!(
+        saved.bonds.broken.len() < l.broken.len(),
+        "break after the restart"
+    );
+    let bits = |g: &Granular| {
+        let p = &g.particles;
+        let mut v: Vec<u64> = p
+            .pos
+            .iter()
+            .chain(&p.vel)
+            .flat_map(|x| [x.x.to_bits(), x.y.to_bits()])
+            .collect();
+        v.extend(p.omega.iter().map(|w| w.to_bits()));
+        v.extend(p.id.iter().map(|&i| i as u64));
+        v
+    };
+    for other in [&b, &c] {
+        assert_eq!(bits(&a), bits(other));
+        assert_eq!(a.bonds.list, other.bonds.list);
+        assert_eq!(a.step, other.step);
+    }
 }

@@ -252,7 +252,11 @@ impl BondList {
         {
             return Err("the bond arrays differ in length".into());
         }
-        let pairs_ok = self.a.iter().zip(&self.b).all(|(&a, &b)| a < b && (b as usize) < n);
+        let pairs_ok = self
+            .a
+            .iter()
+            .zip(&self.b)
+            .all(|(&a, &b)| a < b && (b as usize) < n);
         let sorted = (1..m).all(|k| (self.a[k - 1], self.b[k - 1]) < (self.a[k], self.b[k]));
         if !pairs_ok || !sorted {
             return Err("the bonds are not sorted pairs of disc ids".into());
@@ -469,13 +473,11 @@ impl Bonds {
     pub fn create(&mut self, p: &Particles, pairs: impl Iterator<Item = (usize, usize)>) {
         let Some(rule) = &self.rule else { return };
         let inside = |x: Vec2| {
-            rule.region.is_none_or(|(lo, hi)| {
-                x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y
-            })
+            rule.region
+                .is_none_or(|(lo, hi)| x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y)
         };
-        let material_ok = |s: usize| {
-            rule.materials.is_empty() || rule.materials.contains(&p.material[s])
-        };
+        let material_ok =
+            |s: usize| rule.materials.is_empty() || rule.materials.contains(&p.material[s]);
         let mut made: Vec<(u32, u32)> = pairs
             .filter(|&(i, j)| {
                 let (ri, rj) = (p.radius[i], p.radius[j]);
@@ -523,7 +525,11 @@ impl Bonds {
         self.refresh(p);
         let l = &mut self.list;
         let law = self.law;
-        let dt = if std::mem::take(&mut l.fresh) { 0.0 } else { dt };
+        let dt = if std::mem::take(&mut l.fresh) {
+            0.0
+        } else {
+            dt
+        };
         let (radius, tensile, shear) = (&l.radius, &l.tensile, &l.shear);
         let slots = &self.slots;
         let broken: Vec<(usize, BreakMode, f64)> = self
