@@ -435,6 +435,8 @@ impl Granular {
     /// force and torque with the sum of its contacts, in a fixed order
     /// (bitwise independent of the thread count, see [`sweep`]). Also sets
     /// each wall's force.
+    /// It also advances the parallel bonds by one step: call it once per
+    /// step.
     pub fn compute_contact_forces(&mut self) {
         self.sweep::<false>();
         self.wall_totals();

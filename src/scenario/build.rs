@@ -338,6 +338,11 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
     gr.damping = body;
     gr.gravity = Vec2::from(sc.simulation.gravity);
     gr.thickness = g.thickness;
+    if let Some(b) = &sc.bonds {
+        let (law, rule) = super::bonds::law_and_rule(sc, b);
+        gr.bonds.law = law;
+        gr.bonds.rule = Some(rule);
+    }
     gr.dt = sc.simulation.dt.unwrap_or(DT_SAFETY * gr.critical_dt());
     if !gr.dt.is_finite() || gr.dt <= 0.0 {
         return Err(bad(
