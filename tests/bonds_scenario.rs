@@ -132,7 +132,7 @@ fn a_bonded_block_breaks_and_every_output_tells_the_same_story() {
     for b in &breaks {
         let step: usize = b[0].parse().unwrap();
         let (a, c): (usize, usize) = (b[7].parse().unwrap(), b[8].parse().unwrap());
-        assert!(step >= 1 && step <= 5000 && a < c && c <= 209);
+        assert!((1..=5000).contains(&step) && a < c && c <= 209);
         let radius: f64 = b[6].parse().unwrap();
         assert_eq!(radius, 0.0025);
     }

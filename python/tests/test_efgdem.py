@@ -447,3 +447,70 @@ def test_a_state_of_another_model_is_refused(box_file, tmp_path):
         m.restore_state(other.save_state())
     with pytest.raises(efgdem.ModelError):
         m.restore_state(b"not a state")
+
+
+# --- parallel bonds ----------------------------------------------------------
+
+# A bonded hexagonal block (209 discs, 565 touching pairs) crushed between
+# two platens: bonds break from about step 1 200 on.
+BONDED_TOML = """\
+[simulation]
+steps = 5000
+
+[[material]]
+name = "rock"
+density = 2650.0
+kn = 1.0e9
+ks = 5.0e8
+friction = 0.5
+
+[granular]
+material = "rock"
+discs = { generate = "hex", box = [[0.0, 0.0], [0.05, 0.1]], radius = 0.0025 }
+damping = { kind = "local", alpha = 0.7 }
+
+[bonds]
+kn = 2.0e11
+ks = 1.0e11
+tensile = 5.0e6
+shear = 1.0e7
+scatter = 0.2
+
+[[wall]]
+name = "bottom"
+from = [-0.01, 0.0]
+to = [0.06, 0.0]
+strain_rate = 5.0
+
+[[wall]]
+name = "top"
+from = [-0.01, 0.096]
+to = [0.06, 0.096]
+strain_rate = 5.0
+"""
+
+
+def test_bonds_and_their_breakage_events():
+    import tomllib
+
+    runs = []
+    for threads in (1, 2):
+        m = efgdem.Model.from_dict(tomllib.loads(BONDED_TOML), threads=threads)
+        m.step()  # the bonds are made at the start of step 1
+        b = m.bonds()
+        assert len(b["a"]) == 565 and b["a"].dtype == np.uint32
+        assert (b["a"] < b["b"]).all() and (b["radius"] == 0.0025).all()
+        m.step(4999)
+        b, k = m.bonds(), m.bond_breaks()
+        assert len(b["a"]) + len(k["a"]) == 565 and len(k["a"]) > 50
+        assert set(np.unique(k["mode"])) <= {0, 1} and k["mode"].dtype == np.uint8
+        assert (np.diff(k["step"].astype(np.int64)) >= 0).all() and k["step"][-1] <= 5000
+        assert (k["energy"] > 0).all() and np.allclose(np.hypot(k["nx"], k["ny"]), 1.0)
+        # no pair is both intact and broken
+        intact = set(zip(b["a"].tolist(), b["b"].tolist()))
+        assert not intact & set(zip(k["a"].tolist(), k["b"].tolist()))
+        runs.append((b, k))
+    for name in runs[0][1]:
+        assert runs[0][1][name].tobytes() == runs[1][1][name].tobytes(), name
+    for name in runs[0][0]:
+        assert runs[0][0][name].tobytes() == runs[1][0][name].tobytes(), name
