@@ -22,53 +22,11 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// 209 discs of radius 2.5 mm on a hexagonal lattice (rows of 10 and 9,
-/// 22 rows) between two platens closing at ε̇ = 5 /s: the block fails in
-/// about 4 500 steps.
-const UCS: &str = r#"[simulation]
-steps = 5000
-
-[output]
-every = 100
-vtk_every = 2500
-
-[[material]]
-name = "rock"
-density = 2650.0
-kn = 1.0e9
-ks = 5.0e8
-friction = 0.5
-
-[[material]]
-name = "platen"
-kn = 1.0e9
-
-[granular]
-material = "rock"
-discs = { generate = "hex", box = [[0.0, 0.0], [0.05, 0.1]], radius = 0.0025 }
-damping = { kind = "local", alpha = 0.7 }
-
-[bonds]
-kn = 2.0e11
-ks = 1.0e11
-tensile = 5.0e6
-shear = 1.0e7
-scatter = 0.2
-
-[[wall]]
-name = "bottom"
-from = [-0.01, 0.0]
-to = [0.06, 0.0]
-material = "platen"
-strain_rate = 5.0
-
-[[wall]]
-name = "top"
-from = [-0.01, 0.096]
-to = [0.06, 0.096]
-material = "platen"
-strain_rate = 5.0
-"#;
+/// The bonded block of `tests/common/bonded_block.toml`, with outputs.
+fn ucs() -> String {
+    include_str!("common/bonded_block.toml").to_string()
+        + "\n[output]\nevery = 100\nvtk_every = 2500\n"
+}
 
 fn csv(path: &std::path::Path) -> (Vec<String>, Vec<Vec<String>>) {
     let text = std::fs::read_to_string(path).unwrap();
@@ -84,7 +42,7 @@ fn csv(path: &std::path::Path) -> (Vec<String>, Vec<Vec<String>>) {
 fn a_bonded_block_breaks_and_every_output_tells_the_same_story() {
     let dir = scratch("ucs");
     let file = dir.join("ucs.toml");
-    std::fs::write(&file, UCS).unwrap();
+    std::fs::write(&file, ucs()).unwrap();
     let out_dir = dir.join("out");
     let out = efgdem(&[
         "run",
@@ -191,7 +149,7 @@ fn bad_bonds_input_reports_file_line_field_and_exits_2() {
         ),
     ] {
         let f = dir.join(name);
-        std::fs::write(&f, UCS.replace(from, to)).unwrap();
+        std::fs::write(&f, ucs().replace(from, to)).unwrap();
         let out = efgdem(&["check", f.to_str().unwrap()]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{name}: {err}");

@@ -841,48 +841,13 @@ fn a_granular_run_restarts_with_identical_outputs() {
     check_run_restart("granular", &src, 2000, 1301);
 }
 
-/// A bonded hexagonal block crushed between two platens (bonds break
-/// before and after the checkpoint).
-const BONDED: &str = r#"[simulation]
-steps = 5000
-
-[[material]]
-name = "rock"
-density = 2650.0
-kn = 1.0e9
-ks = 5.0e8
-friction = 0.5
-
-[granular]
-material = "rock"
-discs = { generate = "hex", box = [[0.0, 0.0], [0.05, 0.1]], radius = 0.0025 }
-damping = { kind = "local", alpha = 0.7 }
-
-[bonds]
-kn = 2.0e11
-ks = 1.0e11
-tensile = 5.0e6
-cohesion = 8.0e6
-friction_angle = 20
-scatter = 0.2
-
-[[wall]]
-name = "bottom"
-from = [-0.01, 0.0]
-to = [0.06, 0.0]
-strain_rate = 5.0
-
-[[wall]]
-name = "top"
-from = [-0.01, 0.096]
-to = [0.06, 0.096]
-strain_rate = 5.0
-"#;
-
 #[test]
 fn a_bonded_run_restarts_with_identical_outputs() {
     // history (bond columns), bond_breaks.csv and the crack frames
-    let src = with_outputs(BONDED, "quantity = \"kinetic\"");
+    // with a cohesion–friction shear strength
+    let block = include_str!("common/bonded_block.toml")
+        .replace("shear = 1.0e7", "cohesion = 8.0e6\nfriction_angle = 20");
+    let src = with_outputs(&block, "quantity = \"kinetic\"");
     check_run_restart("bonded", &src, 5000, 2999);
 }
 

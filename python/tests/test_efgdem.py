@@ -453,41 +453,7 @@ def test_a_state_of_another_model_is_refused(box_file, tmp_path):
 
 # A bonded hexagonal block (209 discs, 565 touching pairs) crushed between
 # two platens: bonds break from about step 1 200 on.
-BONDED_TOML = """\
-[simulation]
-steps = 5000
-
-[[material]]
-name = "rock"
-density = 2650.0
-kn = 1.0e9
-ks = 5.0e8
-friction = 0.5
-
-[granular]
-material = "rock"
-discs = { generate = "hex", box = [[0.0, 0.0], [0.05, 0.1]], radius = 0.0025 }
-damping = { kind = "local", alpha = 0.7 }
-
-[bonds]
-kn = 2.0e11
-ks = 1.0e11
-tensile = 5.0e6
-shear = 1.0e7
-scatter = 0.2
-
-[[wall]]
-name = "bottom"
-from = [-0.01, 0.0]
-to = [0.06, 0.0]
-strain_rate = 5.0
-
-[[wall]]
-name = "top"
-from = [-0.01, 0.096]
-to = [0.06, 0.096]
-strain_rate = 5.0
-"""
+BONDED = ROOT / "tests" / "common" / "bonded_block.toml"
 
 
 def test_bonds_and_their_breakage_events():
@@ -495,7 +461,7 @@ def test_bonds_and_their_breakage_events():
 
     runs = []
     for threads in (1, 2):
-        m = efgdem.Model.from_dict(tomllib.loads(BONDED_TOML), threads=threads)
+        m = efgdem.Model.from_dict(tomllib.loads(BONDED.read_text()), threads=threads)
         m.step()  # the bonds are made at the start of step 1
         b = m.bonds()
         assert len(b["a"]) == 565 and b["a"].dtype == np.uint32

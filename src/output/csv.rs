@@ -201,26 +201,27 @@ pub fn bond_row(gr: &Granular) -> [f64; 5] {
 /// it), its radius, the two discs (1-based), the mode and the energy it
 /// released.
 pub fn write_bond_breaks(gr: &Granular, path: &Path) -> std::io::Result<()> {
-    let mut w = std::io::BufWriter::new(File::create(path)?);
-    writeln!(w, "step,t,x,y,nx,ny,radius,disc_a,disc_b,mode,energy")?;
-    for b in &gr.bonds.list.broken {
-        writeln!(
-            w,
-            "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e}",
-            b.step + 1,
-            b.time + gr.dt,
-            b.pos.x,
-            b.pos.y,
-            b.normal.x,
-            b.normal.y,
-            b.radius,
-            b.a + 1,
-            b.b + 1,
-            b.mode.name(),
-            b.energy
-        )?;
-    }
-    w.flush()
+    super::write_atomic(path, true, |w| {
+        writeln!(w, "step,t,x,y,nx,ny,radius,disc_a,disc_b,mode,energy")?;
+        for b in &gr.bonds.list.broken {
+            writeln!(
+                w,
+                "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e}",
+                b.step + 1,
+                b.time + gr.dt,
+                b.pos.x,
+                b.pos.y,
+                b.normal.x,
+                b.normal.y,
+                b.radius,
+                b.a + 1,
+                b.b + 1,
+                b.mode.name(),
+                b.energy
+            )?;
+        }
+        Ok(())
+    })
 }
 
 #[cfg(test)]

@@ -111,13 +111,14 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
         "contacts": { "disc_disc": dd, "disc_wall": dw, "listed_pairs": gr.contacts.len() },
         "bytes_per_disc": gr.heap_bytes() as f64 / n.max(1) as f64,
         "energies": e,
-        "bonds": bonded.then(|| {
-            let (t, s) = gr.bonds.broken_counts();
-            json!({"made": gr.bonds.list.made, "intact": gr.bonds.list.len(), "broken_tension": t, "broken_shear": s, "released_energy": gr.bonds.list.released})
-        }),
         "wall_forces": gr.walls.iter().map(|w| json!({"name": w.name, "force": [w.force.x, w.force.y], "position_from": [w.a.x, w.a.y]})).collect::<Vec<_>>(),
         "warnings": warnings,
     });
+    if bonded {
+        let (t, s) = gr.bonds.broken_counts();
+        let l = &gr.bonds.list;
+        summary["bonds"] = json!({"made": l.made, "intact": l.len(), "broken_tension": t, "broken_shear": s, "released_energy": l.released});
+    }
     ended.record(&mut summary, &model);
     write_json(&out.join("summary.json"), &summary)?;
     ended.result(summary, &model, out)
