@@ -868,6 +868,16 @@ fn a_granular_run_restarts_with_identical_outputs() {
 }
 
 #[test]
+fn a_bonded_run_restarts_with_identical_outputs() {
+    // history (bond columns), bond_breaks.csv and the crack frames
+    // with a cohesion–friction shear strength
+    let block = include_str!("common/bonded_block.toml")
+        .replace("shear = 1.0e7", "cohesion = 8.0e6\nfriction_angle = 20");
+    let src = with_outputs(&block, "quantity = \"kinetic\"");
+    check_run_restart("bonded", &src, 5000, 2999);
+}
+
+#[test]
 fn a_continuum_run_restarts_with_identical_outputs() {
     let src = with_outputs(&cantilever("efg"), "point = [4.0, 0.0]\nquantity = \"uy\"");
     check_run_restart("continuum", &src, 240, 131);

@@ -854,6 +854,79 @@ impl PyModel {
         Ok(out)
     }
 
+    /// The intact parallel bonds as a dict of numpy arrays (copies), one
+    /// entry per bond, sorted by `(a, b)`: `a`, `b` (u4, the discs'
+    /// numbers, from 1, as in the files; a < b), `a_index`, `b_index` (the
+    /// same from 0: rows of the disc arrays),
+    /// `radius` (R̄), `fn` (normal force, compression positive), `fs`
+    /// (shear force along (−ny, nx), n from a to b), `moment` (on a),
+    /// `tensile` and `shear` (the bond's strengths: σ_c, and τ_c or the
+    /// cohesion c). Empty arrays without bonds.
+    fn bonds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let g = self.lock()?;
+        let out = PyDict::new(py);
+        let empty = Default::default();
+        let l = g.model.granular().map_or(&empty, |gr| &gr.bonds.list);
+        let number = |v: &[u32]| v.iter().map(|k| k + 1).collect::<Vec<u32>>();
+        out.set_item("a", number(&l.a).into_pyarray(py))?;
+        out.set_item("b", number(&l.b).into_pyarray(py))?;
+        out.set_item("a_index", l.a.clone().into_pyarray(py))?;
+        out.set_item("b_index", l.b.clone().into_pyarray(py))?;
+        for (k, v) in [
+            ("radius", &l.radius),
+            ("fn", &l.fn_),
+            ("fs", &l.fs),
+            ("moment", &l.moment),
+            ("tensile", &l.tensile),
+            ("shear", &l.shear),
+        ] {
+            out.set_item(k, v.clone().into_pyarray(py))?;
+        }
+        Ok(out)
+    }
+
+    /// Every bond broken so far, in the order they broke, as a dict of
+    /// numpy arrays (copies; the rows of `bond_breaks.csv`): `step` (in
+    /// which it broke), `t` (at its end), `x`,
+    /// `y` (the bond's centre), `nx`, `ny` (unit normal from a to b; the
+    /// crack runs across it), `radius`, `a`, `b` (u4, the discs' numbers
+    /// from 1, the file's `disc_a`, `disc_b`), `a_index`, `b_index` (the
+    /// same from 0), `mode` (u1: 0
+    /// tension, 1 shear) and `energy` (released).
+    fn bond_breaks<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let g = self.lock()?;
+        let out = PyDict::new(py);
+        let (broken, dt) = g
+            .model
+            .granular()
+            .map_or((&[][..], 0.0), |gr| (&gr.bonds.list.broken[..], gr.dt));
+        let col = |f: &dyn Fn(&efgdem::dem::bonds::BrokenBond) -> f64| {
+            broken.iter().map(f).collect::<Vec<f64>>()
+        };
+        let step: Vec<u64> = broken.iter().map(|b| b.step as u64 + 1).collect();
+        out.set_item("step", step.into_pyarray(py))?;
+        out.set_item("t", col(&|b| b.time + dt).into_pyarray(py))?;
+        out.set_item("x", col(&|b| b.pos.x).into_pyarray(py))?;
+        out.set_item("y", col(&|b| b.pos.y).into_pyarray(py))?;
+        out.set_item("nx", col(&|b| b.normal.x).into_pyarray(py))?;
+        out.set_item("ny", col(&|b| b.normal.y).into_pyarray(py))?;
+        out.set_item("radius", col(&|b| b.radius).into_pyarray(py))?;
+        let ids = |f: fn(&efgdem::dem::bonds::BrokenBond) -> u32| {
+            broken.iter().map(f).collect::<Vec<u32>>()
+        };
+        out.set_item("a", ids(|b| b.a + 1).into_pyarray(py))?;
+        out.set_item("b", ids(|b| b.b + 1).into_pyarray(py))?;
+        out.set_item("a_index", ids(|b| b.a).into_pyarray(py))?;
+        out.set_item("b_index", ids(|b| b.b).into_pyarray(py))?;
+        let mode: Vec<u8> = broken
+            .iter()
+            .map(|b| (b.mode == efgdem::dem::bonds::BreakMode::Shear) as u8)
+            .collect();
+        out.set_item("mode", mode.into_pyarray(py))?;
+        out.set_item("energy", col(&|b| b.energy).into_pyarray(py))?;
+        Ok(out)
+    }
+
     /// Every closed contact (disc–disc, disc–wall, then disc–body) as a
     /// numpy structured array with fields `kind` (u1: 0 disc–disc, 1
     /// disc–wall, 2 disc–body), `disc` (u4, the disc's number, from 1, as

@@ -571,3 +571,38 @@ def test_a_subcycled_body_past_its_limit_raises_model_error(tmp_path):
         m.run(0.08)
     # stopped before the end, at the step that failed
     assert 0.015 < m.time < 0.075
+
+
+# --- parallel bonds ----------------------------------------------------------
+
+# A bonded hexagonal block (209 discs, 565 touching pairs) crushed between
+# two platens: bonds break from about step 1 200 on.
+BONDED = ROOT / "tests" / "common" / "bonded_block.toml"
+
+
+def test_bonds_and_their_breakage_events():
+    import tomllib
+
+    runs = []
+    for threads in (1, 2):
+        m = efgdem.Model.from_dict(tomllib.loads(BONDED.read_text()), threads=threads)
+        m.step()  # the bonds are made at the start of step 1
+        b = m.bonds()
+        assert len(b["a"]) == 565 and b["a"].dtype == np.uint32
+        assert (b["a"] < b["b"]).all() and (b["radius"] == 0.0025).all()
+        # numbers from 1 as in the files, indices from 0
+        assert (b["a"] == b["a_index"] + 1).all() and (b["b"] == b["b_index"] + 1).all()
+        m.step(4999)
+        b, k = m.bonds(), m.bond_breaks()
+        assert len(b["a"]) + len(k["a"]) == 565 and len(k["a"]) > 50
+        assert set(np.unique(k["mode"])) <= {0, 1} and k["mode"].dtype == np.uint8
+        assert (np.diff(k["step"].astype(np.int64)) >= 0).all() and k["step"][-1] <= 5000
+        assert (k["energy"] > 0).all() and np.allclose(np.hypot(k["nx"], k["ny"]), 1.0)
+        # no pair is both intact and broken
+        intact = set(zip(b["a"].tolist(), b["b"].tolist()))
+        assert not intact & set(zip(k["a"].tolist(), k["b"].tolist()))
+        runs.append((b, k))
+    for name in runs[0][1]:
+        assert runs[0][1][name].tobytes() == runs[1][1][name].tobytes(), name
+    for name in runs[0][0]:
+        assert runs[0][0][name].tobytes() == runs[1][0][name].tobytes(), name

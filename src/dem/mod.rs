@@ -28,6 +28,7 @@
 //! histories are kept here, keyed by slot pairs `(i < j)` / `(disc, wall)`
 //! and remapped on renumbering.
 
+pub mod bonds;
 pub mod broadphase;
 pub mod contact;
 pub mod critical;
@@ -48,6 +49,7 @@ pub const DT_WARN: f64 = 0.8;
 /// Default time step, as a fraction of the critical step
 /// ([`Granular::critical_step`]), when a scenario gives none.
 pub const DT_SAFETY: f64 = 0.5;
+use bonds::Bonds;
 use broadphase::{ContactList, NeighbourGrid};
 use contact::{ContactLaw, effective_mass, normal_between};
 use particles::Particles;
@@ -141,12 +143,14 @@ pub struct Energies {
     pub spring: f64,
     /// `−Σ m g·x` (relative to the origin).
     pub gravity: f64,
+    /// Strain energy of the intact parallel bonds ([`bonds::bond_energy`]).
+    pub bond: f64,
 }
 
 impl Energies {
-    /// Kinetic + rotational + spring + gravity potential.
+    /// Kinetic + rotational + spring + gravity potential + bond energy.
     pub fn total(&self) -> f64 {
-        self.kinetic + self.rotational + self.spring + self.gravity
+        self.kinetic + self.rotational + self.spring + self.gravity + self.bond
     }
 }
 
@@ -182,6 +186,8 @@ pub struct Granular {
     pub contacts: ContactList,
     /// The contact search grid and its Verlet skin.
     pub grid: NeighbourGrid,
+    /// Parallel bonds between discs ([`bonds`]; none unless a rule is set).
+    pub bonds: Bonds,
     /// Largest disc displacement since the last rebuild.
     pub max_disp: f64,
     /// Keep each disc's contact force and moment of the step in
@@ -237,6 +243,7 @@ impl Granular {
             time: 0.0,
             contacts: ContactList::default(),
             grid: NeighbourGrid::new(skin),
+            bonds: Bonds::default(),
             max_disp: 0.0,
             store_forces: true,
             external: Vec::new(),
@@ -342,9 +349,15 @@ impl Granular {
         for &m in &p.material {
             present[m as usize] = true;
         }
+        let bond = self.bond_stiffness();
         let pairs: Vec<ContactLaw> = (0..nm * nm)
             .filter(|&ab| present[ab / nm] && present[ab % nm])
-            .map(|ab| self.laws[ab])
+            .map(|ab| {
+                let mut law = self.laws[ab];
+                law.kn += bond.0;
+                law.ks += bond.1;
+                law
+            })
             .collect();
         let walls: Vec<ContactLaw> = (0..self.walls.len() * nm)
             .filter(|&wa| present[wa % nm])
@@ -354,18 +367,40 @@ impl Granular {
         critical::estimate(d, p.len(), &pairs, &walls)
     }
 
+    /// The normal and shear stiffness a parallel bond adds to a pair in
+    /// contact (zero without bonds): `k̄_n A` and `k̄_s A + k̄_n I / r²`
+    /// (its bending taken as a shear spring at the disc's rim), with the
+    /// section of the largest disc's bond — so that the pair and packing
+    /// modes of [`critical_step`](Self::critical_step) bound bonded discs
+    /// too.
+    fn bond_stiffness(&self) -> (f64, f64) {
+        if self.bonds.rule.is_none() {
+            return (0.0, 0.0);
+        }
+        let law = &self.bonds.law;
+        let r = self.particles.radius.iter().copied().fold(0.0, f64::max);
+        let (a, i) = bonds::section(law.radius_factor * r, self.thickness);
+        (law.kn * a, law.ks * a + law.kn * i / (r * r))
+    }
+
     /// `2√(m_min/k_max)`: the critical step of the lightest disc on a wall
     /// of the stiffest law, undamped — not a bound for a pair or a packing
     /// ([`critical_step`](Self::critical_step)); the packing preparations
     /// use a fraction of it.
+    /// With parallel bonds, at most that of each bonded disc against its
+    /// bond's stiffness ([`Bonds::critical_dt`]).
     pub fn critical_dt(&self) -> f64 {
         let k = self.k_max();
         let m = self.particles.min_mass();
-        if k > 0.0 && m.is_finite() {
+        let contacts = if k > 0.0 && m.is_finite() {
             2.0 * (m / k).sqrt()
         } else {
             f64::INFINITY
-        }
+        };
+        contacts.min(
+            self.bonds
+                .critical_dt(&self.particles, self.thickness, self.k_max()),
+        )
     }
 
     /// One full time step: the three phases in order, with the external
@@ -433,19 +468,52 @@ impl Granular {
     }
 
     /// Phase 1: rebuild the neighbour list when the Verlet criterion says
-    /// so (or it was never built).
+    /// so (or it was never built); bond the discs when the bond rule's step
+    /// has come ([`bonds::BondRule`]).
     pub fn prepare_contacts(&mut self) {
         if self.grid.needs_rebuild(self.max_disp, &self.walls) {
-            self.grid
-                .rebuild(&mut self.particles, &self.walls, &mut self.contacts);
-            self.max_disp = 0.0;
+            self.rebuild();
         }
+        if let Some(rule) = &self.bonds.rule
+            && !self.bonds.list.created
+            && self.step >= rule.at_step
+        {
+            self.make_bonds();
+        }
+    }
+
+    /// Rebuild the neighbour list now (the discs may be renumbered).
+    fn rebuild(&mut self) {
+        self.grid
+            .rebuild(&mut self.particles, &self.walls, &mut self.contacts);
+        self.max_disp = 0.0;
+        self.bonds.invalidate();
+    }
+
+    /// Apply the bond rule to the present state: every listed pair whose
+    /// gap is below the rule's (the list is rebuilt first with a skin that
+    /// reaches that gap, if the present one does not).
+    fn make_bonds(&mut self) {
+        let Some(rule) = &self.bonds.rule else { return };
+        let reach = rule.gap * self.particles.max_radius();
+        let skin = self.grid.skin;
+        if reach >= skin {
+            self.grid.skin = reach * 1.01;
+            self.rebuild();
+            self.grid.skin = skin;
+            self.grid.stale = true;
+        } else if self.contacts.first.len() != self.particles.len() + 1 {
+            self.rebuild();
+        }
+        self.bonds.create(&self.particles, self.contacts.pairs());
     }
 
     /// Phase 2: evaluate every listed contact and *overwrite* each disc's
     /// force and torque with the sum of its contacts, in a fixed order
     /// (bitwise independent of the thread count, see [`sweep`]). Also sets
     /// each wall's force.
+    /// It also advances the parallel bonds by one step: call it once per
+    /// step.
     pub fn compute_contact_forces(&mut self) {
         self.sweep::<false>();
         self.wall_totals();
@@ -724,6 +792,7 @@ impl Granular {
                 e.spring += contact::rolling_energy(law, p.radius[d], q.mr);
             }
         }
+        e.bond = self.bonds.energy(self.thickness);
         e
     }
 
@@ -756,8 +825,12 @@ impl Granular {
         (dd, dw)
     }
 
-    /// Heap bytes held by the assembly (discs + contact list + grid).
+    /// Heap bytes held by the assembly (discs + contact list + grid +
+    /// bonds).
     pub fn heap_bytes(&self) -> usize {
-        self.particles.heap_bytes() + self.contacts.heap_bytes() + self.grid.heap_bytes()
+        self.particles.heap_bytes()
+            + self.contacts.heap_bytes()
+            + self.grid.heap_bytes()
+            + self.bonds.heap_bytes()
     }
 }

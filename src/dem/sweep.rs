@@ -21,6 +21,7 @@
 //! order, then walls), so the result is bitwise the same on any number of
 //! threads.
 
+use super::bonds::BondForce;
 use super::broadphase::{ContactList, WallPair};
 use super::contact::{self, ContactForce, ContactLaw, Side, effective_mass};
 use super::integrate;
@@ -78,6 +79,12 @@ struct Ctx<'a> {
     /// `(check_radii/Δt)²`: a disc is flagged when `v·v > max_v2 r²` or
     /// its state is not finite.
     max_v2: f64,
+    /// Bonds of the disc in slot s: `bond_list[bond_first[s]..bond_first[s
+    /// + 1]]` (`2k` or `2k + 1`: side a or b of bond k; empty without bonds).
+    bond_first: &'a [u32],
+    bond_list: &'a [u32],
+    /// What each bond does in this step.
+    bond_buf: &'a [BondForce],
 }
 
 /// The discs `lo..lo + pos.len()` with their pairs (as first disc) and
@@ -206,6 +213,17 @@ impl Granular {
             self.grid.stale = true;
             self.prepare_contacts();
         }
+        // the bonds, from the state before the step (each disc adds its
+        // bonds' forces in the sweep)
+        if !self.bonds.list.is_empty() {
+            self.bonds.evaluate(
+                &self.particles,
+                self.thickness,
+                self.dt,
+                self.step,
+                self.time,
+            );
+        }
         if self.contacts.rolling {
             self.sweep_with::<ADVANCE, true>()
         } else {
@@ -287,6 +305,13 @@ impl Granular {
             store: !ADVANCE || self.store_forces,
             external: &self.external,
             max_v2: self.check_radii * self.check_radii / (self.dt * self.dt),
+            bond_first: if self.bonds.list.is_empty() {
+                &[]
+            } else {
+                &self.bonds.first
+            },
+            bond_list: &self.bonds.per_disc,
+            bond_buf: &self.bonds.buf,
         };
         let p = &mut self.particles;
         let ref_pos: &[Vec2] = if ADVANCE && self.grid.ref_pos.len() == n {
@@ -677,6 +702,20 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         let mut tq = radius[d] * st;
         if ROLL {
             tq += sr;
+        }
+        if !ctx.bond_first.is_empty() {
+            let s = lo + d;
+            let (b0, b1) = (ctx.bond_first[s] as usize, ctx.bond_first[s + 1] as usize);
+            for &e in &ctx.bond_list[b0..b1] {
+                let bf = &ctx.bond_buf[e as usize >> 1];
+                if e & 1 == 0 {
+                    sf += bf.f;
+                    tq += bf.ma;
+                } else {
+                    sf -= bf.f;
+                    tq += bf.mb;
+                }
+            }
         }
         while ek < ctx.external.len() && ctx.external[ek].0 as usize == lo + d {
             sf += ctx.external[ek].1;

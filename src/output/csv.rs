@@ -233,6 +233,61 @@ pub fn write_discs_csv(gr: &Granular, path: &Path) -> std::io::Result<()> {
     })
 }
 
+/// The `history.csv` columns of the parallel bonds: intact bonds, bonds
+/// broken in tension and in shear so far, energy stored in the intact
+/// bonds and released by the broken ones.
+pub const BOND_COLUMNS: [&str; 5] = [
+    "bonds",
+    "bonds_broken_tension",
+    "bonds_broken_shear",
+    "E_bond",
+    "E_bond_released",
+];
+
+/// The values of [`BOND_COLUMNS`] for `gr`.
+pub fn bond_row(gr: &Granular) -> [f64; 5] {
+    let b = &gr.bonds;
+    let (t, s) = b.broken_counts();
+    [
+        b.list.len() as f64,
+        t as f64,
+        s as f64,
+        b.energy(gr.thickness),
+        b.list.released,
+    ]
+}
+
+/// Write every bond broken so far to `path` (`bond_breaks.csv`): one row
+/// per breakage in the order they happened, with the step in which it
+/// broke (its stresses reached the strength in the state before; the first
+/// `history.csv` row that counts it) and the time at the end of it, the
+/// bond's centre and unit normal (from disc a to b; the crack runs across
+/// it), its radius, the two discs (1-based), the mode and the energy it
+/// released.
+pub fn write_bond_breaks(gr: &Granular, path: &Path) -> std::io::Result<()> {
+    super::write_atomic(path, true, |w| {
+        writeln!(w, "step,t,x,y,nx,ny,radius,disc_a,disc_b,mode,energy")?;
+        for b in &gr.bonds.list.broken {
+            writeln!(
+                w,
+                "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e}",
+                b.step + 1,
+                b.time + gr.dt,
+                b.pos.x,
+                b.pos.y,
+                b.normal.x,
+                b.normal.y,
+                b.radius,
+                b.a + 1,
+                b.b + 1,
+                b.mode.name(),
+                b.energy
+            )?;
+        }
+        Ok(())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

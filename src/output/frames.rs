@@ -12,7 +12,7 @@
 //! [`vtp`](super::vtp), [`vtu`](super::vtu); how: [`vtk`](super::vtk).
 
 use super::vtk::{PvdSeries, VtkFormat};
-use super::vtp::{write_contacts, write_discs, write_walls};
+use super::vtp::{write_contacts, write_cracks, write_discs, write_walls};
 use super::vtu::write_body;
 use crate::efg::assemble::PointShapes;
 use crate::model::Model;
@@ -30,6 +30,7 @@ enum Dataset {
     Discs,
     Contacts,
     Walls,
+    Cracks,
     Body(usize),
 }
 
@@ -61,6 +62,9 @@ impl Frames {
             sets.push((Dataset::Contacts, "contacts"));
             if !g.walls.is_empty() {
                 sets.push((Dataset::Walls, "walls"));
+            }
+            if g.bonds.active() {
+                sets.push((Dataset::Cracks, "cracks"));
             }
         }
         sets.extend(
@@ -104,6 +108,7 @@ impl Frames {
                 Dataset::Discs => ("discs", "vtp"),
                 Dataset::Contacts => ("contacts", "vtp"),
                 Dataset::Walls => ("walls", "vtp"),
+                Dataset::Cracks => ("cracks", "vtp"),
                 Dataset::Body(i) => (self.bodies[i].as_str(), "vtu"),
             };
             let f = frame_file(stem, step, ext);
@@ -117,6 +122,7 @@ impl Frames {
                 Dataset::Discs => write_discs(g(), &contacts, self.format, &path)?,
                 Dataset::Contacts => write_contacts(g(), &contacts, self.format, &path)?,
                 Dataset::Walls => write_walls(g(), self.format, &path)?,
+                Dataset::Cracks => write_cracks(g(), self.format, &path)?,
                 Dataset::Body(i) => {
                     write_body(model.body(i), self.nodal[i].as_ref(), self.format, &path)?
                 }

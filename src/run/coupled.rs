@@ -9,6 +9,7 @@ use crate::geom::Vec2;
 use crate::model::body::At;
 use crate::model::body::BodyRef;
 use crate::model::{Model, System, coupled_body as body};
+use crate::output::csv::{BOND_COLUMNS, bond_row, write_bond_breaks};
 use crate::output::write_json;
 use crate::scenario::Scenario;
 use serde::{Deserialize, Serialize};
@@ -394,6 +395,10 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
         "W_ext",
         "E_diss",
     ]);
+    let bonded = coupled(&model).granular.bonds.active();
+    if bonded {
+        cols.extend(BOND_COLUMNS);
+    }
     let mut out = Outputs::open(&run, &model, &cols)?;
     let mut r = match &run.restart {
         Some(ck) => ck.driver()?,
@@ -421,6 +426,9 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
             row.extend([
                 fn_sum, e.kin_dem, e.kin_body, e.strain, e.penalty, e.contact, e.w_ext, e.diss,
             ]);
+            if bonded {
+                row.extend(bond_row(&m.granular));
+            }
             out.hist.row(&row)?;
         }
         if due(step, vtk_every, steps) {
@@ -447,6 +455,9 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     session.finish();
     out.hist.flush()?;
     let m = coupled(&model);
+    if bonded {
+        write_bond_breaks(&m.granular, &dir.join("bond_breaks.csv"))?;
+    }
     let e = r.meter.account(m);
     let events = &r.events;
     let crit = m.granular.critical_step(&m.body_laws);

@@ -5,16 +5,17 @@ use super::session::{Ended, Outputs, Session, due};
 use super::{Run, RunError};
 use crate::dem::{DT_SAFETY, DT_WARN};
 use crate::model::{Model, System};
-use crate::output::csv::write_discs_csv;
+use crate::output::csv::{BOND_COLUMNS, bond_row, write_bond_breaks, write_discs_csv};
 use crate::output::write_json;
 use crate::scenario::Scenario;
 use serde_json::json;
 use std::time::Instant;
 
 /// Run a granular scenario: `history.csv` (columns `step, t` and one per
-/// probe; a row at step 0, every `output.every` steps and at the last step),
-/// `frames/discs_NNNNNNN.vtp` + `discs.pvd` every `output.vtk_every` steps,
-/// `discs_final.csv` and `summary.json`.
+/// probe, then [`BOND_COLUMNS`] with bonds; a row at step 0, every
+/// `output.every` steps and at the last step), `frames/discs_NNNNNNN.vtp` +
+/// `discs.pvd` every `output.vtk_every` steps, `discs_final.csv`,
+/// `bond_breaks.csv` with bonds, and `summary.json`.
 pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunError> {
     let (sc, out) = (run.sc, &run.opts.out_dir);
     let steps = model.steps;
@@ -25,6 +26,10 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
     }
     let mut cols = vec!["step", "t"];
     cols.extend(run.probes.iter().map(|p| p.0.as_str()));
+    let bonded = model.granular().is_some_and(|g| g.bonds.active());
+    if bonded {
+        cols.extend(BOND_COLUMNS);
+    }
     let mut outputs = Outputs::open(&run, &model, &cols)?;
     let every = sc.output.every.max(1);
     let vtk_every = sc.output.vtk_every;
@@ -34,6 +39,10 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
         row[1] = model.time();
         for (k, (_, s)) in run.probes.iter().enumerate() {
             row[2 + k] = model.probe(s);
+        }
+        if bonded {
+            let n = row.len() - BOND_COLUMNS.len();
+            row[n..].copy_from_slice(&bond_row(granular(model)));
         }
         out.hist.row(row)
     };
@@ -79,6 +88,9 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
     if !matches!(ended, Ended::Unstable(_) | Ended::Failed(_)) {
         write_discs_csv(gr, &out.join("discs_final.csv"))?;
     }
+    if bonded {
+        write_bond_breaks(gr, &out.join("bond_breaks.csv"))?;
+    }
     let n = gr.particles.len();
     let (dd, dw) = gr.touching();
     let e = gr.energies();
@@ -105,6 +117,11 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
         "warnings": warnings,
     });
     run.annotate(&mut summary)?;
+    if bonded {
+        let (t, s) = gr.bonds.broken_counts();
+        let l = &gr.bonds.list;
+        summary["bonds"] = json!({"made": l.made, "intact": l.len(), "broken_tension": t, "broken_shear": s, "released_energy": l.released});
+    }
     ended.record(&mut summary, &model);
     write_json(&out.join("summary.json"), &summary)?;
     ended.result(summary, &model, out)

@@ -386,6 +386,11 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
     gr.damping = body;
     gr.gravity = Vec2::from(sc.simulation.gravity);
     gr.thickness = g.thickness;
+    if let Some(b) = &sc.bonds {
+        let (law, rule) = super::bonds::law_and_rule(sc, b);
+        gr.bonds.law = law;
+        gr.bonds.rule = Some(rule);
+    }
     gr.dt = match sc.simulation.dt {
         Some(dt) => dt,
         None => DT_SAFETY * gr.critical_step(&body_laws(sc, &gr.materials)).dt,

@@ -8,6 +8,7 @@
 //! Every field and its default is documented in `docs/scenario.md`.
 
 pub mod body;
+pub mod bonds;
 pub mod build;
 pub mod builder;
 pub mod fill;
@@ -39,6 +40,8 @@ pub struct Scenario {
     /// Rigid walls (line segments).
     #[serde(default)]
     pub wall: Vec<granular::WallSpec>,
+    /// Parallel bonds between the discs.
+    pub bonds: Option<bonds::BondsSpec>,
     /// History outputs, one `history.csv` column each.
     #[serde(default)]
     pub probe: Vec<Probe>,
@@ -730,6 +733,7 @@ impl Scenario {
         );
         body::validate(self, &mut p);
         granular::validate(self, &mut p);
+        bonds::validate(self, &mut p);
         measure::validate(self, &mut p);
         p.0
     }
