@@ -112,7 +112,8 @@ impl TreeSolve {
             None => ((0..n as u32).collect(), (0..n as u32).collect()),
         };
         let roots = cut(&nodes, &rows, n);
-        let mut subtrees: Vec<Range<usize>> = roots.iter().map(|&(r, size)| r + 1 - size..r + 1).collect();
+        let mut subtrees: Vec<Range<usize>> =
+            roots.iter().map(|&(r, size)| r + 1 - size..r + 1).collect();
         subtrees.sort_by_key(|r| r.start);
         let mut in_sub = vec![false; ns];
         for r in &subtrees {
@@ -131,7 +132,13 @@ impl TreeSolve {
         for (i, &c) in top_cols.iter().enumerate() {
             top_pos[c as usize] = i as u32;
         }
-        let max_m = |r: &Range<usize>| nodes[r.clone()].iter().map(|v| v.pat.len()).max().unwrap_or(0);
+        let max_m = |r: &Range<usize>| {
+            nodes[r.clone()]
+                .iter()
+                .map(|v| v.pat.len())
+                .max()
+                .unwrap_or(0)
+        };
         TreeSolve {
             bufs: subtrees.iter().map(|_| vec![0.0; top_cols.len()]).collect(),
             tmp: subtrees.iter().map(|r| vec![0.0; max_m(r)]).collect(),
@@ -160,7 +167,12 @@ impl TreeSolve {
     /// (the subtrees, the large off-diagonal blocks of the top).
     pub(crate) fn parallel_share(&self) -> f64 {
         let total: usize = self.nodes.iter().map(Node::cost).sum();
-        let subtrees: usize = self.subtrees.iter().flat_map(|r| &self.nodes[r.clone()]).map(Node::cost).sum();
+        let subtrees: usize = self
+            .subtrees
+            .iter()
+            .flat_map(|r| &self.nodes[r.clone()])
+            .map(Node::cost)
+            .sum();
         let split: usize = self
             .top
             .iter()
@@ -321,11 +333,17 @@ fn cut(nodes: &[Node], rows: &[u32], n: usize) -> Vec<(usize, usize)> {
     let ns = nodes.len();
     let mut owner = vec![0usize; n];
     for (k, v) in nodes.iter().enumerate() {
-        owner[v.start..v.start + v.w].iter_mut().for_each(|o| *o = k);
+        owner[v.start..v.start + v.w]
+            .iter_mut()
+            .for_each(|o| *o = k);
     }
     let parent: Vec<usize> = nodes
         .iter()
-        .map(|v| rows.get(v.pat.start).filter(|_| !v.pat.is_empty()).map_or(usize::MAX, |&r| owner[r as usize]))
+        .map(|v| {
+            rows.get(v.pat.start)
+                .filter(|_| !v.pat.is_empty())
+                .map_or(usize::MAX, |&r| owner[r as usize])
+        })
         .collect();
     let mut cost: Vec<usize> = nodes.iter().map(Node::cost).collect();
     let mut size = vec![1usize; ns];
@@ -357,7 +375,11 @@ fn cut(nodes: &[Node], rows: &[u32], n: usize) -> Vec<(usize, usize)> {
     }
     let mut cand: Vec<usize> = (0..ns).filter(|&k| parent[k] == usize::MAX).collect();
     loop {
-        let Some((i, &k)) = cand.iter().enumerate().max_by_key(|&(i, &k)| (cost[k], usize::MAX - i)) else {
+        let Some((i, &k)) = cand
+            .iter()
+            .enumerate()
+            .max_by_key(|&(i, &k)| (cost[k], usize::MAX - i))
+        else {
             break;
         };
         if cost[k] * CUT <= total || children[k].is_empty() {
