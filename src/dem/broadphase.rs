@@ -250,14 +250,15 @@ impl ContactList {
     /// wall pairs follow. `√m_eff` and the cross index are left stale (a
     /// rebuild follows).
     fn renumber(&mut self, new_of_old: &[u32]) {
-        self.remap(new_of_old, new_of_old.len(), &[], &[]);
+        self.remap(new_of_old, new_of_old.len(), &[], &[], |_, _| true);
     }
 
     /// Move the list onto a new set of `n` discs: the disc in old slot `s`
     /// is now in slot `new_of_old[s]`, or gone when that is `u32::MAX` (its
     /// pairs are dropped); `extra` pairs `(a, b, shear, rolling moment on
     /// a)` and `extra_walls` (in new slots) are added, e.g. the histories
-    /// a disc brings along when it joins the set. The pairs are ordered
+    /// a disc brings along when it joins the set; old pairs `(i, j)` (old
+    /// slots) for which `keep(i, j)` is false are dropped. The pairs are ordered
     /// `i < j` again (a rolling history flips sign when its pair's order
     /// flips) and sorted; the wall pairs likewise. `√m_eff` and the cross
     /// index are left stale (a rebuild follows).
@@ -267,6 +268,7 @@ impl ContactList {
         n: usize,
         extra: &[(u32, u32, f64, f64)],
         extra_walls: &[WallPair],
+        keep: impl Fn(u32, u32) -> bool,
     ) {
         const GONE: u32 = u32::MAX;
         if self.first.len() != new_of_old.len() + 1 {
@@ -282,7 +284,8 @@ impl ContactList {
         // (first, second, flipped) of old pair k of disc i, None when dropped
         let key = |i: usize, k: usize| {
             let (a, b) = (new_of_old[i], new_of_old[self.j[k] as usize]);
-            (a != GONE && b != GONE).then_some((a.min(b), a.max(b), a > b))
+            (a != GONE && b != GONE && keep(i as u32, self.j[k]))
+                .then_some((a.min(b), a.max(b), a > b))
         };
         let old_rows = new_of_old.len();
         // counting sort by the new first disc

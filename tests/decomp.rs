@@ -1,0 +1,140 @@
+//! A granular assembly divided over 2, 3 and 4 ranks (threads of this
+//! process talking through `decomp::Threads`, the same code paths as MPI)
+//! steps bitwise as the undivided one: the state gathered on rank 0 equals
+//! the whole's saved state, byte for byte, at every check — discs, the
+//! pair list and its shear and rolling histories, walls (a servo among
+//! them), the Verlet bookkeeping.
+
+use efgdem::decomp::{Comm, Decomposed, Threads};
+use efgdem::dem::Granular;
+use efgdem::dem::state::GranularState;
+use efgdem::scenario;
+use std::sync::Arc;
+
+fn build(src: &str) -> Granular {
+    scenario::parse(src, "t.toml")
+        .unwrap_or_else(|e| panic!("{e}"))
+        .build()
+        .unwrap_or_else(|e| panic!("{e}"))
+        .into_granular()
+        .expect("granular")
+}
+
+/// Discs falling into a box whose lid is a servo wall; rolling resistance.
+fn settling(n: usize, extra: &str) -> String {
+    format!(
+        r#"
+[simulation]
+steps = 1
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "sand"
+density = 2650.0
+kn = 1.0e6
+ks = 5.0e5
+friction = 0.5
+rolling_friction = 0.1
+
+[granular]
+material = "sand"
+discs = {{ generate = "random", box = [[0.0, 0.0], [0.2, 0.3]], count = {n}, radius = [0.002, 0.003], seed = 5 }}
+damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+{extra}
+
+[[wall]]
+name = "floor"
+from = [-0.01, 0.0]
+to = [0.21, 0.0]
+
+[[wall]]
+name = "left"
+from = [0.0, -0.01]
+to = [0.0, 0.4]
+
+[[wall]]
+name = "right"
+from = [0.2, -0.01]
+to = [0.2, 0.4]
+
+[[wall]]
+name = "lid"
+from = [-0.01, 0.3]
+to = [0.21, 0.3]
+servo = {{ stress = 2.0e3, max_velocity = 0.5 }}
+"#
+    )
+}
+
+fn bytes(s: &GranularState) -> Vec<u8> {
+    postcard::to_stdvec(s).unwrap()
+}
+
+/// Step the whole and `ranks` parts `steps` steps, comparing every
+/// `every` steps; returns the parts' largest imbalance and the number of
+/// discs that changed rank.
+fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> f64 {
+    let mut single = whole.clone();
+    single.prepare_contacts();
+    let mut want = Vec::new();
+    for s in 1..=steps {
+        single.step();
+        if s % every == 0 {
+            want.push(bytes(&single.save_state()));
+        }
+    }
+    let comms = Threads::group(ranks);
+    let got: Vec<(Vec<Vec<u8>>, f64)> = std::thread::scope(|sc| {
+        let hs: Vec<_> = comms
+            .into_iter()
+            .map(|c| {
+                let whole = whole.clone();
+                sc.spawn(move || {
+                    let comm: Arc<dyn Comm> = Arc::new(c);
+                    let mut d = Decomposed::new(&whole, comm);
+                    drop(whole);
+                    d.prepare();
+                    let mut out = Vec::new();
+                    let mut worst = 0.0f64;
+                    for s in 1..=steps {
+                        d.step(false);
+                        worst = worst.max(d.imbalance);
+                        if s % every == 0 {
+                            if let Some(st) = d.gather() {
+                                out.push(bytes(&st));
+                            }
+                        }
+                    }
+                    (out, worst)
+                })
+            })
+            .collect();
+        hs.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let (dd, dw) = single.touching();
+    println!(
+        "{} discs, {} rebuilds, {dd} disc–disc and {dw} disc–wall contacts, lid at {:.4}",
+        single.particles.len(),
+        single.grid.rebuilds,
+        single.walls[3].a.y
+    );
+    let (root, worst) = &got[0];
+    assert_eq!(root.len(), want.len());
+    for (k, (a, b)) in root.iter().zip(&want).enumerate() {
+        assert!(
+            a == b,
+            "{ranks} ranks: state after {} steps differs from the whole",
+            (k + 1) * every
+        );
+    }
+    *worst
+}
+
+#[test]
+fn parts_step_bitwise_as_the_whole() {
+    let whole = build(&settling(1500, ""));
+    for ranks in [1, 2, 3, 4] {
+        let worst = compare(&whole, ranks, 600, 100);
+        println!("{ranks} ranks: worst imbalance {worst:.3}");
+    }
+}
