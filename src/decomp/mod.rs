@@ -132,8 +132,7 @@ impl Decomposed {
         let owner: Vec<usize> = p.pos.iter().map(|&q| regions.owner(q)).collect();
         let local: Vec<u32> = (0..n as u32)
             .filter(|&s| {
-                owner[s as usize] == me
-                    || regions.regions[me].distance(p.pos[s as usize]) <= width
+                owner[s as usize] == me || regions.regions[me].distance(p.pos[s as usize]) <= width
             })
             .collect();
         let mut new_of_old = vec![GONE; n];
@@ -152,18 +151,28 @@ impl Decomposed {
         part.grid.stale = whole.grid.stale;
         part.max_disp = whole.max_disp;
         if whole.grid.ref_pos.len() == n {
-            part.grid.ref_pos = local.iter().map(|&s| whole.grid.ref_pos[s as usize]).collect();
+            part.grid.ref_pos = local
+                .iter()
+                .map(|&s| whole.grid.ref_pos[s as usize])
+                .collect();
         }
         if whole.contacts.first.len() == n + 1 {
             let mut list = whole.contacts.clone();
             let mine = |s: u32| owner[s as usize] == me;
-            list.remap(&new_of_old, local.len(), &[], &[], |i, j| mine(i) || mine(j));
-            list.walls.retain(|w| part.particles.fixity[w.disc as usize] & GHOST == 0);
+            list.remap(&new_of_old, local.len(), &[], &[], |i, j| {
+                mine(i) || mine(j)
+            });
+            list.walls
+                .retain(|w| part.particles.fixity[w.disc as usize] & GHOST == 0);
             list.wall_buf = vec![Default::default(); list.walls.len()];
             list.finish(&part.particles);
             part.contacts = list;
         }
-        let follows = whole.walls.iter().map(|w| w.motion.follows_state()).collect();
+        let follows = whole
+            .walls
+            .iter()
+            .map(|w| w.motion.follows_state())
+            .collect();
         let mut d = Decomposed {
             part,
             comm,
@@ -207,7 +216,11 @@ impl Decomposed {
     /// Rebuild the contact list now if the whole assembly would
     /// (collective): before the first record of a run.
     pub fn prepare(&mut self) {
-        if self.part.grid.needs_rebuild(self.part.max_disp, &self.part.walls) {
+        if self
+            .part
+            .grid
+            .needs_rebuild(self.part.max_disp, &self.part.walls)
+        {
             self.rebuild();
         }
     }
@@ -219,7 +232,11 @@ impl Decomposed {
     /// request). Returns whether every disc passed the step check, and the
     /// flag of any rank.
     pub fn step(&mut self, flag: bool) -> (bool, bool) {
-        if self.part.grid.needs_rebuild(self.part.max_disp, &self.part.walls) {
+        if self
+            .part
+            .grid
+            .needs_rebuild(self.part.max_disp, &self.part.walls)
+        {
             self.rebuild();
         } else {
             self.refresh_ghosts();
@@ -366,16 +383,22 @@ impl Decomposed {
                 .collect();
             centre_bounds(&owned)
         };
+        // and how many discs each region would own now
+        let mut mine = vec![0u64; size];
+        let p = &self.part.particles;
+        for s in (0..p.len()).filter(|&s| p.fixity[s] & GHOST == 0) {
+            mine[self.regions.owner(p.pos[s])] += 1;
+        }
         let mut b = Pack::default();
-        b.u64(self.owned() as u64);
+        mine.iter().for_each(|&c| b.u64(c));
         b.vec2(lo);
         b.vec2(hi);
         let all = self.comm.all_gather(&b.0);
         let (mut glo, mut ghi) = (lo, hi);
-        let mut counts = Vec::with_capacity(size);
+        let mut counts = vec![0u64; size];
         for b in &all {
             let mut u = Unpack(b);
-            counts.push(u.u64());
+            counts.iter_mut().for_each(|c| *c += u.u64());
             let (l, h) = (u.vec2(), u.vec2());
             glo = Vec2::new(glo.x.min(l.x), glo.y.min(l.y));
             ghi = Vec2::new(ghi.x.max(h.x), ghi.y.max(h.y));
@@ -585,7 +608,7 @@ impl Decomposed {
             .collect();
         let ghost_old = |s: u32| p.fixity[s as usize] & GHOST != 0;
         let mut list = std::mem::take(&mut self.part.contacts);
-        list.remap(&new_of_old, np.len(), &[], &extra_walls, |i, j| {
+        list.remap(&new_of_old, np.len(), &extra, &extra_walls, |i, j| {
             !(ghost_old(i) && ghost_old(j))
         });
         self.key = keep.iter().map(|e| e.0).collect();
@@ -616,7 +639,11 @@ impl Decomposed {
             b.f64(p.omega[s]);
             b.vec2(p.force[s]);
             b.f64(p.torque[s]);
-            b.vec2(if has_ref { g.grid.ref_pos[s] } else { Vec2::ZERO });
+            b.vec2(if has_ref {
+                g.grid.ref_pos[s]
+            } else {
+                Vec2::ZERO
+            });
         }
         let mine = |&(_, (i, _)): &(usize, (usize, usize))| p.fixity[i] & GHOST == 0;
         b.u32(c.pairs().enumerate().filter(mine).count() as u32);

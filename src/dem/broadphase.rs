@@ -284,8 +284,11 @@ impl ContactList {
         // (first, second, flipped) of old pair k of disc i, None when dropped
         let key = |i: usize, k: usize| {
             let (a, b) = (new_of_old[i], new_of_old[self.j[k] as usize]);
-            (a != GONE && b != GONE && keep(i as u32, self.j[k]))
-                .then_some((a.min(b), a.max(b), a > b))
+            (a != GONE && b != GONE && keep(i as u32, self.j[k])).then_some((
+                a.min(b),
+                a.max(b),
+                a > b,
+            ))
         };
         let old_rows = new_of_old.len();
         // counting sort by the new first disc
@@ -655,9 +658,7 @@ impl NeighbourGrid {
                             let cc = (yy * nx + xx) as usize;
                             let (a, b) = (self.cell_start[cc], self.cell_start[cc + 1]);
                             for &j in &self.cell_items[a as usize..b as usize] {
-                                if (j as usize) <= i
-                                    || ghost && p.fixity[j as usize] & GHOST != 0
-                                {
+                                if (j as usize) <= i || ghost && p.fixity[j as usize] & GHOST != 0 {
                                     continue;
                                 }
                                 let reach = ri + p.radius[j as usize] + skin;
