@@ -2,8 +2,6 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
-use efgdem::coupling::CouplingError;
-use efgdem::model::ModelError;
 use efgdem::run::RunError;
 use efgdem::scenario::{self, ScenarioError};
 use std::path::PathBuf;
@@ -104,6 +102,19 @@ fn main() -> ExitCode {
     match dispatch(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
+            // under mpirun every rank fails alike: rank 0 says why
+            let rank = ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"]
+                .iter()
+                .find_map(|v| std::env::var(v).ok()?.parse::<usize>().ok());
+            if rank.is_some_and(|r| r > 0) {
+                let run = e.chain().find_map(|c| c.downcast_ref::<RunError>());
+                let scenario = e.downcast_ref::<ScenarioError>().is_some();
+                return ExitCode::from(if scenario {
+                    2
+                } else {
+                    run.map_or(1, RunError::exit_code)
+                });
+            }
             if let Some(se) = e.downcast_ref::<ScenarioError>() {
                 eprintln!("error: {se}");
                 return ExitCode::from(2);
@@ -111,24 +122,45 @@ fn main() -> ExitCode {
             let run = e.chain().find_map(|c| c.downcast_ref::<RunError>());
             // Bad input is exit code 2, an unstable run 3, a stopped one
             // 128 + signal (the shell's convention); anything else 1.
-            let code = match run {
+            match run {
                 Some(RunError::Scenario(se)) => {
                     eprintln!("error: {se}");
-                    return ExitCode::from(2);
+                    ExitCode::from(2)
                 }
-                Some(RunError::NotEmpty(_) | RunError::Restart { .. }) => 2,
-                Some(RunError::Model(
-                    ModelError::Unstable(_)
-                    | ModelError::Coupling(
-                        CouplingError::Unstable { .. } | CouplingError::Subcycling { .. },
-                    ),
-                )) => 3,
-                Some(RunError::Interrupted { signal, .. }) => 128 + (*signal as u8 & 0x7f),
-                _ => 1,
-            };
-            eprintln!("error: {e:#}");
-            ExitCode::from(code)
+                // rank 0 of the run said why
+                Some(RunError::OnRank0 { code }) => ExitCode::from(*code),
+                _ => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(run.map_or(1, RunError::exit_code))
+                }
+            }
         }
+    }
+}
+
+/// The ranks of this process's MPI job (`mpirun -np N`): one rank when not
+/// started by mpirun. A build without the `mpi` feature started as one of
+/// several ranks refuses to run (each copy would run the whole scenario).
+fn ranks() -> anyhow::Result<Arc<dyn efgdem::decomp::Comm>> {
+    #[cfg(feature = "mpi")]
+    {
+        match efgdem::decomp::mpi::Mpi::init() {
+            Some(m) => Ok(Arc::new(m)),
+            None => anyhow::bail!("MPI cannot be initialised with serialised thread support"),
+        }
+    }
+    #[cfg(not(feature = "mpi"))]
+    {
+        let size = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"]
+            .iter()
+            .find_map(|v| std::env::var(v).ok()?.parse::<usize>().ok());
+        if let Some(n) = size.filter(|&n| n > 1) {
+            return Err(RunError::Ranks(format!(
+                "started as one of {n} MPI ranks, but this efgdem was built without MPI: build it with `cargo build --release --features mpi` (needs a system MPI, e.g. the libopenmpi-dev, openmpi-bin and libclang-dev packages)"
+            ))
+            .into());
+        }
+        Ok(Arc::new(efgdem::decomp::Solo))
     }
 }
 
@@ -184,16 +216,20 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 restart,
                 ..efgdem::run::RunOptions::new(&out)
             };
+            let comm = ranks()?;
+            let root = comm.rank() == 0;
             let t0 = std::time::Instant::now();
             in_pool(threads.unwrap_or(sc.simulation.threads), || {
-                efgdem::run::run(&sc, &opts)
+                efgdem::run::run_on(&sc, &opts, comm)
             })?
             .with_context(|| format!("running {}", file.display()))?;
-            eprintln!(
-                "done in {:.3} s; results in {}",
-                t0.elapsed().as_secs_f64(),
-                out.display()
-            );
+            if root {
+                eprintln!(
+                    "done in {:.3} s; results in {}",
+                    t0.elapsed().as_secs_f64(),
+                    out.display()
+                );
+            }
         }
         Cmd::Reproduce {
             out,

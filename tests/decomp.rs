@@ -183,3 +183,64 @@ fn ranks_without_discs_take_part() {
     let whole = build(&settling(3, ""));
     compare(&whole, 4, 200, 50);
 }
+
+/// `efgdem run` of a granular scenario on 3 ranks (threads) writes the
+/// files of the run on one rank, byte for byte: history (wall forces of
+/// the servo lid, energies, a disc's position), final discs.
+#[test]
+fn run_on_ranks_writes_the_outputs_of_one_rank() {
+    let probes = r#"
+[output]
+every = 250
+[[probe]]
+name = "lid_fy"
+wall = "lid"
+quantity = "wall_fy"
+[[probe]]
+name = "ek"
+quantity = "kinetic"
+[[probe]]
+name = "spring"
+quantity = "spring"
+[[probe]]
+name = "contacts"
+quantity = "contacts"
+[[probe]]
+name = "y7"
+disc = 7
+quantity = "y"
+"#;
+    let src = settling(600, "").replace("steps = 1\n", "steps = 4000\n") + probes;
+    let sc = scenario::parse(&src, "t.toml").unwrap_or_else(|e| panic!("{e}"));
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-run-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut opts = efgdem::run::RunOptions::new(dir.join("one"));
+    opts.quiet = true;
+    efgdem::run::run(&sc, &opts).unwrap();
+    let read = |d: &str, f: &str| std::fs::read(dir.join(d).join(f)).unwrap();
+    let hist = String::from_utf8(read("one", "history.csv")).unwrap();
+    println!("{}", hist.lines().last().unwrap());
+    for ranks in [2, 3] {
+        let name = format!("ranks{ranks}");
+        let opts = efgdem::run::RunOptions {
+            out_dir: dir.join(&name),
+            ..opts.clone()
+        };
+        std::thread::scope(|s| {
+            for c in Threads::group(ranks) {
+                let (sc, opts) = (&sc, &opts);
+                s.spawn(move || efgdem::run::run_on(sc, opts, Arc::new(c)).unwrap());
+            }
+        });
+        for f in ["history.csv", "discs_final.csv"] {
+            assert!(
+                read("one", f) == read(&name, f),
+                "{ranks} ranks: {f} differs"
+            );
+        }
+        let s: serde_json::Value = serde_json::from_slice(&read(&name, "summary.json")).unwrap();
+        assert_eq!(s["ranks"]["count"], ranks);
+        assert_eq!(s["status"], "completed");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

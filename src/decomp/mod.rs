@@ -198,6 +198,11 @@ impl Decomposed {
         &*self.comm
     }
 
+    /// Discs of the whole assembly.
+    pub fn total(&self) -> usize {
+        self.n_total
+    }
+
     /// Discs this rank owns (ghosts not counted).
     pub fn owned(&self) -> usize {
         self.part

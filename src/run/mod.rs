@@ -7,8 +7,10 @@ mod coupled;
 mod granular;
 pub mod memory;
 pub mod progress;
+mod ranks;
 mod session;
 
+use crate::decomp::{Comm, Solo};
 use crate::model::{Model, ModelError, System};
 use crate::scenario::{Scenario, ScenarioError, build};
 use checkpoint::Checkpoint;
@@ -97,6 +99,16 @@ pub enum RunError {
         /// The checkpoint written at the stop.
         checkpoint: PathBuf,
     },
+    /// The scenario cannot run on several ranks (exit code 2).
+    #[error("{0}")]
+    Ranks(String),
+    /// On a rank other than 0 of a run on several ranks: rank 0 failed
+    /// (and said why) with this exit code.
+    #[error("rank 0 failed (exit code {code})")]
+    OnRank0 {
+        /// Rank 0's exit code.
+        code: u8,
+    },
     /// A checkpoint cannot be used to restart this scenario (exit code 2).
     #[error("cannot restart from {}: {message}", path.display())]
     Restart {
@@ -105,6 +117,27 @@ pub enum RunError {
         /// Why.
         message: String,
     },
+}
+
+impl RunError {
+    /// The process exit code for this error: 2 bad input or a refused
+    /// restart, 3 an unstable run, 128 + signal an interrupted one, else 1.
+    pub fn exit_code(&self) -> u8 {
+        use crate::coupling::CouplingError as C;
+        match self {
+            RunError::Scenario(_)
+            | RunError::NotEmpty(_)
+            | RunError::Restart { .. }
+            | RunError::Ranks(_) => 2,
+            RunError::Model(
+                ModelError::Unstable(_)
+                | ModelError::Coupling(C::Unstable { .. } | C::Subcycling { .. }),
+            ) => 3,
+            RunError::Interrupted { signal, .. } => 128 + (*signal as u8 & 0x7f),
+            RunError::OnRank0 { code } => *code,
+            _ => 1,
+        }
+    }
 }
 
 impl From<crate::model::body::BodyError> for RunError {
@@ -128,13 +161,33 @@ impl From<crate::coupling::CouplingError> for RunError {
 /// Build `sc` and run it, writing `summary.json`, `history.csv` and frames
 /// into `opts.out_dir`. Returns the summary that was written.
 pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunError> {
-    session::prepare_out_dir(opts)?;
+    run_on(sc, opts, Arc::new(Solo))
+}
+
+/// [`run`] on the ranks of `comm`: every rank calls it with the same
+/// scenario and options. On one rank it is [`run`]; on several, a granular
+/// scenario is divided over them ([`crate::decomp`]) with outputs bitwise
+/// those of one rank, written by rank 0 (which returns the summary; the
+/// others return `Null`, or [`RunError::OnRank0`] when rank 0 failed).
+/// Continuum and coupled scenarios are refused on several ranks.
+pub fn run_on(
+    sc: &Scenario,
+    opts: &RunOptions,
+    comm: Arc<dyn Comm>,
+) -> Result<serde_json::Value, RunError> {
+    let (root, ranks) = (comm.rank() == 0, comm.size());
+    let prepared = if root {
+        session::prepare_out_dir(opts)
+    } else {
+        Ok(())
+    };
+    ranks::agree(&*comm, prepared)?;
     let t0 = Instant::now();
     let what = match build::preparation(sc) {
         Some(p) => format!("building the model: {} ({} DEM steps)", p.what(), p.steps),
         None => "building the model".to_string(),
     };
-    let spin = progress::spinner(&what, opts.quiet);
+    let spin = progress::spinner(&what, opts.quiet || !root);
     let mut model = sc.build()?;
     let restart = match &opts.restart {
         Some(path) => {
@@ -155,6 +208,10 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunErr
         restart,
     };
     match model.system {
+        System::Granular(_) if ranks > 1 => ranks::run(run, model, comm),
+        _ if ranks > 1 => Err(RunError::Ranks(format!(
+            "only granular scenarios (discs and walls) run on several ranks; this one has continuum bodies: run it with one process (not under mpirun -np {ranks})"
+        ))),
         System::Continuum { .. } => continuum::run(run, model),
         System::Granular(_) => granular::run(run, model),
         System::Coupled(_) => coupled::run(run, model),
