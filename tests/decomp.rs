@@ -244,3 +244,20 @@ quantity = "y"
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A build without the `mpi` feature started as one of several MPI ranks
+/// (as mpirun sets its environment) refuses to run and says how to build
+/// with MPI, instead of N copies each running the whole scenario.
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn a_build_without_mpi_refuses_mpirun() {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
+        .args(["run", "no-such.toml", "-q"])
+        .env("OMPI_COMM_WORLD_SIZE", "2")
+        .env("OMPI_COMM_WORLD_RANK", "0")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--features mpi"), "{err}");
+}
