@@ -188,7 +188,7 @@ fn ranks_without_discs_take_part() {
 /// files of the run on one rank, byte for byte: history (wall forces of
 /// the servo lid, energies, a disc's position), final discs.
 #[test]
-fn run_on_ranks_writes_the_outputs_of_one_rank() {
+fn run_on_ranks_writes_the_outputs_of_one_rank_and_restarts_on_others() {
     let probes = r#"
 [output]
 every = 250
@@ -220,18 +220,21 @@ quantity = "y"
     let read = |d: &str, f: &str| std::fs::read(dir.join(d).join(f)).unwrap();
     let hist = String::from_utf8(read("one", "history.csv")).unwrap();
     println!("{}", hist.lines().last().unwrap());
+    let on = |ranks: usize, opts: &efgdem::run::RunOptions| {
+        std::thread::scope(|s| {
+            for c in Threads::group(ranks) {
+                let sc = &sc;
+                s.spawn(move || efgdem::run::run_on(sc, opts, Arc::new(c)).unwrap());
+            }
+        })
+    };
     for ranks in [2, 3] {
         let name = format!("ranks{ranks}");
         let opts = efgdem::run::RunOptions {
             out_dir: dir.join(&name),
             ..opts.clone()
         };
-        std::thread::scope(|s| {
-            for c in Threads::group(ranks) {
-                let (sc, opts) = (&sc, &opts);
-                s.spawn(move || efgdem::run::run_on(sc, opts, Arc::new(c)).unwrap());
-            }
-        });
+        on(ranks, &opts);
         for f in ["history.csv", "discs_final.csv"] {
             assert!(
                 read("one", f) == read(&name, f),
@@ -241,6 +244,31 @@ quantity = "y"
         let s: serde_json::Value = serde_json::from_slice(&read(&name, "summary.json")).unwrap();
         assert_eq!(s["ranks"]["count"], ranks);
         assert_eq!(s["status"], "completed");
+    }
+    // a checkpoint written on 3 ranks continues on 2 (and on 1) as if
+    // the run had never stopped
+    let opts3 = efgdem::run::RunOptions {
+        out_dir: dir.join("ck"),
+        checkpoint_every: 2000,
+        ..opts.clone()
+    };
+    on(3, &opts3);
+    let ck = dir.join("ck").join("checkpoint.bin");
+    let saved = std::fs::read(&ck).unwrap();
+    for ranks in [2, 1] {
+        std::fs::write(&ck, &saved).unwrap();
+        let restart = efgdem::run::RunOptions {
+            restart: Some(ck.clone()),
+            checkpoint_every: 0,
+            ..opts3.clone()
+        };
+        on(ranks, &restart);
+        for f in ["history.csv", "discs_final.csv"] {
+            assert!(
+                read("one", f) == read("ck", f),
+                "restart on {ranks}: {f} differs"
+            );
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -78,7 +78,13 @@ fn efgdem(dir: &Path, out: &str, ranks: usize, threads: usize) -> std::process::
         Command::new(bin)
     } else {
         let mut c = Command::new("mpirun");
-        c.args(["-np", &ranks.to_string(), "--oversubscribe", "--bind-to", "none"]);
+        c.args([
+            "-np",
+            &ranks.to_string(),
+            "--oversubscribe",
+            "--bind-to",
+            "none",
+        ]);
         // CI runs as root
         c.env("OMPI_ALLOW_RUN_AS_ROOT", "1");
         c.env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
@@ -118,7 +124,10 @@ fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
             if p.is_dir() {
                 stack.push(p);
             } else if p.file_name().unwrap() != "summary.json" {
-                out.push((p.strip_prefix(dir).unwrap().to_path_buf(), std::fs::read(&p).unwrap()));
+                out.push((
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                ));
             }
         }
     }
@@ -143,7 +152,11 @@ fn mpirun_writes_the_outputs_of_one_process() {
         let names = |v: &[(PathBuf, Vec<u8>)]| v.iter().map(|f| f.0.clone()).collect::<Vec<_>>();
         assert_eq!(names(&got), names(&want), "{ranks} ranks: files");
         for ((p, a), (_, b)) in got.iter().zip(&want) {
-            assert!(a == b, "{ranks} ranks × {threads} threads: {} differs", p.display());
+            assert!(
+                a == b,
+                "{ranks} ranks × {threads} threads: {} differs",
+                p.display()
+            );
         }
         let s: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.join(&out).join("summary.json")).unwrap())

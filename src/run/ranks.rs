@@ -182,6 +182,7 @@ fn drive(
             output(d, model, due, &mut failed);
         }
         progress.update(step, d.part.time);
+        run.last_step.set(step);
         if stop {
             // a stop that another rank saw: SIGINT, as mpirun forwards it
             break Ended::Interrupted(if signal != 0 { signal } else { 2 });
