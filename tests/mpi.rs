@@ -8,11 +8,12 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// 3000 discs settling in a box under a servo lid, rolling resistance,
+/// 3000 discs falling in a box under a servo lid, rolling resistance,
 /// frames every 500 steps.
 const SCENARIO: &str = r#"
 [simulation]
 steps = 3000
+gravity = [0.0, -9.81]
 
 [[material]]
 name = "sand"
@@ -24,7 +25,7 @@ rolling_friction = 0.1
 
 [granular]
 material = "sand"
-discs = { generate = "random", box = [[0.0, 0.0], [0.3, 0.25]], count = 3000, radius = [0.002, 0.003], seed = 9 }
+discs = { generate = "random", box = [[0.0, 0.0], [0.3, 0.5]], count = 3000, radius = [0.002, 0.003], seed = 9 }
 damping = { kind = "critical-ratio", zeta = 0.2 }
 
 [[wall]]
@@ -35,17 +36,17 @@ to = [0.31, 0.0]
 [[wall]]
 name = "left"
 from = [0.0, -0.01]
-to = [0.0, 0.4]
+to = [0.0, 0.6]
 
 [[wall]]
 name = "right"
 from = [0.3, -0.01]
-to = [0.3, 0.4]
+to = [0.3, 0.6]
 
 [[wall]]
 name = "lid"
-from = [-0.01, 0.25]
-to = [0.31, 0.25]
+from = [-0.01, 0.5]
+to = [0.31, 0.5]
 servo = { stress = 2.0e3, max_velocity = 0.5 }
 
 [output]
@@ -113,8 +114,9 @@ fn efgdem(dir: &Path, out: &str, ranks: usize, threads: usize) -> std::process::
     o
 }
 
-/// Every file under `dir` (relative path, bytes), `summary.json` aside
-/// (timings and the ranks' records differ).
+/// Every file under `dir` (relative path, bytes), `summary.json` (timings
+/// and the ranks' records differ) and the directory lock (a process id)
+/// aside.
 fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -123,7 +125,10 @@ fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
             let p = e.unwrap().path();
             if p.is_dir() {
                 stack.push(p);
-            } else if p.file_name().unwrap() != "summary.json" {
+            } else if !["summary.json", ".efgdem.lock"]
+                .map(std::ffi::OsStr::new)
+                .contains(&p.file_name().unwrap())
+            {
                 out.push((
                     p.strip_prefix(dir).unwrap().to_path_buf(),
                     std::fs::read(&p).unwrap(),

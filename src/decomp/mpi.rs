@@ -78,6 +78,16 @@ fn displacements(counts: &[i32]) -> Vec<i32> {
         .collect()
 }
 
+/// A buffer of at least one byte. An empty `Vec<u8>` points at address 1,
+/// which OpenMPI reads as `MPI_IN_PLACE`: a collective would then use its
+/// receive buffer as the data sent (or refuse the call).
+fn nonempty(mut v: Vec<u8>) -> Vec<u8> {
+    if v.is_empty() {
+        v.push(0);
+    }
+    v
+}
+
 /// The received bytes cut into one vector per rank.
 fn split(buf: &[u8], counts: &[i32]) -> Vec<Vec<u8>> {
     let mut at = 0;
@@ -104,8 +114,8 @@ impl Comm for Mpi {
             let scount: Vec<i32> = send.iter().map(|b| count(b.len())).collect();
             let mut rcount = vec![0i32; send.len()];
             world.all_to_all_into(&scount[..], &mut rcount[..]);
-            let flat: Vec<u8> = send.concat();
-            let mut got = vec![0u8; rcount.iter().map(|&c| c as usize).sum()];
+            let flat = nonempty(send.concat());
+            let mut got = nonempty(vec![0u8; rcount.iter().map(|&c| c as usize).sum()]);
             {
                 let sd = displacements(&scount);
                 let rd = displacements(&rcount);
@@ -145,7 +155,9 @@ impl Comm for Mpi {
             let mut counts = vec![0i32; size];
             world.all_gather_into(&count(mine.len()), &mut counts[..]);
             let displs = displacements(&counts);
-            let mut got = vec![0u8; counts.iter().map(|&c| c as usize).sum()];
+            let mut got = nonempty(vec![0u8; counts.iter().map(|&c| c as usize).sum()]);
+            let one = nonempty(Vec::new());
+            let mine = if mine.is_empty() { &one[..0] } else { mine };
             {
                 let mut r = PartitionMut::new(&mut got[..], &counts[..], &displs[..]);
                 world.all_gather_varcount_into(mine, &mut r);
