@@ -1,5 +1,5 @@
 //! `mpirun -np N efgdem run` (the `mpi` feature, a system MPI) writes the
-//! outputs of the run on one process, byte for byte, for 1 to 4 ranks
+//! outputs of the run on one process, byte for byte, for 1 to 3 ranks
 //! (oversubscribed on a smaller machine) and 1 or 2 threads per rank:
 //! `history.csv`, `discs_final.csv` and the ParaView frames. Run by
 //! `.ci/mpi`: `cargo test --release --features mpi --test mpi`.
@@ -8,11 +8,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// 3000 discs falling in a box under a servo lid, rolling resistance,
+/// 3000 discs falling into a box under a servo lid, rolling resistance,
 /// frames every 500 steps.
 const SCENARIO: &str = r#"
 [simulation]
-steps = 3000
+steps = 2000
 gravity = [0.0, -9.81]
 
 [[material]]
@@ -150,7 +150,7 @@ fn mpirun_writes_the_outputs_of_one_process() {
     let want = files(&dir.join("one"));
     assert!(want.iter().any(|(p, _)| p.ends_with("discs_final.csv")));
     assert!(want.len() >= 4, "{want:?}");
-    for (ranks, threads) in [(1, 1), (2, 1), (3, 1), (4, 1), (2, 2)] {
+    for (ranks, threads) in [(1, 1), (2, 1), (3, 1), (2, 2)] {
         let out = format!("r{ranks}t{threads}");
         efgdem(&dir, &out, ranks, threads);
         let got = files(&dir.join(&out));
