@@ -7,6 +7,9 @@
 //! On 1 thread the same steps are also timed through `Model::step`
 //! (`model_step_threads_1`), which adds the per-step stability check.
 //!
+//! 1 000 000 discs: the dense 100 000-disc packing ten times side by side
+//! (group `dem_b_dense_1000000`, dense case only).
+//!
 //! `DEM_BENCH_SIZES=10000` restricts the sizes; `DEM_BENCH_ROLLING=0.1`
 //! adds rolling resistance (μ_r = 0.1, rolling dashpot η_r = 0.3) to the
 //! measured assembly (the packing is the same).
@@ -15,7 +18,7 @@
 mod dem_setup;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use dem_setup::{assembly, dense, loose};
+use dem_setup::{assembly_in, bounds, dense, dense_tiled, loose};
 use efgdem::model::{Model, System};
 
 const STEPS: usize = 20;
@@ -24,12 +27,22 @@ fn sizes() -> Vec<usize> {
     std::env::var("DEM_BENCH_SIZES")
         .ok()
         .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect())
-        .unwrap_or_else(|| vec![10_000, 100_000])
+        .unwrap_or_else(|| vec![10_000, 100_000, 1_000_000])
 }
 
 fn bench(c: &mut Criterion) {
     for n in sizes() {
-        for (case, rows) in [("a_settling", loose(n)), ("b_dense", dense(n))] {
+        let (lo, hi) = bounds(n);
+        let cases = if n == 1_000_000 {
+            let (rows, lo, hi) = dense_tiled(100_000, 10);
+            vec![("b_dense", rows, lo, hi)]
+        } else {
+            vec![
+                ("a_settling", loose(n), lo, hi),
+                ("b_dense", dense(n), lo, hi),
+            ]
+        };
+        for (case, rows, lo, hi) in cases {
             let mut group = c.benchmark_group(format!("dem_{case}_{n}"));
             group.sample_size(10);
             group.warm_up_time(std::time::Duration::from_secs(1));
@@ -40,7 +53,7 @@ fn bench(c: &mut Criterion) {
                     .num_threads(threads)
                     .build()
                     .unwrap();
-                let mut g = assembly(&rows, n);
+                let mut g = assembly_in(&rows, lo, hi);
                 // (a) falls freely from the loose packing for 2000 steps (until
                 // the bed is compacting from the floor up) and keeps settling
                 // while measured; (b) first lets the reloaded packing

@@ -1,7 +1,7 @@
 //! The 201 × 201-node plate (80 802 DOFs, 4 × 4 Gauss points per cell):
 //! shape functions + assembly of K̄ and M, sparse Cholesky of the Newmark
-//! matrix, one Newmark step (RHS + solve). Small sample sizes: `cargo bench
-//! --bench efg_plate` takes about two minutes on 2 cores.
+//! matrix, one Newmark step (RHS + solve) on 1 and 2 threads. Small sample sizes:
+//! `cargo bench --bench efg_plate` takes about two minutes on 2 cores.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use efgdem::Vec2;
@@ -57,9 +57,15 @@ fn bench(c: &mut Criterion) {
     let f: Vec<f64> = (0..n)
         .map(|i| if i % 2 == 1 { -1.0 } else { 0.0 })
         .collect();
-    g.bench_function("newmark_step", |b| {
-        b.iter(|| nm.advance(&mut st, black_box(&f)))
-    });
+    for threads in [1usize, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        g.bench_function(format!("newmark_step_threads_{threads}"), |b| {
+            b.iter(|| pool.install(|| nm.advance(&mut st, black_box(&f))))
+        });
+    }
     g.finish();
 }
 

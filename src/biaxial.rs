@@ -181,8 +181,8 @@ impl Setup {
                 && b[0] >= x1 + 0.1 * w
                 && a[1] <= y0
                 && b[1] >= y1
-                && has("sxx")
-                && has("syy"))
+                && has("sxx_cpos")
+                && has("syy_cpos"))
             .then(|| (m.name.clone(), [a, b]))
         });
         Ok(Setup {
@@ -259,8 +259,8 @@ pub fn curve(setup: &Setup, h: &History) -> Result<Vec<Point>, String> {
     let (sl, xl) = (pair(&setup.lateral_stress)?, pair(&setup.lateral_position)?);
     let whole = match &setup.whole {
         Some((name, rect)) => Some((
-            col(&format!("{name}_syy"))?,
-            col(&format!("{name}_sxx"))?,
+            col(&format!("{name}_syy_cpos"))?,
+            col(&format!("{name}_sxx_cpos"))?,
             *rect,
         )),
         None => None,

@@ -36,7 +36,10 @@ pub struct Trial {
 /// The result of the study.
 #[derive(Debug, Clone)]
 pub struct DtStudy {
-    /// DEM critical step `2√(m_min/k_max)`.
+    /// The largest Δt studied: the lightest disc's wall step
+    /// `2√(m_min/k_max)`, or the build's limit for a first collision
+    /// ([`Critical::certain`](crate::dem::critical::Critical::certain)) if
+    /// smaller.
     pub dt_critical: f64,
     /// Largest bounded Δt found (within `rel_tol`), if any.
     pub dt_max: Option<f64>,
@@ -122,8 +125,11 @@ pub fn study_dt(
     rel_tol: f64,
     mut progress: impl FnMut(&Trial),
 ) -> Result<DtStudy, RunError> {
-    let dt_critical = coupled(sc)?.0.granular.critical_dt();
-    let dt0 = sc.simulation.dt.unwrap_or(0.1 * dt_critical);
+    let (m, _) = coupled(sc)?;
+    let crit = m.granular.critical_step(&m.body_laws);
+    // trials above the collision limit are refused at the build
+    let dt_critical = m.granular.critical_dt().min(crit.certain);
+    let dt0 = (sc.simulation.dt).unwrap_or(crate::dem::DT_SAFETY * crit.dt);
     // trials rescale step counts from the scenario's Δt: make it explicit
     let mut sc = sc.clone();
     sc.simulation.dt = Some(dt0);

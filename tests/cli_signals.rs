@@ -70,6 +70,7 @@ fn a_signalled_run_stops_cleanly_and_restarts_bitwise() {
                 "-o",
                 out.to_str().unwrap(),
             ])
+            .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::piped())
             .spawn()
             .unwrap();
@@ -93,6 +94,12 @@ fn a_signalled_run_stops_cleanly_and_restarts_bitwise() {
         assert_eq!(s["signal"], sig);
         let last = s["last_step"].as_u64().unwrap();
         assert!(last > 0 && last < 12000, "stopped at {last}");
+        // the results so far, on stdout as for a completed run
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            stdout.starts_with(&format!("granular run interrupted: {last} steps")),
+            "{stdout}"
+        );
         // whole rows only, the last one no later than the stop
         let text = std::fs::read_to_string(&hist).unwrap();
         assert!(text.ends_with('\n'));

@@ -5,8 +5,11 @@
 //! numerical), the refusal of a body too soft for it, and the corner of a
 //! closed contact chain in the exact scheme.
 
+use efgdem::coupling::CouplingError;
 use efgdem::coupling::energy::WorkMeter;
+use efgdem::coupling::scheme::Scheme;
 use efgdem::model::Model;
+use efgdem::model::ModelError;
 use efgdem::scenario::parse;
 
 /// A hexagonal bed of 446 discs (r = 5 mm, k_n = 10⁷ N/m, no damping, no
@@ -20,6 +23,7 @@ dt = 1.0e-5
 end_time = END
 gravity = [0.0, -9.81]
 substeps = SUBSTEPS
+COUPLING
 
 [[material]]
 name = "grain"
@@ -60,8 +64,17 @@ ux = 0.0
 uy = { velocity = -0.05 }
 "#;
 
+/// [`scenario`] with the predicted scheme named (`coupling = "predicted"`).
+fn predicted(substeps: usize, modulus: &str, end: f64) -> String {
+    scenario(substeps, modulus, end).replace(
+        &format!("substeps = {substeps}\n"),
+        &format!("substeps = {substeps}\ncoupling = \"predicted\"\n"),
+    )
+}
+
 fn scenario(substeps: usize, modulus: &str, end: f64) -> String {
     FOOTING
+        .replace("COUPLING", "")
         .replace("SUBSTEPS", &substeps.to_string())
         .replace("MODULUS", modulus)
         .replace("END", &end.to_string())
@@ -72,6 +85,11 @@ fn scenario(substeps: usize, modulus: &str, end: f64) -> String {
 /// mean vertical force of the discs on the footing over 0.015–0.045 s.
 fn energy_error(src: &str) -> (f64, f64, f64) {
     let mut m: Model = parse(src, "footing.toml").unwrap().build().unwrap();
+    energy_error_of(&mut m)
+}
+
+/// [`energy_error`] of a model built.
+fn energy_error_of(m: &mut Model) -> (f64, f64, f64) {
     let substeps = m.coupled().unwrap().substeps;
     let mut meter = WorkMeter::new(m.coupled().unwrap());
     let (mut diss, mut work, mut push, mut n) = (0.0f64, 0.0f64, 0.0, 0);
@@ -111,25 +129,29 @@ fn subcycled_footing_keeps_the_energy_of_the_exact_step() {
     assert!((f50 - f1).abs() < 0.02 * f1, "reaction {f50} vs {f1}");
 }
 
-/// A body that is soft against the discs over a body step is refused with
-/// the gain, at `simulation.substeps`; the same body with one substep runs.
+/// A body soft against the contacts over a body step (E = 0.1 GPa: the
+/// predicted scheme's collective gain 0.3 at 10 substeps): with `substeps
+/// = 10` alone the build gives it the compliant scheme, which is stable
+/// whatever the gain; named `coupling = "predicted"` it is built with a
+/// warning that gives the gain and the rule.
 #[test]
-fn a_body_too_soft_for_subcycling_is_refused() {
-    let Err(e) = parse(&scenario(10, "1.0e8", 0.001), "soft.toml")
+fn a_body_too_soft_for_the_predicted_scheme_gets_the_compliant_one() {
+    let m: Model = parse(&scenario(10, "1.0e8", 0.001), "soft.toml")
         .unwrap()
         .build()
-    else {
-        panic!("a soft body sub-cycled is refused")
-    };
-    let e = e.to_string();
-    assert!(e.contains("soft.toml:6: simulation.substeps"), "{e}");
-    assert!(e.contains("k_n·c = 0.3"), "{e}");
-    assert!(
-        parse(&scenario(1, "1.0e8", 0.001), "soft.toml")
-            .unwrap()
-            .build()
-            .is_ok()
-    );
+        .unwrap();
+    let c = m.coupled().unwrap().choice.clone().unwrap();
+    assert_eq!(c.scheme, Scheme::Compliant, "{}", c.why);
+    assert_eq!(c.substeps, 10);
+    assert!(c.why.contains("not safe"), "{}", c.why);
+    let m: Model = parse(&predicted(10, "1.0e8", 0.001), "soft.toml")
+        .unwrap()
+        .build()
+        .unwrap();
+    let c = m.coupled().unwrap().choice.clone().unwrap();
+    assert_eq!(c.scheme, Scheme::Predicted);
+    let w = c.warning.unwrap();
+    assert!(w.contains("collective gain Γ = 0.3"), "{w}");
 }
 
 /// The exact scheme on a softer footing (E = 3 GPa): at 0.0386 s a disc
@@ -147,11 +169,12 @@ fn closed_chain_corner_creates_no_energy() {
 /// The scheme's own account of the energy it creates (what the bodies
 /// received less what the discs did on the paths) against the independent
 /// energy account's `E_diss` (work less stored energy): on the 3 GPa
-/// footing at 10 substeps the scheme creates ≈ 0.5 % of the exchanged work
+/// footing at 10 substeps the predicted scheme (named: its gain 0.023 is
+/// above the automatic choice's limit at this body step) creates ≈ 0.5 % of the exchanged work
 /// (under the 2 % at which a run stops) and `−E_diss` shows the same.
 #[test]
 fn subcycling_energy_is_what_the_account_misses() {
-    let src = scenario(10, "3.0e9", 0.06);
+    let src = predicted(10, "3.0e9", 0.06);
     let mut m: Model = parse(&src, "footing.toml").unwrap().build().unwrap();
     let mut meter = WorkMeter::new(m.coupled().unwrap());
     for _ in 0..m.steps {
@@ -172,11 +195,11 @@ fn subcycling_energy_is_what_the_account_misses() {
     );
 }
 
-/// A body soft enough to go unstable at 10 substeps (E = 2 GPa: its gain
-/// 0.034 passes the build's check, which cannot tell it from the stable
-/// 3 GPa one, gain 0.023; run on, it creates 5 % of the work) is stopped
-/// by `efgdem run` with the energy created (exit code 3, an instability)
-/// before the end, its history kept up to there.
+/// A body soft enough to go unstable at 10 substeps of the predicted
+/// scheme (E = 2 GPa, named against the warning; run on, it creates 5 % of
+/// the work) is stopped by `efgdem run` with the energy created (exit
+/// code 3, an instability) before the end, its history kept up to there
+/// and its summary written.
 #[test]
 fn an_unstable_subcycled_run_stops() {
     let dir = std::env::temp_dir().join(format!("efgdem-subcycled-{}", std::process::id()));
@@ -184,7 +207,7 @@ fn an_unstable_subcycled_run_stops() {
     let file = dir.join("soft.toml");
     std::fs::write(
         &file,
-        scenario(10, "2.0e9", 0.08) + "[output]\nevery = 100\n",
+        predicted(10, "2.0e9", 0.08) + "[output]\nevery = 100\n",
     )
     .unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
@@ -194,7 +217,10 @@ fn an_unstable_subcycled_run_stops() {
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{err}");
-    assert!(err.contains("sub-cycled scheme created"), "{err}");
+    assert!(
+        err.contains("body `footing`: the sub-cycled scheme (predicted) created"),
+        "{err}"
+    );
     let history = std::fs::read_to_string(dir.join("out/history.csv")).unwrap();
     let last: f64 = history
         .lines()
@@ -205,11 +231,22 @@ fn an_unstable_subcycled_run_stops() {
         .unwrap()
         .parse()
         .unwrap();
-    assert!((0.015..0.07).contains(&last), "stopped at t = {last}");
+    assert!((0.015..0.075).contains(&last), "stopped at t = {last}");
+    // nothing lost: the summary says how it ended
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["status"], "unstable");
+    let failure = summary["failure"].as_str().unwrap();
+    assert!(
+        failure.contains("sub-cycled scheme (predicted) created"),
+        "{failure}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `efgdem check` reports each sub-cycled body's gain and the limits.
+/// `efgdem check` reports the scheme chosen for `substeps = 50` and each
+/// body's collective gain.
 #[test]
 fn check_reports_the_subcycling_gain() {
     let dir = std::env::temp_dir().join(format!("efgdem-subcycled-check-{}", std::process::id()));
@@ -223,10 +260,128 @@ fn check_reports_the_subcycling_gain() {
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}");
     assert!(
-        text.contains(
-            "body `footing` sub-cycled: a contact feeds back on itself with the gain k_n·c = 0.0026"
-        ),
+        text.contains("coupled scheme: predicted with 50 DEM step(s) per body step (chosen)")
+            && text.contains(
+                "predicted scheme at 50 substeps (ω_c h = 3.47): collective gain `footing` 0.0062"
+            ),
         "{text}"
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The same unstable run driven through the Rust API, `Model::step`: the
+/// energy guard is in the model, so the step returns the typed error (a
+/// numerical failure, exit code 3 from the CLI) before the end.
+#[test]
+fn the_energy_guard_stops_model_step() {
+    let mut m: Model = parse(&predicted(10, "2.0e9", 0.08), "soft.toml")
+        .unwrap()
+        .build()
+        .unwrap();
+    let steps = m.steps;
+    let err = loop {
+        match m.step() {
+            Ok(()) => assert!(m.step < steps, "the unstable run finished"),
+            Err(e) => break e,
+        }
+    };
+    assert!(err.is_numerical(), "{err}");
+    let ModelError::Coupling(CouplingError::Subcycling {
+        body,
+        scheme,
+        created,
+        exchanged,
+        ..
+    }) = &err
+    else {
+        panic!("{err}")
+    };
+    assert_eq!((body.as_str(), *scheme), ("footing", "predicted"));
+    assert!(*created > 0.02 * exchanged, "{created} of {exchanged}");
+    let t = m.time();
+    assert!((0.015..0.075).contains(&t), "stopped at t = {t}");
+}
+
+/// A contact solve that cannot converge (`contact_iterations = 1`: the
+/// first contact changes the regimes) stops `efgdem run` with exit code 3
+/// and a message naming the body and the step.
+#[test]
+fn a_contact_solve_that_does_not_converge_stops_the_run() {
+    let dir = std::env::temp_dir().join(format!("efgdem-newton-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("cap.toml");
+    let src = scenario(1, "30.0e9", 0.02)
+        .replace("substeps = 1\n", "substeps = 1\ncontact_iterations = 1\n");
+    std::fs::write(&file, src).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
+        .args(["run", file.to_str().unwrap(), "-q", "--overwrite", "-o"])
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains("body `footing`: the contact solve did not converge at step ")
+            && err.contains("after 1 Newton iterations"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// [`scenario`] without `substeps` (the automatic choice) on a bed 1.2 m
+/// wide (1 200 discs: above the size where the choice keeps the exact
+/// step), or with `coupling = "exact"`.
+fn wide(modulus: &str, exact: bool) -> String {
+    let src = scenario(1, modulus, 0.05)
+        .replace(
+            "substeps = 1\n",
+            if exact { "coupling = \"exact\"\n" } else { "" },
+        )
+        .replace("[0.5, 0.085]", "[1.2, 0.085]")
+        .replace(
+            "from = [0.5, 0.0]\nto = [0.5, 0.3]",
+            "from = [1.2, 0.0]\nto = [1.2, 0.3]",
+        );
+    assert!(src.contains("[1.2, 0.3]"));
+    src
+}
+
+/// The automatic scheme on the soft (E = 0.1 GPa) and the stiff (30 GPa)
+/// footing, pushed into the wide bed: it sub-cycles both, its own account
+/// of the energy it created stays within 1 % of the work the footing
+/// exchanged, the whole system's |E_diss| (the only dissipation is
+/// numerical) within 1 % of the work, and the footing's mean reaction
+/// over the push within 1 % of the exact step's.
+#[test]
+fn the_automatic_scheme_keeps_the_energy_and_the_reaction_of_the_exact_step() {
+    for modulus in ["1.0e8", "30.0e9"] {
+        let src = wide(modulus, false);
+        let m: Model = parse(&src, "wide.toml").unwrap().build().unwrap();
+        let choice = m.coupled().unwrap().choice.clone().unwrap();
+        assert!(
+            choice.automatic && choice.scheme != Scheme::Exact,
+            "{}",
+            choice.why
+        );
+        drop(m);
+        let mut m: Model = parse(&src, "wide.toml").unwrap().build().unwrap();
+        let (d, w, f) = energy_error_of(&mut m);
+        let (created, exchanged) = m.coupled().unwrap().subcycling_energy();
+        let (d1, w1, f1) = energy_error(&wide(modulus, true));
+        println!(
+            "E = {modulus}: {} × {}: created {created:.3e} of {exchanged:.3e} exchanged; |E_diss| {d:.3e} of {w:.3e} (exact {d1:.3e} of {w1:.3e}); reaction {f:.1} vs exact {f1:.1} N/m",
+            choice.scheme.name(),
+            choice.substeps
+        );
+        assert!(
+            w > 5.0 && exchanged > 1.0,
+            "the drive works: {w} {exchanged}"
+        );
+        assert!(
+            created.abs() <= 0.01 * exchanged,
+            "{created} of {exchanged}"
+        );
+        assert!(d <= 0.01 * w, "|E_diss| {d} of {w}");
+        assert!((f - f1).abs() <= 0.01 * f1.abs(), "reaction {f} vs {f1}");
+    }
 }

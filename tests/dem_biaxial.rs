@@ -74,7 +74,7 @@ damping = {{ kind = "critical-ratio", zeta = 0.2 }}
 {}{}{}{}{}{}{}{}{}{}{}{}[[measure]]
 name = "all"
 rectangle = [[-0.01, -0.01], [0.034, 0.058]]
-quantities = ["sxx", "syy", "porosity"]
+quantities = ["sxx_cpos", "syy_cpos", "porosity"]
 "#,
         wall("bottom", [0.0, 0.0], [0.024, 0.0], &axial),
         wall("top", [0.0, 0.048], [0.024, 0.048], &axial),

@@ -304,17 +304,17 @@ radius = 0.035
     assert_eq!(
         names,
         [
-            "core_sxx",
-            "core_syy",
-            "core_sxy",
+            "core_sxx_cpos",
+            "core_syy_cpos",
+            "core_sxy_cpos",
             "core_porosity",
             "core_coordination",
             "core_fxx",
             "core_fyy",
             "core_fxy",
-            "disc_sxx",
-            "disc_syy",
-            "disc_sxy",
+            "disc_sxx_cpos",
+            "disc_syy_cpos",
+            "disc_sxy_cpos",
             "disc_porosity",
             "disc_coordination",
             "disc_fxx",
@@ -492,7 +492,7 @@ quantity = "wall_stress"
 name = "bed"
 centre = [0.15, 0.1]
 radius = 0.2
-quantities = ["syy", "porosity", "coordination"]
+quantities = ["syy_cpos", "porosity", "coordination"]
 "#
         ),
     )
@@ -504,7 +504,7 @@ quantities = ["syy", "porosity", "coordination"]
     let mut lines = csv.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "step,t,n,floor_s,bed_syy,bed_porosity,bed_coordination"
+        "step,t,n,floor_s,bed_syy_cpos,bed_porosity,bed_coordination"
     );
     let last: Vec<f64> = lines
         .last()

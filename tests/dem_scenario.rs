@@ -44,8 +44,9 @@ fn lattices_fill_the_box() {
         "",
     ));
     assert_eq!(g.particles.len(), 12);
-    // default dt: 0.1 × critical
-    assert!((g.dt / g.critical_dt() - 0.1).abs() < 1e-12);
+    // default dt: DT_SAFETY × the critical step of the contacts in use
+    let crit = g.critical_step(&[]).dt;
+    assert!((g.dt / crit - efgdem::dem::DT_SAFETY).abs() < 1e-12);
 }
 
 #[test]

@@ -716,6 +716,7 @@ fn with_example(ctx: &str, lines: &[String]) -> Result<toml::Table, String> {
         "probe-granular" => ("granular", "probe"),
         "probe-coupled" => ("coupled", "probe"),
         "measure" => ("granular", "measure"),
+        "bonds" => ("granular", "bonds"),
         _ => return Err(format!("unknown example context `{ctx}`")),
     };
     let mut sc = base(kind);
@@ -795,6 +796,13 @@ fn with_example(ctx: &str, lines: &[String]) -> Result<toml::Table, String> {
                 "measure".into(),
                 toml::Value::Array(vec![toml::Value::Table(m)]),
             );
+        }
+        "bonds" => {
+            let mut b: toml::Table = "kn = 2.0e11\nks = 1.0e11\ntensile = 5.0e6\nshear = 1.0e7"
+                .parse()
+                .unwrap();
+            merge(&mut b, &ex, &[("cohesion", "shear")]);
+            sc.insert("bonds".into(), toml::Value::Table(b));
         }
         "probe" => {
             let mut p = toml::Table::new();

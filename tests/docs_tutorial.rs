@@ -210,15 +210,15 @@ fn tutorial_step_1_settling_box() {
     let h = History::read(&out);
     let s = common::summary(&out);
     let mut page = Page::read("docs/tutorial.md");
-    page.quote("`dt = 7.33e-5` s", "7.33e-5", s["dt"].as_f64().unwrap());
-    page.quote("13 644 steps", "13 644", s["steps"].as_f64().unwrap());
-    page.quote("last step (13 644)", "13 644", h.last("step"));
+    page.quote("`dt = 1.01e-4` s", "1.01e-4", s["dt"].as_f64().unwrap());
+    page.quote("9897 steps", "9897", s["steps"].as_f64().unwrap());
+    page.quote("last step (9897)", "9897", h.last("step"));
     let (ke_peak, t_ke) = h.max("kinetic");
     page.quote("peaks at 8.7 J", "8.7", ke_peak);
     page.quote("land at t ≈ 0.08 s", "0.08", t_ke);
     let (floor_peak, t_floor) = h.min("floor_fy");
-    page.quote("peaks at −1712 N", "−1712", floor_peak);
-    page.quote("−1712 N at t ≈ 0.11 s", "0.11", t_floor);
+    page.quote("peaks at −1293 N", "−1293", floor_peak);
+    page.quote("−1293 N at t ≈ 0.08 s", "0.08", t_floor);
     let t = h.col("t");
     let quiet = h
         .col("kinetic")
@@ -227,9 +227,9 @@ fn tutorial_step_1_settling_box() {
         .find(|&(k, &tt)| tt > t_ke && *k < 1e-3 * ke_peak)
         .map(|(_, &tt)| tt)
         .unwrap();
-    page.quote("of its peak by t = 0.23 s", "0.23", quiet);
-    page.quote("levels off at 516", "516", h.last("contacts"));
-    page.quote("carries −600.6 N", "−600.6", h.last("floor_fy"));
+    page.quote("of its peak by t = 0.27 s", "0.27", quiet);
+    page.quote("levels off at 528", "528", h.last("contacts"));
+    page.quote("carries −606.6 N", "−606.6", h.last("floor_fy"));
     page.quote("discs weigh 612.9 N", "612.9", weight_of_bed());
     let walls_fy: f64 = s["wall_forces"]
         .as_array()
@@ -237,12 +237,12 @@ fn tutorial_step_1_settling_box() {
         .iter()
         .map(|w| w["force"][1].as_f64().unwrap())
         .sum();
-    page.quote("add up to −612.2 N", "−612.2", walls_fy);
+    page.quote("add up to −613.3 N", "−613.3", walls_fy);
     let c = &s["contacts"];
-    page.quote("482 disc–disc", "482", c["disc_disc"].as_f64().unwrap());
-    page.quote("34 disc–wall", "34", c["disc_wall"].as_f64().unwrap());
+    page.quote("492 disc–disc", "492", c["disc_disc"].as_f64().unwrap());
+    page.quote("36 disc–wall", "36", c["disc_wall"].as_f64().unwrap());
     page.quote("reaches y = 0.107 m", "0.107", bed_top(f64::MIN, f64::MAX));
-    page.quote("the surface is at 0.104 m", "0.104", bed_top(0.1, 0.2));
+    page.quote("the surface is at 0.103 m", "0.103", bed_top(0.1, 0.2));
     page.finish();
 }
 
@@ -257,49 +257,49 @@ fn tutorial_step_2_block_on_bed() {
     let h = History::read(&out);
     let s = common::summary(&out);
     let mut page = Page::read("docs/tutorial.md");
-    for quoted in ["6822 steps", "55 nodes, 110 DOFs", "with 112 segments"] {
+    for quoted in ["4949 steps", "55 nodes, 110 DOFs", "with 112 segments"] {
         assert!(
             check.contains(quoted),
             "`check` no longer says {quoted:?}:\n{check}"
         );
     }
-    page.quote("reports 6822 steps", "6822", s["steps"].as_f64().unwrap());
+    page.quote("reports 4949 steps", "4949", s["steps"].as_f64().unwrap());
     let gap = 0.106 - bed_top(0.1, 0.2);
-    page.quote("2.05 mm above the highest grain", "2.05", gap * 1e3);
-    page.quote("free fall of 2.05 mm", "2.05", gap * 1e3);
+    page.quote("2.83 mm above the highest grain", "2.83", gap * 1e3);
+    page.quote("free fall of 2.83 mm", "2.83", gap * 1e3);
     page.quote(
-        "takes √(2 · 0.00205/9.81) = 0.0204 s",
-        "0.0204",
+        "takes √(2 · 0.00283/9.81) = 0.0240 s",
+        "0.0240",
         (2.0 * gap / 9.81).sqrt(),
     );
     let first = s["first_contact_time"].as_f64().unwrap();
-    page.quote("`first_contact_time` 0.0206 s", "0.0206", first);
+    page.quote("`first_contact_time` 0.0241 s", "0.0241", first);
     let peak = s["peak_contact_force"].as_f64().unwrap();
-    page.quote("`peak_contact_force` 223 N", "223", peak);
+    page.quote("`peak_contact_force` 302 N", "302", peak);
     page.quote(
-        "223 N at t = 0.024 s",
-        "0.024",
+        "302 N at t = 0.029 s",
+        "0.029",
         s["peak_contact_time"].as_f64().unwrap(),
     );
     let weight = 0.1 * 0.04 * 2000.0 * 9.81;
     page.quote("2000 × 9.81 = 78.48 N", "78.48", weight);
-    page.quote("2.8 × the weight", "2.8", peak / weight);
-    page.quote("averages 78.9 N", "78.9", h.mean("bed_force", 0.4, 1.0));
-    page.quote("ends at −5.63 mm", "−5.63", h.last("block_uy") * 1e3);
+    page.quote("3.8 × the weight", "3.8", peak / weight);
+    page.quote("averages 78.7 N", "78.7", h.mean("bed_force", 0.4, 1.0));
+    page.quote("ends at −4.14 mm", "−4.14", h.last("block_uy") * 1e3);
     page.quote(
-        "3.6 mm of bed compaction",
-        "3.6",
+        "1.3 mm of bed compaction",
+        "1.3",
         -h.last("block_uy") * 1e3 - gap * 1e3,
     );
-    page.quote("ends at 527", "527", h.last("contacts"));
+    page.quote("ends at 530", "530", h.last("contacts"));
     let tilt = h.last("left_uy") - h.last("right_uy");
-    page.quote("ends 8.6 mm lower", "8.6", tilt * 1e3);
-    page.quote("a turn of 0.086 rad", "0.086", tilt / 0.1);
-    page.quote("`W_ext` is 0.494 J", "0.494", h.last("W_ext"));
-    page.quote("`E_diss` = 0.368 J", "0.368", h.last("E_diss"));
-    page.quote("`E_contact` = 0.125 J", "0.125", h.last("E_contact"));
+    page.quote("ends 1.6 mm lower", "1.6", tilt * 1e3);
+    page.quote("a turn of 0.016 rad", "0.016", tilt / 0.1);
+    page.quote("`W_ext` is 0.363 J", "0.363", h.last("W_ext"));
+    page.quote("`E_diss` = 0.253 J", "0.253", h.last("E_diss"));
+    page.quote("`E_contact` = 0.110 J", "0.110", h.last("E_contact"));
     // the first row after step 0
-    page.quote("`E_diss` starts at −0.064 J", "−0.064", h.col("E_diss")[1]);
+    page.quote("`E_diss` starts at −0.061 J", "−0.061", h.col("E_diss")[1]);
     page.finish();
 }
 
@@ -317,27 +317,27 @@ fn tutorial_step_3_footing() {
     );
     page.quote("−20.0 mm from", "−20.0", h.last("settlement") * 1e3);
     page.quote(
-        "at t = 0.0416 s",
-        "0.0416",
+        "at t = 0.0570 s",
+        "0.0570",
         s["first_contact_time"].as_f64().unwrap(),
     );
-    page.quote("averages 149 N", "149", h.mean("reaction", 0.0, 0.15));
-    page.quote("325 N between", "325", h.mean("reaction", 0.15, 0.25));
-    page.quote("400 N over 0.1–0.4 s", "400", h.mean("reaction", 0.1, 0.4));
+    page.quote("averages 218 N", "218", h.mean("reaction", 0.0, 0.15));
+    page.quote("337 N between", "337", h.mean("reaction", 0.15, 0.25));
+    page.quote("501 N over 0.1–0.4 s", "501", h.mean("reaction", 0.1, 0.4));
     page.quote(
-        "peaks at 1006 N",
-        "1006",
+        "peaks at 1257 N",
+        "1257",
         s["peak_contact_force"].as_f64().unwrap(),
     );
     page.quote(
-        "1006 N at t = 0.407 s",
-        "0.407",
+        "1257 N at t = 0.400 s",
+        "0.400",
         s["peak_contact_time"].as_f64().unwrap(),
     );
-    page.quote("reaction ends at 657 N", "657", h.last("reaction"));
-    page.quote("`W_ext` = 6.37 J", "6.37", h.last("W_ext"));
-    page.quote("`E_diss` = 5.64 J", "5.64", h.last("E_diss"));
-    page.quote("`E_contact` = 0.72 J", "0.72", h.last("E_contact"));
+    page.quote("reaction ends at 281 N", "281", h.last("reaction"));
+    page.quote("`W_ext` = 7.81 J", "7.81", h.last("W_ext"));
+    page.quote("`E_diss` = 7.52 J", "7.52", h.last("E_diss"));
+    page.quote("`E_contact` = 0.29 J", "0.29", h.last("E_contact"));
     page.finish();
 }
 
@@ -351,7 +351,8 @@ fn tutorial_plate_with_a_hole_check() {
     for quoted in [
         "1200 discs",
         "377 nodes, 754 DOFs, 1 contact chain(s) with 320 segments",
-        "10958 steps",
+        "7949 steps",
+        "compliant with 7 DEM step(s) per body step",
     ] {
         assert!(
             check.contains(quoted),

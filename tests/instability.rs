@@ -47,6 +47,9 @@ fn an_unphysical_state_stops_the_run_with_exit_3_and_a_diagnosis() {
     assert_eq!(s["status"], "unstable");
     let step = s["instability"]["step"].as_u64().unwrap();
     assert!(step == 100_000 || step == 100_001, "{step}");
+    // what the run reached, on stdout as for a completed run
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("run unstable: "), "{stdout}");
     assert!(
         stderr.contains(&format!("unstable at step {step}")),
         "{stderr}"

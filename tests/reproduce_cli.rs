@@ -64,6 +64,20 @@ fn reproduce_writes_every_figure_and_the_report() {
     ] {
         assert!(dir.join(f).is_file(), "{f}");
     }
+    // the result (where the report and figures are) on stdout, progress
+    // and timing on stderr
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(
+        stdout.contains(&format!("report: {}", dir.join("report.md").display())),
+        "{stdout}"
+    );
+    assert!(
+        !stderr.contains("report:") && stderr.contains("done in"),
+        "{stderr}"
+    );
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
     for needle in [
         "| `ex1_newmark_1.5_0.8`",

@@ -116,14 +116,15 @@ fn missing_duration_duplicate_probes_and_unstable_dt_are_refused() {
         err.contains("dup.toml:20: probe[1].name: probe `ke` is defined twice"),
         "{err}"
     );
-    // critical step 2√(m/k) = 2√(7.85/1e6) ≈ 5.6e-3: dt = 1e-2 is above it
+    // a disc on a wall: 2√(m/k) = 2√(7.85/1e6) ≈ 5.6e-3, the limit of its
+    // normal mode at the first collision: dt = 1e-2 is above it
     let (code, err) = check(
         "big_dt",
         &with_discs(one).replace("dt = 1.0e-5", "dt = 1.0e-2"),
     );
     assert_eq!(code, 2, "{err}");
     assert!(
-        err.contains("big_dt.toml:2: simulation.dt: dt = 1e-2 is 1.78 × the DEM critical step"),
+        err.contains("big_dt.toml:2: simulation.dt: dt = 1e-2 is above 5.6"),
         "{err}"
     );
 }
@@ -186,10 +187,14 @@ elastic = { E = 1.0e8, nu = 0.3, density = 2000.0 }
 edge = "top"
 fixed = true
 "#;
-    // `check` does not settle the packing (its discs are not where the run
-    // starts them): only `run` can tell, once settled
+    // a growth fills its whole box: `check` and `run` refuse the body
+    // before any step of the preparation
     let (code, err) = check("settled_check", &(with_discs(discs) + body));
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("settled_check.toml:18: body[0].rectangle: body `footing` lies where discs will be: the radius growth"),
+        "{err}"
+    );
     let dir = common::tmpdir("start-settled-run");
     let f = dir.join("settled.toml");
     std::fs::write(&f, with_discs(discs) + body).unwrap();
@@ -204,7 +209,7 @@ fixed = true
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("settled.toml:17: body[0]:") && err.contains("overlap body `footing`"),
+        err.contains("settled.toml:18: body[0].rectangle: body `footing` lies where discs will be"),
         "{err}"
     );
     // above the box it is accepted

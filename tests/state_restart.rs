@@ -116,6 +116,7 @@ servo = { stress = 2000.0, max_velocity = 0.6 }
         r#"
 [simulation]
 steps = 2000
+dt = 6.4e-5
 gravity = [0.0, -9.81]
 
 [[material]]
@@ -528,8 +529,8 @@ fn bed_on_efg_plate_restarts_bitwise() {
 #[test]
 fn bed_on_fem_plate_substepped_restarts_bitwise() {
     let src = bed_on_plate("fem-q4", "substeps = 3");
-    // a plate ten times stiffer: sub-cycling refuses the softer one
-    // (k_n c = 0.065 > 0.05)
+    // a plate ten times stiffer: the predicted scheme is safe for it (the
+    // softer one gets the compliant scheme)
     let src = src
         .replace(
             "contact_edges",
@@ -551,6 +552,27 @@ fn bed_on_fem_plate_substepped_restarts_bitwise() {
         "loads pending"
     );
     check_bed(&src, n, k);
+}
+
+/// The automatic scheme (`coupling = "auto"`) given `substeps = 4` on the
+/// soft plate picks the compliant sub-cycled scheme; saved in the middle
+/// of a body step (its boundary's response pending), restored, bitwise
+/// equal — and equal on 1 and 2 threads ([`restarts_across_thread_counts`]).
+#[test]
+fn bed_on_compliant_plate_restarts_bitwise() {
+    let src = bed_on_plate("efg", "substeps = 4");
+    let m = build(&src);
+    let choice = m.coupled().unwrap().choice.clone().unwrap();
+    assert_eq!(choice.scheme.name(), "compliant", "{}", choice.why);
+    let (a, c, bytes) = restart(&src, 800, 450);
+    let s = ModelState::from_bytes(&bytes).unwrap();
+    let SystemState::Coupled(m) = &s.system else {
+        panic!("a coupled state")
+    };
+    assert_eq!(m.sub, 450 % 4, "saved within a body step");
+    let on_body = m.contacts.iter().filter(|q| q.fs != 0.0).count();
+    assert!(on_body >= 5, "{on_body} disc–body contacts with shear");
+    assert_same(&a, &c);
 }
 
 /// A state saved before the first step (nothing built yet: no neighbour
@@ -577,7 +599,11 @@ fn restarts_across_thread_counts() {
             .build()
             .unwrap()
     };
-    for src in [packing(0.1, true), bed_on_plate("efg", "")] {
+    for src in [
+        packing(0.1, true),
+        bed_on_plate("efg", ""),
+        bed_on_plate("efg", "substeps = 4"),
+    ] {
         let (n, k) = (500, 260);
         let mut whole = Vec::new();
         for threads in [1, 2] {
@@ -839,6 +865,16 @@ fn a_granular_run_restarts_with_identical_outputs() {
     let src = with_outputs(&packing(0.1, true), "quantity = \"kinetic\"")
         + "\n[[measure]]\nname = \"bed\"\nrectangle = [[0.05, 0.05], [0.25, 0.2]]\n";
     check_run_restart("granular", &src, 2000, 1301);
+}
+
+#[test]
+fn a_bonded_run_restarts_with_identical_outputs() {
+    // history (bond columns), bond_breaks.csv and the crack frames
+    // with a cohesion–friction shear strength
+    let block = include_str!("common/bonded_block.toml")
+        .replace("shear = 1.0e7", "cohesion = 8.0e6\nfriction_angle = 20");
+    let src = with_outputs(&block, "quantity = \"kinetic\"");
+    check_run_restart("bonded", &src, 5000, 2999);
 }
 
 #[test]

@@ -81,9 +81,13 @@ pub fn dense(n: usize) -> Vec<DiscRow> {
     let (lo, hi) = bounds(n);
     // deposit under 10 g (faster), then relax under g
     let g10 = Vec2::new(0.0, -98.1);
-    let rows = settle_in_box(&loose(n), lo, hi, law(), 1.0, 1.0, g10, 6_000).expect("settles");
+    let rows = settle_in_box(&loose(n), lo, hi, law(), 1.0, 1.0, g10, 6_000, &mut |_| {
+        true
+    })
+    .expect("settles");
     let g = Vec2::new(0.0, -9.81);
-    let rows = settle_in_box(&rows, lo, hi, law(), 1.0, 1.0, g, 10_000).expect("settles");
+    let rows =
+        settle_in_box(&rows, lo, hi, law(), 1.0, 1.0, g, 10_000, &mut |_| true).expect("settles");
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).ok();
     }

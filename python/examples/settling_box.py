@@ -57,7 +57,7 @@ def scenario(width, height, count, steps):
 
 
 def plot_force_chains(model, path, title):
-    pos = model.disc_positions()  # (n, 2), row i = disc id i
+    pos = model.disc_positions()  # (n, 2), row i = disc number i + 1
     r = model.disc_radii()
     c = model.contacts()  # structured array, one row per closed contact
     fn = c["fn_elastic"]
@@ -65,8 +65,8 @@ def plot_force_chains(model, path, title):
     dw = c[c["kind"] == efgdem.CONTACT_DISC_WALL]
     segs = np.concatenate(
         [
-            np.stack([pos[dd["disc"]], pos[dd["other"]]], axis=1),
-            np.stack([pos[dw["disc"]], np.column_stack([dw["x"], dw["y"]])], axis=1),
+            np.stack([pos[dd["disc_index"]], pos[dd["other_index"]]], axis=1),
+            np.stack([pos[dw["disc_index"]], np.column_stack([dw["x"], dw["y"]])], axis=1),
         ]
     )
     f = np.concatenate([dd["fn_elastic"], dw["fn_elastic"]])

@@ -31,7 +31,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, MutexGuard, TryLockError};
+use std::sync::{Arc, Mutex, MutexGuard, TryLockError};
+use std::time::{Duration, Instant};
 
 pyo3::create_exception!(
     efgdem,
@@ -49,11 +50,16 @@ pyo3::create_exception!(
 /// File name that `from_dict` scenarios carry in messages.
 const DICT_FILE: &str = "<dict>";
 
-/// The structured dtype of `Model.contacts()` (packed, 73 bytes a record).
-const CONTACT_FIELDS: [(&str, &str); 11] = [
+/// The structured dtype of `Model.contacts()` (packed, 81 bytes a
+/// record). `disc` and `other` are the numbers the files use (from 1);
+/// `disc_index` and `other_index` the rows of the id-ordered arrays and of
+/// `body_names()` (from 0).
+const CONTACT_FIELDS: [(&str, &str); 13] = [
     ("kind", "u1"),
     ("disc", "<u4"),
     ("other", "<u4"),
+    ("disc_index", "<u4"),
+    ("other_index", "<u4"),
     ("x", "<f8"),
     ("y", "<f8"),
     ("nx", "<f8"),
@@ -69,8 +75,8 @@ const CONTACT_FIELDS: [(&str, &str); 11] = [
 #[derive(Clone, Copy)]
 struct ContactRecord {
     kind: u8,
-    disc: u32,
-    other: u32,
+    /// `disc_id`, `other_id` (from 1), `disc_index`, `other_index` (from 0).
+    ids: [u32; 4],
     f: [f64; 8],
 }
 
@@ -173,18 +179,32 @@ fn model_error(e: impl std::fmt::Display) -> PyErr {
     ModelError::new_err(e.to_string())
 }
 
-/// `obj` (a dict of the scenario schema) as a TOML value; `path` names
-/// where it is, for messages.
-fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
-    use toml::Value;
-    let bad = |what: String| {
-        let at = if path.is_empty() {
-            String::new()
-        } else {
-            format!("{path}: ")
-        };
-        ScenarioError::new_err(format!("{DICT_FILE}: {at}{what}"))
+/// Deepest nesting of dicts and lists accepted by `Model.from_dict` (the
+/// scenario schema needs 5).
+const MAX_DEPTH: usize = 32;
+
+/// A `ScenarioError` about the value at `path` of a dict.
+fn dict_error(path: &str, what: &str) -> PyErr {
+    let at = if path.is_empty() {
+        String::new()
+    } else {
+        format!("{path}: ")
     };
+    ScenarioError::new_err(format!("{DICT_FILE}: {at}{what}"))
+}
+
+/// `obj` (a dict of the scenario schema) as a TOML value; `path` names
+/// where it is, for messages. A dict or list that contains itself, or
+/// nesting deeper than [`MAX_DEPTH`], is refused (rather than recursing
+/// until the stack overflows).
+fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
+    to_toml_in(obj, path, &mut Vec::new())
+}
+
+/// [`to_toml`] inside the containers `open` (their addresses, outermost
+/// first).
+fn to_toml_in(obj: &Bound<'_, PyAny>, path: &str, open: &mut Vec<usize>) -> PyResult<toml::Value> {
+    use toml::Value;
     if let Ok(b) = obj.cast::<PyBool>() {
         return Ok(Value::Boolean(b.is_true()));
     }
@@ -192,7 +212,7 @@ fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
         return obj
             .extract::<i64>()
             .map(Value::Integer)
-            .map_err(|_| bad("an integer out of the 64-bit range".into()));
+            .map_err(|_| dict_error(path, "an integer out of the 64-bit range"));
     }
     if let Ok(f) = obj.cast::<PyFloat>() {
         return Ok(Value::Float(f.value()));
@@ -200,11 +220,59 @@ fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
     if let Ok(s) = obj.cast::<PyString>() {
         return Ok(Value::String(s.to_str()?.to_owned()));
     }
+    let container = obj.is_instance_of::<PyDict>()
+        || obj.is_instance_of::<PyList>()
+        || obj.is_instance_of::<PyTuple>();
+    if container {
+        let at = obj.as_ptr() as usize;
+        if open.contains(&at) {
+            return Err(dict_error(
+                path,
+                "contains itself (a dict or list inside its own value): a scenario is a tree",
+            ));
+        }
+        if open.len() >= MAX_DEPTH {
+            return Err(dict_error(
+                path,
+                &format!("nested more than {MAX_DEPTH} levels deep; a scenario needs a few"),
+            ));
+        }
+        open.push(at);
+        let v = container_to_toml(obj, path, open);
+        open.pop();
+        return v;
+    }
+    // numpy arrays and scalars (and anything else with a `tolist`)
+    if obj.hasattr("tolist")? {
+        let l = obj.call_method0("tolist")?;
+        if !l.is(obj) {
+            return to_toml_in(&l, path, open);
+        }
+    }
+    Err(dict_error(
+        path,
+        &format!(
+            "a value of type `{}` has no TOML form (use dicts, lists, str, int, float, bool)",
+            obj.get_type().name()?
+        ),
+    ))
+}
+
+/// A dict as a TOML table, a list or tuple as an array ([`to_toml_in`]).
+fn container_to_toml(
+    obj: &Bound<'_, PyAny>,
+    path: &str,
+    open: &mut Vec<usize>,
+) -> PyResult<toml::Value> {
+    use toml::Value;
     if let Ok(d) = obj.cast::<PyDict>() {
         let mut t = toml::Table::new();
         for (k, v) in d.iter() {
             let Ok(k) = k.extract::<String>() else {
-                return Err(bad(format!("keys must be strings (got {})", k.repr()?)));
+                return Err(dict_error(
+                    path,
+                    &format!("keys must be strings (got {})", k.repr()?),
+                ));
             };
             if v.is_none() {
                 continue; // TOML has no null: an absent key takes the default
@@ -214,34 +282,25 @@ fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
             } else {
                 format!("{path}.{k}")
             };
-            t.insert(k, to_toml(&v, &sub)?);
+            t.insert(k, to_toml_in(&v, &sub, open)?);
         }
         return Ok(Value::Table(t));
     }
-    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
-        let mut a = Vec::new();
-        for (i, v) in obj.try_iter()?.enumerate() {
-            a.push(to_toml(&v?, &format!("{path}[{i}]"))?);
-        }
-        return Ok(Value::Array(a));
+    let mut a = Vec::new();
+    for (i, v) in obj.try_iter()?.enumerate() {
+        a.push(to_toml_in(&v?, &format!("{path}[{i}]"), open)?);
     }
-    // numpy arrays and scalars (and anything else with a `tolist`)
-    if obj.hasattr("tolist")? {
-        let l = obj.call_method0("tolist")?;
-        if !l.is(obj) {
-            return to_toml(&l, path);
-        }
-    }
-    Err(bad(format!(
-        "a value of type `{}` has no TOML form (use dicts, lists, str, int, float, bool)",
-        obj.get_type().name()?
-    )))
+    Ok(Value::Array(a))
 }
 
 /// What the model needs besides the Rust model: probes, a pool, caches.
 struct Inner {
     model: Model,
-    pool: rayon::ThreadPool,
+    /// The worker threads (started by the process `pool_pid`: a process
+    /// forked from it has none of them and starts its own).
+    pool: Arc<rayon::ThreadPool>,
+    threads: usize,
+    pool_pid: u32,
     probes: Vec<(String, Probe)>,
     /// Per body: its nodes bound for sampling (on first use), and the
     /// body's generation they were bound in (a body rebuilt by crack
@@ -283,7 +342,9 @@ impl Inner {
         let buffers = granular_buffers(model.granular());
         Inner {
             model,
-            pool,
+            threads: pool.current_num_threads(),
+            pool: Arc::new(pool),
+            pool_pid: std::process::id(),
             probes,
             node_at: (0..nb).map(|_| None).collect(),
             frames: HashMap::new(),
@@ -300,28 +361,49 @@ impl Inner {
         );
     }
 
-    /// `n` steps (inside the model's pool). Granular runs store the disc
-    /// forces of the last step only (as `efgdem run` stores them only at
-    /// frame steps; they are never read by the physics).
-    fn step(&mut self, n: usize) -> Result<(), efgdem::model::ModelError> {
-        let Inner { model, pool, .. } = self;
-        pool.install(|| {
-            for k in 0..n {
-                set_store_forces(model, k + 1 == n);
-                model.step()?;
-            }
-            Ok::<_, efgdem::model::ModelError>(())
-        })?;
-        self.check_buffers();
+    /// The model's pool, started again in a process forked from the one
+    /// that started it (its threads do not survive `fork`: using them
+    /// would wait for ever).
+    fn ensure_pool(&mut self) -> PyResult<()> {
+        if self.pool_pid != std::process::id() {
+            let pool = Arc::new(thread_pool(self.threads)?);
+            // the old pool's threads are gone: dropping it could wait on
+            // them; it is left as it is
+            std::mem::forget(std::mem::replace(&mut self.pool, pool));
+            self.pool_pid = std::process::id();
+        }
         Ok(())
     }
 
-    /// Step until `t` (within half a step, as `Model::run_until`).
-    fn run(&mut self, t: f64) -> Result<usize, efgdem::model::ModelError> {
+    /// Up to `n` steps inside the model's pool, for at most about
+    /// [`SLICE`] (then the caller checks for Ctrl-C); the number taken.
+    /// Granular runs store the disc forces of the step that ends the call's
+    /// `left` steps only (as `efgdem run` stores them only at frame steps;
+    /// they are never read by the physics).
+    fn steps_for(&mut self, n: usize, left: usize) -> Result<usize, efgdem::model::ModelError> {
         let Inner { model, pool, .. } = self;
+        let t0 = Instant::now();
+        let done = pool.install(|| {
+            let mut k = 0;
+            while k < n && (k == 0 || t0.elapsed() < SLICE) {
+                set_store_forces(model, k + 1 == left);
+                model.step()?;
+                k += 1;
+            }
+            Ok::<_, efgdem::model::ModelError>(k)
+        })?;
+        self.check_buffers();
+        Ok(done)
+    }
+
+    /// Steps until `t` (within half a step, as `Model::run_until`) for at
+    /// most about [`SLICE`]; the number taken.
+    fn run_for(&mut self, t: f64) -> Result<usize, efgdem::model::ModelError> {
+        let Inner { model, pool, .. } = self;
+        let t0 = Instant::now();
         let n = pool.install(|| {
             let mut n = 0;
-            while model.time() + 0.5 * model.dt < t {
+            while model.time() + 0.5 * model.dt < t && (n == 0 || t0.elapsed() < SLICE) {
                 // the last steps store the disc forces (2.5 dt: rounding of t)
                 set_store_forces(model, model.time() + 2.5 * model.dt >= t);
                 model.step()?;
@@ -422,13 +504,15 @@ fn read_only<'py, T>(a: Bound<'py, T>) -> PyResult<Bound<'py, T>> {
 /// Disc state comes in two forms:
 ///
 /// * `disc_positions()`, `disc_velocities()`, `disc_radii()`,
-///   `disc_spins()`, `disc_forces()`: **copies in id order** — row `i` is
-///   the scenario's disc `i` (0-based; probes and the TOML number discs from
-///   1). A copy is a snapshot: it stays as it is when the model steps, so
-///   `p1 - p0` is a displacement.
+///   `disc_spins()`, `disc_forces()`: **copies in id order** — row `i`
+///   (an *index*, from 0) is disc number `i + 1` (its *id*: the number the
+///   scenario's probes, `history.csv`, `discs_final.csv` and the frames'
+///   `GlobalIds` use). A copy is a snapshot: it stays as it is when the
+///   model steps, so `p1 - p0` is a displacement.
 /// * `disc_views()`: **zero-copy, read-only views** of the Rust arrays, in
 ///   *slot* order (the DEM renumbers its slots in space-filling order from
-///   time to time; `views["id"][k]` is the id of the disc in slot `k`).
+///   time to time; `views["index"][k]` is the index of the disc in slot
+///   `k`, `disc_ids()[k]` its id).
 ///   They are **live**: they show the state after the latest step, including
 ///   the renumbering, and keep the model alive. Do not read them from another
 ///   thread while `step()` runs (it releases the GIL).
@@ -440,12 +524,28 @@ struct PyModel {
     inner: Mutex<Inner>,
 }
 
-fn build(py: Python<'_>, sc: Scenario, threads: Option<usize>, dict: bool) -> PyResult<PyModel> {
-    let n = threads.unwrap_or(sc.simulation.threads);
-    let pool = rayon::ThreadPoolBuilder::new()
+/// Longest time a call steps with the GIL released before it checks for
+/// signals (Ctrl-C raises `KeyboardInterrupt` between two steps).
+const SLICE: Duration = Duration::from_millis(50);
+
+/// A pool of `n` worker threads (0: one per core; never more than the
+/// machine runs at once, with a `RuntimeWarning` when fewer than asked).
+fn thread_pool(n: usize) -> PyResult<rayon::ThreadPool> {
+    let (n, note) = efgdem::run::worker_threads(n);
+    if let Some(note) = note {
+        Python::attach(|py| {
+            let warning = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
+            PyErr::warn(py, &warning, &std::ffi::CString::new(note)?, 1)
+        })?;
+    }
+    rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build()
-        .map_err(model_error)?;
+        .map_err(model_error)
+}
+
+fn build(py: Python<'_>, sc: Scenario, threads: Option<usize>, dict: bool) -> PyResult<PyModel> {
+    let pool = thread_pool(threads.unwrap_or(sc.simulation.threads))?;
     let built = py.detach(|| {
         pool.install(|| {
             let model = sc.build()?;
@@ -502,7 +602,9 @@ impl PyModel {
     /// "material": [{...}], "granular": {...}, "wall": [...]}`; `None`
     /// values are left out). Relative paths in it resolve against
     /// `base_dir` (default: the working directory). Raises `ScenarioError`
-    /// (`<dict>: field: message`).
+    /// (`<dict>: field: message`), also for a dict or list that contains
+    /// itself or is nested more than 32 levels deep. `threads` above the
+    /// machine's count are lowered to it (a `RuntimeWarning`).
     #[staticmethod]
     #[pyo3(signature = (scenario, base_dir = None, threads = None))]
     fn from_dict(
@@ -519,20 +621,46 @@ impl PyModel {
     }
 
     /// Advance `n` time steps (the GIL is released while stepping).
-    /// Raises `ModelError` if a step fails.
+    /// Raises `ModelError` if a step fails; Ctrl-C raises
+    /// `KeyboardInterrupt` within a fraction of a second, the model left
+    /// after a whole step.
     #[pyo3(signature = (n = 1))]
     fn step(&self, py: Python<'_>, n: usize) -> PyResult<()> {
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
-        py.detach(|| inner.step(n)).map_err(model_error)
+        inner.ensure_pool()?;
+        let mut left = n;
+        while left > 0 {
+            left -= py
+                .detach(|| inner.steps_for(left, left))
+                .map_err(model_error)?;
+            py.check_signals()?;
+        }
+        Ok(())
     }
 
     /// Step until the time reaches `until` (within half a step); returns the
-    /// number of steps taken (the GIL is released while stepping).
+    /// number of steps taken (the GIL is released while stepping). `until`
+    /// must be finite (`ValueError`); Ctrl-C raises `KeyboardInterrupt`
+    /// within a fraction of a second, the model left after a whole step.
     fn run(&self, py: Python<'_>, until: f64) -> PyResult<usize> {
+        if !until.is_finite() {
+            return Err(PyValueError::new_err(format!(
+                "run(until={until}): the end time must be a finite number"
+            )));
+        }
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
-        py.detach(|| inner.run(until)).map_err(model_error)
+        inner.ensure_pool()?;
+        let mut n = 0;
+        loop {
+            let k = py.detach(|| inner.run_for(until)).map_err(model_error)?;
+            if k == 0 {
+                return Ok(n);
+            }
+            n += k;
+            py.check_signals()?;
+        }
     }
 
     /// The model's whole evolving state as bytes (discs, walls, contact
@@ -545,8 +673,9 @@ impl PyModel {
     }
 
     /// Restore bytes of `save_state` (of a model built from the same
-    /// scenario). Raises `ModelError` if they do not fit this model (it is
-    /// then left as it was). Live numpy views stay valid.
+    /// scenario). Raises `ModelError` if they do not fit this model or are
+    /// damaged (the bytes carry a checksum: any altered bit is refused);
+    /// the model is then left as it was. Live numpy views stay valid.
     fn restore_state(&self, state: &[u8]) -> PyResult<()> {
         let mut g = self.lock()?;
         let s = efgdem::model::ModelState::from_bytes(state).map_err(model_error)?;
@@ -555,10 +684,12 @@ impl PyModel {
         Ok(())
     }
 
-    /// Solve a static continuum model (`analysis = "static"`).
+    /// Solve a static continuum model (`analysis = "static"`). Raises
+    /// `ModelError` for a model with discs (it has no static solve).
     fn solve_static(&self, py: Python<'_>) -> PyResult<()> {
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
+        inner.ensure_pool()?;
         py.detach(|| {
             let Inner { model, pool, .. } = inner;
             pool.install(|| model.solve_static())
@@ -658,9 +789,22 @@ impl PyModel {
         Ok(by_id(g.model.granular(), |g, s| g.particles.theta[s]).into_pyarray(py))
     }
 
-    /// Scenario id (0-based) of the disc in each slot, shape (n,), uint32 —
-    /// the order of `disc_views()` (a copy).
+    /// The number of the disc in each slot, as the files give it (from 1:
+    /// probes' `disc`, `history.csv`, `discs_final.csv`'s `id`, the frames'
+    /// `id`/`GlobalIds`), shape (n,), uint32 — the order of `disc_views()`
+    /// (a copy). `disc_ids() - 1` is `disc_indices()`.
     fn disc_ids<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<u32>>> {
+        let g = self.lock()?;
+        let ids = g.model.granular().map_or_else(Vec::new, |g| {
+            g.particles.id.iter().map(|&i| i + 1).collect()
+        });
+        Ok(ids.into_pyarray(py))
+    }
+
+    /// The row of the disc in each slot in the id-ordered arrays
+    /// (`disc_positions()` …; from 0), shape (n,), uint32 — the order of
+    /// `disc_views()` (a copy; the same as `disc_views()["index"]`).
+    fn disc_indices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<u32>>> {
         let g = self.lock()?;
         let ids = g
             .model
@@ -671,10 +815,12 @@ impl PyModel {
 
     /// Zero-copy, read-only, live views of the disc arrays in slot order:
     /// a dict with `pos` (n, 2), `vel` (n, 2), `force` (n, 2), `radius`,
-    /// `omega`, `theta` (n,) float64 and `id` (n,) uint32. They reflect the
-    /// state after the latest step (slots are renumbered from time to time:
-    /// always index them together with `id`); copy one (`a.copy()`) to keep
-    /// a snapshot. They keep the model alive.
+    /// `omega`, `theta` (n,) float64 and `index` (n,) uint32, the row of
+    /// each slot's disc in the id-ordered arrays (from 0; its number in the
+    /// files is `index + 1`). They reflect the state after the latest step
+    /// (slots are renumbered from time to time: always index them together
+    /// with `index`); copy one (`a.copy()`) to keep a snapshot. They keep
+    /// the model alive.
     fn disc_views<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
         let py = slf.py();
         let out = PyDict::new(py);
@@ -707,17 +853,93 @@ impl PyModel {
             out.set_item("theta", f64s(&p.theta)?)?;
             let a = ArrayView1::from_shape_ptr(n, p.id.as_ptr());
             out.set_item(
-                "id",
+                "index",
                 read_only(PyArray1::<u32>::borrow_from_array(&a, base.clone()))?,
             )?;
         }
         Ok(out)
     }
 
+    /// The intact parallel bonds as a dict of numpy arrays (copies), one
+    /// entry per bond, sorted by `(a, b)`: `a`, `b` (u4, the discs'
+    /// numbers, from 1, as in the files; a < b), `a_index`, `b_index` (the
+    /// same from 0: rows of the disc arrays),
+    /// `radius` (R̄), `fn` (normal force, compression positive), `fs`
+    /// (shear force along (−ny, nx), n from a to b), `moment` (on a),
+    /// `tensile` and `shear` (the bond's strengths: σ_c, and τ_c or the
+    /// cohesion c). Empty arrays without bonds.
+    fn bonds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let g = self.lock()?;
+        let out = PyDict::new(py);
+        let empty = Default::default();
+        let l = g.model.granular().map_or(&empty, |gr| &gr.bonds.list);
+        let number = |v: &[u32]| v.iter().map(|k| k + 1).collect::<Vec<u32>>();
+        out.set_item("a", number(&l.a).into_pyarray(py))?;
+        out.set_item("b", number(&l.b).into_pyarray(py))?;
+        out.set_item("a_index", l.a.clone().into_pyarray(py))?;
+        out.set_item("b_index", l.b.clone().into_pyarray(py))?;
+        for (k, v) in [
+            ("radius", &l.radius),
+            ("fn", &l.fn_),
+            ("fs", &l.fs),
+            ("moment", &l.moment),
+            ("tensile", &l.tensile),
+            ("shear", &l.shear),
+        ] {
+            out.set_item(k, v.clone().into_pyarray(py))?;
+        }
+        Ok(out)
+    }
+
+    /// Every bond broken so far, in the order they broke, as a dict of
+    /// numpy arrays (copies; the rows of `bond_breaks.csv`): `step` (in
+    /// which it broke), `t` (at its end), `x`,
+    /// `y` (the bond's centre), `nx`, `ny` (unit normal from a to b; the
+    /// crack runs across it), `radius`, `a`, `b` (u4, the discs' numbers
+    /// from 1, the file's `disc_a`, `disc_b`), `a_index`, `b_index` (the
+    /// same from 0), `mode` (u1: 0
+    /// tension, 1 shear) and `energy` (released).
+    fn bond_breaks<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let g = self.lock()?;
+        let out = PyDict::new(py);
+        let (broken, dt) = g
+            .model
+            .granular()
+            .map_or((&[][..], 0.0), |gr| (&gr.bonds.list.broken[..], gr.dt));
+        let col = |f: &dyn Fn(&efgdem::dem::bonds::BrokenBond) -> f64| {
+            broken.iter().map(f).collect::<Vec<f64>>()
+        };
+        let step: Vec<u64> = broken.iter().map(|b| b.step as u64 + 1).collect();
+        out.set_item("step", step.into_pyarray(py))?;
+        out.set_item("t", col(&|b| b.time + dt).into_pyarray(py))?;
+        out.set_item("x", col(&|b| b.pos.x).into_pyarray(py))?;
+        out.set_item("y", col(&|b| b.pos.y).into_pyarray(py))?;
+        out.set_item("nx", col(&|b| b.normal.x).into_pyarray(py))?;
+        out.set_item("ny", col(&|b| b.normal.y).into_pyarray(py))?;
+        out.set_item("radius", col(&|b| b.radius).into_pyarray(py))?;
+        let ids = |f: fn(&efgdem::dem::bonds::BrokenBond) -> u32| {
+            broken.iter().map(f).collect::<Vec<u32>>()
+        };
+        out.set_item("a", ids(|b| b.a + 1).into_pyarray(py))?;
+        out.set_item("b", ids(|b| b.b + 1).into_pyarray(py))?;
+        out.set_item("a_index", ids(|b| b.a).into_pyarray(py))?;
+        out.set_item("b_index", ids(|b| b.b).into_pyarray(py))?;
+        let mode: Vec<u8> = broken
+            .iter()
+            .map(|b| (b.mode == efgdem::dem::bonds::BreakMode::Shear) as u8)
+            .collect();
+        out.set_item("mode", mode.into_pyarray(py))?;
+        out.set_item("energy", col(&|b| b.energy).into_pyarray(py))?;
+        Ok(out)
+    }
+
     /// Every closed contact (disc–disc, disc–wall, then disc–body) as a
     /// numpy structured array with fields `kind` (u1: 0 disc–disc, 1
-    /// disc–wall, 2 disc–body), `disc` (u4, id of the disc), `other` (u4: a
-    /// disc id, a wall index or a body index), `x`, `y` (contact point),
+    /// disc–wall, 2 disc–body), `disc` (u4, the disc's number, from 1, as
+    /// in the files), `other` (u4: the number of the other disc, wall or
+    /// body, by `kind`, from 1, as in the frames' `other`), `disc_index`,
+    /// `other_index` (u4: the same from 0 — rows of the id-ordered disc
+    /// arrays, of the walls, of `body_names()`), `x`, `y` (contact point),
     /// `nx`, `ny` (unit normal from the disc to the other side), `overlap`,
     /// `fn_elastic` (k_n δ), `fn_total` (with the dashpot) and `fs` (shear
     /// spring force along (−ny, nx)). A copy.
@@ -733,8 +955,12 @@ impl PyModel {
                         ContactKind::DiscWall => 1,
                         ContactKind::DiscBody => 2,
                     },
-                    disc: c.disc as u32,
-                    other: c.other as u32,
+                    ids: [
+                        c.disc as u32 + 1,
+                        c.other as u32 + 1,
+                        c.disc as u32,
+                        c.other as u32,
+                    ],
                     f: [
                         c.point.x,
                         c.point.y,
@@ -924,7 +1150,13 @@ impl PyModel {
     fn write_frame(&self, py: Python<'_>, dir: PathBuf) -> PyResult<Vec<PathBuf>> {
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
-        py.detach(|| write_frame(inner, &dir)).map_err(|e| match e {
+        inner.ensure_pool()?;
+        // inside the model's pool: the frames compress in parallel
+        py.detach(|| {
+            let pool = Arc::clone(&inner.pool);
+            pool.install(|| write_frame(inner, &dir))
+        })
+        .map_err(|e| match e {
             FrameError::Io(e) => PyIOError::new_err(format!("{}: {e}", dir.display())),
             FrameError::Model(e) => model_error(e),
         })

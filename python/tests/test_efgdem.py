@@ -180,8 +180,10 @@ def test_state_arrays_shapes_dtypes_and_initial_values(box_file):
     for f in ("disc_spins", "disc_rotations"):
         a = getattr(m, f)()
         assert a.shape == (3,) and a.dtype == np.float64 and not a.any()
+    # ids are the files' numbers (from 1), indices the rows (from 0)
     ids = m.disc_ids()
-    assert ids.dtype == np.uint32 and sorted(ids) == [0, 1, 2]
+    assert ids.dtype == np.uint32 and sorted(ids) == [1, 2, 3]
+    assert np.array_equal(m.disc_indices(), ids - 1)
     assert m.probe_names() == ["y3"] and m.probe("y3") == 0.2
     # copies are snapshots
     pos[:] = 0.0
@@ -195,13 +197,16 @@ def test_contacts_structured_array(box_file):
     m = efgdem.Model.from_scenario(box_file)
     m.step()
     c = m.contacts()
-    assert c.dtype.names == ("kind", "disc", "other", "x", "y", "nx", "ny", "overlap",
-                             "fn_elastic", "fn_total", "fs")
+    assert c.dtype.names == ("kind", "disc", "other", "disc_index", "other_index", "x", "y",
+                             "nx", "ny", "overlap", "fn_elastic", "fn_total", "fs")
     assert c.dtype["kind"] == np.uint8 and c.dtype["disc"] == np.uint32
     assert c.dtype["x"] == np.float64
-    # discs 0 and 1 overlap, both touch the floor (wall 0)
+    # numbers as in the files (from 1), indices from 0
+    assert np.array_equal(c["disc"], c["disc_index"] + 1)
+    assert np.array_equal(c["other"], c["other_index"] + 1)
+    # discs 1 and 2 overlap, both touch the floor (wall 1)
     dd = c[c["kind"] == efgdem.CONTACT_DISC_DISC]
-    assert len(dd) == 1 and {int(dd["disc"][0]), int(dd["other"][0])} == {0, 1}
+    assert len(dd) == 1 and {int(dd["disc"][0]), int(dd["other"][0])} == {1, 2}
     pos, r = m.disc_positions(), m.disc_radii()
     d = np.linalg.norm(pos[1] - pos[0])
     assert dd["overlap"][0] == pytest.approx(r[0] + r[1] - d, rel=1e-12)
@@ -209,7 +214,7 @@ def test_contacts_structured_array(box_file):
     n = np.array([dd["nx"][0], dd["ny"][0]])
     assert np.linalg.norm(n) == pytest.approx(1.0)
     dw = c[c["kind"] == efgdem.CONTACT_DISC_WALL]
-    assert sorted(zip(dw["disc"].tolist(), dw["other"].tolist())) == [(0, 0), (1, 0)]
+    assert sorted(zip(dw["disc"].tolist(), dw["other"].tolist())) == [(1, 1), (2, 1)]
     assert (c["fn_elastic"] > 0).all() and (c["overlap"] > 0).all()
     assert len(efgdem.Model.from_dict(settling()).contacts()) == 0
 
@@ -217,8 +222,8 @@ def test_contacts_structured_array(box_file):
 def test_views_are_zero_copy_read_only_and_live():
     m = efgdem.Model.from_dict(settling())
     v = m.disc_views()
-    assert set(v) == {"pos", "vel", "force", "radius", "omega", "theta", "id"}
-    assert v["pos"].shape == (300, 2) and v["id"].dtype == np.uint32
+    assert set(v) == {"pos", "vel", "force", "radius", "omega", "theta", "index"}
+    assert v["pos"].shape == (300, 2) and v["index"].dtype == np.uint32
     for a in v.values():
         assert not a.flags.writeable and not a.flags.owndata
         with pytest.raises(ValueError):
@@ -227,15 +232,16 @@ def test_views_are_zero_copy_read_only_and_live():
     # the discs fall: the slots are renumbered several times on the way
     for _ in range(6):
         m.step(500)
-        order = np.argsort(v["id"])
+        order = np.argsort(v["index"])
         assert np.array_equal(v["pos"][order], m.disc_positions())
         assert np.array_equal(v["vel"][order], m.disc_velocities())
         assert np.array_equal(v["radius"][order], m.disc_radii())
-        assert np.array_equal(v["id"], m.disc_ids())
+        assert np.array_equal(v["index"], m.disc_indices())
+        assert np.array_equal(v["index"] + 1, m.disc_ids())
     assert not np.array_equal(v["pos"], before)
     assert np.array_equal(m.disc_views()["pos"], v["pos"])
     # a view keeps the model alive
-    ids = m.disc_ids()
+    ids = m.disc_indices()
     pos = m.disc_positions()
     del m
     gc.collect()
@@ -277,7 +283,8 @@ def test_body_fields_and_sampling():
     with pytest.raises(efgdem.ModelError):
         m.sample("beam", 5.0, 5.0)
     c = m.contacts()
-    assert len(c) == 1 and c["kind"][0] == efgdem.CONTACT_DISC_BODY and c["other"][0] == 0
+    assert len(c) == 1 and c["kind"][0] == efgdem.CONTACT_DISC_BODY
+    assert (c["other"][0], c["other_index"][0]) == (1, 0)  # body 1, body_names()[0]
 
 
 def test_static_model():
@@ -451,7 +458,7 @@ def test_save_and_restore_state_continue_bitwise(box_file):
     assert c.save_state() == a.save_state()
     assert np.array_equal(c.disc_positions(), a.disc_positions())
     # live views follow the restored model
-    assert np.array_equal(views["pos"][np.argsort(views["id"])], a.disc_positions())
+    assert np.array_equal(views["pos"][np.argsort(views["index"])], a.disc_positions())
 
 
 def test_a_state_of_another_model_is_refused(box_file, tmp_path):
@@ -461,3 +468,155 @@ def test_a_state_of_another_model_is_refused(box_file, tmp_path):
         m.restore_state(other.save_state())
     with pytest.raises(efgdem.ModelError):
         m.restore_state(b"not a state")
+
+
+# --- conventions and settle-then-place ----------------------------------------
+
+
+def deposit_with_footing(remove, rect=((10.0, 20.0), (30.0, 30.0))):
+    """`settling()` deposited before the run, with a footing in its bed."""
+    d = settling()
+    d["granular"]["discs"].update({"method": "deposit", "settle_steps": 4000})
+    d["body"] = [{
+        "name": "footing", "rectangle": [list(rect[0]), list(rect[1])], "nodes": [5, 3],
+        "elastic": {"E": 1.0e8, "nu": 0.2, "density": 1.0},
+        "self_weight": False, "bc": [{"edge": "top", "fixed": True}],
+    }]
+    if remove:
+        d["body"][0]["overlapping_discs"] = "remove"
+    return d
+
+
+def test_a_footing_in_a_future_bed_is_refused_and_placed_after_with_remove():
+    with pytest.raises(efgdem.ScenarioError, match="lies where discs will be") as e:
+        efgdem.Model.from_dict(deposit_with_footing(False, ((10.0, 2.0), (30.0, 10.0))))
+    assert e.value.errors[0][1] == "body[0].rectangle"
+    m = efgdem.Model.from_dict(deposit_with_footing(True))
+    # the settled bed without the footing: count the discs the footing
+    # overlaps by more than 1e-3 of their radius, independently
+    bed = deposit_with_footing(True)
+    del bed["body"]
+    b = efgdem.Model.from_dict(bed)
+    p, r = b.disc_positions(), b.disc_radii()
+    nearest = np.clip(p, [10.0, 20.0], [30.0, 30.0])
+    inside = (nearest == p).all(axis=1)
+    hit = inside | (np.linalg.norm(p - nearest, axis=1) < r * (1 - 1e-3))
+    assert 0 < hit.sum() < 300
+    assert m.n_discs == 300 - hit.sum()
+    # the others keep their order, numbered from 1
+    assert np.array_equal(m.disc_positions(), p[~hit])
+
+
+def test_rectangle_forms_and_centre_spellings_build_the_same_model():
+    d = settling()
+    a = efgdem.Model.from_dict(d)
+    d["granular"]["discs"]["box"] = {"origin": [0, 0], "size": [40, 60]}
+    assert np.array_equal(efgdem.Model.from_dict(d).disc_positions(), a.disc_positions())
+    plate = {
+        "simulation": {"analysis": "static"},
+        "body": [{"name": "p", "outline": [[0, 0], [4, 0], [4, 2], [0, 2]], "spacing": 0.25,
+                  "holes": [{"centre": [2.0, 1.0], "radius": 0.5}],
+                  "elastic": {"E": 1000.0, "nu": 0.3},
+                  "bc": [{"edge": "outline", "fixed": True}]}],
+    }
+    x = efgdem.Model.from_dict(plate).body_fields(0)["x"]
+    plate["body"][0]["holes"] = [{"center": [2.0, 1.0], "radius": 0.5}]
+    assert np.array_equal(efgdem.Model.from_dict(plate).body_fields(0)["x"], x)
+
+
+# --- guards in the model ------------------------------------------------------
+
+# A soft EFG footing (E = 2 GPa) pushed into a hexagonal bed of 446 discs,
+# with the predicted sub-cycled scheme named at 10 substeps against the
+# build's warning: the scheme creates energy and the model's guard stops it.
+SOFT_FOOTING = """
+[simulation]
+dt = 1.0e-5
+end_time = 0.08
+gravity = [0.0, -9.81]
+substeps = 10
+coupling = "predicted"
+
+[[material]]
+name = "grain"
+density = 2650.0
+kn = 1.0e7
+ks = 1.0e7
+friction = 0.0
+
+[granular]
+material = "grain"
+discs = { generate = "hex", box = [[0.0, 0.0], [0.5, 0.085]], radius = 0.005 }
+
+[[wall]]
+name = "floor"
+from = [0.0, 0.0]
+to = [0.5, 0.0]
+
+[[wall]]
+name = "left"
+from = [0.0, 0.0]
+to = [0.0, 0.3]
+
+[[wall]]
+name = "right"
+from = [0.5, 0.0]
+to = [0.5, 0.3]
+
+[[body]]
+name = "footing"
+rectangle = { origin = [0.15, 0.0798], size = [0.2, 0.04] }
+nodes = [41, 9]
+elastic = { E = 2.0e9, nu = 0.2, density = 2400.0, thickness = 1.0, plane = "strain" }
+newmark = { gamma = 0.5, beta = 0.25 }
+self_weight = false
+[[body.bc]]
+edge = "top"
+ux = 0.0
+uy = { velocity = -0.05 }
+"""
+
+
+def test_a_subcycled_body_past_its_limit_raises_model_error(tmp_path):
+    path = tmp_path / "soft.toml"
+    path.write_text(SOFT_FOOTING)
+    m = efgdem.Model.from_scenario(str(path))
+    with pytest.raises(efgdem.ModelError, match=r"body `footing`: the sub-cycled scheme \(predicted\) created"):
+        m.run(0.08)
+    # stopped before the end, at the step that failed
+    assert 0.015 < m.time < 0.075
+
+
+# --- parallel bonds ----------------------------------------------------------
+
+# A bonded hexagonal block (209 discs, 565 touching pairs) crushed between
+# two platens: bonds break from about step 1 200 on.
+BONDED = ROOT / "tests" / "common" / "bonded_block.toml"
+
+
+def test_bonds_and_their_breakage_events():
+    import tomllib
+
+    runs = []
+    for threads in (1, 2):
+        m = efgdem.Model.from_dict(tomllib.loads(BONDED.read_text()), threads=threads)
+        m.step()  # the bonds are made at the start of step 1
+        b = m.bonds()
+        assert len(b["a"]) == 565 and b["a"].dtype == np.uint32
+        assert (b["a"] < b["b"]).all() and (b["radius"] == 0.0025).all()
+        # numbers from 1 as in the files, indices from 0
+        assert (b["a"] == b["a_index"] + 1).all() and (b["b"] == b["b_index"] + 1).all()
+        m.step(4999)
+        b, k = m.bonds(), m.bond_breaks()
+        assert len(b["a"]) + len(k["a"]) == 565 and len(k["a"]) > 50
+        assert set(np.unique(k["mode"])) <= {0, 1} and k["mode"].dtype == np.uint8
+        assert (np.diff(k["step"].astype(np.int64)) >= 0).all() and k["step"][-1] <= 5000
+        assert (k["energy"] > 0).all() and np.allclose(np.hypot(k["nx"], k["ny"]), 1.0)
+        # no pair is both intact and broken
+        intact = set(zip(b["a"].tolist(), b["b"].tolist()))
+        assert not intact & set(zip(k["a"].tolist(), k["b"].tolist()))
+        runs.append((b, k))
+    for name in runs[0][1]:
+        assert runs[0][1][name].tobytes() == runs[1][1][name].tobytes(), name
+    for name in runs[0][0]:
+        assert runs[0][0][name].tobytes() == runs[1][0][name].tobytes(), name

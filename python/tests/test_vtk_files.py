@@ -11,6 +11,7 @@ cannot be the only reader). The arrays are checked against `history.csv`,
 
 import csv
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -143,7 +144,7 @@ def test_coupled_run_files_match_history(tmp_path):
         assert set(cd["kind"].tolist()) <= {2}
         assert cd["fn"].sum() == pytest.approx(row["contact_fn"], rel=1e-12, abs=1e-12)
         if len(cd["kind"]):
-            assert cd["disc"].tolist() == [1] * len(cd["kind"]) and set(cd["other"].tolist()) == {0}
+            assert cd["disc"].tolist() == [1] * len(cd["kind"]) and set(cd["other"].tolist()) == {1}
             # the normal force pushes the disc back from the contact point
             # (along the line to it, up to the body's turn within the step)
             nf = cd["normal_force"]
@@ -194,13 +195,14 @@ def test_granular_run_files_match_history(tmp_path):
             assert h[step]["t"] == t
             assert kinds.count(0) + kinds.count(1) == h[step]["contacts"]
         wxyz, _, wd, _, _ = read_vtk(wall_f)
-        assert wd["wall"].tolist() == [0, 1, 2]
+        assert wd["wall"].tolist() == [1, 2, 3]  # numbered from 1, as discs
         if step in h:
             assert wd["force"][0, 1] == h[step]["floor_fy"]
     # the last frame: summary.json and discs_final.csv
     xyz, pd, _, _, _ = read_vtk(sets["discs"][-1][2])
     final = np.loadtxt(out / "discs_final.csv", delimiter=",", skiprows=1)
     assert np.array_equal(xyz[:, :2], final[:, :2]) and np.array_equal(pd["radius"], final[:, 2])
+    assert np.array_equal(final[:, 3], pd["id"])  # x,y,r,id: the same numbers
     _, _, cd, _, _ = read_vtk(sets["contacts"][-1][2])
     kinds = cd["kind"].tolist()
     assert kinds.count(0) == summary["contacts"]["disc_disc"]
@@ -224,18 +226,92 @@ def test_view_script_renders(tmp_path):
     empty.mkdir()
     o = subprocess.run([cli(), "view", str(empty), "--no-open"], capture_output=True, text=True)
     assert o.returncode != 0 and "vtk_every" in o.stderr
-    pvbatch = shutil.which("pvbatch")
-    if pvbatch is None:
+    if shutil.which("pvbatch") is None:
         pytest.skip("no pvbatch (ParaView) on PATH")
-    cmd = [pvbatch, str(script), "--screenshot", str(tmp_path / "view.png"), "--size", "640", "360"]
-    if not __import__("os").environ.get("DISPLAY"):
-        if shutil.which("xvfb-run") is None:
-            pytest.skip("no display and no xvfb-run")
-        cmd = ["xvfb-run", "-a"] + cmd
-    subprocess.run(cmd, check=True, capture_output=True, timeout=300)
+    if not (os.environ.get("DISPLAY") or shutil.which("Xvfb")):
+        pytest.skip("no display and no Xvfb")
+    # `efgdem view --screenshot` renders on a virtual display of its own
+    # when there is none
+    o = subprocess.run([cli(), "view", str(out), "--screenshot", str(tmp_path / "view.png"),
+                        "--size", "640", "360"], capture_output=True, text=True, timeout=300)
+    assert o.returncode == 0, o.stderr[-3000:]
     Image = pytest.importorskip("PIL.Image")
     im = np.asarray(Image.open(tmp_path / "view.png").convert("RGB")).astype(int)
     assert im.shape == (360, 640, 3)
     # the view is mostly white background, with the coloured beam and disc
     coloured = (np.abs(im - im.mean(axis=2, keepdims=True)).max(axis=2) > 40).mean()
     assert 0.05 < coloured < 0.8, coloured
+
+    def sag(png):
+        """How much lower (pixels) the beam's bottom edge is near its tip
+        than near its clamped end (above the colour bars)."""
+        im = np.asarray(Image.open(png).convert("RGB")).astype(int)[:280]
+        bottom = [np.nonzero((im[:, a:a + 40].sum(axis=2) < 700).any(axis=1))[0].max()
+                  for a in (60, 540)]
+        return bottom[1] - bottom[0]
+
+    # --warp: the tip deflection (1.5 mm, a pixel) drawn 50 times larger
+    o = subprocess.run([cli(), "view", str(out), "--screenshot", str(tmp_path / "warp.png"),
+                        "--size", "640", "360", "--warp", "50"],
+                       capture_output=True, text=True, timeout=300)
+    assert o.returncode == 0, o.stderr[-3000:]
+    drop = (sag(tmp_path / "view.png"), sag(tmp_path / "warp.png"))
+    assert drop[0] <= 2 and 25 < drop[1] < 70, drop
+
+    def colours(args):
+        """{title: (low, high)} of the colour bars `efgdem view --screenshot`
+        reports for the image it renders with `args`."""
+        o = subprocess.run([cli(), "view", str(out), "--screenshot", str(tmp_path / "c.png"),
+                            "--size", "320", "180", *args], capture_output=True, text=True, timeout=300)
+        assert o.returncode == 0, o.stderr[-3000:]
+        bars = [line.split(": ") for line in o.stdout.splitlines() if line.startswith("colours: ")]
+        return {b[1]: tuple(float(v) for v in b[2].split(" to ")) for b in bars}
+
+    # colour ranges over the whole series (default) stay put when an early
+    # frame is shown; --range frame takes the frame's own; the discs' range
+    # ends at the 99th percentile of their speeds
+    beam = [read_vtk(f)[1]["von_mises"] for _, _, f in series(out, "beam")]
+    speeds = np.concatenate([np.linalg.norm(read_vtk(f)[1]["velocity"], axis=1)
+                             for _, _, f in series(out, "discs")])
+    t1, k1 = series(out, "beam")[1][1], 1
+    stress, disc = "von Mises stress [Pa]", "disc speed [m/s], 99% below"
+    whole = colours(["--time", str(t1)])
+    assert whole[stress] == pytest.approx((min(b.min() for b in beam), max(b.max() for b in beam)), rel=1e-8)
+    assert whole[disc] == pytest.approx((0.0, np.percentile(speeds, 99.0)), rel=1e-8)
+    own = colours(["--time", str(t1), "--range", "frame", "--percentile", "100"])
+    assert own[stress] == pytest.approx((beam[k1].min(), beam[k1].max()), rel=1e-8)
+    # the early frame's stresses are a part of the series' range
+    assert own[stress][1] < 0.8 * whole[stress][1], (own, whole)
+    speed1 = np.linalg.norm(read_vtk(series(out, "discs")[k1][2])[1]["velocity"], axis=1).max()
+    assert own["disc speed [m/s]"] == pytest.approx((0.0, speed1), rel=1e-8)
+    # --region: the ranges are those of the points in it (the clamped part
+    # of the beam, away from the disc's impact near the tip)
+    part = colours(["--region", "-0.1", "-0.1", "0.7", "0.3", "--percentile", "100"])
+
+    def clamped(f):
+        xyz, pd, _, _, _ = read_vtk(f)
+        return pd["von_mises"][xyz[:, 0] <= 0.7]
+
+    v = np.concatenate([clamped(f) for _, _, f in series(out, "beam")])
+    assert part[stress] == pytest.approx((v.min(), v.max()), rel=1e-8)
+    assert part[stress][1] < 0.99 * whole[stress][1], (part, whole)
+
+    def grid_pixels(args):
+        """Pixels of the body's grid-line grey (above the colour bars) in
+        the 640 × 360 image rendered with `args`."""
+        png = tmp_path / "edges.png"
+        o = subprocess.run([cli(), "view", str(out), "--screenshot", str(png), "--size", "640", "360",
+                            *args], capture_output=True, text=True, timeout=300)
+        assert o.returncode == 0, o.stderr[-3000:]
+        im = np.asarray(Image.open(png).convert("RGB")).astype(int)[:270]
+        return int((np.abs(im - 89).max(axis=2) <= 6).sum())
+
+    # body grid lines: off, on, and `auto`: on where a cell is 6 pixels or
+    # wider (the beam's cells, ~0.06 m, are ~30 px on the whole scene), off
+    # where they are narrower (~3.5 px in a 9 m wide --region)
+    off, on = grid_pixels(["--edges", "off"]), grid_pixels(["--edges", "on"])
+    assert off < 50 and on > 150, (off, on)
+    assert grid_pixels([]) == on
+    far = ["--region", "-4", "-2", "5", "2.5"]
+    small = [grid_pixels(far + e) for e in ([], ["--edges", "on"], ["--edges", "off"])]
+    assert small[0] == small[2] < small[1], small

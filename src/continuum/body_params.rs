@@ -25,8 +25,7 @@ pub enum MassKind {
 
 /// An axis-aligned rectangle in the reference configuration: the domain Ω
 /// of a body.
-#[derive(Debug, Clone, Copy, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Rectangle {
     /// Lower-left corner.
     pub origin: [f64; 2],

@@ -5,6 +5,7 @@
 
 pub mod body_params;
 pub mod cantilever;
+pub mod chain_compliance;
 pub mod compliance;
 pub mod conditions;
 pub mod crack_tip;
@@ -30,6 +31,7 @@ pub use material::{Material, Sample};
 pub use state::{BodyState, BoundaryState, CrackState, StateError};
 pub use table::{Table, TimedLoad};
 
+use crate::continuum::chain_compliance::ChainCompliance;
 use crate::continuum::compliance::{BoundaryGreen, Compliance, PointRows};
 use crate::continuum::newmark::{Newmark, State, pair_values};
 use crate::geom::Vec2;
@@ -243,19 +245,29 @@ pub trait Continuum: Send {
         Ok(())
     }
     /// Sub-cycled scheme: the energy the scheme created since t = 0 (what
-    /// the body received from its end loads, `Σ ½(Fₖ + Fₖ₊₁)·ΔU`, less what
-    /// the discs did on the predicted path, `Σ F̄ₖ·ΔŶ`), the work the discs
-    /// exchanged with the body through the path (`Σ |F̄ₖ·ΔŶ|` per chain
-    /// point). Kept for the energy-conserving Newmark (γ = ½, β = ¼) only,
-    /// whose load work is exactly `½(Fₖ + Fₖ₊₁)·ΔU` (a dissipative one
-    /// damps what the scheme creates, and its load work has other terms):
-    /// zeros otherwise.
+    /// the body received from its end loads, `Σ ½(Fₖ + Fₖ₊₁)·ΔU` at the
+    /// chain points, less what the discs did on the boundary: `Σ F̄ₖ·ΔŶ` on
+    /// the predicted path, or per DEM step the mean of its two loads on the
+    /// chain points' displacement in the compliant scheme), and the work
+    /// the discs exchanged with the body (the sum of the magnitudes of
+    /// their work, chain point by chain point). With γ = ½ (any β) the
+    /// body's load work in Newmark's energy balance is exactly
+    /// `½(Fₖ + Fₖ₊₁)·ΔU` (the balance of `½U̇ᵀMU̇ + ½UᵀKU + (β − ¼)Δt²½ÜᵀMÜ`),
+    /// so what is created is energy the coupled system gained; with γ > ½
+    /// the balance has a numerical dissipation term besides, and the same
+    /// difference measures the interface's mismatch alone (the discs' work
+    /// against the trapezoidal work of the loads the body took).
     fn path_energy(&self) -> (f64, f64) {
         (0.0, 0.0)
     }
     /// Sub-cycled scheme: how far any chain point moves on the present
     /// path (0 when none is under way).
     fn path_extent(&self) -> f64 {
+        0.0
+    }
+    /// Compliant scheme: how far any chain point is from its path (its
+    /// response to the contacts within the present body step).
+    fn path_correction(&self) -> f64 {
         0.0
     }
     /// Sub-cycled scheme: put the contact boundary at the fraction `s ∈
@@ -279,13 +291,65 @@ pub trait Continuum: Send {
     fn end_path(&mut self) -> Result<(), SolveError> {
         self.advance()
     }
-    /// The largest compliance `φ(x)ᵀ A⁻¹ φ(x)` of the body step at the
-    /// contact boundary (sampled at up to 32 chain points, both
-    /// directions): a contact of normal stiffness `k_n` there feeds back on
-    /// itself within a body step with the gain `k_n c`
-    /// ([`begin_path`](Self::begin_path) needs it small). 0 if unknown.
-    fn boundary_compliance(&mut self) -> Result<f64, SolveError> {
+    /// Compliant sub-cycled scheme (switched on once, at the build): over
+    /// a body step the boundary is the predicted path plus its response,
+    /// through the body step's compliance, to the present contact loads
+    /// less the held ones ([`compliant_system`](Self::compliant_system),
+    /// [`compliant_loads`](Self::compliant_loads)); the step ends with the
+    /// last DEM step's loads. A body that cannot do it says so.
+    fn set_compliant(&mut self) -> Result<(), SolveError> {
+        Err(SolveError {
+            body: self.name().to_string(),
+            message: "this body cannot take the compliant sub-cycled scheme".to_string(),
+        })
+    }
+    /// Compliant scheme, at the fraction `s` of the body step: for the
+    /// contact points `pts[k] = (chain, segment, σ)` (parameter σ on the
+    /// segment), their positions with the held loads only (`free`) and the
+    /// compliance among them (`out`, 2m × 2m row-major): the boundary at
+    /// the points is `free + S g` under forces `g` on them.
+    fn compliant_system(
+        &mut self,
+        _s: f64,
+        _pts: &[(usize, usize, f64)],
+        _free: &mut Vec<Vec2>,
+        _out: &mut Vec<f64>,
+    ) -> Result<(), SolveError> {
+        self.set_compliant()
+    }
+    /// Compliant scheme: the forces `g[k]` on the contact points `pts[k]`
+    /// are the body's present loads (shared by the ends of the segment);
+    /// the boundary at the fraction `s` follows them. `ds` is the DEM
+    /// step's fraction of the body step (for the discs' work).
+    fn compliant_loads(
+        &mut self,
+        _s: f64,
+        _ds: f64,
+        _pts: &[(usize, usize, f64)],
+        _g: &[Vec2],
+    ) -> Result<(), SolveError> {
+        self.set_compliant()
+    }
+    /// Take body steps of `h` (before the first step): the Newmark matrix
+    /// factored again for it. A body that cannot says so.
+    fn set_step(&mut self, _h: f64) -> Result<(), SolveError> {
+        self.set_compliant()
+    }
+    /// The gain with which the contacts, acting together, feed back on
+    /// themselves within one body step: the largest eigenvalue of
+    /// `K^½ S K^½`, `S` the body step's compliance among all the chain
+    /// points and `K` a contact layer along the whole contact boundary,
+    /// one contact of stiffness `k_n` normal and `k_s` tangential per
+    /// `spacing` of boundary (the densest row of the smallest discs: each
+    /// chain point carries the contacts of its share of the boundary). A
+    /// single contact's gain `k_n φᵀA⁻¹φ` is at most this. 0 if unknown.
+    fn collective_gain(&mut self, _kn: f64, _ks: f64, _spacing: f64) -> Result<f64, SolveError> {
         Ok(0.0)
+    }
+    /// Stored entries of the factor of the body step's Newmark matrix (the
+    /// cost of a body solve; 0 if not dynamic).
+    fn factor_nnz(&mut self) -> usize {
+        0
     }
     /// Kinetic and strain energy of the present state.
     fn energies(&self) -> BodyEnergies;
@@ -329,6 +393,9 @@ pub trait ContactBody: Send + Sync + 'static {
     }
     /// The row `[(node, φ_J(x))]` at the material point `x`.
     fn row(&self, x: Vec2) -> Result<Row, Self::Error>;
+    /// Start (or, before the first step, start again) the time stepping
+    /// with the step `dt`: the Newmark matrix factored for it.
+    fn start_dynamic(&mut self, dt: f64) -> Result<(), Self::Error>;
     /// Nodal displacement, velocity, acceleration.
     fn state(&self) -> &State;
     /// `F += Φᵀ f` for the next step.
@@ -382,6 +449,22 @@ fn add_chain_loads<'a, B: ContactBody>(
             body.add_point_load_row(row, *f);
         }
     }
+}
+
+/// The nonzero entries of a per-chain, per-point field, chain points
+/// numbered chain after chain.
+fn nonzero(v: &[Vec<Vec2>]) -> impl Iterator<Item = (usize, Vec2)> + '_ {
+    v.iter()
+        .flatten()
+        .copied()
+        .enumerate()
+        .filter(|(_, f)| *f != Vec2::ZERO)
+}
+
+/// Position of point `i` of chain `c` at the fraction `s` of the path.
+fn path_at(p: &Path, c: usize, i: usize, s: f64) -> Vec2 {
+    let a = p.start[c][i];
+    a + (p.end[c][i] - a) * s
 }
 
 /// `F += Φᵀ f`: the point load `f` on the nodal force vector through a row.
@@ -446,6 +529,14 @@ pub struct WithBoundary<B> {
     contact_force: Vec2,
     /// Per chain point, its `x` and `y` functionals (the path's loads).
     point_fs: Vec<Vec<(usize, f64)>>,
+    /// Per chain, the number of its first point in the chain points
+    /// numbered chain after chain.
+    offsets: Vec<usize>,
+    /// Compliant scheme: the columns of the body step's compliance among
+    /// the chain points computed so far.
+    chain_s: ChainCompliance,
+    /// Compliant scheme, per chain point: the response to the held loads.
+    held_resp: Vec<Vec2>,
 }
 
 /// The sub-cycled scheme's boundary path over one body step: the chain
@@ -477,6 +568,22 @@ pub struct Path {
     pub created: f64,
     /// Work exchanged with the discs through the path so far.
     pub exchanged: f64,
+    /// The compliant sub-cycled scheme ([`Continuum::set_compliant`]): the
+    /// boundary responds to the loads within the body step, and `acc`
+    /// holds the last DEM step's loads, not their sum.
+    pub compliant: bool,
+    /// Compliant scheme: the discs' work on the boundary in the present
+    /// body step so far (per DEM step, its mean load times the chain
+    /// points' displacement).
+    pub done: f64,
+    /// Compliant scheme: the sum of the magnitudes of that work, chain
+    /// point by chain point and DEM step by DEM step.
+    pub swept: f64,
+    /// Compliant scheme, per chain, per point: the boundary's response to
+    /// the present loads less the held ones, as last updated (the points
+    /// near the contacts every DEM step, all of them zero at the start of
+    /// a body step).
+    pub corr: Vec<Vec<Vec2>>,
 }
 
 impl<B: ContactBody> WithBoundary<B> {
@@ -510,7 +617,17 @@ impl<B: ContactBody> WithBoundary<B> {
             pre: None,
             contact_force: Vec2::ZERO,
             point_fs: Vec::new(),
+            offsets: Vec::new(),
+            chain_s: ChainCompliance::default(),
+            held_resp: Vec::new(),
         };
+        let mut total = 0;
+        for ch in &c.chains {
+            c.offsets.push(total);
+            total += ch.reference.len();
+        }
+        c.chain_s = ChainCompliance::new(total);
+        c.held_resp = vec![Vec2::ZERO; total];
         let zeros: Vec<Vec<Vec2>> = c
             .chains
             .iter()
@@ -518,6 +635,7 @@ impl<B: ContactBody> WithBoundary<B> {
             .collect();
         c.path.held.clone_from(&zeros);
         c.path.last_end.clone_from(&zeros);
+        c.path.corr.clone_from(&zeros);
         c.path.acc = zeros;
         c.refresh();
         Ok(c)
@@ -537,6 +655,20 @@ impl<B: ContactBody> WithBoundary<B> {
     /// one, which a point of a chain segment never is).
     fn row(&self, x: Vec2) -> Row {
         self.body.row(x).unwrap_or_default()
+    }
+
+    /// The body step with the loads changed by `delta` at the chain
+    /// points (point forces and chain loads), committed; the boundary and
+    /// its prediction refreshed.
+    fn take_step(&mut self, delta: &[Vec2]) -> Result<(), SolveError> {
+        self.body
+            .add_point_forces(&self.point_fs, delta)
+            .map_err(|e| self.solve_error(e))?;
+        add_chain_loads(&mut self.body, &self.rows, delta);
+        self.body.commit().map_err(|e| self.solve_error(e))?;
+        self.refresh();
+        self.pre = None;
+        Ok(())
     }
 
     fn solve_error(&self, e: impl std::fmt::Display) -> SolveError {
@@ -584,6 +716,100 @@ impl<B: ContactBody> WithBoundary<B> {
             }
         });
         predicted.map_err(|e| self.solve_error(e))
+    }
+
+    /// Compliant scheme: the compliance columns of the chain points `pts`
+    /// (numbered chain after chain) that are not known yet.
+    fn ensure_columns(&mut self, pts: &[usize]) -> Result<(), SolveError> {
+        if pts.iter().all(|&b| self.chain_s.has(b)) {
+            return Ok(());
+        }
+        let body = self.body.name().to_string();
+        let rows: Vec<&Row> = self.rows.iter().flatten().collect();
+        let Some(nm) = self.body.newmark_mut() else {
+            return Err(SolveError {
+                body,
+                message: "the compliant sub-cycled scheme needs a dynamic body".to_string(),
+            });
+        };
+        self.chain_s
+            .ensure(pts, &rows, nm.imposed(), nm.factor())
+            .map_err(|e| SolveError {
+                body,
+                message: e.to_string(),
+            })
+    }
+
+    /// Compliant scheme: every chain point's response to the held loads.
+    fn held_response(&mut self) -> Result<(), SolveError> {
+        let held: Vec<(usize, Vec2)> = nonzero(&self.path.held).collect();
+        let pts: Vec<usize> = held.iter().map(|h| h.0).collect();
+        self.ensure_columns(&pts)?;
+        self.held_resp.iter_mut().for_each(|r| *r = Vec2::ZERO);
+        for &(b, f) in &held {
+            self.chain_s.add_response(b, f, &mut self.held_resp);
+        }
+        Ok(())
+    }
+
+    /// Chain and point of the chain point numbered `a`.
+    fn locate(&self, a: usize) -> (usize, usize) {
+        let c = self.offsets.partition_point(|&o| o <= a) - 1;
+        (c, a - self.offsets[c])
+    }
+
+    /// The chain points' `x` and `y` functionals, built at their first use.
+    fn ensure_point_fs(&mut self) {
+        if self.point_fs.is_empty() {
+            self.point_fs = self
+                .rows
+                .iter()
+                .flatten()
+                .flat_map(|row| {
+                    (0..2).map(move |a| {
+                        row.iter()
+                            .map(|&(j, phi)| (2 * j as usize + a, phi))
+                            .collect()
+                    })
+                })
+                .collect();
+        }
+    }
+
+    /// Compliant scheme, end of a body step: the body takes the last DEM
+    /// step's loads (their difference from the held ones joins the pending
+    /// prediction, one solve), which are held for the next step; the
+    /// energy account compares the body's trapezoidal load work with the
+    /// discs' work on the boundary.
+    fn end_compliant(&mut self) -> Result<(), SolveError> {
+        self.ensure_point_fs();
+        let p = &self.path;
+        let delta: Vec<Vec2> = p
+            .acc
+            .iter()
+            .flatten()
+            .zip(p.held.iter().flatten())
+            .map(|(f, h)| *f - *h)
+            .collect();
+        self.take_step(&delta)?;
+        let p = &mut self.path;
+        let current = self.chains.iter().flat_map(|c| &c.current);
+        let received: f64 = p
+            .acc
+            .iter()
+            .flatten()
+            .zip(p.last_end.iter().flatten())
+            .zip(p.start.iter().flatten().zip(current))
+            .map(|((f1, f0), (y0, y1))| (*f0 + *f1).dot(*y1 - *y0) * 0.5)
+            .sum();
+        p.created += received - p.done;
+        p.exchanged += p.swept;
+        (p.done, p.swept) = (0.0, 0.0);
+        p.last_end.clone_from(&p.acc);
+        p.held.clone_from(&p.acc);
+        p.corr.iter_mut().flatten().for_each(|c| *c = Vec2::ZERO);
+        p.end.clear();
+        Ok(())
     }
 
     /// Build `G` (first call) and extend it to the nodes of the step's rows
@@ -754,34 +980,100 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             start.clone_from(current);
         }
         self.path.h = h;
+        if self.path.compliant {
+            self.held_response()?;
+            self.path
+                .corr
+                .iter_mut()
+                .flatten()
+                .for_each(|c| *c = Vec2::ZERO);
+        }
         Ok(())
     }
-    fn boundary_compliance(&mut self) -> Result<f64, SolveError> {
-        let total: usize = self.rows.iter().map(Vec::len).sum();
-        let stride = total.div_ceil(32).max(1);
+    fn set_step(&mut self, h: f64) -> Result<(), SolveError> {
+        self.body
+            .start_dynamic(h)
+            .map_err(|e| self.solve_error(e))?;
+        self.green = None;
+        self.chain_s = ChainCompliance::new(self.held_resp.len());
+        Ok(())
+    }
+    /// Power iteration on `K^½ S K^½` (one solve per product), from a
+    /// uniform push along the normals, to 1e-3 or 60 products.
+    fn collective_gain(&mut self, kn: f64, ks: f64, spacing: f64) -> Result<f64, SolveError> {
+        // per chain point: K^½ (2 × 2, symmetric) from its normal and share
+        let mut half: Vec<[f64; 4]> = Vec::new();
+        for ch in &self.chains {
+            let p = &ch.reference;
+            for i in 0..p.len() {
+                let seg = |a: usize| p[a + 1] - p[a];
+                let (prev, next) = (
+                    (i > 0).then(|| seg(i - 1)),
+                    (i + 1 < p.len()).then(|| seg(i)),
+                );
+                let len = 0.5 * (prev.map_or(0.0, |d| d.norm()) + next.map_or(0.0, |d| d.norm()));
+                let tan = prev.unwrap_or(Vec2::ZERO) + next.unwrap_or(Vec2::ZERO);
+                let t = if tan.norm() > 0.0 {
+                    tan * (1.0 / tan.norm())
+                } else {
+                    Vec2::new(1.0, 0.0)
+                };
+                let n = Vec2::new(t.y, -t.x);
+                let w = (len / spacing).sqrt();
+                let (a, b) = (w * kn.sqrt(), w * ks.sqrt());
+                half.push([
+                    a * n.x * n.x + b * t.x * t.x,
+                    a * n.x * n.y + b * t.x * t.y,
+                    a * n.x * n.y + b * t.x * t.y,
+                    a * n.y * n.y + b * t.y * t.y,
+                ]);
+            }
+        }
+        let rows: Vec<&Row> = self.rows.iter().flatten().collect();
+        let name = self.body.name().to_string();
         let Some(nm) = self.body.newmark_mut() else {
             return Ok(0.0);
         };
-        let mut x = vec![0.0; nm.n()];
-        let mut c_max: f64 = 0.0;
-        for row in self.rows.iter().flatten().step_by(stride) {
-            for a in 0..2 {
-                x.iter_mut().for_each(|v| *v = 0.0);
-                for &(j, phi) in row {
-                    let i = 2 * j as usize + a;
-                    if !nm.imposed().get(i).copied().unwrap_or(false) {
-                        x[i] = phi;
-                    }
+        let apply =
+            |k: &[f64; 4], v: Vec2| Vec2::new(k[0] * v.x + k[1] * v.y, k[2] * v.x + k[3] * v.y);
+        let mut x: Vec<Vec2> = half.iter().map(|k| apply(k, Vec2::new(0.3, 1.0))).collect();
+        let mut load = vec![0.0; nm.n()];
+        let mut lambda = 0.0;
+        for _ in 0..60 {
+            let norm = x.iter().map(|v| v.dot(*v)).sum::<f64>().sqrt();
+            if !(norm > 0.0 && norm.is_finite()) {
+                return Ok(0.0);
+            }
+            load.iter_mut().for_each(|l| *l = 0.0);
+            for ((row, k), v) in rows.iter().zip(&half).zip(&x) {
+                add_row_load(&mut load, row, apply(k, *v * (1.0 / norm)));
+            }
+            for (l, &imposed) in load.iter_mut().zip(nm.imposed()) {
+                if imposed {
+                    *l = 0.0;
                 }
-                nm.solve_in_place(&mut x);
-                let c: f64 = row
-                    .iter()
-                    .map(|&(j, phi)| phi * x[2 * j as usize + a])
-                    .sum();
-                c_max = c_max.max(c);
+            }
+            nm.solve_in_place(&mut load);
+            let y: Vec<Vec2> = rows
+                .iter()
+                .zip(&half)
+                .map(|(row, k)| apply(k, interpolate(row, &load)))
+                .collect();
+            let next = y.iter().zip(&x).map(|(a, b)| a.dot(*b)).sum::<f64>() / norm;
+            x = y;
+            let done = (next - lambda).abs() <= 1e-3 * next.abs();
+            lambda = next;
+            if done {
+                break;
             }
         }
-        Ok(c_max)
+        if !lambda.is_finite() {
+            return Err(SolveError {
+                body: name,
+                message: "the collective contact gain is not finite".to_string(),
+            });
+        }
+        Ok(lambda)
     }
     fn path_extent(&self) -> f64 {
         let p = &self.path;
@@ -798,6 +1090,142 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
                 *cur = *a + (*b - *a) * s;
             }
         }
+        if p.compliant {
+            for (chain, corr) in self.chains.iter_mut().zip(&p.corr) {
+                for (cur, c) in chain.current.iter_mut().zip(corr) {
+                    *cur += *c;
+                }
+            }
+        }
+    }
+    fn set_compliant(&mut self) -> Result<(), SolveError> {
+        self.path.compliant = true;
+        Ok(())
+    }
+    fn path_correction(&self) -> f64 {
+        let c = self.path.corr.iter().flatten();
+        c.fold(0.0, |m, c| m.max(c.norm()))
+    }
+    fn factor_nnz(&mut self) -> usize {
+        self.body.newmark_mut().map_or(0, |nm| nm.factor_nnz())
+    }
+    /// The free positions and the compliance `S_kl = Σ w_ka w_lb S_ab`
+    /// over the segment ends `a`, `b` of the points and their weights
+    /// `1 − σ`, `σ`.
+    fn compliant_system(
+        &mut self,
+        s: f64,
+        pts: &[(usize, usize, f64)],
+        free: &mut Vec<Vec2>,
+        out: &mut Vec<f64>,
+    ) -> Result<(), SolveError> {
+        let w: Vec<[(usize, f64); 2]> = pts
+            .iter()
+            .map(|&(c, seg, t)| {
+                let a = self.offsets[c] + seg;
+                [(a, 1.0 - t), (a + 1, t)]
+            })
+            .collect();
+        let ends: Vec<usize> = w.iter().flatten().map(|e| e.0).collect();
+        self.ensure_columns(&ends)?;
+        let (p, held) = (&self.path, &self.held_resp);
+        free.clear();
+        free.extend(pts.iter().zip(&w).map(|(&(c, seg, _), wk)| {
+            let at = |i: usize, (a, x): (usize, f64)| (path_at(p, c, i, s) - held[a]) * x;
+            at(seg, wk[0]) + at(seg + 1, wk[1])
+        }));
+        let m2 = 2 * pts.len();
+        out.clear();
+        out.resize(m2 * m2, 0.0);
+        // by columns (l), each down its chain points' column (k ≥ l)
+        for (l, wl) in w.iter().enumerate() {
+            for (k, wk) in w.iter().enumerate().skip(l) {
+                let mut blk = [0.0; 4];
+                for &(b, y) in wl {
+                    for &(a, x) in wk {
+                        let sab = self.chain_s.block(a, b);
+                        for (q, v) in blk.iter_mut().zip(sab) {
+                            *q += x * y * v;
+                        }
+                    }
+                }
+                // S_lk = S_klᵀ (A is symmetric)
+                for (i, j) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                    out[(2 * k + i) * m2 + 2 * l + j] = blk[2 * i + j];
+                    out[(2 * l + j) * m2 + 2 * k + i] = blk[2 * i + j];
+                }
+            }
+        }
+        Ok(())
+    }
+    /// The new loads replace the last DEM step's; the response to them
+    /// (less the held ones) is updated at the points loaded now or then,
+    /// which move to the path plus it, and the discs' work over the DEM
+    /// step is booked (the mean of the two loads on each point's
+    /// displacement).
+    fn compliant_loads(
+        &mut self,
+        s: f64,
+        ds: f64,
+        pts: &[(usize, usize, f64)],
+        g: &[Vec2],
+    ) -> Result<(), SolveError> {
+        let o = &self.offsets;
+        let old: Vec<(usize, Vec2)> = nonzero(&self.path.acc).collect();
+        let acc = &mut self.path.acc;
+        acc.iter_mut().flatten().for_each(|f| *f = Vec2::ZERO);
+        for (&(c, seg, t), f) in pts.iter().zip(g) {
+            acc[c][seg] += *f * (1.0 - t);
+            acc[c][seg + 1] += *f * t;
+        }
+        let mut win: Vec<usize> = old
+            .iter()
+            .map(|x| x.0)
+            .chain(
+                pts.iter()
+                    .flat_map(|&(c, seg, _)| [o[c] + seg, o[c] + seg + 1]),
+            )
+            .collect();
+        win.sort_unstable();
+        win.dedup();
+        let p = &self.path;
+        let diff: Vec<(usize, Vec2)> = p
+            .acc
+            .iter()
+            .flatten()
+            .zip(p.held.iter().flatten())
+            .enumerate()
+            .filter(|(_, (f, h))| f != h)
+            .map(|(b, (f, h))| (b, *f - *h))
+            .collect();
+        let need: Vec<usize> = diff.iter().map(|d| d.0).collect();
+        self.ensure_columns(&need)?;
+        // the response at the window, column by column
+        let mut resp = vec![Vec2::ZERO; win.len()];
+        for &(b, d) in &diff {
+            for (r, &a) in resp.iter_mut().zip(&win) {
+                let k = self.chain_s.block(a, b);
+                r.x += k[0] * d.x + k[1] * d.y;
+                r.y += k[2] * d.x + k[3] * d.y;
+            }
+        }
+        let (mut done, mut swept) = (0.0, 0.0);
+        for (a, r) in win.into_iter().zip(resp) {
+            let (c, i) = self.locate(a);
+            let p = &mut self.path;
+            let f0 = old
+                .binary_search_by_key(&a, |x| x.0)
+                .map_or(Vec2::ZERO, |k| old[k].1);
+            let dy = (p.end[c][i] - p.start[c][i]) * ds + r - p.corr[c][i];
+            let work = (f0 + p.acc[c][i]).dot(dy) * 0.5;
+            done += work;
+            swept += work.abs();
+            p.corr[c][i] = r;
+            self.chains[c].current[i] = path_at(p, c, i, s) + r;
+        }
+        self.path.done += done;
+        self.path.swept += swept;
+        Ok(())
     }
     /// Constant along the path: the chain points' displacement over the
     /// step divided by `h`, interpolated along the segment.
@@ -815,22 +1243,15 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     /// The end load less the held one joins the pending prediction through
     /// `A⁻¹` (with a moving edge's refinement residual: one solve).
     fn end_path(&mut self) -> Result<(), SolveError> {
-        if self.point_fs.is_empty() {
-            self.point_fs = self
-                .rows
-                .iter()
-                .flatten()
-                .flat_map(|row| {
-                    (0..2).map(move |a| {
-                        row.iter()
-                            .map(|&(j, phi)| (2 * j as usize + a, phi))
-                            .collect()
-                    })
-                })
-                .collect();
+        if self.path.compliant {
+            return self.end_compliant();
         }
+        self.ensure_point_fs();
         // the average over the step belongs to its middle: the load at its
-        // end is extrapolated from it and the last step's average
+        // end is extrapolated from it and the last step's average, except
+        // where a point starts or stops being loaded (a contact's first
+        // body step would be off by a quarter of its work, its last would
+        // pull)
         let p = &self.path;
         let held = || p.held.iter().flatten();
         let ends: Vec<Vec2> = p
@@ -838,23 +1259,19 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             .iter()
             .flatten()
             .zip(held())
-            .map(|(f, f0)| *f * 1.5 - *f0 * 0.5)
+            .map(|(f, f0)| {
+                if *f0 == Vec2::ZERO || *f == Vec2::ZERO {
+                    *f
+                } else {
+                    *f * 1.5 - *f0 * 0.5
+                }
+            })
             .collect();
         let delta: Vec<Vec2> = ends.iter().zip(held()).map(|(f, f0)| *f - *f0).collect();
-        self.body
-            .add_point_forces(&self.point_fs, &delta)
-            .map_err(|e| self.solve_error(e))?;
         // the step's loads: the held ones went in before the prediction
-        add_chain_loads(&mut self.body, &self.rows, &delta);
-        self.body.commit().map_err(|e| self.solve_error(e))?;
-        self.refresh();
-        self.pre = None;
+        self.take_step(&delta)?;
         // the energy account of the step: what the body received against
         // what the discs did on the path
-        let trapezoidal = self.body.newmark_mut().is_some_and(|nm| {
-            let p = nm.params;
-            p.gamma == 0.5 && p.beta == 0.25
-        });
         let p = &mut self.path;
         let (mut received, mut done, mut exchanged) = (0.0, 0.0, 0.0);
         for (((((f1, f0), avg), y0), yp), y1) in ends
@@ -871,10 +1288,8 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             exchanged += w.abs();
             *f0 = f1;
         }
-        if trapezoidal {
-            p.created += received - done;
-            p.exchanged += exchanged;
-        }
+        p.created += received - done;
+        p.exchanged += exchanged;
         std::mem::swap(&mut p.held, &mut p.acc);
         p.acc.iter_mut().flatten().for_each(|f| *f = Vec2::ZERO);
         p.end.clear();
@@ -923,6 +1338,8 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         if !shape(&p.held)
             || !shape(&p.acc)
             || !shape(&p.last_end)
+            || !shape(&p.corr)
+            || p.compliant != self.path.compliant
             || !(p.end.is_empty() || shape(&p.end) && shape(&p.start))
         {
             return Err(StateError::new(format!(
@@ -940,6 +1357,10 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             self.body.set_contact_force(p.measured);
             self.predict_path()
                 .map_err(|e| StateError::new(e.to_string()))?;
+            if p.compliant {
+                self.held_response()
+                    .map_err(|e| StateError::new(e.to_string()))?;
+            }
         }
         self.mode = if b.direct {
             ComplianceMode::Direct

@@ -13,7 +13,7 @@
 //! matrices on one sparsity pattern.
 
 use crate::geom::Vec2;
-use crate::sparse::{Cholesky, SparseError, SymCsc};
+use crate::sparse::{Cholesky, SparseError, SymCsc, SymRows};
 
 /// Newmark parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -78,6 +78,9 @@ pub struct Newmark {
     /// `K` with the prescribed DOFs decoupled, no penalty).
     pub stiffness: SymCsc,
     factor: Cholesky,
+    /// `M` and `C` by rows, for the products of [`predict`](Self::predict).
+    mass_rows: SymRows,
+    damping_rows: Option<SymRows>,
     rhs: Vec<f64>,
     tmp: Vec<f64>,
     /// `A⁻¹Φᵀ` of the points of the last [`point_compliance`](Self::point_compliance),
@@ -105,6 +108,8 @@ impl Newmark {
         drop(eff);
         let n = stiffness.n();
         Ok(Newmark {
+            mass_rows: SymRows::new(&mass),
+            damping_rows: damping.as_ref().map(SymRows::new),
             params,
             alpha,
             mass,
@@ -162,8 +167,8 @@ impl Newmark {
         for i in 0..n {
             self.tmp[i] = a1 * state.u[i] + a2 * state.v[i] + a3 * state.a[i];
         }
-        self.mass.mul_add(&self.tmp, &mut self.rhs);
-        if let Some(c) = &self.damping {
+        self.mass_rows.mul_add(&self.tmp, &mut self.rhs);
+        if let Some(c) = &self.damping_rows {
             for i in 0..n {
                 self.tmp[i] = a4 * state.u[i] + a5 * state.v[i] + a6 * state.a[i];
             }

@@ -19,8 +19,9 @@ pub struct EnergyAccount {
     /// Energy of the bodies' penalty springs (EFG prescribed edges), from
     /// their gap to the prescribed displacement.
     pub penalty: f64,
-    /// Energy in the contact springs: disc–disc and disc–wall (DEM) and
-    /// disc–body.
+    /// Energy in the contact springs — disc–disc and disc–wall (DEM) and
+    /// disc–body — and in the intact parallel bonds (the energy of broken
+    /// bonds counts as dissipated).
     pub contact: f64,
     /// Work of gravity on the discs, of the bodies' permanent loads and
     /// moving edges, and of the walls since t = 0.
@@ -93,7 +94,7 @@ impl WorkMeter {
             penalty += en.penalty;
             w_body += en.work;
         }
-        let contact = e.spring + m.body_contact_energy();
+        let contact = e.spring + e.bond + m.body_contact_energy();
         let w_ext = w_grav + w_body + self.wall_work;
         let kin_dem = e.kinetic + e.rotational;
         let mut e = EnergyAccount {

@@ -193,16 +193,61 @@ impl Linear {
 /// Contacts up to which the Newton matrix `I − S J` is formed and factored
 /// densely (`8m³/3` flops); beyond, it is solved by GMRES with products `S x`.
 const DENSE_MAX: usize = 48;
-/// Semi-smooth Newton iterations at most (the regimes settle in 1–3).
-const MAX_NEWTON: usize = 30;
+/// Semi-smooth Newton iterations at most, by default (the regimes settle
+/// in 1–5; `[simulation] contact_iterations`).
+pub const MAX_NEWTON: usize = 30;
+/// Full Newton steps before the steps are damped ([`Solver::line_search`]).
+const UNDAMPED: usize = 10;
+/// A damped Newton step has converged when the residual is this fraction
+/// of the increments and free motions.
+const RESIDUAL_TOL: f64 = 1e-10;
+/// A solve whose regimes still change at the iteration cap is accepted
+/// when its residual is this fraction of the increments and free motions
+/// (regimes flickering at a kink of a law whose force is continuous there:
+/// the iterate is a solution to this accuracy).
+const ACCEPT_TOL: f64 = 1e-6;
 /// GMRES: Krylov vectors per restart, restarts, relative tolerance.
 const KRYLOV: usize = 40;
 const RESTARTS: usize = 25;
 const GMRES_RTOL: f64 = 1e-13;
 
+/// Why a contact solve did not converge.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Unsolved {
+    /// The contacts' regimes (open, stick, slide) still changed at the
+    /// last Newton iteration allowed.
+    Newton {
+        /// Iterations taken (the cap).
+        iterations: usize,
+    },
+    /// A Newton step's linear system kept a residual above the tolerance
+    /// after every GMRES restart.
+    Gmres {
+        /// Relative residual reached.
+        residual: f64,
+    },
+}
+
+impl std::fmt::Display for Unsolved {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unsolved::Newton { iterations } => write!(
+                f,
+                "the contacts' regimes still changed after {iterations} Newton iterations (simulation.contact_iterations)"
+            ),
+            Unsolved::Gmres { residual } => write!(
+                f,
+                "GMRES left a relative residual of {residual:.2e} (above {GMRES_RTOL:e}) after {RESTARTS} restarts of {KRYLOV}"
+            ),
+        }
+    }
+}
+
 /// The contact solve and its scratch (kept between steps).
 #[derive(Default)]
 pub struct Solver {
+    /// Newton iterations allowed (0: [`MAX_NEWTON`]).
+    pub max_newton: usize,
     w: Vec<Vec2>,
     s: Vec<f64>,
     mat: Vec<f64>,
@@ -221,6 +266,11 @@ pub struct Solver {
     scratch: Vec<Vec2>,
     /// Products `S x` of the last solve.
     pub products: usize,
+    /// The squared residual and squared scale of the last damped step
+    /// ([`line_search`](Self::line_search)).
+    last: (f64, f64),
+    /// Row permutations of [`lu_solve`].
+    perm: (Vec<usize>, Vec<usize>),
 }
 
 impl Solver {
@@ -242,9 +292,10 @@ impl Solver {
         free: &[Vec2],
         s: &mut Compliance,
         out: &mut Vec<Eval>,
-    ) -> usize {
+    ) -> Result<usize, Unsolved> {
         let m = contacts.len();
         self.products = 0;
+        self.last = (f64::INFINITY, 0.0);
         out.clear();
         out.extend(contacts.iter().map(|c| c.eval(Vec2::ZERO)));
         self.w.clear();
@@ -257,19 +308,109 @@ impl Solver {
         }
     }
 
+    /// [`solve`](Self::solve) for a dense `S` (2m × 2m, row-major) of any
+    /// size, each Newton step solved directly over the closed contacts only
+    /// (an open contact takes no force: its unknown follows the others'),
+    /// `(2c)³` for `c` closed contacts. The compliant sub-cycled scheme's
+    /// solve, whose compliance is that of a whole body step.
+    pub fn solve_dense(
+        &mut self,
+        contacts: &[Linear],
+        base: &[Vec2],
+        free: &[Vec2],
+        s: &[f64],
+        out: &mut Vec<Eval>,
+    ) -> Result<usize, Unsolved> {
+        let m = contacts.len();
+        let m2 = 2 * m;
+        self.products = 0;
+        self.last = (f64::INFINITY, 0.0);
+        out.clear();
+        out.extend(contacts.iter().map(|c| c.eval(Vec2::ZERO)));
+        self.w.clear();
+        self.w.resize(m, Vec2::ZERO);
+        for v in [&mut self.r, &mut self.t, &mut self.st] {
+            v.clear();
+            v.resize(m, Vec2::ZERO);
+        }
+        let mut closed: Vec<usize> = Vec::new();
+        for iter in 1..=self.newton_cap() {
+            // −R = −(w + base − free − S g)
+            for (t, e) in self.t.iter_mut().zip(out.iter()) {
+                *t = e.g;
+            }
+            Compliance::Dense(s).mul(&self.t, &mut self.st);
+            self.products += 1;
+            for k in 0..m {
+                self.r[k] = -(self.w[k] + base[k] - free[k] - self.st[k]);
+            }
+            // (I − S_CC J_C) d_C = −R_C over the closed contacts
+            closed.clear();
+            closed.extend((0..m).filter(|&k| out[k].regime != 0));
+            let c2 = 2 * closed.len();
+            self.mat.clear();
+            self.mat.resize(c2 * c2, 0.0);
+            self.rhs.clear();
+            for (i, &k) in closed.iter().enumerate() {
+                self.rhs.extend([self.r[k].x, self.r[k].y]);
+                // column-major: entry (row 2i + a, column q) at q c2 + 2i + a
+                for a in 0..2 {
+                    let row = &s[(2 * k + a) * m2..(2 * k + a + 1) * m2];
+                    let ri = 2 * i + a;
+                    for (j, &l) in closed.iter().enumerate() {
+                        let (x, y) = (row[2 * l], row[2 * l + 1]);
+                        let jac = &out[l].jac;
+                        self.mat[2 * j * c2 + ri] = -(x * jac[0] + y * jac[2]);
+                        self.mat[(2 * j + 1) * c2 + ri] = -(x * jac[1] + y * jac[3]);
+                    }
+                    self.mat[ri * c2 + ri] += 1.0;
+                }
+            }
+            lu_solve(&mut self.mat, &mut self.rhs, c2, &mut self.perm);
+            // d_O = −R_O + S_OC J_C d_C: J d on the closed ones, S of it
+            self.t.iter_mut().for_each(|t| *t = Vec2::ZERO);
+            for (i, &k) in closed.iter().enumerate() {
+                let d = Vec2::new(self.rhs[2 * i], self.rhs[2 * i + 1]);
+                self.t[k] = apply2(&out[k].jac, d);
+            }
+            Compliance::Dense(s).mul(&self.t, &mut self.st);
+            self.products += 1;
+            let mut d: Vec<Vec2> = (0..m).map(|k| self.r[k] + self.st[k]).collect();
+            for (i, &k) in closed.iter().enumerate() {
+                d[k] = Vec2::new(self.rhs[2 * i], self.rhs[2 * i + 1]);
+            }
+            // the compliance of a whole body step makes the contacts
+            // strongly coupled: damped steps from the first
+            let touch = iter > UNDAMPED;
+            if self.line_search(
+                contacts,
+                base,
+                free,
+                &mut Compliance::Dense(s),
+                out,
+                &d,
+                touch,
+            ) {
+                return Ok(iter);
+            }
+        }
+        self.unsettled()
+    }
+
     fn dense_newton(
         &mut self,
         contacts: &[Linear],
         base: &[Vec2],
         free: &[Vec2],
         out: &mut [Eval],
-    ) -> usize {
+    ) -> Result<usize, Unsolved> {
         let m2 = 2 * contacts.len();
-        let (s, w) = (&self.s, &mut self.w);
+        let cap = self.newton_cap();
         self.mat.resize(m2 * m2, 0.0);
         self.rhs.resize(m2, 0.0);
-        let (mat, rhs) = (&mut self.mat, &mut self.rhs);
-        for iter in 1..=MAX_NEWTON {
+        for iter in 1..=cap {
+            let (s, w) = (&self.s, &self.w);
+            let (mat, rhs) = (&mut self.mat, &mut self.rhs);
             // residual R = w + base − free − S g, Newton matrix I − S J
             for i in 0..m2 {
                 let mut sg = 0.0;
@@ -290,11 +431,30 @@ impl Solver {
                 mat[i * m2 + i] += 1.0;
             }
             gauss_solve(mat, rhs, m2);
-            if settle(w, contacts, out, |k| Vec2::new(rhs[2 * k], rhs[2 * k + 1])) {
-                return iter;
+            let rhs = &self.rhs;
+            let d = |k: usize| Vec2::new(rhs[2 * k], rhs[2 * k + 1]);
+            let settled = if iter <= UNDAMPED {
+                settle(&mut self.w, contacts, out, d)
+            } else {
+                let d: Vec<Vec2> = (0..m2 / 2).map(d).collect();
+                let dense = std::mem::take(&mut self.s);
+                let settled = self.line_search(
+                    contacts,
+                    base,
+                    free,
+                    &mut Compliance::Dense(&dense),
+                    out,
+                    &d,
+                    true,
+                );
+                self.s = dense;
+                settled
+            };
+            if settled {
+                return Ok(iter);
             }
         }
-        MAX_NEWTON
+        self.unsettled()
     }
 
     fn krylov_newton(
@@ -304,14 +464,14 @@ impl Solver {
         free: &[Vec2],
         s: &mut Compliance,
         out: &mut [Eval],
-    ) -> usize {
+    ) -> Result<usize, Unsolved> {
         let m = contacts.len();
         s.diagonal(&mut self.diag);
         for v in [&mut self.r, &mut self.t, &mut self.st, &mut self.d] {
             v.clear();
             v.resize(m, Vec2::ZERO);
         }
-        for iter in 1..=MAX_NEWTON {
+        for iter in 1..=self.newton_cap() {
             // R = w + base − free − S g; the Newton step solves (I − S J) d = −R
             for (t, e) in self.t.iter_mut().zip(out.iter()) {
                 *t = e.g;
@@ -326,15 +486,112 @@ impl Solver {
                 let a = mul2(sk, &e.jac);
                 inv2(&[1.0 - a[0], -a[1], -a[2], 1.0 - a[3]])
             }));
-            self.gmres(s, out);
+            if let Some(residual) = self.gmres(s, out) {
+                return Err(Unsolved::Gmres { residual });
+            }
             let d = std::mem::take(&mut self.d);
-            let settled = settle(&mut self.w, contacts, out, |k| d[k]);
+            let settled = if iter <= UNDAMPED {
+                settle(&mut self.w, contacts, out, |k| d[k])
+            } else {
+                self.line_search(contacts, base, free, s, out, &d, true)
+            };
             self.d = d;
             if settled {
-                return iter;
+                return Ok(iter);
             }
         }
-        MAX_NEWTON
+        self.unsettled()
+    }
+
+    /// A damped Newton step: `w += t d` with `t` halved from 1 until the
+    /// residual `|w + base − free − S g|` drops (Armijo), at least 1/64;
+    /// true when the full step was taken and no contact changed regime
+    /// (then `w` solves the system exactly), or the residual is at
+    /// round-off. The semi-smooth Newton steps of the piecewise-affine
+    /// contact laws can swap regimes back and forth without end; halving
+    /// them settles the cycle.
+    ///
+    /// With `touch`, a contact that opened or closed within its own step's
+    /// reach of zero overlap (`|δ| ≤ t |d·n|`) counts as settled: with a
+    /// normal dashpot the force jumps at `δ = 0` (from 0 to `c_n δ̇`), and
+    /// a contact just touching has no exact solution on either side of the
+    /// jump — the step ends with it on the side the last iterate found.
+    #[allow(clippy::too_many_arguments)]
+    fn line_search(
+        &mut self,
+        contacts: &[Linear],
+        base: &[Vec2],
+        free: &[Vec2],
+        s: &mut Compliance,
+        out: &mut [Eval],
+        d: &[Vec2],
+        touch: bool,
+    ) -> bool {
+        let m = contacts.len();
+        for v in [&mut self.t, &mut self.st, &mut self.scratch] {
+            v.resize(m, Vec2::ZERO);
+        }
+        let mut residual = |w: &[Vec2], e: &[Eval], t: &mut [Vec2], st: &mut [Vec2]| {
+            for (t, e) in t.iter_mut().zip(e) {
+                *t = e.g;
+            }
+            s.mul(t, st);
+            (0..m)
+                .map(|k| {
+                    let r = w[k] + base[k] - free[k] - st[k];
+                    r.dot(r)
+                })
+                .sum::<f64>()
+        };
+        let phi = residual(&self.w, out, &mut self.t, &mut self.st);
+        let mut step = 1.0;
+        loop {
+            for k in 0..m {
+                self.scratch[k] = self.w[k] + d[k] * step;
+            }
+            let trial: Vec<Eval> = (contacts.iter().zip(&self.scratch))
+                .map(|(c, w)| c.eval(*w))
+                .collect();
+            let now = residual(&self.scratch, &trial, &mut self.t, &mut self.st);
+            self.products += 2;
+            if now <= (1.0 - 1e-4 * step) * phi || step < 1.0 / 64.0 {
+                let mut flips = false;
+                let same = (trial.iter().zip(out.iter()).zip(contacts.iter().zip(d))).all(
+                    |((a, b), (c, d))| {
+                        let flip = touch
+                            && (a.regime == 0) != (b.regime == 0)
+                            && a.overlap.abs() <= step * d.dot(c.n).abs();
+                        flips |= flip;
+                        a.regime == b.regime || flip
+                    },
+                );
+                self.w.copy_from_slice(&self.scratch);
+                out.copy_from_slice(&trial);
+                // a solution on a regime's boundary (a contact just
+                // closing, a shear force just at its cap) is reached by
+                // the residual, not by a regime that stays put
+                let scale: f64 = (0..m)
+                    .map(|k| (free[k] - base[k]).dot(free[k] - base[k]) + self.w[k].dot(self.w[k]))
+                    .sum();
+                self.last = (now, scale);
+                return ((step == 1.0 || flips) && same)
+                    || now <= RESIDUAL_TOL * RESIDUAL_TOL * scale;
+            }
+            step *= 0.5;
+        }
+    }
+
+    /// The end of a solve whose regimes still changed at the iteration
+    /// cap: accepted when the last damped step's residual is within
+    /// [`ACCEPT_TOL`] of the motions, else [`Unsolved::Newton`].
+    fn unsettled(&self) -> Result<usize, Unsolved> {
+        let cap = self.newton_cap();
+        let (residual, scale) = self.last;
+        if residual <= ACCEPT_TOL * ACCEPT_TOL * scale {
+            Ok(cap)
+        } else {
+            Err(Unsolved::Newton { iterations: cap })
+        }
     }
 
     /// `y ← (I − S J) P x` (P the preconditioner), using `t`, `st`.
@@ -353,13 +610,15 @@ impl Solver {
 
     /// Restarted GMRES with right preconditioning for `(I − S J) d = r`
     /// (modified Gram–Schmidt, Givens rotations); the solution in `d`.
-    fn gmres(&mut self, s: &mut Compliance, out: &[Eval]) {
+    /// Returns the relative residual if it is still above the tolerance
+    /// after the last restart.
+    fn gmres(&mut self, s: &mut Compliance, out: &[Eval]) -> Option<f64> {
         let m = self.r.len();
         let dot = |a: &[Vec2], b: &[Vec2]| a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum::<f64>();
         self.d.iter_mut().for_each(|v| *v = Vec2::ZERO);
         let b_norm = dot(&self.r, &self.r).sqrt();
         if b_norm == 0.0 {
-            return;
+            return None;
         }
         let tol = GMRES_RTOL * b_norm;
         let mut basis = std::mem::take(&mut self.basis);
@@ -456,10 +715,22 @@ impl Solver {
                 *rq = self.r[q] - (self.d[q] - self.st[q]);
             }
         }
+        let left = dot(&res, &res).sqrt();
         self.res = res;
         self.scratch = scratch;
         self.basis = basis;
         self.hess = hess;
+        // NaN is not converged either
+        (left.is_nan() || left > tol).then_some(left / b_norm)
+    }
+
+    /// The Newton iterations allowed.
+    fn newton_cap(&self) -> usize {
+        if self.max_newton == 0 {
+            MAX_NEWTON
+        } else {
+            self.max_newton
+        }
     }
 }
 /// `w += d`, re-evaluate; true when no contact changed regime.
@@ -502,6 +773,36 @@ fn inv2(a: &[f64; 4]) -> [f64; 4] {
 #[inline]
 fn apply2(a: &[f64; 4], x: Vec2) -> Vec2 {
     Vec2::new(a[0] * x.x + a[1] * x.y, a[2] * x.x + a[3] * x.y)
+}
+
+/// Solve `a x = b` in place (`b ← x`) by an LU factorization with partial
+/// pivoting (faer's, sequential: the same on any number of threads); `a`
+/// is n × n column-major and is destroyed.
+fn lu_solve(a: &mut [f64], b: &mut [f64], n: usize, perm: &mut (Vec<usize>, Vec<usize>)) {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::lu::partial_pivoting::{factor, solve};
+    use faer::prelude::{Reborrow, ReborrowMut};
+    if n == 0 {
+        return;
+    }
+    let par = faer::Par::Seq;
+    perm.0.resize(n, 0);
+    perm.1.resize(n, 0);
+    let req = factor::lu_in_place_scratch::<usize, f64>(n, n, par, Default::default())
+        .or(solve::solve_in_place_scratch::<usize, f64>(n, 1, par));
+    let mut mem = MemBuffer::new(req);
+    let stack = MemStack::new(&mut mem);
+    let mut m = faer::MatMut::from_column_major_slice_mut(a, n, n);
+    let (_, p) = factor::lu_in_place(
+        m.rb_mut(),
+        &mut perm.0,
+        &mut perm.1,
+        par,
+        stack,
+        Default::default(),
+    );
+    let rhs = faer::MatMut::from_column_major_slice_mut(b, n, 1);
+    solve::solve_in_place(m.rb(), m.rb(), p, rhs, par, stack);
 }
 
 /// Solve `a x = b` in place (`b ← x`), Gaussian elimination with partial
@@ -678,7 +979,9 @@ mod tests {
         let base = [Vec2::new(0.01, 0.02)];
         let free = [Vec2::new(0.0101, 0.0199)];
         let mut out = Vec::new();
-        let it = Solver::default().solve(&[c], &base, &free, &mut Compliance::Dense(&s), &mut out);
+        let it = Solver::default()
+            .solve(&[c], &base, &free, &mut Compliance::Dense(&s), &mut out)
+            .unwrap();
         assert!(it < 10);
         let g = out[0].g;
         let u = base[0]

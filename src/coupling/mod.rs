@@ -52,6 +52,7 @@ pub mod candidates;
 pub mod energy;
 pub mod implicit;
 pub mod interface;
+pub mod scheme;
 pub mod segments;
 pub mod state;
 
@@ -150,9 +151,27 @@ pub struct CoupledModel {
     pub compliance_products: usize,
     /// Wall time spent so far in each part of the step.
     pub timing: StepTiming,
-    /// The sub-cycled scheme: per body, the gain `k_n c` of a contact on
-    /// it within a body step, found at the build (empty otherwise).
-    pub subcycling_gains: Vec<f64>,
+    /// The compliant sub-cycled scheme ([`CoupledModel::set_compliant`]).
+    pub compliant: bool,
+    /// Compliant scheme, per body: how far its boundary's response to the
+    /// contacts may go before its segments are binned again.
+    allow: Vec<f64>,
+    /// Per body, the sub-cycling energy guard's record (saved with the
+    /// state).
+    pub over: Vec<GuardRecord>,
+    /// The scheme and substeps, and why ([`scheme::apply`]).
+    pub choice: Option<scheme::Choice>,
+    /// The body step (in DEM steps) the bodies are factored for.
+    pub factored: usize,
+}
+
+impl CoupledModel {
+    /// Newton iterations a contact solve may take before the run stops
+    /// ([`CouplingError::NotConverged`]; default
+    /// [`implicit::MAX_NEWTON`]).
+    pub fn set_contact_iterations(&mut self, n: usize) {
+        self.work.solver.max_newton = n;
+    }
 }
 
 /// Where the time of the coupled steps goes (seconds, accumulated).
@@ -183,6 +202,10 @@ struct Work {
     forces: Vec<Vec2>,
     /// Per candidate: (disc slot, body, chain, contact point, feature).
     meta: Vec<(usize, usize, usize, Vec2, interface::Feature)>,
+    /// Compliant scheme, per candidate: (chain, segment, parameter), and
+    /// the compliance among them.
+    pts: Vec<(usize, usize, f64)>,
+    dense: Vec<f64>,
 }
 
 /// A disc–body force waiting to be applied.
@@ -222,23 +245,61 @@ pub enum CouplingError {
         /// DEM steps done when it was detected (with sub-cycling, n per
         /// body step).
         step: usize,
-        /// The DEM critical time step `2√(m_min/k_max)` (ERRATA E11).
+        /// The critical time step of the contacts in use
+        /// ([`Granular::critical_step`]).
         dt_crit: f64,
     },
-    /// The sub-cycled scheme created energy ([`MAX_CREATED`]).
+    /// A body's sub-cycled scheme created energy ([`MAX_CREATED`]).
     #[error(
-        "the sub-cycled scheme created {created:.3e} J by t = {time:.6} s, {pct:.1} % of the run's work ({work:.3e} J; above {limit} %): a body is too soft against the contacts for its step; use fewer `substeps`, or 1 (the exact implicit step)",
-        pct = 100.0 * created / work,
+        "body `{body}`: the sub-cycled scheme ({scheme}) created {created:.3e} J by step {step} (t = {time:.6} s), {pct:.2} % of the {exchanged:.3e} J the body exchanged with the discs, above {limit} % for {GUARD_STEPS} body steps in a row: the body is too soft against the contacts for this scheme and step; {remedy}",
+        pct = 100.0 * created / exchanged,
         limit = 100.0 * MAX_CREATED
     )]
     Subcycling {
+        /// Name of the body.
+        body: String,
+        /// `"predicted"` or `"compliant"`.
+        scheme: &'static str,
+        /// DEM steps taken.
+        step: usize,
         /// Time of the discs when it was found.
         time: f64,
-        /// Energy created so far.
+        /// Energy the scheme created on this body so far.
         created: f64,
-        /// The run's largest work or stored energy so far.
-        work: f64,
+        /// Work the body exchanged with the discs so far.
+        exchanged: f64,
+        /// What to do about it.
+        remedy: &'static str,
     },
+    /// A contact solve did not converge.
+    #[error(
+        "body `{body}`: the contact solve did not converge at step {step} (t = {time:.6} s): {why}; the run stops rather than go on with forces that are not a solution"
+    )]
+    NotConverged {
+        /// Name of the body.
+        body: String,
+        /// DEM steps taken (the step being solved is the next).
+        step: usize,
+        /// Time of the discs.
+        time: f64,
+        /// What failed.
+        why: implicit::Unsolved,
+    },
+}
+
+/// The Newton iterations of a contact solve, or the error naming the body
+/// and the step.
+fn unsolved(
+    r: Result<usize, implicit::Unsolved>,
+    body: &str,
+    g: &Granular,
+) -> Result<usize, CouplingError> {
+    r.map_err(|why| CouplingError::NotConverged {
+        body: body.to_string(),
+        step: g.step,
+        time: g.time,
+        why,
+    })
 }
 
 impl CoupledModel {
@@ -282,12 +343,32 @@ impl CoupledModel {
             compliance_products: 0,
             geometric_stiffness: true,
             timing: StepTiming::default(),
-            subcycling_gains: Vec::new(),
+            compliant: false,
+            allow: Vec::new(),
+            over: Vec::new(),
+            choice: None,
+            factored: substeps.max(1),
         }
+    }
+
+    /// Use the compliant sub-cycled scheme: over a body step of `substeps`
+    /// DEM steps each body's contact boundary is its predicted path plus
+    /// its response, through the body step's compliance, to the change of
+    /// the contact forces; the contacts are solved implicitly against that
+    /// response in every DEM step ([`CoupledModel::step`]).
+    pub fn set_compliant(&mut self) -> Result<(), CouplingError> {
+        for b in &mut self.bodies {
+            b.set_compliant()?;
+        }
+        self.compliant = true;
+        Ok(())
     }
 
     /// One DEM step, and a body step every `substeps` of them.
     pub fn step(&mut self) -> Result<(), CouplingError> {
+        if self.compliant {
+            return self.step_compliant();
+        }
         let t = Instant::now();
         let implicit = self.substeps == 1 && !self.staggered;
         // the DEM's neighbour list (part of its step)
@@ -301,18 +382,7 @@ impl CoupledModel {
                 self.implicit_contacts(false)?;
                 self.primed = true;
             }
-            let g = &self.granular;
-            let ext: Vec<_> = self
-                .contacts
-                .iter()
-                .map(|q| {
-                    let slot = g.slot(q.disc as usize);
-                    let arm = g.particles.pos[slot] + q.normal * g.particles.radius[slot];
-                    // the rolling moment acts on the disc only
-                    (slot, q.force, arm, q.moment)
-                })
-                .collect();
-            self.granular.set_external_with_moments(ext);
+            self.contacts_on_discs();
             let t1 = Instant::now();
             self.granular.step();
             let t2 = Instant::now();
@@ -360,8 +430,236 @@ impl CoupledModel {
                     b.advance()?;
                 }
             }
+            if path {
+                self.energy_guard()?;
+            }
         }
         self.timing.body += t3.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The sub-cycled schemes' guard, at the end of every body step: a
+    /// body whose scheme has created more than [`MAX_CREATED`] of the work
+    /// it exchanged with the discs (and of the energy it holds) for
+    /// [`GUARD_STEPS`] body steps in a row, and more than that fraction of
+    /// the work exchanged over those steps, stops the run.
+    fn energy_guard(&mut self) -> Result<(), CouplingError> {
+        self.over.resize(self.bodies.len(), GuardRecord::default());
+        let mut interface = vec![0.0; self.bodies.len()];
+        for q in &self.contacts {
+            interface[q.body as usize] += self.contact_energy(q);
+        }
+        for ((body, g), interface) in self.bodies.iter().zip(&mut self.over).zip(interface) {
+            let (created, exchanged) = body.path_energy();
+            // against what the body and its contacts hold too: a stiff
+            // body barely moving exchanges almost no work, and a fraction
+            // of nothing is noise
+            let e = body.energies();
+            g.held = g.held.max(e.kinetic + e.strain + interface);
+            if created > MAX_CREATED * exchanged.max(g.held) {
+                if g.over == 0 {
+                    (g.created, g.exchanged) = (created, exchanged);
+                }
+                g.over += 1;
+            } else {
+                g.over = 0;
+            }
+            // over the row, the scheme went on creating: a bump of the
+            // first contacts stays put, an unstable scheme's creation grows
+            let (row_created, row_exchanged) = (created - g.created, exchanged - g.exchanged);
+            if g.over >= GUARD_STEPS && row_created > MAX_CREATED * row_exchanged.max(0.0) {
+                let (scheme, remedy) = if self.compliant {
+                    ("compliant", "use fewer `substeps`, or 1 (the exact step)")
+                } else {
+                    (
+                        "predicted",
+                        "use `coupling = \"compliant\"`, fewer `substeps`, or 1 (the exact step)",
+                    )
+                };
+                return Err(CouplingError::Subcycling {
+                    body: body.name().to_string(),
+                    scheme,
+                    step: self.granular.step,
+                    time: self.granular.time,
+                    created,
+                    exchanged,
+                    remedy,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The disc–body forces of the present state as external forces of
+    /// the DEM's next (fused) step.
+    fn contacts_on_discs(&mut self) {
+        let g = &self.granular;
+        let ext: Vec<_> = self
+            .contacts
+            .iter()
+            .map(|q| {
+                let slot = g.slot(q.disc as usize);
+                let arm = g.particles.pos[slot] + q.normal * g.particles.radius[slot];
+                // the rolling moment acts on the disc only
+                (slot, q.force, arm, q.moment)
+            })
+            .collect();
+        self.granular.set_external_with_moments(ext);
+    }
+
+    /// One DEM step of the compliant sub-cycled scheme. At the start of a
+    /// body step (`h = nΔt`) each body predicts its step under the held
+    /// loads (the last body step's end loads); the discs then take one DEM
+    /// step with the disc–body forces of the present state, the boundary
+    /// goes to its path at the new fraction `s` of the body step, and the
+    /// contacts are solved implicitly ([`implicit`], as in the exact
+    /// step) with the boundary `Y(s) + S (L − L_held)`, `S` the
+    /// compliance of the body step among the chain points
+    /// ([`Continuum::compliant_system`]): the discs never act on a body
+    /// that does not give way. Each body step ends with the last DEM
+    /// step's loads, at which the body then is exactly where the discs
+    /// last saw it (`Y(1) + S (L − L_held)`). Cost: two body solves per
+    /// body step and a contact solve over the chain points' compliance per
+    /// DEM step; with n = 1 it is the exact step with the contact forces
+    /// shared by the segment ends.
+    fn step_compliant(&mut self) -> Result<(), CouplingError> {
+        let t = Instant::now();
+        self.granular.prepare_contacts();
+        let t0 = Instant::now();
+        self.timing.dem += (t0 - t).as_secs_f64();
+        if self.sub == 0 {
+            let h = self.granular.dt * self.substeps as f64;
+            for b in &mut self.bodies {
+                b.begin_path(h)?;
+            }
+        }
+        let t1 = Instant::now();
+        self.timing.body += (t1 - t0).as_secs_f64();
+        if !self.primed {
+            self.compliant_contacts(false)?;
+            self.primed = true;
+        }
+        self.contacts_on_discs();
+        let t2 = Instant::now();
+        self.granular.step();
+        let t3 = Instant::now();
+        self.timing.transfer += (t2 - t1).as_secs_f64();
+        self.timing.dem += (t3 - t2).as_secs_f64();
+        self.check_finite()?;
+        self.sub += 1;
+        let s = self.sub as f64 / self.substeps as f64;
+        for b in &mut self.bodies {
+            b.set_path(s);
+        }
+        self.compliant_contacts(true)?;
+        self.timing.transfer += t3.elapsed().as_secs_f64();
+        if self.sub == self.substeps {
+            let tb = Instant::now();
+            self.sub = 0;
+            self.set_contact_forces();
+            for b in &mut self.bodies {
+                b.end_path()?;
+            }
+            self.timing.body += tb.elapsed().as_secs_f64();
+            self.energy_guard()?;
+        }
+        Ok(())
+    }
+
+    /// The compliant scheme's contacts at the present fraction of the body
+    /// step (discs at the end of their DEM step): the candidates within a
+    /// margin, linearised in the increment of their contact points
+    /// relative to the boundary's path, solved with the bodies'
+    /// compliance; the forces become the bodies' present loads. With
+    /// `advance` false (before the first step) the forces of the present
+    /// state, with the discs at rest relative to the body and no history.
+    fn compliant_contacts(&mut self, advance: bool) -> Result<(), CouplingError> {
+        let dt = self.granular.dt;
+        let nm = self.granular.materials.len();
+        let s = self.sub as f64 / self.substeps as f64;
+        let ds = 1.0 / self.substeps as f64;
+        let mut next = std::mem::take(&mut self.scratch);
+        next.clear();
+        // binned once per body step, again if a boundary's response to the
+        // contacts outgrew the allowance it was binned with
+        let regrid = self.sub <= 1
+            || (self.bodies.iter())
+                .zip(&self.allow)
+                .any(|(b, a)| b.path_correction() > *a);
+        self.rebuild_grids(CANDIDATE_MARGIN, regrid);
+        let w = &mut self.work;
+        let p = &self.granular.particles;
+        let mut solve_time = 0.0;
+        for (b, body) in self.bodies.iter_mut().enumerate() {
+            w.lin.clear();
+            w.base.clear();
+            w.meta.clear();
+            w.pts.clear();
+            for (c, chain) in body.contact_boundary().iter().enumerate() {
+                if chain.segments() == 0 {
+                    continue;
+                }
+                for (d, t) in touching(
+                    chain,
+                    &self.grids[b][c],
+                    &self.near[b][c],
+                    p,
+                    CANDIDATE_MARGIN,
+                ) {
+                    let r = p.radius[d];
+                    let (fs_old, _) = history(&self.contacts, (p.id[d], b as u16, c as u16));
+                    let law = self.body_laws[b * nm + p.material[d] as usize];
+                    let (cn, cs) = law.dashpots(effective_mass(p.inv_mass[d], 0.0));
+                    let n = -t.normal; // from the disc towards the body
+                    let (vn0, vt0) = if advance {
+                        let v = p.vel[d] - body.path_velocity(c, t.seg, t.s);
+                        (v.dot(n), v.dot(n.perp()) + p.omega[d] * r)
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    w.lin.push(implicit::Linear {
+                        law,
+                        cn,
+                        cs,
+                        n,
+                        delta0: t.overlap - CANDIDATE_MARGIN * r,
+                        vn0,
+                        vt0,
+                        fs_old: if advance { fs_old } else { 0.0 },
+                        dt,
+                        spring: None,
+                    });
+                    w.base.push(t.point);
+                    w.pts.push((c, t.seg, t.s));
+                    w.meta.push((d, b, c, t.point, t.feature));
+                    w.points.push((c, t.material));
+                }
+            }
+            if advance {
+                let ts = Instant::now();
+                body.compliant_system(s, &w.pts, &mut w.free, &mut w.dense)?;
+                let solved =
+                    (w.solver).solve_dense(&w.lin, &w.base, &w.free, &w.dense, &mut w.evals);
+                self.newton_iterations = unsolved(solved, body.name(), &self.granular)?;
+                self.compliance_products += w.solver.products;
+                solve_time += ts.elapsed().as_secs_f64();
+            } else {
+                w.evals.clear();
+                w.evals.extend(w.lin.iter().map(|l| l.eval(Vec2::ZERO)));
+            }
+            w.forces.clear();
+            w.forces.extend(w.evals.iter().map(|e| e.g));
+            if advance {
+                body.compliant_loads(s, ds, &w.pts, &w.forces)?;
+            }
+            let laws = (&self.body_laws[..], nm);
+            closed_contacts(w, laws, &self.contacts, p, advance, dt, &mut next);
+            w.points.clear();
+        }
+        next.sort_by_key(|q| q.key());
+        self.scratch = std::mem::replace(&mut self.contacts, next);
+        self.timing.contact_solve += solve_time;
+        self.timing.transfer -= solve_time;
         Ok(())
     }
 
@@ -374,6 +672,20 @@ impl CoupledModel {
             let (c1, w1) = b.path_energy();
             (c + c1, w + w1)
         })
+    }
+
+    /// The scheme the model steps with.
+    pub fn scheme(&self) -> scheme::Scheme {
+        use scheme::Scheme;
+        if self.staggered {
+            Scheme::Staggered
+        } else if self.compliant {
+            Scheme::Compliant
+        } else if self.substeps > 1 {
+            Scheme::Predicted
+        } else {
+            Scheme::Exact
+        }
     }
 
     /// The sub-cycled scheme: more than one DEM step per body step, the
@@ -413,7 +725,7 @@ impl CoupledModel {
         } else {
             Err(CouplingError::Unstable {
                 step: self.granular.step,
-                dt_crit: self.granular.critical_dt(),
+                dt_crit: self.granular.critical_step(&self.body_laws).dt,
             })
         }
     }
@@ -498,9 +810,11 @@ impl CoupledModel {
                 let tc = Instant::now();
                 body_time += (tc - tb).as_secs_f64();
                 let mut s = body.compliance();
-                self.newton_iterations =
-                    w.solver
-                        .solve(&w.lin, &w.base, &w.free, &mut s, &mut w.evals);
+                let solved = w
+                    .solver
+                    .solve(&w.lin, &w.base, &w.free, &mut s, &mut w.evals);
+                drop(s);
+                self.newton_iterations = unsolved(solved, body.name(), &self.granular)?;
                 self.compliance_products += w.solver.products;
                 solve_time += tc.elapsed().as_secs_f64();
             } else {
@@ -515,37 +829,8 @@ impl CoupledModel {
                 body_time += tb.elapsed().as_secs_f64();
             }
             // the contacts (the geometric stiffness unknowns follow them)
-            for (k, e) in w.evals.iter().enumerate().take(w.meta.len()) {
-                if e.regime == 0 {
-                    continue;
-                }
-                let (d, b, c, point, feature) = w.meta[k];
-                let key = (p.id[d], b as u16, c as u16);
-                // rolling resistance on the disc (the body feels no moment),
-                // limited by the contact's normal force at t + Δt
-                let law = &self.body_laws[b * nm + p.material[d] as usize];
-                let (mut mr, mut moment) = (0.0, 0.0);
-                if advance && law.rolling() {
-                    mr = history(&self.contacts, key).1;
-                    moment = body_rolling(law, p, d, e.fn_cap, &mut mr, dt);
-                }
-                next.push(BodyContact {
-                    disc: key.0,
-                    body: key.1,
-                    chain: key.2,
-                    fs: e.fs,
-                    mr,
-                    moment,
-                    overlap: e.overlap,
-                    fn_elastic: e.fn_elastic,
-                    fn_total: e.fn_total,
-                    force: -e.g,
-                    point: point + e.w,
-                    normal: w.lin[k].n,
-                    material: w.points[k].1,
-                    feature,
-                });
-            }
+            let laws = (&self.body_laws[..], nm);
+            closed_contacts(w, laws, &self.contacts, p, advance, dt, &mut next);
         }
         next.sort_by_key(|q| q.key());
         self.scratch = std::mem::replace(&mut self.contacts, next);
@@ -688,13 +973,24 @@ impl CoupledModel {
         let s = g.grid.skin.max(0.1 * r_max);
         self.grids.resize_with(self.bodies.len(), Vec::new);
         self.near.resize_with(self.bodies.len(), Vec::new);
-        for ((body, grids), near) in self.bodies.iter().zip(&mut self.grids).zip(&mut self.near) {
+        self.allow.resize(self.bodies.len(), 0.0);
+        let bodies = self.bodies.iter().zip(&mut self.allow);
+        for (((body, allowance), grids), near) in bodies.zip(&mut self.grids).zip(&mut self.near) {
             let chains = body.contact_boundary();
             grids.resize_with(chains.len(), SegmentGrid::default);
             near.resize_with(chains.len(), Candidates::default);
             for ((chain, sg), cand) in chains.iter().zip(grids.iter_mut()).zip(near.iter_mut()) {
                 if regrid || sg.is_empty() {
-                    let extent = body.path_extent();
+                    // the compliant scheme's boundary also moves with its
+                    // response to the contacts: rebinned when it outgrows
+                    // the allowance
+                    let allow = if self.compliant {
+                        (0.5 * r_max).max(2.0 * body.path_correction())
+                    } else {
+                        0.0
+                    };
+                    *allowance = allow;
+                    let extent = body.path_extent() + allow;
                     sg.rebuild(chain, reach + extent);
                     let e = Vec2::new(extent, extent);
                     (sg.chain_lo, sg.chain_hi) = (sg.chain_lo - e, sg.chain_hi + e);
@@ -714,38 +1010,103 @@ impl CoupledModel {
 
     /// Contact spring energy of the disc–body contacts, `½k_nδ² + F_s²/(2k_s)`.
     pub fn body_contact_energy(&self) -> f64 {
+        self.contacts.iter().map(|q| self.contact_energy(q)).sum()
+    }
+
+    /// Spring energy of one disc–body contact ([`body_contact_energy`](Self::body_contact_energy)).
+    fn contact_energy(&self, q: &BodyContact) -> f64 {
         let nm = self.granular.materials.len();
-        self.contacts
-            .iter()
-            .map(|q| {
-                let slot = self.granular.slot(q.disc as usize);
-                let law = &self.body_laws
-                    [q.body as usize * nm + self.granular.particles.material[slot] as usize];
-                let mut e = 0.5 * law.kn * q.overlap * q.overlap;
-                if law.ks > 0.0 {
-                    e += 0.5 * q.fs * q.fs / law.ks;
-                }
-                if q.mr != 0.0 {
-                    let r = self.granular.particles.radius[slot];
-                    e += contact::rolling_energy(law, r, q.mr);
-                }
-                e
-            })
-            .sum()
+        let slot = self.granular.slot(q.disc as usize);
+        let law =
+            &self.body_laws[q.body as usize * nm + self.granular.particles.material[slot] as usize];
+        let mut e = 0.5 * law.kn * q.overlap * q.overlap;
+        if law.ks > 0.0 {
+            e += 0.5 * q.fs * q.fs / law.ks;
+        }
+        if q.mr != 0.0 {
+            let r = self.granular.particles.radius[slot];
+            e += contact::rolling_energy(law, r, q.mr);
+        }
+        e
     }
 }
 
-/// A run with the sub-cycled scheme stops once the scheme has created more
-/// than this fraction of the run's largest work or stored energy so far,
-/// at every row of `history.csv` for 100 body steps in a row
-/// ([`CoupledModel::subcycling_energy`], checked by the driver). On an
-/// undamped footing the stable runs create 0.003–0.6 % of the work, the
-/// unstable ones (a body soft against the contacts, with a body step that
-/// resolves the contacts' own oscillation) 5–500 % and growing; a bed
-/// settling on a plate 0.2 %; `examples/footing.toml` at 20 substeps
-/// 1.1 % (its contacts are made and broken all the time, and a contact's
-/// first body step is off by a quarter of its work).
+/// A sub-cycled body stops the run ([`CouplingError::Subcycling`]) once
+/// the energy its scheme created exceeds this fraction of the work it
+/// exchanged with the discs and of the largest energy it and its contacts
+/// have held (kinetic, strain, the disc–body contact springs) at the end
+/// of [`GUARD_STEPS`] body steps in a row, and created more than this
+/// fraction of the work exchanged over those steps too (checked at every
+/// body step, [`CoupledModel::step`]). A contact's
+/// first body step of the predicted scheme is off by a quarter of its own
+/// work (the end load's extrapolation starts from zero): a bump that stays
+/// put while the later work dwarfs it, hence the row of body steps and the
+/// creation over the row rather than one step's total.
 pub const MAX_CREATED: f64 = 0.02;
+
+/// Body steps in a row above [`MAX_CREATED`] that stop a run.
+pub const GUARD_STEPS: u32 = 100;
+
+/// A body's record in the sub-cycling energy guard
+/// ([`CoupledModel::step`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GuardRecord {
+    /// Body steps in a row above [`MAX_CREATED`].
+    pub over: u32,
+    /// Energy created when the row began.
+    pub created: f64,
+    /// Work exchanged when the row began.
+    pub exchanged: f64,
+    /// The largest energy the body and its contacts have held (kinetic,
+    /// strain, the disc–body contact springs).
+    pub held: f64,
+}
+
+/// The closed contacts of a solve (`w.evals` over the candidates of
+/// `w.meta`; the geometric stiffness unknowns after them are skipped) as
+/// [`BodyContact`]s into `next`, with the rolling resistance on the disc
+/// (the body feels no moment), limited by the contact's normal force at
+/// t + Δt, from the history in `old`. `laws`: the disc–body laws and the
+/// number of disc materials ([`CoupledModel::body_laws`]).
+fn closed_contacts(
+    w: &Work,
+    (laws, nm): (&[ContactLaw], usize),
+    old: &[BodyContact],
+    p: &Particles,
+    advance: bool,
+    dt: f64,
+    next: &mut Vec<BodyContact>,
+) {
+    for (k, e) in w.evals.iter().enumerate().take(w.meta.len()) {
+        if e.regime == 0 {
+            continue;
+        }
+        let (d, b, c, point, feature) = w.meta[k];
+        let key = (p.id[d], b as u16, c as u16);
+        let law = &laws[b * nm + p.material[d] as usize];
+        let (mut mr, mut moment) = (0.0, 0.0);
+        if advance && law.rolling() {
+            mr = history(old, key).1;
+            moment = body_rolling(law, p, d, e.fn_cap, &mut mr, dt);
+        }
+        next.push(BodyContact {
+            disc: key.0,
+            body: key.1,
+            chain: key.2,
+            fs: e.fs,
+            mr,
+            moment,
+            overlap: e.overlap,
+            fn_elastic: e.fn_elastic,
+            fn_total: e.fn_total,
+            force: -e.g,
+            point: point + e.w,
+            normal: w.lin[k].n,
+            material: w.points[k].1,
+            feature,
+        });
+    }
+}
 
 /// Discs within `(1 + CANDIDATE_MARGIN) r` of a boundary enter the implicit
 /// contact solve (as open contacts unless the step closes them).

@@ -28,6 +28,8 @@ pub struct CoupledState {
     pub newton_iterations: usize,
     /// Products `S x` of all contact solves so far (diagnostics).
     pub compliance_products: usize,
+    /// Per body, the sub-cycling energy guard's record.
+    pub over: Vec<super::GuardRecord>,
 }
 
 impl CoupledModel {
@@ -42,6 +44,7 @@ impl CoupledModel {
             primed: self.primed,
             newton_iterations: self.newton_iterations,
             compliance_products: self.compliance_products,
+            over: self.over.clone(),
         }
     }
 
@@ -85,6 +88,7 @@ impl CoupledModel {
         self.primed = s.primed;
         self.newton_iterations = s.newton_iterations;
         self.compliance_products = s.compliance_products;
+        self.over.clone_from(&s.over);
         Ok(())
     }
 }

@@ -175,11 +175,11 @@ pub struct OuterContact {
 /// One column of a measurement.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Quantity {
-    /// σ_xx (compression positive).
+    /// σ_xx, compression positive (`sxx_cpos`).
     Sxx,
-    /// σ_yy.
+    /// σ_yy, compression positive (`syy_cpos`).
     Syy,
-    /// σ_xy (symmetric part).
+    /// σ_xy (symmetric part), compression positive (`sxy_cpos`).
     Sxy,
     /// Porosity.
     Porosity,
@@ -206,12 +206,13 @@ impl Quantity {
         Quantity::Fxy,
     ];
 
-    /// Its name (the history column's suffix): `sxx`, …, `fxy`.
+    /// Its name (the history column's suffix): `sxx_cpos` (the stresses
+    /// say their sign: compression positive), …, `fxy`.
     pub fn name(self) -> &'static str {
         match self {
-            Quantity::Sxx => "sxx",
-            Quantity::Syy => "syy",
-            Quantity::Sxy => "sxy",
+            Quantity::Sxx => "sxx_cpos",
+            Quantity::Syy => "syy_cpos",
+            Quantity::Sxy => "sxy_cpos",
             Quantity::Porosity => "porosity",
             Quantity::Coordination => "coordination",
             Quantity::Fxx => "fxx",

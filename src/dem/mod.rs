@@ -28,8 +28,10 @@
 //! histories are kept here, keyed by slot pairs `(i < j)` / `(disc, wall)`
 //! and remapped on renumbering.
 
+pub mod bonds;
 pub mod broadphase;
 pub mod contact;
+pub mod critical;
 pub mod integrate;
 pub mod measure;
 pub mod packing;
@@ -40,8 +42,14 @@ pub mod walls;
 
 use crate::geom::Vec2;
 
-/// `efgdem check` and `run` warn above this fraction of the critical step (E11).
-pub const DT_WARN: f64 = 0.2;
+/// `efgdem check` and `run` warn above this fraction of the critical step
+/// ([`Granular::critical_step`]).
+pub const DT_WARN: f64 = 0.8;
+
+/// Default time step, as a fraction of the critical step
+/// ([`Granular::critical_step`]), when a scenario gives none.
+pub const DT_SAFETY: f64 = 0.5;
+use bonds::Bonds;
 use broadphase::{ContactList, NeighbourGrid};
 use contact::{ContactLaw, effective_mass, normal_between};
 use particles::Particles;
@@ -63,8 +71,16 @@ pub enum DemError {
     Unstable {
         /// Steps done when it was detected.
         step: usize,
-        /// The critical step `2√(m_min/k_max)` ([`Granular::critical_dt`]).
+        /// The critical step of the contacts in use
+        /// ([`Granular::critical_step`]).
         dt_crit: f64,
+    },
+    /// A preparation ([`packing::settle_in_box`], [`packing::grow_in_box`])
+    /// was stopped by its watch.
+    #[error("the preparation was stopped after {step} steps")]
+    Stopped {
+        /// Steps done.
+        step: usize,
     },
 }
 
@@ -81,6 +97,25 @@ pub struct WallContact {
     pub elastic: f64,
     /// Total normal force with the dashpot (clamped at zero).
     pub total: f64,
+}
+
+/// What one disc–wall pair adds to its wall's totals
+/// ([`Granular::wall_terms`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct WallTerm {
+    /// Slot of the disc.
+    pub disc: u32,
+    /// Index of the wall.
+    pub wall: u32,
+    /// Contact force on the disc (the wall gets its opposite).
+    pub f: Vec2,
+    /// The disc touches a wall that follows the state (servo, strain
+    /// rate): it counts in the wall's contacts, stiffness and damping.
+    pub counted: bool,
+    /// The pair's `k_n` (when counted).
+    pub kn: f64,
+    /// The pair's normal dashpot `c_n` (when counted).
+    pub cn: f64,
 }
 
 /// The disc check done inside [`Granular::step`] (no extra pass over the
@@ -127,12 +162,14 @@ pub struct Energies {
     pub spring: f64,
     /// `−Σ m g·x` (relative to the origin).
     pub gravity: f64,
+    /// Strain energy of the intact parallel bonds ([`bonds::bond_energy`]).
+    pub bond: f64,
 }
 
 impl Energies {
-    /// Kinetic + rotational + spring + gravity potential.
+    /// Kinetic + rotational + spring + gravity potential + bond energy.
     pub fn total(&self) -> f64 {
-        self.kinetic + self.rotational + self.spring + self.gravity
+        self.kinetic + self.rotational + self.spring + self.gravity + self.bond
     }
 }
 
@@ -168,6 +205,8 @@ pub struct Granular {
     pub contacts: ContactList,
     /// The contact search grid and its Verlet skin.
     pub grid: NeighbourGrid,
+    /// Parallel bonds between discs ([`bonds`]; none unless a rule is set).
+    pub bonds: Bonds,
     /// Largest disc displacement since the last rebuild.
     pub max_disp: f64,
     /// Keep each disc's contact force and moment of the step in
@@ -223,6 +262,7 @@ impl Granular {
             time: 0.0,
             contacts: ContactList::default(),
             grid: NeighbourGrid::new(skin),
+            bonds: Bonds::default(),
             max_disp: 0.0,
             store_forces: true,
             external: Vec::new(),
@@ -232,6 +272,46 @@ impl Granular {
         };
         g.update_laws();
         g
+    }
+
+    /// An assembly with the same materials, laws, walls, damping, clock,
+    /// Verlet skin and rebuild count, holding `particles` instead (one part
+    /// of a decomposed assembly): its contact list is built at its first
+    /// step; it keeps no displacement reference
+    /// ([`displacement`](Self::displacement) is not available).
+    pub fn with_discs(&self, particles: Particles) -> Granular {
+        Granular {
+            particles,
+            walls: self.walls.clone(),
+            materials: self.materials.clone(),
+            laws: self.laws.clone(),
+            wall_laws: self.wall_laws.clone(),
+            dash: self.dash.clone(),
+            damping: self.damping,
+            gravity: self.gravity,
+            thickness: self.thickness,
+            dt: self.dt,
+            step: self.step,
+            time: self.time,
+            contacts: ContactList {
+                rolling: self.contacts.rolling,
+                needs_mass: self.contacts.needs_mass,
+                ..Default::default()
+            },
+            grid: {
+                let mut grid = NeighbourGrid::new(self.grid.skin);
+                grid.reorder_every = self.grid.reorder_every;
+                grid.rebuilds = self.grid.rebuilds;
+                grid.wall_ref = self.grid.wall_ref.clone();
+                grid
+            },
+            max_disp: self.max_disp,
+            store_forces: self.store_forces,
+            external: Vec::new(),
+            check_radii: self.check_radii,
+            last_check: None,
+            start: Vec::new(),
+        }
     }
 
     /// Displacement of the disc in `slot` since the assembly was made (for a
@@ -289,28 +369,97 @@ impl Granular {
             .fold(0.0, f64::max)
     }
 
-    /// A warning when Δt exceeds [`DT_WARN`] × the critical step (ERRATA E11).
-    pub fn dt_warning(&self) -> Option<String> {
-        let crit = self.critical_dt();
-        (self.dt > DT_WARN * crit).then(|| {
-        format!(
-            "dt = {:e} is {:.3} × the critical step 2√(m_min/k_max) = {crit:e}; above {DT_WARN} × it the central difference may be unstable (ERRATA E11)",
-            self.dt,
-            self.dt / crit
-        )
-    })
+    /// A warning when Δt exceeds [`DT_WARN`] × the critical step
+    /// ([`critical_step`](Self::critical_step), with the disc–body laws
+    /// `bodies`).
+    pub fn dt_warning(&self, bodies: &[ContactLaw]) -> Option<String> {
+        let crit = self.critical_step(bodies);
+        (self.dt > DT_WARN * crit.dt).then(|| {
+            format!(
+                "dt = {:e} is {:.3} × the critical step {:e} (of {}); above {DT_WARN} × it a dense packing, a packing of unequal discs or a contact whose overlap changes fast may not stay stable (a run that goes unstable stops with exit code 3); the default is {DT_SAFETY} ×",
+                self.dt,
+                self.dt / crit.dt,
+                crit.dt,
+                crit.mode
+            )
+        })
     }
 
-    /// Critical time step of the central difference, `2√(m_min/k_max)`
-    /// (ERRATA E11); use a fraction 0.1–0.2 of it.
+    /// The critical step of the central difference for the contact laws
+    /// in use ([`critical`]): the lightest disc's pair, wall and
+    /// hexagonal-packing modes, dashpots included; `bodies` are the
+    /// disc–body laws (a body taken as a rigid wall).
+    pub fn critical_step(&self, bodies: &[ContactLaw]) -> critical::Critical {
+        let p = &self.particles;
+        let Some(k) = (0..p.len()).min_by(|&a, &b| p.mass[a].total_cmp(&p.mass[b])) else {
+            return critical::Critical {
+                dt: f64::INFINITY,
+                mode: "no discs".into(),
+                certain: f64::INFINITY,
+            };
+        };
+        let d = critical::Disc {
+            m: p.mass[k],
+            r: p.radius[k],
+        };
+        // the laws of the materials present
+        let nm = self.materials.len();
+        let mut present = vec![false; nm];
+        for &m in &p.material {
+            present[m as usize] = true;
+        }
+        let bond = self.bond_stiffness();
+        let pairs: Vec<ContactLaw> = (0..nm * nm)
+            .filter(|&ab| present[ab / nm] && present[ab % nm])
+            .map(|ab| {
+                let mut law = self.laws[ab];
+                law.kn += bond.0;
+                law.ks += bond.1;
+                law
+            })
+            .collect();
+        let walls: Vec<ContactLaw> = (0..self.walls.len() * nm)
+            .filter(|&wa| present[wa % nm])
+            .map(|wa| self.wall_laws[wa])
+            .chain(bodies.iter().copied())
+            .collect();
+        critical::estimate(d, p.len(), &pairs, &walls)
+    }
+
+    /// The normal and shear stiffness a parallel bond adds to a pair in
+    /// contact (zero without bonds): `k̄_n A` and `k̄_s A + k̄_n I / r²`
+    /// (its bending taken as a shear spring at the disc's rim), with the
+    /// section of the largest disc's bond — so that the pair and packing
+    /// modes of [`critical_step`](Self::critical_step) bound bonded discs
+    /// too.
+    fn bond_stiffness(&self) -> (f64, f64) {
+        if self.bonds.rule.is_none() {
+            return (0.0, 0.0);
+        }
+        let law = &self.bonds.law;
+        let r = self.particles.radius.iter().copied().fold(0.0, f64::max);
+        let (a, i) = bonds::section(law.radius_factor * r, self.thickness);
+        (law.kn * a, law.ks * a + law.kn * i / (r * r))
+    }
+
+    /// `2√(m_min/k_max)`: the critical step of the lightest disc on a wall
+    /// of the stiffest law, undamped — not a bound for a pair or a packing
+    /// ([`critical_step`](Self::critical_step)); the packing preparations
+    /// use a fraction of it.
+    /// With parallel bonds, at most that of each bonded disc against its
+    /// bond's stiffness ([`Bonds::critical_dt`]).
     pub fn critical_dt(&self) -> f64 {
         let k = self.k_max();
         let m = self.particles.min_mass();
-        if k > 0.0 && m.is_finite() {
+        let contacts = if k > 0.0 && m.is_finite() {
             2.0 * (m / k).sqrt()
         } else {
             f64::INFINITY
-        }
+        };
+        contacts.min(
+            self.bonds
+                .critical_dt(&self.particles, self.thickness, self.k_max()),
+        )
     }
 
     /// One full time step: the three phases in order, with the external
@@ -320,16 +469,35 @@ impl Granular {
     /// [`compute_contact_forces`](Self::compute_contact_forces) and
     /// [`integrate`](Self::integrate).
     pub fn step(&mut self) {
+        let bad = self.advance_discs();
+        self.wall_totals();
+        self.finish_step(!bad);
+    }
+
+    /// The discs' part of [`step`](Self::step): the contact list prepared,
+    /// every contact evaluated and every disc advanced in one sweep
+    /// (`max_disp` set). Returns whether some disc failed the step check
+    /// ([`step_check`](Self::step_check)). The walls' totals and motion
+    /// follow: [`wall_totals`](Self::wall_totals) (or
+    /// [`set_wall_totals`](Self::set_wall_totals)), then
+    /// [`finish_step`](Self::finish_step).
+    pub fn advance_discs(&mut self) -> bool {
         self.prepare_contacts();
         let (max_disp, bad) = self.sweep::<true>();
         self.max_disp = max_disp;
         self.external.clear();
-        self.wall_totals();
+        bad
+    }
+
+    /// The end of [`step`](Self::step): the walls move, the clock
+    /// advances, and the step check is recorded (`clean`: every disc
+    /// passed it).
+    pub fn finish_step(&mut self, clean: bool) {
         self.move_walls();
         self.last_check = Some(StepCheck {
             step: self.step,
             radii_per_step: self.check_radii,
-            clean: !bad,
+            clean,
         });
     }
 
@@ -378,19 +546,52 @@ impl Granular {
     }
 
     /// Phase 1: rebuild the neighbour list when the Verlet criterion says
-    /// so (or it was never built).
+    /// so (or it was never built); bond the discs when the bond rule's step
+    /// has come ([`bonds::BondRule`]).
     pub fn prepare_contacts(&mut self) {
         if self.grid.needs_rebuild(self.max_disp, &self.walls) {
-            self.grid
-                .rebuild(&mut self.particles, &self.walls, &mut self.contacts);
-            self.max_disp = 0.0;
+            self.rebuild();
         }
+        if let Some(rule) = &self.bonds.rule
+            && !self.bonds.list.created
+            && self.step >= rule.at_step
+        {
+            self.make_bonds();
+        }
+    }
+
+    /// Rebuild the neighbour list now (the discs may be renumbered).
+    fn rebuild(&mut self) {
+        self.grid
+            .rebuild(&mut self.particles, &self.walls, &mut self.contacts);
+        self.max_disp = 0.0;
+        self.bonds.invalidate();
+    }
+
+    /// Apply the bond rule to the present state: every listed pair whose
+    /// gap is below the rule's (the list is rebuilt first with a skin that
+    /// reaches that gap, if the present one does not).
+    fn make_bonds(&mut self) {
+        let Some(rule) = &self.bonds.rule else { return };
+        let reach = rule.gap * self.particles.max_radius();
+        let skin = self.grid.skin;
+        if reach >= skin {
+            self.grid.skin = reach * 1.01;
+            self.rebuild();
+            self.grid.skin = skin;
+            self.grid.stale = true;
+        } else if self.contacts.first.len() != self.particles.len() + 1 {
+            self.rebuild();
+        }
+        self.bonds.create(&self.particles, self.contacts.pairs());
     }
 
     /// Phase 2: evaluate every listed contact and *overwrite* each disc's
     /// force and torque with the sum of its contacts, in a fixed order
     /// (bitwise independent of the thread count, see [`sweep`]). Also sets
     /// each wall's force.
+    /// It also advances the parallel bonds by one step: call it once per
+    /// step.
     pub fn compute_contact_forces(&mut self) {
         self.sweep::<false>();
         self.wall_totals();
@@ -400,24 +601,58 @@ impl Granular {
     /// the fixed order of the wall-pair list; for servo and strain-rate
     /// walls also the number of discs touching it, their `Σ k_n` and
     /// `Σ c_n` (the servo's stiffness and damping).
-    fn wall_totals(&mut self) {
+    pub fn wall_totals(&mut self) {
+        let terms: Vec<WallTerm> = self.wall_terms().collect();
+        self.set_wall_totals(&terms);
+    }
+
+    /// What each disc–wall pair of the present step adds to its wall's
+    /// totals, in list order (by disc slot, then wall).
+    pub fn wall_terms(&self) -> impl Iterator<Item = WallTerm> + '_ {
+        let nm = self.materials.len();
+        let p = &self.particles;
+        self.contacts
+            .walls
+            .iter()
+            .zip(&self.contacts.wall_buf)
+            .map(move |(q, cf)| {
+                let (wi, d) = (q.wall as usize, q.disc as usize);
+                let counted = cf.f != Vec2::ZERO && self.walls[wi].motion.follows_state();
+                let (kn, cn) = if counted {
+                    let law = &self.wall_laws[wi * nm + p.material[d] as usize];
+                    (law.kn, law.dashpots(effective_mass(p.inv_mass[d], 0.0)).0)
+                } else {
+                    (0.0, 0.0)
+                };
+                WallTerm {
+                    disc: q.disc,
+                    wall: q.wall,
+                    f: cf.f,
+                    counted,
+                    kn,
+                    cn,
+                }
+            })
+    }
+
+    /// Set each wall's totals from `terms` `(wall, term)`, summed in the
+    /// order given ([`wall_totals`](Self::wall_totals) gives them in list
+    /// order; the parts of a decomposed assembly merge theirs into the
+    /// same order).
+    pub fn set_wall_totals<'a>(&mut self, terms: impl IntoIterator<Item = &'a WallTerm>) {
         for w in &mut self.walls {
             w.force = Vec2::ZERO;
             w.contacts = 0;
             w.stiffness = 0.0;
             w.damping = 0.0;
         }
-        let nm = self.materials.len();
-        let p = &self.particles;
-        for (q, cf) in self.contacts.walls.iter().zip(&self.contacts.wall_buf) {
-            let (wi, d) = (q.wall as usize, q.disc as usize);
-            let w = &mut self.walls[wi];
-            w.force -= cf.f;
-            if cf.f != Vec2::ZERO && w.motion.follows_state() {
-                let law = &self.wall_laws[wi * nm + p.material[d] as usize];
+        for t in terms {
+            let w = &mut self.walls[t.wall as usize];
+            w.force -= t.f;
+            if t.counted {
                 w.contacts += 1;
-                w.stiffness += law.kn;
-                w.damping += law.dashpots(effective_mass(p.inv_mass[d], 0.0)).0;
+                w.stiffness += t.kn;
+                w.damping += t.cn;
             }
         }
     }
@@ -550,12 +785,13 @@ impl Granular {
         }
     }
 
-    /// Is every disc state finite?
+    /// Is every disc state, and every wall's position, finite?
     pub fn is_finite(&self) -> bool {
         let p = &self.particles;
         p.pos
             .iter()
             .chain(&p.vel)
+            .chain(self.walls.iter().flat_map(|w| [&w.a, &w.b]))
             .all(|v| v.x.is_finite() && v.y.is_finite())
             && p.omega.iter().all(|w| w.is_finite())
     }
@@ -569,7 +805,7 @@ impl Granular {
         } else {
             Err(DemError::Unstable {
                 step: self.step,
-                dt_crit: self.critical_dt(),
+                dt_crit: self.critical_step(&[]).dt,
             })
         }
     }
@@ -668,6 +904,7 @@ impl Granular {
                 e.spring += contact::rolling_energy(law, p.radius[d], q.mr);
             }
         }
+        e.bond = self.bonds.energy(self.thickness);
         e
     }
 
@@ -700,8 +937,12 @@ impl Granular {
         (dd, dw)
     }
 
-    /// Heap bytes held by the assembly (discs + contact list + grid).
+    /// Heap bytes held by the assembly (discs + contact list + grid +
+    /// bonds).
     pub fn heap_bytes(&self) -> usize {
-        self.particles.heap_bytes() + self.contacts.heap_bytes() + self.grid.heap_bytes()
+        self.particles.heap_bytes()
+            + self.contacts.heap_bytes()
+            + self.grid.heap_bytes()
+            + self.bonds.heap_bytes()
     }
 }

@@ -135,6 +135,10 @@ pub fn lattice_packing(
     Ok(out)
 }
 
+/// Watches a preparation: called after every step with the steps done;
+/// returning `false` stops it ([`DemError::Stopped`]).
+pub type Watch<'a> = &'a mut dyn FnMut(usize) -> bool;
+
 /// Settle `rows` in the box `[lo, hi]` (four fixed walls) under `gravity`
 /// for `steps` steps at 0.15 × the critical step, with local damping 0.3
 /// and a normal dashpot at ζ = 0.3 added to `law` (with the elastic
@@ -150,6 +154,7 @@ pub fn settle_in_box(
     thickness: f64,
     gravity: Vec2,
     steps: usize,
+    watch: Watch,
 ) -> Result<Vec<DiscRow>, DemError> {
     let mut p = Particles::with_capacity(rows.len());
     for r in rows {
@@ -167,8 +172,11 @@ pub fn settle_in_box(
     gr.dt = 0.15 * gr.critical_dt();
     gr.gravity = gravity;
     gr.damping = BodyDamping::Local { alpha: 0.3 };
-    for _ in 0..steps {
+    for n in 1..=steps {
         gr.step();
+        if !watch(n) {
+            return Err(DemError::Stopped { step: n });
+        }
     }
     gr.check_finite()?;
     let p = &gr.particles;
@@ -201,6 +209,7 @@ pub fn grow_in_box(
     law: ContactLaw,
     density: f64,
     thickness: f64,
+    watch: Watch,
 ) -> Result<Vec<DiscRow>, DemError> {
     let mut law = law;
     law.zeta_n = 0.3;
@@ -253,6 +262,9 @@ pub fn grow_in_box(
             }
         }
         gr.step();
+        if !watch(n + 1) {
+            return Err(DemError::Stopped { step: n + 1 });
+        }
     }
     gr.check_finite()?;
     let p = &gr.particles;

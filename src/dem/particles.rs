@@ -15,6 +15,12 @@ pub const FIX_X: u8 = 1;
 pub const FIX_Y: u8 = 2;
 /// Fixity flag: the spin is prescribed (rotation locked when it is zero).
 pub const FIX_ROT: u8 = 4;
+/// Flag: the slot holds a *ghost*, a copy of a disc that another part of
+/// a decomposed assembly advances. Its contacts with the other discs are
+/// evaluated (for their sake) but it is not advanced, takes no part in
+/// the displacement and stability checks, has no wall contacts, and two
+/// ghosts are never paired.
+pub const GHOST: u8 = 8;
 
 /// The discs of a granular assembly.
 #[derive(Debug, Clone, Default)]
@@ -83,6 +89,27 @@ impl Particles {
             id: Vec::with_capacity(n),
             slot: Vec::with_capacity(n),
         }
+    }
+
+    /// Room for `n` more discs in every array, or the allocation error
+    /// (a run too large for the memory it may use is refused with it
+    /// instead of aborting the process).
+    pub fn try_reserve(&mut self, n: usize) -> Result<(), std::collections::TryReserveError> {
+        self.pos.try_reserve_exact(n)?;
+        self.vel.try_reserve_exact(n)?;
+        self.theta.try_reserve_exact(n)?;
+        self.omega.try_reserve_exact(n)?;
+        self.radius.try_reserve_exact(n)?;
+        self.mass.try_reserve_exact(n)?;
+        self.inertia.try_reserve_exact(n)?;
+        self.inv_mass.try_reserve_exact(n)?;
+        self.inv_inertia.try_reserve_exact(n)?;
+        self.force.try_reserve_exact(n)?;
+        self.torque.try_reserve_exact(n)?;
+        self.fixity.try_reserve_exact(n)?;
+        self.material.try_reserve_exact(n)?;
+        self.id.try_reserve_exact(n)?;
+        self.slot.try_reserve_exact(n)
     }
 
     /// Append a disc of radius `r`, density `rho` and thickness `t` at rest.

@@ -9,7 +9,9 @@
 //! disc–wall pairs) and the Verlet bookkeeping that
 //! decides when the list is rebuilt and when the discs are renumbered
 //! (positions at the last rebuild, rebuild counter, largest displacement
-//! since). Restored onto an assembly built from the same scenario, the
+//! since); the parallel bonds ([`BondList`]: the intact bonds with their
+//! forces, keyed by disc ids, and the broken ones). Restored onto an
+//! assembly built from the same scenario, the
 //! assembly then steps bitwise as the one the state was saved from: the
 //! same pairs summed in the same order, the same rebuild steps.
 //!
@@ -23,6 +25,7 @@
 //! (cleared by every step) and `store_forces` (the driver's choice).
 
 use super::Granular;
+use super::bonds::BondList;
 use super::broadphase::WallPair;
 use crate::continuum::StateError;
 use crate::geom::Vec2;
@@ -98,6 +101,8 @@ pub struct GranularState {
     pub rebuilds: usize,
     /// A rebuild is due before the next force computation.
     pub stale: bool,
+    /// The parallel bonds (empty without bonds).
+    pub bonds: BondList,
 }
 
 fn bad(m: String) -> StateError {
@@ -150,6 +155,7 @@ impl Granular {
             wall_ref: self.grid.wall_ref.clone(),
             rebuilds: self.grid.rebuilds,
             stale: self.grid.stale,
+            bonds: self.bonds.list.clone(),
         }
     }
 
@@ -201,6 +207,8 @@ impl Granular {
         self.grid.wall_ref.clone_from(&s.wall_ref);
         self.grid.rebuilds = s.rebuilds;
         self.grid.stale = s.stale;
+        self.bonds.list.clone_from(&s.bonds);
+        self.bonds.invalidate();
         Ok(())
     }
 
@@ -265,6 +273,14 @@ impl Granular {
                 "the saved contact list is not sorted or out of range".into()
             ));
         }
+        if s.bonds.created && !self.bonds.active() {
+            return Err(bad(
+                "the saved state has parallel bonds, the model has no bond rule".into(),
+            ));
+        }
+        s.bonds
+            .check(n)
+            .map_err(|e| bad(format!("the saved bonds: {e}")))?;
         if !(s.ref_pos.is_empty() || s.ref_pos.len() == n)
             || !(s.wall_ref.is_empty() || s.wall_ref.len() == nw)
         {

@@ -21,10 +21,11 @@
 //! order, then walls), so the result is bitwise the same on any number of
 //! threads.
 
+use super::bonds::BondForce;
 use super::broadphase::{ContactList, WallPair};
 use super::contact::{self, ContactForce, ContactLaw, Side, effective_mass};
 use super::integrate;
-use super::particles::Particles;
+use super::particles::{GHOST, Particles};
 use super::walls::Wall;
 use super::{BodyDamping, Granular};
 use crate::geom::Vec2;
@@ -78,6 +79,14 @@ struct Ctx<'a> {
     /// `(check_radii/Δt)²`: a disc is flagged when `v·v > max_v2 r²` or
     /// its state is not finite.
     max_v2: f64,
+    /// Bonds of the disc in slot s: `bond_list[bond_first[s]..bond_first[s
+    /// + 1]]` (`2k` or `2k + 1`: side a or b of bond k; empty without bonds).
+    bond_first: &'a [u32],
+    bond_list: &'a [u32],
+    /// What each bond does in this step.
+    bond_buf: &'a [BondForce],
+    /// Evaluate inner pairs four at a time ([`lanes4`]).
+    four_lanes: bool,
 }
 
 /// The discs `lo..lo + pos.len()` with their pairs (as first disc) and
@@ -206,6 +215,17 @@ impl Granular {
             self.grid.stale = true;
             self.prepare_contacts();
         }
+        // the bonds, from the state before the step (each disc adds its
+        // bonds' forces in the sweep)
+        if !self.bonds.list.is_empty() {
+            self.bonds.evaluate(
+                &self.particles,
+                self.thickness,
+                self.dt,
+                self.step,
+                self.time,
+            );
+        }
         if self.contacts.rolling {
             self.sweep_with::<ADVANCE, true>()
         } else {
@@ -287,6 +307,17 @@ impl Granular {
             store: !ADVANCE || self.store_forces,
             external: &self.external,
             max_v2: self.check_radii * self.check_radii / (self.dt * self.dt),
+            bond_first: if self.bonds.list.is_empty() {
+                &[]
+            } else {
+                &self.bonds.first
+            },
+            bond_list: &self.bonds.per_disc,
+            bond_buf: &self.bonds.buf,
+            #[cfg(target_arch = "x86_64")]
+            four_lanes: lanes4::available(),
+            #[cfg(not(target_arch = "x86_64"))]
+            four_lanes: false,
         };
         let p = &mut self.particles;
         let ref_pos: &[Vec2] = if ADVANCE && self.grid.ref_pos.len() == n {
@@ -519,6 +550,11 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         (Some(l), Some(d)) if single => (*l, *d),
         _ => (ContactLaw::default(), [0.0; 4]),
     };
+    // inner pairs evaluated ahead, four at a time: `ahead[k − ahead_lo]`
+    // for `ahead_lo ≤ k < ahead_hi` (their histories already written)
+    let four = single && !ROLL && ctx.four_lanes;
+    let (mut ahead_lo, mut ahead_hi) = (0usize, 0usize);
+    let mut ahead = [ContactForce::default(); 4];
     for d in 0..n {
         // taken: the accumulators are left at zero for the next block
         let (mut sf, mut st) = std::mem::take(&mut acc[d]);
@@ -609,6 +645,30 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                 k += 1;
                 continue;
             }
+            #[cfg(target_arch = "x86_64")]
+            if four {
+                if k >= ahead_hi {
+                    let f = Four {
+                        first: ctx.first,
+                        pair_lo,
+                        lo,
+                        hi,
+                    };
+                    if let Some(r) = f.batch(kin, pairs, sm, shear, d, k, &law0, &dash0, ctx.dt) {
+                        (ahead, ahead_lo, ahead_hi) = (r, k, k + 4);
+                    }
+                }
+                if k < ahead_hi {
+                    let c = ahead[k - ahead_lo];
+                    let a = &mut acc[jl];
+                    a.0 -= c.f;
+                    a.1 += c.fs;
+                    sf += c.f;
+                    st += c.fs;
+                    k += 1;
+                    continue;
+                }
+            }
             // two inner pairs of disc d side by side when the lanes apply
             #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
             if single && k + 1 < end && (pairs[k + 1] as usize) < hi {
@@ -678,6 +738,20 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         if ROLL {
             tq += sr;
         }
+        if !ctx.bond_first.is_empty() {
+            let s = lo + d;
+            let (b0, b1) = (ctx.bond_first[s] as usize, ctx.bond_first[s + 1] as usize);
+            for &e in &ctx.bond_list[b0..b1] {
+                let bf = &ctx.bond_buf[e as usize >> 1];
+                if e & 1 == 0 {
+                    sf += bf.f;
+                    tq += bf.ma;
+                } else {
+                    sf -= bf.f;
+                    tq += bf.mb;
+                }
+            }
+        }
         while ek < ctx.external.len() && ctx.external[ek].0 as usize == lo + d {
             sf += ctx.external[ek].1;
             tq += ctx.external[ek].2;
@@ -687,7 +761,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             force[d] = sf;
             torque[d] = tq;
         }
-        if ADVANCE {
+        if ADVANCE && fixity[d] & GHOST == 0 {
             integrate::advance(
                 &mut pos[d],
                 &mut vel[d],
@@ -712,6 +786,59 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         }
     }
     (m2, bad)
+}
+
+/// Where a block's pairs and discs are, for [`lanes4`]'s batches.
+#[cfg(target_arch = "x86_64")]
+struct Four<'a> {
+    first: &'a [u32],
+    pair_lo: usize,
+    lo: usize,
+    hi: usize,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Four<'_> {
+    /// The block's pairs `k..k + 4` (local numbering; `d` the first disc
+    /// of pair `k`) evaluated at once when all four are inner pairs with
+    /// distinct centres: their forces, their new histories written. Pairs
+    /// of later discs read only discs not yet advanced (every disc of the
+    /// batch is at least `d`), so the values are those of the one-by-one
+    /// sweep, and the caller adds them in the same order.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn batch(
+        &self,
+        kin: Kin,
+        pairs: &[u32],
+        sm: &[f64],
+        shear: &mut [f64],
+        d: usize,
+        k: usize,
+        law: &ContactLaw,
+        dash: &[f64; 4],
+        dt: f64,
+    ) -> Option<[ContactForce; 4]> {
+        let ks = pairs.get(k..k + 4)?;
+        let (mut ix, mut jx) = ([0usize; 4], [0usize; 4]);
+        let mut e = d;
+        for (l, &j) in ks.iter().enumerate() {
+            if j as usize >= self.hi {
+                return None;
+            }
+            while self.first[self.lo + e + 1] as usize - self.pair_lo <= k + l {
+                e += 1;
+            }
+            ix[l] = e;
+            jx[l] = j as usize - self.lo;
+        }
+        let fs = [shear[k], shear[k + 1], shear[k + 2], shear[k + 3]];
+        let q = std::array::from_fn(|l| sm_at(sm, k + l));
+        // SAFETY: the sweep asks for batches only when `lanes4::available()`.
+        let (cf, fs_new) = unsafe { lanes4::pair_contacts(kin, ix, jx, fs, q, law, dash, dt) }?;
+        shear[k..k + 4].copy_from_slice(&fs_new);
+        Some(cf)
+    }
 }
 
 /// The per-disc arrays the disc–disc kernel reads, cut to one length so
@@ -1194,6 +1321,194 @@ mod lanes {
     }
 }
 
+/// Four disc–disc contacts in the four lanes of AVX2 registers, chosen at
+/// run time ([`lanes4::available`]) with the two-lane kernel as fallback.
+/// Every lane performs exactly the IEEE operations of [`pair_contact`]
+/// and [`contact::evaluate`] in the same order (no fused multiply–add), so
+/// the results are bitwise those of the scalar code and of the two-lane
+/// kernel: the instruction set changes no result.
+#[cfg(target_arch = "x86_64")]
+pub(super) mod lanes4 {
+    use super::{ContactForce, ContactLaw, Kin};
+    use crate::dem::contact::SlipNormal;
+    use crate::geom::Vec2;
+    use std::arch::x86_64::*;
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    /// Use the four-lane kernel when the processor has AVX2 (cleared by
+    /// tests to compare with the two-lane path).
+    static ENABLED: AtomicBool = AtomicBool::new(true);
+
+    /// The four-lane kernel is enabled, the processor has AVX2, and the
+    /// environment does not ask for two lanes (`EFGDEM_LANES=2`, to compare
+    /// the kernels: the results are the same).
+    pub(crate) fn available() -> bool {
+        static TWO: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+        let two = *TWO.get_or_init(|| std::env::var("EFGDEM_LANES").is_ok_and(|v| v.trim() == "2"));
+        !two && ENABLED.load(Ordering::Relaxed) && std::arch::is_x86_feature_detected!("avx2")
+    }
+
+    /// Enable or disable the four-lane kernel (tests).
+    #[cfg(test)]
+    pub(crate) fn enable(on: bool) {
+        ENABLED.store(on, Ordering::Relaxed);
+    }
+
+    /// The contacts of the inner pairs `(ix[l], jx[l])` with shear
+    /// histories `fs` and cached `√m_eff` `sm`: forces and new histories,
+    /// or `None` if a pair has coincident centres (left to the scalar path).
+    ///
+    /// # Safety
+    /// The processor must have AVX2 ([`available`]).
+    #[target_feature(enable = "avx2")]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) unsafe fn pair_contacts(
+        p: Kin,
+        ix: [usize; 4],
+        jx: [usize; 4],
+        fs: [f64; 4],
+        sm: [f64; 4],
+        law: &ContactLaw,
+        dash: &[f64; 4],
+        dt: f64,
+    ) -> Option<([ContactForce; 4], [f64; 4])> {
+        // lane expressions expanded in place (closures would not be
+        // compiled for AVX2 and not inlined)
+        macro_rules! get {
+            ($l:ident => $e:expr) => {
+                _mm256_set_pd(
+                    {
+                        let $l = 3;
+                        $e
+                    },
+                    {
+                        let $l = 2;
+                        $e
+                    },
+                    {
+                        let $l = 1;
+                        $e
+                    },
+                    {
+                        let $l = 0;
+                        $e
+                    },
+                )
+            };
+        }
+        macro_rules! out {
+            ($v:expr) => {{
+                let mut a = [0.0; 4];
+                // SAFETY: `a` holds four f64.
+                unsafe { _mm256_storeu_pd(a.as_mut_ptr(), $v) };
+                a
+            }};
+        }
+        // per lane (x, y) pairs in 128-bit halves, subtracted as the scalar
+        // code does, then transposed to (x₀..x₃), (y₀..y₃)
+        macro_rules! xy {
+            ($v:expr, $a:expr, $b:expr) => {{
+                // SAFETY: in bounds (indexed), `Vec2` is two f64 (repr(C)).
+                let pair = |l: usize| unsafe {
+                    _mm_sub_pd(
+                        _mm_loadu_pd(&$v[$a[l]].x as *const f64),
+                        _mm_loadu_pd(&$v[$b[l]].x as *const f64),
+                    )
+                };
+                let (p0, p1, p2, p3) = (pair(0), pair(1), pair(2), pair(3));
+                let lo = _mm256_insertf128_pd::<1>(_mm256_castpd128_pd256(p0), p2);
+                let hi = _mm256_insertf128_pd::<1>(_mm256_castpd128_pd256(p1), p3);
+                (_mm256_unpacklo_pd(lo, hi), _mm256_unpackhi_pd(lo, hi))
+            }};
+        }
+        let ri = get!(l => p.radius[ix[l]]);
+        let rj = get!(l => p.radius[jx[l]]);
+        let rsum = _mm256_add_pd(ri, rj);
+        // d = pj − pi, d² = dx dx + dy dy
+        let (dx, dy) = xy!(p.pos, jx, ix);
+        let d2 = _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy));
+        let zero = _mm256_setzero_pd();
+        let touch = _mm256_cmp_pd::<_CMP_LT_OS>(d2, _mm256_mul_pd(rsum, rsum));
+        if _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(d2, zero)) != 0 {
+            return None;
+        }
+        let dist = _mm256_sqrt_pd(d2);
+        let inv = _mm256_div_pd(_mm256_set1_pd(1.0), dist);
+        let nx = _mm256_mul_pd(dx, inv);
+        let ny = _mm256_mul_pd(dy, inv);
+        let delta = _mm256_sub_pd(rsum, dist);
+        // SAFETY: four f64.
+        let sm = unsafe { _mm256_loadu_pd(sm.as_ptr()) };
+        let cn = _mm256_add_pd(
+            _mm256_set1_pd(dash[0]),
+            _mm256_mul_pd(_mm256_set1_pd(dash[1]), sm),
+        );
+        let cs = _mm256_add_pd(
+            _mm256_set1_pd(dash[2]),
+            _mm256_mul_pd(_mm256_set1_pd(dash[3]), sm),
+        );
+        // t = perp(n) = (−ny, nx); dv = vi − vj; negation flips the sign bit
+        let sign = _mm256_set1_pd(-0.0);
+        let tx = _mm256_xor_pd(ny, sign);
+        let (dvx, dvy) = xy!(p.vel, ix, jx);
+        let vn = _mm256_add_pd(_mm256_mul_pd(dvx, nx), _mm256_mul_pd(dvy, ny));
+        let wi = get!(l => p.omega[ix[l]]);
+        let wj = get!(l => p.omega[jx[l]]);
+        let vt = _mm256_add_pd(
+            _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(dvx, tx), _mm256_mul_pd(dvy, nx)),
+                _mm256_mul_pd(wi, ri),
+            ),
+            _mm256_mul_pd(wj, rj),
+        );
+        let fn_el = _mm256_mul_pd(_mm256_set1_pd(law.kn), delta);
+        let mut fn_tot = _mm256_add_pd(fn_el, _mm256_mul_pd(cn, vn));
+        if law.no_tension {
+            fn_tot = _mm256_andnot_pd(_mm256_cmp_pd::<_CMP_LT_OS>(fn_tot, zero), fn_tot);
+        }
+        let trial = _mm256_sub_pd(
+            // SAFETY: four f64.
+            unsafe { _mm256_loadu_pd(fs.as_ptr()) },
+            _mm256_mul_pd(
+                _mm256_mul_pd(_mm256_set1_pd(law.ks), vt),
+                _mm256_set1_pd(dt),
+            ),
+        );
+        // as the two-lane kernel: max/min return their second operand
+        // unless the first is greater/smaller (the scalar selects)
+        let fn_cap = match law.slip_normal {
+            SlipNormal::Elastic => fn_el,
+            SlipNormal::Total => _mm256_max_pd(fn_tot, zero),
+        };
+        let cap = _mm256_add_pd(
+            _mm256_mul_pd(_mm256_set1_pd(law.mu), fn_cap),
+            _mm256_set1_pd(law.cohesion),
+        );
+        let capped = _mm256_min_pd(cap, trial);
+        let capped = _mm256_max_pd(_mm256_xor_pd(cap, sign), capped);
+        let damp = _mm256_and_pd(
+            _mm256_cmp_pd::<_CMP_EQ_OQ>(capped, trial),
+            _mm256_mul_pd(cs, vt),
+        );
+        let fs_tot = _mm256_sub_pd(capped, damp);
+        // f = n (−F_n) + t F_s
+        let neg_fn = _mm256_xor_pd(fn_tot, sign);
+        let fx = _mm256_add_pd(_mm256_mul_pd(nx, neg_fn), _mm256_mul_pd(tx, fs_tot));
+        let fy = _mm256_add_pd(_mm256_mul_pd(ny, neg_fn), _mm256_mul_pd(nx, fs_tot));
+        let (fx, fy) = (
+            out!(_mm256_and_pd(touch, fx)),
+            out!(_mm256_and_pd(touch, fy)),
+        );
+        let fs_tot = out!(_mm256_and_pd(touch, fs_tot));
+        let fs_new = out!(_mm256_and_pd(touch, capped));
+        let cf = |l: usize| ContactForce {
+            f: Vec2::new(fx[l], fy[l]),
+            fs: fs_tot[l],
+        };
+        Some(([cf(0), cf(1), cf(2), cf(3)], fs_new))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1259,6 +1574,126 @@ mod tests {
             }
         }
         assert!(cases > 1000, "touching cases: {cases}");
+    }
+
+    /// The four-lane kernel gives bitwise the scalar kernel's forces and
+    /// shear histories (the cases of the two-lane test, four pairs at once).
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn four_lanes_equal_the_scalar_contact_bitwise() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut rng = oorandom::Rand64::new(11);
+        let mut u = |a: f64, b: f64| a + (b - a) * rng.rand_float();
+        let mut touching = 0;
+        for case in 0..2000 {
+            let n = 8;
+            let pos: Vec<Vec2> = (0..n)
+                .map(|_| Vec2::new(u(0.0, 2.5), u(0.0, 2.5)))
+                .collect();
+            let vel: Vec<Vec2> = (0..n)
+                .map(|_| Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)))
+                .collect();
+            let omega: Vec<f64> = (0..n).map(|_| u(-5.0, 5.0)).collect();
+            let radius: Vec<f64> = (0..n).map(|_| u(0.8, 1.2)).collect();
+            let kin = Kin {
+                pos: &pos,
+                vel: &vel,
+                omega: &omega,
+                radius: &radius,
+            };
+            let law = ContactLaw {
+                kn: 1.0e4,
+                ks: u(0.5e4, 1.0e4),
+                mu: if case % 5 == 0 { 0.0 } else { u(0.1, 0.8) },
+                cohesion: if case % 3 == 0 { u(0.0, 50.0) } else { 0.0 },
+                beta_n: u(0.0, 1e-3),
+                zeta_n: u(0.0, 0.3),
+                zeta_s: if case % 2 == 0 { u(0.0, 0.2) } else { 0.0 },
+                no_tension: case % 4 == 1,
+                slip_normal: if case % 7 < 4 {
+                    contact::SlipNormal::Total
+                } else {
+                    contact::SlipNormal::Elastic
+                },
+                ..Default::default()
+            };
+            let dash = law.dashpot_terms();
+            let q = [0.7, 0.5, 0.9, 0.6];
+            let mut fs: [f64; 4] = std::array::from_fn(|_| u(-300.0, 300.0));
+            let dt = 1e-3;
+            let (ix, jx) = ([0, 2, 4, 6], [1, 3, 5, 7]);
+            // SAFETY: AVX2 checked above.
+            let lanes = unsafe { lanes4::pair_contacts(kin, ix, jx, fs, q, &law, &dash, dt) }
+                .expect("distinct centres");
+            for l in 0..4 {
+                let cf = pair_contact(kin, ix[l], jx[l], &law, &dash, q[l], &mut fs[l], dt);
+                let bits = |c: &ContactForce| [c.f.x.to_bits(), c.f.y.to_bits(), c.fs.to_bits()];
+                assert_eq!(bits(&cf), bits(&lanes.0[l]), "case {case} lane {l}");
+                assert_eq!(
+                    fs[l].to_bits(),
+                    lanes.1[l].to_bits(),
+                    "case {case} lane {l}"
+                );
+                touching += usize::from(cf.f != Vec2::ZERO);
+            }
+        }
+        assert!(touching > 1000, "touching cases: {touching}");
+    }
+
+    /// A whole run with the four-lane kernel is bitwise the run with the
+    /// two-lane one (pairs evaluated ahead of their disc, forces summed in
+    /// the same order), on 1 and 2 threads.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn four_lane_sweep_equals_the_two_lane_sweep_bitwise() {
+        use crate::dem::packing::{Lattice, lattice_packing};
+        use crate::dem::particles::Particles;
+        use crate::dem::walls::{Wall, WallMotion};
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let (lo, hi) = (Vec2::ZERO, Vec2::new(150.0, 60.0));
+        let rows = lattice_packing(Lattice::Hex, lo, hi, (0.8, 1.2), Some(1500), 0.02, 0.5, 3)
+            .expect("fits");
+        let run = |four: bool, threads: usize| {
+            let mut p = Particles::with_capacity(rows.len());
+            for r in &rows {
+                p.push(r.pos, r.r, 1.0, 1.0, 0);
+            }
+            let c = [lo, Vec2::new(hi.x, lo.y), hi, Vec2::new(lo.x, hi.y)];
+            let walls = (0..4)
+                .map(|k| Wall::new("box", c[k], c[(k + 1) % 4], WallMotion::Fixed))
+                .collect();
+            let law = ContactLaw {
+                kn: 1.0e6,
+                ks: 1.0e6,
+                mu: 0.5,
+                zeta_n: 0.2,
+                ..Default::default()
+            };
+            let mut g = Granular::new(p, vec![law], walls, 1.0);
+            g.dt = 0.15 * g.critical_dt();
+            g.gravity = Vec2::new(0.0, -98.1);
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            lanes4::enable(four);
+            pool.install(|| (0..1500).for_each(|_| g.step()));
+            lanes4::enable(true);
+            let p = &g.particles;
+            let mut bits: Vec<u64> = Vec::new();
+            for k in 0..p.len() {
+                bits.extend([p.pos[k].x, p.pos[k].y, p.vel[k].x, p.omega[k]].map(f64::to_bits));
+            }
+            (bits, g.contacts.len())
+        };
+        let (reference, pairs) = run(false, 1);
+        assert!(pairs > 1000, "listed pairs: {pairs}");
+        assert!(run(true, 1).0 == reference);
+        assert!(run(true, 2).0 == reference);
     }
 
     /// The same with rolling resistance: forces, shear and rolling

@@ -137,7 +137,7 @@ impl EfgBody {
         let piece = (ring.outer - ring.inner) / RING_PIECES;
         let mut out: Vec<QuadPoint> = Vec::new();
         for t in &mesh.triangles {
-            let tri = t.map(|i| mesh.place[i]);
+            let tri = t.map(|i| mesh.points[i]);
             let far = tri.iter().map(|v| (*v - p).norm()).fold(0.0, f64::max);
             let near = (0..3)
                 .map(|k| {

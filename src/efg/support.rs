@@ -65,21 +65,27 @@ pub struct Visibility {
     /// segment may still run outside Ω (across a notch); its midpoint
     /// decides.
     pub domain: crate::geom::polygon::Domain,
-    /// CSR: segments near node `k` are `items[start[k]..start[k + 1]]`.
+    /// The number of the first segment of each loop in `segments`.
+    first: Vec<usize>,
+    /// CSR: segments near node `k` are `items[start[k]..start[k + 1]]`,
+    /// increasing.
     start: Vec<u32>,
     items: Vec<u32>,
     /// CSR per node: boundary vertices reachable from `x_I` with their
     /// geodesic distance (shortest path inside Ω̄, bent at vertices).
     geo_start: Vec<u32>,
-    geo: Vec<(Vec2, f64)>,
-    /// Index of the first crack piece in `segments` (the domain's loops
-    /// come first).
-    crack_start: usize,
-    /// Per crack piece: is each end opaque (a crack point other than a
-    /// tip)? A ray through an opaque point crosses the crack there.
-    opaque: Vec<[bool; 2]>,
-    /// The crack tips: the only crack points a hidden ray bends around.
-    tips: Vec<Vec2>,
+    geo: Vec<(Corner, f64)>,
+    /// The crack pieces (outside the domain and its index), each with its
+    /// ends' opacity: an end other than a tip is opaque, a ray through it
+    /// crosses the crack there.
+    cracks: Vec<((Vec2, Vec2), [bool; 2])>,
+    /// CSR: crack pieces near node `k` are
+    /// `crack_items[crack_start[k]..crack_start[k + 1]]`.
+    crack_start: Vec<u32>,
+    crack_items: Vec<u32>,
+    /// The crack tips, each with its neighbouring station: the only crack
+    /// points a hidden ray bends around.
+    tips: Vec<Corner>,
 }
 
 impl Visibility {
@@ -87,17 +93,34 @@ impl Visibility {
     pub fn near(&self, k: usize) -> &[u32] {
         &self.items[self.start[k] as usize..self.start[k + 1] as usize]
     }
-    /// Is `p` an opaque crack point (a mouth on the boundary)?
-    fn is_opaque(&self, p: Vec2) -> bool {
-        let cracks = &self.segments[self.crack_start..];
-        cracks
-            .iter()
-            .zip(&self.opaque)
-            .any(|(&(c, d), o)| (o[0] && c == p) || (o[1] && d == p))
+    /// Crack pieces that meet the support of node `k`.
+    fn near_cracks(&self, k: usize) -> &[u32] {
+        &self.crack_items[self.crack_start[k] as usize..self.crack_start[k + 1] as usize]
     }
-    /// The crack tips.
-    pub fn tips(&self) -> &[Vec2] {
-        &self.tips
+}
+
+/// A boundary vertex and its neighbours along its loop.
+#[derive(Debug, Clone, Copy)]
+struct Corner {
+    at: Vec2,
+    prev: Vec2,
+    next: Vec2,
+}
+
+impl Corner {
+    /// Does the boundary turn away from the body at the vertex (the body
+    /// is on the left of the loops)? A shortest path inside Ω̄ bends only
+    /// at such vertices.
+    fn reflex(&self) -> bool {
+        crate::geom::polygon::orient(self.prev, self.at, self.next) < 0
+    }
+
+    /// Does the line through the vertex and `q` leave both neighbours on
+    /// one side (or on it)? A shortest path inside Ω̄ that bends at the
+    /// vertex wraps around it: it arrives and leaves along such lines.
+    fn tangent(&self, q: Vec2) -> bool {
+        use crate::geom::polygon::orient;
+        orient(q, self.at, self.prev) * orient(q, self.at, self.next) >= 0
     }
 }
 
@@ -246,56 +269,104 @@ impl Support {
     }
 
     /// [`with_visibility`](Self::with_visibility) with cracks: each crack
-    /// `pieces` (its polyline, at the nodes' stations) is opaque on both
-    /// sides, everywhere but at its tips (the ends inside Ω), around which
-    /// hidden rays bend (diffraction). A ray through an inner point of a
-    /// crack crosses it (a pair of face nodes does not see across the
-    /// crack at their station).
+    /// (its polyline, at the nodes' stations, with which of its ends are
+    /// tips) is opaque on both sides, everywhere but at its tips (the ends
+    /// inside Ω), around which hidden rays bend (diffraction). A ray
+    /// through an inner point of a crack crosses it (a pair of face nodes
+    /// does not see across the crack at their station).
     pub fn with_cracks(
         mut self,
         domain: &crate::geom::polygon::Domain,
         cracks: &[(Vec<Vec2>, [bool; 2])],
         diffraction: bool,
     ) -> Support {
-        let mut segments: Vec<(Vec2, Vec2)> = domain.segments().collect();
-        let crack_start = segments.len();
-        let mut opaque = Vec::new();
+        let mut pieces = Vec::new();
         let mut tips = Vec::new();
         for (pts, is_tip) in cracks {
             let n = pts.len();
             for i in 0..n - 1 {
-                segments.push((pts[i], pts[i + 1]));
-                opaque.push([i > 0 || !is_tip[0], i + 2 < n || !is_tip[1]]);
+                pieces.push((
+                    (pts[i], pts[i + 1]),
+                    [i > 0 || !is_tip[0], i + 2 < n || !is_tip[1]],
+                ));
             }
-            for (e, &t) in is_tip.iter().enumerate() {
-                if t {
-                    tips.push(if e == 0 { pts[0] } else { pts[n - 1] });
-                }
+            // a tip turns back on its crack: prev = next = its neighbour
+            if is_tip[0] {
+                tips.push(Corner { at: pts[0], prev: pts[1], next: pts[1] });
+            }
+            if is_tip[1] {
+                tips.push(Corner { at: pts[n - 1], prev: pts[n - 2], next: pts[n - 2] });
             }
         }
+        let boxed = |n: &[f64; 4], (a, b): (Vec2, Vec2)| {
+            a.x.max(b.x) >= n[0] - n[2]
+                && a.x.min(b.x) <= n[0] + n[2]
+                && a.y.max(b.y) >= n[1] - n[3]
+                && a.y.min(b.y) <= n[1] + n[3]
+        };
+        let mut crack_start = vec![0u32];
+        let mut crack_items = Vec::new();
+        for n in &self.node {
+            crack_items.extend(
+                (0..pieces.len() as u32).filter(|&i| boxed(n, pieces[i as usize].0)),
+            );
+            crack_start.push(crack_items.len() as u32);
+        }
+        let segments: Vec<(Vec2, Vec2)> = domain.segments().collect();
+        // the global number of segment `seg` of loop `lp`, and its vertices'
+        // neighbours along their loop (diffraction bends only where the
+        // boundary lets a path wrap around the vertex)
+        let first: Vec<usize> = domain
+            .loops
+            .iter()
+            .scan(0, |n, l| {
+                let f = *n;
+                *n += l.len();
+                Some(f)
+            })
+            .collect();
         let mut start = vec![0u32];
         let mut items = Vec::new();
         for n in &self.node {
-            for (k, (a, b)) in segments.iter().enumerate() {
-                let (lx, hx) = (a.x.min(b.x), a.x.max(b.x));
-                let (ly, hy) = (a.y.min(b.y), a.y.max(b.y));
-                if hx >= n[0] - n[2] && lx <= n[0] + n[2] && hy >= n[1] - n[3] && ly <= n[1] + n[3]
-                {
-                    items.push(k as u32);
-                }
-            }
+            let (lo, hi) = (
+                Vec2::new(n[0] - n[2], n[1] - n[3]),
+                Vec2::new(n[0] + n[2], n[1] + n[3]),
+            );
+            let at = items.len();
+            items.extend(
+                domain
+                    .index()
+                    .in_box(lo, hi)
+                    .filter(|s| {
+                        let (a, b) = (s.a, s.b);
+                        let (lx, hx) = (a.x.min(b.x), a.x.max(b.x));
+                        let (ly, hy) = (a.y.min(b.y), a.y.max(b.y));
+                        hx >= lo.x && lx <= hi.x && hy >= lo.y && ly <= hi.y
+                    })
+                    .map(|s| (first[s.lp] + s.seg) as u32),
+            );
+            items[at..].sort_unstable();
             start.push(items.len() as u32);
         }
+        // per global segment: its loop and number in it
+        let owner: Vec<(usize, usize)> = domain
+            .loops
+            .iter()
+            .enumerate()
+            .flat_map(|(lp, l)| (0..l.len()).map(move |i| (lp, i)))
+            .collect();
         let mut v = Visibility {
             segments,
             diffraction,
             domain: domain.clone(),
+            first,
             start,
             items,
             geo_start: vec![0],
             geo: Vec::new(),
+            cracks: pieces,
             crack_start,
-            opaque,
+            crack_items,
             tips,
         };
         if diffraction {
@@ -303,65 +374,91 @@ impl Support {
                 let n = self.node[k];
                 let xi = Vec2::new(n[0], n[1]);
                 let reach = 1.5 * n[2].max(n[3]);
-                let mut verts: Vec<Vec2> = Vec::new();
-                // the loops' vertices (a crack's mouth is opaque, not one)
-                // and the crack tips
+                // the boundary vertices near x_I where a path can bend
+                // (reflex: the boundary turns away from the body there)
+                let mut verts: Vec<Corner> = Vec::new();
+                let mut seen = std::collections::HashSet::new();
                 for &s in v.near(k) {
-                    let s = s as usize;
-                    let (a, b) = v.segments[s];
-                    for (e, c) in [a, b].into_iter().enumerate() {
-                        let bend = if s < v.crack_start {
-                            !v.is_opaque(c)
-                        } else {
-                            !v.opaque[s - v.crack_start][e]
+                    let (lp, i) = owner[s as usize];
+                    let l = &domain.loops[lp];
+                    for j in [i, i + 1] {
+                        let corner = Corner {
+                            at: l.points[j % l.len()],
+                            prev: l.points[(j + l.len() - 1) % l.len()],
+                            next: l.points[(j + 1) % l.len()],
                         };
-                        if bend && c != xi && (c - xi).norm() < reach && !verts.contains(&c) {
-                            verts.push(c);
-                        }
-                    }
-                }
-                // Dijkstra from x_I over the visibility graph of the vertices
-                let m = verts.len();
-                let mut dist: Vec<f64> = verts
-                    .iter()
-                    .map(|&c| {
-                        if Self::blocked(&v, k, xi, c) {
-                            f64::INFINITY
-                        } else {
-                            (c - xi).norm()
-                        }
-                    })
-                    .collect();
-                let mut done = vec![false; m];
-                for _ in 0..m {
-                    let Some(i) = (0..m)
-                        .filter(|&i| !done[i] && dist[i].is_finite())
-                        .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))
-                    else {
-                        break;
-                    };
-                    done[i] = true;
-                    for j in 0..m {
-                        let d = dist[i] + (verts[j] - verts[i]).norm();
-                        if !done[j]
-                            && d < dist[j]
-                            && d < reach
-                            && !Self::blocked(&v, k, verts[i], verts[j])
+                        let c = corner.at;
+                        if c != xi
+                            && (c - xi).norm() < reach
+                            && corner.reflex()
+                            && seen.insert((c.x.to_bits(), c.y.to_bits()))
                         {
-                            dist[j] = d;
+                            verts.push(corner);
                         }
                     }
                 }
-                for (c, d) in verts.into_iter().zip(dist) {
-                    if d < reach {
-                        v.geo.push((c, d));
-                    }
-                }
+                // the crack tips near x_I (not reflex, yet a path wraps
+                // around them: `tangent` holds for every line)
+                verts.extend(v.tips.iter().copied().filter(|t| {
+                    t.at != xi
+                        && (t.at - xi).norm() < reach
+                        && v.near_cracks(k)
+                            .iter()
+                            .any(|&i| v.cracks[i as usize].0.0 == t.at || v.cracks[i as usize].0.1 == t.at)
+                }));
+                let geo = Self::geodesics(&v, k, xi, &verts, reach);
+                v.geo
+                    .extend(verts.into_iter().zip(geo).filter(|(_, d)| *d < reach));
                 v.geo_start.push(v.geo.len() as u32);
             }
         }
         self.visibility = Some(v);
         self
+    }
+
+    /// Geodesic distances inside Ω̄ from `x_I` (node `k`) to the reflex
+    /// vertices `verts` (Dijkstra over the visibility graph, paths shorter
+    /// than `reach`; ∞ beyond). A shortest path bends only where it
+    /// wraps around a vertex, leaving it along a line that has both of the
+    /// vertex's neighbours on one side: only such edges are followed (with
+    /// every vertex in reach of a dense boundary — a circle of 1 000
+    /// segments — the full graph costs `O(m³)` per node, this `O(m²)`
+    /// cheap tests and `O(m)` blocking tests).
+    fn geodesics(v: &Visibility, k: usize, xi: Vec2, verts: &[Corner], reach: f64) -> Vec<f64> {
+        let m = verts.len();
+        let mut dist: Vec<f64> = verts
+            .iter()
+            .map(|c| {
+                if Self::blocked(v, k, xi, c.at) {
+                    f64::INFINITY
+                } else {
+                    (c.at - xi).norm()
+                }
+            })
+            .collect();
+        let mut done = vec![false; m];
+        for _ in 0..m {
+            let Some(i) = (0..m)
+                .filter(|&i| !done[i] && dist[i].is_finite())
+                .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))
+            else {
+                break;
+            };
+            done[i] = true;
+            let c = &verts[i];
+            for j in 0..m {
+                let d = dist[i] + (verts[j].at - c.at).norm();
+                if !done[j]
+                    && d < dist[j]
+                    && d < reach
+                    && c.tangent(verts[j].at)
+                    && !Self::blocked(v, k, c.at, verts[j].at)
+                {
+                    dist[j] = d;
+                }
+            }
+        }
+        dist
     }
 
     /// Is `p` hidden from node `k` by the boundary (visibility criterion)?
@@ -376,30 +473,38 @@ impl Support {
         Self::blocked(v, k, xi, p)
     }
 
-    /// Is the straight path `a → b` blocked by a boundary segment or a
-    /// crack near node `k`?
+    /// Is the straight path `a → b` blocked by a boundary segment near
+    /// node `k`?
     #[inline]
     fn blocked(v: &Visibility, k: usize, a: Vec2, b: Vec2) -> bool {
         use crate::geom::polygon::{on_segment, properly_cross};
+        // the segments near the path, from the domain's index, that are
+        // near node k (its sorted list)
         let near = v.near(k);
+        let index = v.domain.index();
+        let mine = |s: &crate::geom::segment_index::Segment| {
+            near.binary_search(&((v.first[s.lp] + s.seg) as u32))
+                .is_ok()
+        };
+        if index
+            .along(a, b)
+            .any(|s| properly_cross(a, b, s.a, s.b) && mine(s))
+        {
+            return true;
+        }
+        // the cracks near node k: crossed, or passed through an opaque point
         let through = |p: Vec2| p != a && p != b && on_segment(a, b, p);
-        if near.iter().any(|&s| {
-            let s = s as usize;
-            let (c, d) = v.segments[s];
-            properly_cross(a, b, c, d)
-                || (s >= v.crack_start && {
-                    let [oc, od] = v.opaque[s - v.crack_start];
-                    (oc && through(c)) || (od && through(d))
-                })
+        if v.near_cracks(k).iter().any(|&i| {
+            let ((c, d), [oc, od]) = v.cracks[i as usize];
+            properly_cross(a, b, c, d) || (oc && through(c)) || (od && through(d))
         }) {
             return true;
         }
         // both ends on the boundary: the ray may run outside Ω
         let on = |p: Vec2| {
-            near.iter().any(|&s| {
-                let (c, d) = v.segments[s as usize];
-                on_segment(c, d, p)
-            })
+            index
+                .in_box(p, p)
+                .any(|s| on_segment(s.a, s.b, p) && mine(s))
         };
         if on(a) && on(b) {
             let m = (a + b) * 0.5;
@@ -410,8 +515,8 @@ impl Support {
     }
 
     /// For `p` hidden from node `k`: the diffraction factor
-    /// `f = (s₁ + s₂)/s₀` (to the power [`TIP_LAMBDA`] when the path
-    /// bends last around a crack tip) and its gradient `∇f`, where `s₁ + s₂` is the
+    /// `f = (s₁ + s₂)/s₀` (to the power [`TIP_LAMBDA`] when the path bends
+    /// last around a crack tip) and its gradient `∇f`, where `s₁ + s₂` is the
     /// geodesic distance from `x_I` to `p` inside Ω̄: over the boundary
     /// vertices `x_c` that `p` sees, `s₁` = the precomputed geodesic
     /// distance `x_I → x_c` (shortest path bent at vertices),
@@ -419,16 +524,18 @@ impl Support {
     /// `None` without diffraction or if no vertex sees both.
     pub fn diffraction(&self, k: usize, p: Vec2) -> Option<(f64, [f64; 2])> {
         let v = self.visibility.as_ref().filter(|v| v.diffraction)?;
-        let mut best: Option<(f64, Vec2)> = None;
-        for &(c, g) in &v.geo[v.geo_start[k] as usize..v.geo_start[k + 1] as usize] {
-            let len = g + (p - c).norm();
-            if best.is_some_and(|(l, _)| l <= len) {
-                continue;
-            }
-            if !Self::blocked(v, k, c, p) {
-                best = Some((len, c));
-            }
-        }
+        // the shortest bent path: its last bend leaves the vertex along a
+        // line with the vertex's neighbours on one side (`Corner::tangent`;
+        // the others cannot be shorter); candidates by length (ties in
+        // their order), the first whose vertex sees p
+        let mut paths: Vec<(f64, Vec2)> = v.geo
+            [v.geo_start[k] as usize..v.geo_start[k + 1] as usize]
+            .iter()
+            .filter(|(c, _)| c.tangent(p))
+            .map(|(c, g)| (g + (p - c.at).norm(), c.at))
+            .collect();
+        paths.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let best = paths.into_iter().find(|&(_, c)| !Self::blocked(v, k, c, p));
         let n = &self.node[k];
         let xi = Vec2::new(n[0], n[1]);
         let (len, c) = best?;
@@ -451,7 +558,7 @@ impl Support {
             g2.x - len * d0.x / (s0 * s0 * s0),
             g2.y - len * d0.y / (s0 * s0 * s0),
         ];
-        if v.tips.contains(&c) {
+        if v.tips.iter().any(|t| t.at == c) {
             // around a crack tip: f^λ, ∇(f^λ) = λ f^(λ−1) ∇f
             let c = TIP_LAMBDA * f.powf(TIP_LAMBDA - 1.0);
             return Some((f.powf(TIP_LAMBDA), [c * g[0], c * g[1]]));

@@ -30,6 +30,9 @@ impl ContactBody for FemBody {
     fn row(&self, x: Vec2) -> Result<Row, FemError> {
         FemBody::row(self, x)
     }
+    fn start_dynamic(&mut self, dt: f64) -> Result<(), FemError> {
+        FemBody::start_dynamic(self, dt)
+    }
     fn state(&self) -> &State {
         &self.state
     }

@@ -4,6 +4,7 @@
 
 pub mod crack;
 pub mod polygon;
+pub mod segment_index;
 pub mod triangulate;
 
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};

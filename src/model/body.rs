@@ -142,6 +142,13 @@ impl<'a> BodyRef<'a> {
             BodyRef::Fem(b) => b.strain_energy(),
         }
     }
+    /// The Newmark integrator (a dynamic body).
+    pub fn newmark(self) -> Option<&'a crate::continuum::newmark::Newmark> {
+        match self {
+            BodyRef::Efg(b) => b.newmark(),
+            BodyRef::Fem(b) => b.newmark(),
+        }
+    }
     /// Number of nodes.
     pub fn n_nodes(self) -> usize {
         match self {

@@ -10,11 +10,11 @@ use crate::geom::Vec2;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u8)]
 pub enum ContactKind {
-    /// Another disc (`other`: its id).
+    /// Another disc (`other`: its index).
     DiscDisc = 0,
-    /// A rigid wall (`other`: the wall index).
+    /// A rigid wall (`other`: the wall's index).
     DiscWall = 1,
-    /// A continuum body's boundary (`other`: the body index).
+    /// A continuum body's boundary (`other`: the body's index).
     DiscBody = 2,
 }
 
@@ -23,9 +23,11 @@ pub enum ContactKind {
 pub struct ContactView {
     /// What the disc touches.
     pub kind: ContactKind,
-    /// Scenario id (0-based) of the disc.
+    /// Index of the disc in scenario order, from 0 (the files number it
+    /// `disc + 1`).
     pub disc: usize,
-    /// The other side: a disc id, a wall index or a body index.
+    /// The other side: the index (from 0, in scenario order) of a disc, a
+    /// wall or a body; the files number it `other + 1`.
     pub other: usize,
     /// Contact point: on the disc's surface along the normal (disc–disc),
     /// on the wall or the body's boundary.

@@ -44,6 +44,26 @@ pub enum ModelError {
     /// A static model has no time steps (call [`Model::solve_static`]).
     #[error("a static analysis has no time steps; call solve_static()")]
     Static,
+    /// A call that does not fit the model: a static solve of a model with
+    /// discs, a non-finite end time.
+    #[error("{0}")]
+    Usage(String),
+}
+
+impl ModelError {
+    /// A numerical failure of the run (exit code 3 of `efgdem run`): the
+    /// state stopped being physical, a sub-cycled body created energy, a
+    /// contact solve did not converge.
+    pub fn is_numerical(&self) -> bool {
+        use crate::coupling::CouplingError as C;
+        matches!(
+            self,
+            ModelError::Unstable(_)
+                | ModelError::Coupling(
+                    C::Unstable { .. } | C::Subcycling { .. } | C::NotConverged { .. }
+                )
+        )
+    }
 }
 
 /// What is simulated.
@@ -106,6 +126,11 @@ impl Model {
         t_end: f64,
         mut after: impl FnMut(&Model) -> ControlFlow<()>,
     ) -> Result<usize, ModelError> {
+        if !t_end.is_finite() {
+            return Err(ModelError::Usage(format!(
+                "run until t = {t_end}: the end time must be a finite number"
+            )));
+        }
         let mut n = 0;
         while self.time() + 0.5 * self.dt < t_end {
             self.step()?;
@@ -118,11 +143,15 @@ impl Model {
     }
 
     /// Solve the static problem of every body (continuum static analysis).
+    /// A model with discs has none ([`ModelError::Usage`]).
     pub fn solve_static(&mut self) -> Result<(), ModelError> {
-        if let System::Continuum { bodies, .. } = &mut self.system {
-            for b in bodies {
-                b.solve_static()?;
-            }
+        let System::Continuum { bodies, .. } = &mut self.system else {
+            return Err(ModelError::Usage(
+                "a model with discs has no static solve (only continuum bodies have one); advance it with step() or run()".into(),
+            ));
+        };
+        for b in bodies {
+            b.solve_static()?;
         }
         Ok(())
     }
@@ -167,6 +196,15 @@ impl Model {
     /// The coupled model (disc–body contacts, timing), if coupled.
     pub fn coupled(&self) -> Option<&CoupledModel> {
         match &self.system {
+            System::Coupled(m) => Some(m),
+            _ => None,
+        }
+    }
+
+    /// The coupled model, to change before the first step (e.g. its
+    /// scheme, [`crate::coupling::scheme::apply`]).
+    pub fn coupled_mut(&mut self) -> Option<&mut CoupledModel> {
+        match &mut self.system {
             System::Coupled(m) => Some(m),
             _ => None,
         }

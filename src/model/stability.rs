@@ -3,7 +3,7 @@
 //! stops with a diagnosis instead of writing NaN or running on.
 
 use super::{Model, System};
-use crate::dem::{DT_WARN, Granular};
+use crate::dem::{DT_SAFETY, Granular};
 use crate::model::body::BodyRef;
 
 /// Why the state of a model stopped being physical, and what to do.
@@ -20,8 +20,9 @@ pub struct Instability {
     pub symptom: String,
     /// The time step in use.
     pub dt: f64,
-    /// A time step that should be stable: `0.2 ×` the DEM critical step
-    /// `2√(m_min/k_max)` when discs are involved, else half the present.
+    /// A time step that should be stable: the default fraction of the
+    /// critical step ([`Granular::critical_step`]) when discs are
+    /// involved (at most half the present), else half the present.
     pub suggested_dt: f64,
 }
 
@@ -53,7 +54,10 @@ pub fn check(model: &Model) -> Result<(), Instability> {
     };
     let dt = model.dt;
     let suggested_dt = match model.granular() {
-        Some(g) => (DT_WARN * g.critical_dt()).min(0.5 * dt),
+        Some(g) => {
+            let bodies = model.coupled().map_or(&[][..], |m| &m.body_laws[..]);
+            (DT_SAFETY * g.critical_step(bodies).dt).min(0.5 * dt)
+        }
         None => 0.5 * dt,
     };
     Err(Instability {

@@ -13,9 +13,9 @@
 //! each file holds: [`vtp`](super::vtp), [`vtu`](super::vtu),
 //! [`cracks`](super::cracks); how: [`vtk`](super::vtk).
 
-use super::cracks::write_cracks;
+use super::cracks::write_cracks as write_body_cracks;
 use super::vtk::{PvdSeries, VtkFormat};
-use super::vtp::{write_contacts, write_discs, write_walls};
+use super::vtp::{write_contacts, write_cracks, write_discs, write_walls};
 use super::vtu::write_body;
 use crate::efg::assemble::PointShapes;
 use crate::model::Model;
@@ -41,7 +41,7 @@ fn crack_frame(
     path: &Path,
 ) -> std::io::Result<()> {
     match (model.body(i), shapes) {
-        (BodyRef::Efg(b), Some(s)) => write_cracks(b, s, format, path),
+        (BodyRef::Efg(b), Some(s)) => write_body_cracks(b, s, format, path),
         _ => Ok(()),
     }
 }
@@ -52,8 +52,9 @@ enum Dataset {
     Discs,
     Contacts,
     Walls,
+    Cracks,
     Body(usize),
-    Cracks(usize),
+    BodyCracks(usize),
 }
 
 /// The frame series of one model in one directory.
@@ -87,11 +88,14 @@ impl Frames {
             if !g.walls.is_empty() {
                 sets.push((Dataset::Walls, "walls".to_string()));
             }
+            if g.bonds.active() {
+                sets.push((Dataset::Cracks, "cracks".to_string()));
+            }
         }
         for (i, n) in bodies.iter().enumerate() {
             sets.push((Dataset::Body(i), n.clone()));
             if has_cracks(model, i) {
-                sets.push((Dataset::Cracks(i), format!("{n}_cracks")));
+                sets.push((Dataset::BodyCracks(i), format!("{n}_cracks")));
             }
         }
         let series = sets
@@ -131,7 +135,8 @@ impl Frames {
                 Dataset::Contacts => ("contacts".to_string(), "vtp"),
                 Dataset::Walls => ("walls".to_string(), "vtp"),
                 Dataset::Body(i) => (self.bodies[i].clone(), "vtu"),
-                Dataset::Cracks(i) => (format!("{}_cracks", self.bodies[i]), "vtp"),
+                Dataset::Cracks => ("cracks".to_string(), "vtp"),
+                Dataset::BodyCracks(i) => (format!("{}_cracks", self.bodies[i]), "vtp"),
             };
             let f = frame_file(&stem, step, ext);
             let path = self.dir.join(&f);
@@ -144,10 +149,11 @@ impl Frames {
                 Dataset::Discs => write_discs(g(), &contacts, self.format, &path)?,
                 Dataset::Contacts => write_contacts(g(), &contacts, self.format, &path)?,
                 Dataset::Walls => write_walls(g(), self.format, &path)?,
+                Dataset::Cracks => write_cracks(g(), self.format, &path)?,
                 Dataset::Body(i) => {
                     write_body(model.body(i), self.nodal[i].0.as_ref(), self.format, &path)?
                 }
-                Dataset::Cracks(i) => crack_frame(model, i, &self.nodal[i].0, self.format, &path)?,
+                Dataset::BodyCracks(i) => crack_frame(model, i, &self.nodal[i].0, self.format, &path)?,
             }
             series.add(t, &f)?;
             written.push(path);

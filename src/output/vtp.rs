@@ -5,12 +5,18 @@
 //! - contacts of every kind (disc–disc, disc–wall, disc–body): one line
 //!   each, from the disc's centre to the other disc's centre or to the
 //!   contact point, with the forces on the disc as cell data;
-//! - walls: one line each, with the force of the discs on it.
+//! - walls: one line each, with the force of the discs on it;
+//! - cracks (with parallel bonds): one line per broken bond, across the
+//!   bond's width `2R̄` at its centre, perpendicular to the line of
+//!   centres, with `mode` (0 tension, 1 shear), `step` (in which it
+//!   broke, as in `bond_breaks.csv`), `disc_a`/`disc_b`
+//!   (1-based) and the `energy` it released.
 //!
 //! Vectors have 3 components (z = 0).
 
 use super::vtk::{VtkFile, VtkFormat, vec3};
 use crate::dem::Granular;
+use crate::dem::bonds::BreakMode;
 use crate::geom::Vec2;
 use crate::model::contacts::{ContactKind, ContactView};
 use std::path::Path;
@@ -115,8 +121,9 @@ pub fn write_discs(
 /// Write the contacts at `path`: per contact two points (the disc's
 /// centre; the other disc's centre or the contact point on the wall or
 /// body) and a line, with cell data `kind` (0 disc–disc, 1 disc–wall,
-/// 2 disc–body), `disc` (1-based), `other` (a disc: 1-based; a wall or a
-/// body: 0-based index in scenario order), `normal_force` and
+/// 2 disc–body), `disc` (its number, from 1), `other` (the number of the
+/// other disc, wall or body, by `kind`: each counted from 1 in scenario
+/// order), `normal_force` and
 /// `tangential_force` (vectors, on the disc; elastic normal part `k_n δ`
 /// and shear spring), `fn` (`k_n δ`, compression positive), `ft` (|shear
 /// force|), `overlap`.
@@ -176,7 +183,7 @@ pub fn write_contacts(
         "",
         &contacts
             .iter()
-            .map(|c| c.other as i32 + (c.kind == ContactKind::DiscDisc) as i32)
+            .map(|c| c.other as i32 + 1)
             .collect::<Vec<_>>(),
     );
     f.close("CellData");
@@ -186,7 +193,7 @@ pub fn write_contacts(
 }
 
 /// Write the walls of `g` at `path`: one line each (its two end points),
-/// with cell data `wall` (0-based index in scenario order), `force` (of
+/// with cell data `wall` (its number, from 1 in scenario order), `force` (of
 /// the discs on the wall in the last step) and `velocity`.
 pub fn write_walls(g: &Granular, format: VtkFormat, path: &Path) -> std::io::Result<()> {
     let w = &g.walls;
@@ -194,11 +201,57 @@ pub fn write_walls(g: &Granular, format: VtkFormat, path: &Path) -> std::io::Res
     piece(&mut f, 2 * w.len(), 0, w.len());
     points(&mut f, &vec3(w.iter().flat_map(|w| [w.a, w.b])));
     f.open("CellData", "Vectors=\"force\"");
-    f.array("wall", 1, "", &(0..w.len() as i32).collect::<Vec<_>>());
+    f.array("wall", 1, "", &(1..=w.len() as i32).collect::<Vec<_>>());
     f.array("force", 3, "", &vec3(w.iter().map(|w| w.force)));
     f.array("velocity", 3, "", &vec3(w.iter().map(|w| w.vel)));
     f.close("CellData");
     cells(&mut f, "Lines", w.len(), 2);
+    f.close("Piece");
+    f.write(POLY, path)
+}
+
+/// Write the cracks of `g` (every bond broken so far) at `path`.
+pub fn write_cracks(g: &Granular, format: VtkFormat, path: &Path) -> std::io::Result<()> {
+    let c = &g.bonds.list.broken;
+    let mut f = VtkFile::new(POLY, format);
+    piece(&mut f, 2 * c.len(), 0, c.len());
+    let ends = c.iter().flat_map(|b| {
+        let half = b.normal.perp() * b.radius;
+        [b.pos - half, b.pos + half]
+    });
+    points(&mut f, &vec3(ends));
+    f.open("CellData", "Scalars=\"mode\"");
+    let mode: Vec<i32> = c
+        .iter()
+        .map(|b| (b.mode == BreakMode::Shear) as i32)
+        .collect();
+    f.array("mode", 1, "", &mode);
+    f.array(
+        "step",
+        1,
+        "",
+        &c.iter().map(|b| (b.step + 1) as f64).collect::<Vec<_>>(),
+    );
+    f.array(
+        "disc_a",
+        1,
+        "",
+        &c.iter().map(|b| b.a as i32 + 1).collect::<Vec<_>>(),
+    );
+    f.array(
+        "disc_b",
+        1,
+        "",
+        &c.iter().map(|b| b.b as i32 + 1).collect::<Vec<_>>(),
+    );
+    f.array(
+        "energy",
+        1,
+        "",
+        &c.iter().map(|b| b.energy).collect::<Vec<_>>(),
+    );
+    f.close("CellData");
+    cells(&mut f, "Lines", c.len(), 2);
     f.close("Piece");
     f.write(POLY, path)
 }

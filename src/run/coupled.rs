@@ -4,14 +4,14 @@ use super::session::{Outputs, Session, due};
 use super::{Run, RunError};
 use crate::continuum::Edge;
 use crate::coupling::energy::WorkMeter;
-use crate::coupling::{CoupledModel, CouplingError, MAX_CREATED};
+use crate::coupling::{CoupledModel, GUARD_STEPS, MAX_CREATED};
 use crate::geom::Vec2;
 use crate::model::body::At;
 use crate::model::body::BodyRef;
 use crate::model::{Model, System, coupled_body as body};
+use crate::output::csv::{BOND_COLUMNS, bond_row, write_bond_breaks};
 use crate::output::write_json;
 use crate::scenario::Scenario;
-use crate::scenario::build::MAX_SUBCYCLING_GAIN;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use std::time::Instant;
@@ -377,7 +377,10 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     let steps = model.steps;
     let m = coupled(&model);
     let body_dt = m.granular.dt * m.substeps as f64;
-    if let Some(w) = m.granular.dt_warning() {
+    if let Some(w) = m.granular.dt_warning(&m.body_laws) {
+        eprintln!("warning: {w}");
+    }
+    if let Some(w) = m.choice.as_ref().and_then(|c| c.warning.as_ref()) {
         eprintln!("warning: {w}");
     }
     let mut cols: Vec<&str> = vec!["step", "t"];
@@ -392,6 +395,10 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
         "W_ext",
         "E_diss",
     ]);
+    let bonded = coupled(&model).granular.bonds.active();
+    if bonded {
+        cols.extend(BOND_COLUMNS);
+    }
     let mut out = Outputs::open(&run, &model, &cols)?;
     let mut r = match &run.restart {
         Some(ck) => ck.driver()?,
@@ -405,10 +412,6 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     let vtk_every = sc.output.vtk_every;
     let mut row = Vec::with_capacity(cols.len());
     let corners = chain_corners(m);
-    // the first row from which the sub-cycled scheme's energy is over its limit
-    let mut over_since: Option<usize> = None;
-    // the largest work or stored energy of the rows so far
-    let mut work_max = 0.0f64;
     // the outputs of the present step
     let mut output = |model: &Model, r: &mut Running, out: &mut Outputs| -> Result<(), RunError> {
         let (step, m) = (model.step, coupled(model));
@@ -416,24 +419,6 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
         if due(step, sc.output.every, steps) {
             watch.check(m, &body_names, &mut r.reported);
             let e = r.meter.account(m);
-            if m.path_scheme() {
-                // a contact's first body step is off by a quarter of its
-                // own work (the end load's extrapolation starts from zero),
-                // a bump the later work soon dwarfs: the limit must hold
-                // for 100 body steps in a row
-                let (created, _) = m.subcycling_energy();
-                work_max = work_max.max(e.w_ext.abs()).max(e.stored());
-                if created <= MAX_CREATED * work_max {
-                    over_since = None;
-                } else if step - *over_since.get_or_insert(step) >= 100 * m.substeps {
-                    let err = CouplingError::Subcycling {
-                        time: m.granular.time,
-                        created,
-                        work: work_max,
-                    };
-                    return Err(RunError::Model(err.into()));
-                }
-            }
             row.clear();
             row.push(step as f64);
             row.push(m.granular.time);
@@ -441,6 +426,9 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
             row.extend([
                 fn_sum, e.kin_dem, e.kin_body, e.strain, e.penalty, e.contact, e.w_ext, e.diss,
             ]);
+            if bonded {
+                row.extend(bond_row(&m.granular));
+            }
             out.hist.row(&row)?;
         }
         if due(step, vtk_every, steps) {
@@ -467,22 +455,22 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     session.finish();
     out.hist.flush()?;
     let m = coupled(&model);
+    if bonded {
+        write_bond_breaks(&m.granular, &dir.join("bond_breaks.csv"))?;
+    }
     let e = r.meter.account(m);
     let events = &r.events;
+    let crit = m.granular.critical_step(&m.body_laws);
     let mut summary = json!({
         "kind": "coupled",
         "steps": steps,
         "dt": m.granular.dt,
         "body_dt": body_dt,
         "substeps": m.substeps,
-        "coupling": if m.staggered {
-            "staggered"
-        } else if m.path_scheme() {
-            "sub-cycled"
-        } else {
-            "implicit"
-        },
-        "dem_critical_dt": m.granular.critical_dt(),
+        "coupling": m.scheme().name(),
+        "scheme": m.choice,
+        "dem_critical_dt": crit.dt,
+        "dem_critical_mode": crit.mode,
         "discs": m.granular.particles.len(),
         "bodies": body_names,
         "peak_contact_force": events.peak.0,
@@ -509,13 +497,9 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
         },
     });
     if m.path_scheme() {
-        let (created, exchanged) = m.subcycling_energy();
-        summary["subcycling"] = json!({
-            "E_created": created,
-            "W_exchanged": exchanged,
-            "gains": m.subcycling_gains,
-        });
+        summary["subcycling"] = subcycling(m);
     }
+    run.annotate(&mut summary)?;
     ended.record(&mut summary, &model);
     write_json(&dir.join("summary.json"), &summary)?;
     ended.result(summary, &model, dir)
@@ -525,6 +509,66 @@ fn coupled(model: &Model) -> &CoupledModel {
     model.coupled().expect("a coupled model")
 }
 
+/// Per body, the sub-cycled scheme's energy account for `summary.json`:
+/// what it created, the work exchanged, and what the balance is (with
+/// γ = ½ the body's energy balance, else the interface's alone).
+fn subcycling(m: &CoupledModel) -> Value {
+    let bodies: Vec<Value> = (m.bodies.iter().enumerate())
+        .map(|(i, b)| {
+            let (created, exchanged) = b.path_energy();
+            let gamma = body(m, i).newmark().map_or(0.5, |nm| nm.params.gamma);
+            json!({
+                "body": b.name(),
+                "E_created": created,
+                "W_exchanged": exchanged,
+                "balance": if gamma == 0.5 { "energy" } else { "interface" },
+            })
+        })
+        .collect();
+    json!({ "bodies": bodies, "limit": MAX_CREATED, "guard_steps": GUARD_STEPS })
+}
+
+/// What `efgdem check` says of the coupled scheme: the choice and why,
+/// and the predicted scheme's gains examined.
+fn scheme_lines(m: &CoupledModel) -> String {
+    let Some(c) = &m.choice else {
+        return String::new();
+    };
+    let mut s = format!(
+        "coupled scheme: {} with {} DEM step(s) per body step ({}): {}
+",
+        c.scheme.name(),
+        c.substeps,
+        if c.automatic { "chosen" } else { "as named" },
+        c.why
+    );
+    s += &format!(
+        "  the exact step's body solves are estimated at {:.2} × the DEM step; the bodies' chains can carry {} contacts at once\n",
+        c.exact_overhead, c.max_contacts
+    );
+    for (n, g) in &c.gains {
+        let per: Vec<String> = (m.bodies.iter().zip(g))
+            .map(|(b, g)| format!("`{}` {g:.4}", b.name()))
+            .collect();
+        s += &format!(
+            "  predicted scheme at {n} substeps (ω_c h = {:.2}): collective gain {}
+",
+            c.omega_dt * *n as f64,
+            per.join(", ")
+        );
+    }
+    if m.path_scheme() {
+        s += &format!(
+            "  a run stops if a body's scheme creates more than {} % of the work it exchanges with the discs for {GUARD_STEPS} body steps in a row\n",
+            100.0 * MAX_CREATED
+        );
+    }
+    if let Some(w) = &c.warning {
+        s += &format!("warning: {w}\n");
+    }
+    s
+}
+
 /// What `efgdem check` prints for a coupled scenario.
 pub(super) fn check(full: &Model) -> String {
     let System::Coupled(model) = &full.system else {
@@ -532,7 +576,7 @@ pub(super) fn check(full: &Model) -> String {
     };
     let g = &model.granular;
     let mut s = format!(
-        "coupled run: {} discs, {} walls, {} bodies; {} steps of dt = {:e} (bodies: dt = {:e}, {} DEM steps each)\nDEM critical step 2√(m_min/k_max) = {:e} (dt is {:.3} × it)\n",
+        "coupled run: {} discs, {} walls, {} bodies; {} steps of dt = {:e} (bodies: dt = {:e}, {} DEM steps each)\n{}\n",
         g.particles.len(),
         g.walls.len(),
         model.bodies.len(),
@@ -540,18 +584,11 @@ pub(super) fn check(full: &Model) -> String {
         g.dt,
         model.granular.dt * model.substeps as f64,
         model.substeps,
-        g.critical_dt(),
-        g.dt / g.critical_dt()
+        super::granular::time_step_line(g.dt, &g.critical_step(&model.body_laws)),
     );
+    s += &scheme_lines(model);
     for (i, c) in model.bodies.iter().enumerate() {
         let n = body(model, i).n_nodes();
-        if let Some(gain) = model.subcycling_gains.get(i) {
-            s += &format!(
-                "body `{}` sub-cycled: a contact feeds back on itself with the gain k_n·c = {gain:.4} within a body step (limit {MAX_SUBCYCLING_GAIN}; a run stops if the scheme creates more than {} % of its work)\n",
-                c.name(),
-                100.0 * MAX_CREATED
-            );
-        }
         s += &format!(
             "body `{}` ({}): {} nodes, {} DOFs, {} contact chain(s) with {} segments\n",
             c.name(),
@@ -568,7 +605,7 @@ pub(super) fn check(full: &Model) -> String {
                 .sum::<usize>()
         );
     }
-    if let Some(w) = g.dt_warning() {
+    if let Some(w) = g.dt_warning(&model.body_laws) {
         s += &format!("warning: {w}\n");
     }
     s

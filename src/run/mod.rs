@@ -7,14 +7,19 @@ mod coupled;
 mod granular;
 pub mod memory;
 pub mod progress;
+pub mod recap;
+mod ranks;
 mod session;
 
+use crate::decomp::{Comm, Solo};
 use crate::model::{Model, ModelError, System};
+use crate::scenario::prepare::{Bed, PrepareError, prepare};
 use crate::scenario::{Scenario, ScenarioError, build};
 use checkpoint::Checkpoint;
+use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::AtomicUsize;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Options of `efgdem run` that are not part of the scenario.
@@ -61,16 +66,29 @@ pub enum RunError {
     /// The scenario is invalid or cannot be built (exit code 2).
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
-    /// Writing an output file failed.
-    #[error("i/o: {0}")]
-    Io(#[from] std::io::Error),
-    /// The output directory cannot be created or read.
-    #[error("output directory {}: {source}", path.display())]
+    /// Writing an output file failed (exit code 1); the message names the
+    /// file.
+    #[error("{0}")]
+    Io(std::io::Error),
+    /// The output directory cannot be created or read (exit code 1).
+    #[error("output directory {}: {error}", path.display())]
     OutDir {
         /// The directory.
         path: PathBuf,
-        /// What failed.
-        source: std::io::Error,
+        /// What failed (in the message, once).
+        error: std::io::Error,
+    },
+    /// Another run holds the output directory (exit code 2).
+    #[error(
+        "output directory {} is in use by another efgdem run{}; wait for it to end or choose another (-o)",
+        path.display(),
+        holder.map_or_else(String::new, |p| format!(" (process {p})"))
+    )]
+    Busy {
+        /// The directory.
+        path: PathBuf,
+        /// The process id the holder wrote in the lock file.
+        holder: Option<u32>,
     },
     /// The output directory holds files and `overwrite` was not given
     /// (exit code 2).
@@ -97,6 +115,29 @@ pub enum RunError {
         /// The checkpoint written at the stop.
         checkpoint: PathBuf,
     },
+    /// A stop was requested during the preparation of the packing: nothing
+    /// is there to continue (`summary.json` says `"status":
+    /// "interrupted"`, `"during": "preparation"`; exit code 128 + signal).
+    #[error(
+        "interrupted by signal {signal} during the preparation of the packing, after {step} of {steps} steps; nothing to continue from: run it again (with `cache` in the packing's table a finished preparation is kept)"
+    )]
+    InterruptedPreparing {
+        /// The signal number (2 SIGINT, 15 SIGTERM).
+        signal: usize,
+        /// Preparation steps taken.
+        step: usize,
+        /// Steps of the whole preparation.
+        steps: usize,
+    /// The scenario cannot run on several ranks (exit code 2).
+    #[error("{0}")]
+    Ranks(String),
+    /// On a rank other than 0 of a run on several ranks: rank 0 failed
+    /// (and said why) with this exit code.
+    #[error("rank 0 failed (exit code {code})")]
+    OnRank0 {
+        /// Rank 0's exit code.
+        code: u8,
+    },
     /// A checkpoint cannot be used to restart this scenario (exit code 2).
     #[error("cannot restart from {}: {message}", path.display())]
     Restart {
@@ -105,6 +146,37 @@ pub enum RunError {
         /// Why.
         message: String,
     },
+}
+
+impl From<std::io::Error> for RunError {
+    fn from(e: std::io::Error) -> Self {
+        RunError::Io(e)
+    }
+}
+
+impl RunError {
+    /// The exit code of `efgdem run` for this error: 2 bad input or a
+    /// refused restart (the scenario, a checkpoint, a busy or non-empty
+    /// output directory, a state that does not fit), 1 an i/o failure, 3 a
+    /// numerical failure (an instability, a solve), 128 + signal a stop.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            RunError::Scenario(_)
+            | RunError::NotEmpty(_)
+            | RunError::Busy { .. }
+            | RunError::Restart { .. }
+            | RunError::Ranks(_)
+            | RunError::Model(ModelError::State(_) | ModelError::Static | ModelError::Usage(_)) => {
+                2
+            }
+            RunError::Io(_) | RunError::OutDir { .. } => 1,
+            RunError::Model(_) => 3,
+            RunError::Interrupted { signal, .. } | RunError::InterruptedPreparing { signal, .. } => {
+                128 + (*signal as u8 & 0x7f)
+            }
+            RunError::OnRank0 { code } => *code,
+        }
+    }
 }
 
 impl From<crate::model::body::BodyError> for RunError {
@@ -125,17 +197,56 @@ impl From<crate::coupling::CouplingError> for RunError {
     }
 }
 
+/// The number of worker threads to start for `requested` (0: one per
+/// core): never more than the machine runs at once
+/// ([`std::thread::available_parallelism`]), since more only cost memory
+/// and time (results do not depend on it) and an absurd count would never
+/// finish starting. The note says when the count was lowered.
+pub fn worker_threads(requested: usize) -> (usize, Option<String>) {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    match requested {
+        0 => (cores, None),
+        n if n <= cores => (n, None),
+        n => (
+            cores,
+            Some(format!(
+                "{n} threads asked for; this machine runs {cores} at once: using {cores} (results do not depend on it)"
+            )),
+        ),
+    }
+}
+
 /// Build `sc` and run it, writing `summary.json`, `history.csv` and frames
-/// into `opts.out_dir`. Returns the summary that was written.
-pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunError> {
-    session::prepare_out_dir(opts)?;
+/// into `opts.out_dir`. Returns the summary that was written. A generated
+/// packing's preparation (deposit, growth) is shown with its step count
+/// and ETA, and stopped by a stop request.
+pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
+    run_on(sc, opts, Arc::new(Solo))
+}
+
+/// [`run`] on the ranks of `comm`: every rank calls it with the same
+/// scenario and options. On one rank it is [`run`]; on several, a granular
+/// scenario is divided over them ([`crate::decomp`]) with outputs bitwise
+/// those of one rank, written by rank 0 (which returns the summary; the
+/// others return `Null`, or [`RunError::OnRank0`] when rank 0 failed).
+/// Continuum and coupled scenarios are refused on several ranks.
+pub fn run_on(
+    sc: &Scenario,
+    opts: &RunOptions,
+    comm: Arc<dyn Comm>,
+) -> Result<serde_json::Value, RunError> {
+    let (root, ranks) = (comm.rank() == 0, comm.size());
+    // rank 0 writes the files: it holds the output directory
+    let prepared = root.then(|| session::prepare_out_dir(opts)).transpose();
+    let _held = ranks::agree(&*comm, prepared)?;
     let t0 = Instant::now();
-    let what = match build::preparation(sc) {
-        Some(p) => format!("building the model: {} ({} DEM steps)", p.what(), p.steps),
-        None => "building the model".to_string(),
+    // every rank prepares the same packing (it is deterministic)
+    let bed = prepare_packing(sc, opts, opts.quiet || !root)?;
+    let spin = progress::spinner("building the model", opts.quiet || !root);
+    let mut model = match &bed {
+        Some(b) => sc.build_prepared(&b.rows)?,
+        None => sc.build()?,
     };
-    let spin = progress::spinner(&what, opts.quiet);
-    let mut model = sc.build()?;
     let restart = match &opts.restart {
         Some(path) => {
             let ck = Checkpoint::read(path, sc)?;
@@ -146,18 +257,120 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunErr
     };
     spin.finish_and_clear();
     let build_s = t0.elapsed().as_secs_f64();
+    let purpose = bed
+        .as_ref()
+        .map_or(build::BuildFor::Run, |b| build::BuildFor::Prepared(&b.rows));
+    let removed = build::removed_discs(sc, purpose).map_err(|p| sc.located(vec![p]))?;
     let probes = sc.probes(&model)?;
+    let last_step = std::cell::Cell::new(model.step);
     let run = Run {
         sc,
         opts,
         probes,
         build_s,
         restart,
+        last_step: &last_step,
+        bed,
+        removed,
     };
-    match model.system {
+    let result = match model.system {
+        System::Granular(ref g) if ranks > 1 && g.bonds.active() => Err(RunError::Ranks(
+            "bonded discs ([bonds]) do not run on several ranks yet: run this scenario with one process".into(),
+        )),
+        System::Granular(_) if ranks > 1 => ranks::run(run, model, comm),
+        _ if ranks > 1 => Err(RunError::Ranks(format!(
+            "only granular scenarios (discs and walls) run on several ranks; this one has continuum bodies: run it with one process (not under mpirun -np {ranks})"
+        ))),
         System::Continuum { .. } => continuum::run(run, model),
         System::Granular(_) => granular::run(run, model),
         System::Coupled(_) => coupled::run(run, model),
+    };
+    if let Err(e @ (RunError::Io(_) | RunError::OutDir { .. })) = &result {
+        // say so in summary.json if the disk still takes it; the files
+        // already written are whole (history.csv cut back to its last row)
+        let summary = serde_json::json!({
+            "status": "failed",
+            "error": e.to_string(),
+            "last_step": last_step.get(),
+        });
+        let _ = crate::output::write_json(&opts.out_dir.join("summary.json"), &summary);
+    }
+    result
+}
+
+/// The scenario's packing preparation, if any: read from its cache, or
+/// stepped with a progress bar (steps, ETA) that a stop request ends
+/// within a step — `summary.json` then records the interruption.
+fn prepare_packing(
+    sc: &Scenario,
+    opts: &RunOptions,
+    quiet: bool,
+) -> Result<Option<Bed>, RunError> {
+    let Some(prep) = build::preparation(sc) else {
+        return Ok(None);
+    };
+    // every problem of the scenario before any step
+    let problems = sc.validate();
+    if !problems.is_empty() {
+        return Err(sc.located(problems).into());
+    }
+    let t0 = Instant::now();
+    // made at the first step: a bed read from its cache takes none
+    let mut bar = None;
+    let stop = opts.stop.clone();
+    let signal = || stop.as_ref().map_or(0, |s| s.load(Ordering::Relaxed));
+    let result = prepare(sc, &mut |step| {
+        bar.get_or_insert_with(|| {
+            progress::Progress::labelled(prep.what(), prep.steps, quiet)
+        })
+        .update(step, f64::NAN);
+        signal() == 0
+    });
+    if let Some(b) = &bar {
+        b.finish();
+    }
+    match result {
+        Ok(bed) => {
+            if let Some(b) = &bed
+                && !quiet
+            {
+                let n = b.rows.len();
+                match (&b.read_from, &b.written_to) {
+                    (Some(f), _) => {
+                        eprintln!("{}: {n} discs read from {}", prep.what(), f.display())
+                    }
+                    (None, w) => eprintln!(
+                        "{}: {n} discs, {} steps in {:.1} s{}",
+                        prep.what(),
+                        prep.steps,
+                        t0.elapsed().as_secs_f64(),
+                        w.as_ref()
+                            .map_or(String::new(), |w| format!("; saved in {}", w.display()))
+                    ),
+                }
+            }
+            Ok(bed)
+        }
+        Err(PrepareError::Invalid(p)) => Err(sc.located(vec![p]).into()),
+        Err(PrepareError::Stopped { step, steps }) => {
+            let signal = signal();
+            // a restart's directory keeps the stopped run's summary
+            if opts.restart.is_none() {
+                let summary = json!({
+                    "status": "interrupted",
+                    "during": "preparation",
+                    "signal": signal,
+                    "preparation": { "method": prep.what(), "steps_done": step, "steps": steps },
+                    "last_step": 0,
+                });
+                crate::output::write_json(&opts.out_dir.join("summary.json"), &summary)?;
+            }
+            Err(RunError::InterruptedPreparing {
+                signal,
+                step,
+                steps,
+            })
+        }
     }
 }
 
@@ -171,6 +384,47 @@ struct Run<'a> {
     build_s: f64,
     /// The checkpoint the model was restored from.
     restart: Option<Checkpoint>,
+    /// The last step taken (for the summary of a run that fails).
+    last_step: &'a std::cell::Cell<usize>,
+    /// The prepared packing, if the scenario has one.
+    bed: Option<Bed>,
+    /// Discs removed for each body with `overlapping_discs = "remove"`.
+    removed: Vec<(String, usize)>,
+}
+
+impl Run<'_> {
+    /// Add what every granular and coupled summary shares: the probes'
+    /// extrema (over the rows of `history.csv`), the preparation and the
+    /// discs removed for bodies.
+    fn annotate(&self, summary: &mut Value) -> Result<(), RunError> {
+        let names: Vec<&str> = self.probes.iter().map(|p| p.0.as_str()).collect();
+        let path = self.opts.out_dir.join("history.csv");
+        let ext = crate::output::csv::extrema(&path, &names)?;
+        summary["probes"] = names
+            .iter()
+            .zip(ext)
+            .filter_map(|(n, e)| Some((n.to_string(), json!(e?))))
+            .collect::<serde_json::Map<_, _>>()
+            .into();
+        if let (Some(b), Some(p)) = (&self.bed, build::preparation(self.sc)) {
+            summary["preparation"] = json!({
+                "method": p.what(),
+                "steps": p.steps,
+                "discs": b.rows.len(),
+                "cache_read": b.read_from,
+                "cache_written": b.written_to,
+            });
+        }
+        if !self.removed.is_empty() {
+            summary["removed_discs"] = self
+                .removed
+                .iter()
+                .map(|(b, n)| (b.clone(), json!(n)))
+                .collect::<serde_json::Map<_, _>>()
+                .into();
+        }
+        Ok(())
+    }
 }
 
 /// What `efgdem check` prints: sizes, coverage, time-step diagnostics, the
@@ -180,7 +434,16 @@ struct Run<'a> {
 /// would not fit in the machine's memory is refused before anything is
 /// allocated.
 pub fn check(sc: &Scenario) -> Result<String, RunError> {
-    let model = sc.build_unprepared()?;
+    let problems = sc.validate();
+    if !problems.is_empty() {
+        return Err(sc.located(problems).into());
+    }
+    let located = |p| sc.located(vec![p]);
+    let cached = crate::scenario::prepare::cached(sc).map_err(located)?;
+    let model = match &cached {
+        Some(rows) => sc.build_prepared(rows)?,
+        None => sc.build_unprepared()?,
+    };
     let mut s = match &model.system {
         System::Continuum { .. } => continuum::check(sc, &model),
         System::Granular(_) => granular::check(sc, &model),
@@ -189,14 +452,36 @@ pub fn check(sc: &Scenario) -> Result<String, RunError> {
     if !s.ends_with('\n') {
         s.push('\n');
     }
-    if let Some(p) = build::preparation(sc) {
-        s.push_str(&format!(
+    let prep = build::preparation(sc);
+    match (&prep, &cached) {
+        (Some(p), Some(rows)) => s.push_str(&format!(
+            "preparation: {} read from its cache ({} discs; the discs above are those)\n",
+            p.what(),
+            rows.len()
+        )),
+        (Some(p), None) => s.push_str(&format!(
             "preparation: {p}; the discs above are the generated ones, before it\n"
-        ));
+        )),
+        _ => {}
     }
-    let machine = build::machine_memory().map_or_else(|| "unknown".to_string(), build::human_bytes);
+    let purpose = match &cached {
+        Some(rows) => build::BuildFor::Prepared(rows),
+        None => build::BuildFor::Check,
+    };
+    for (body, n) in build::removed_discs(sc, purpose).map_err(located)? {
+        match (&prep, &cached) {
+            (Some(p), None) => s.push_str(&format!(
+                "body `{body}`: placed after {}; the discs it then overlaps will be removed\n",
+                p.what()
+            )),
+            _ => s.push_str(&format!(
+                "body `{body}`: {n} disc(s) overlapping it will be removed\n"
+            )),
+        }
+    }
+    let limit = build::memory_limit().map_or_else(|| "unknown".to_string(), |(_, what)| what);
     s.push_str(&format!(
-        "memory: {} (estimate; machine: {machine})",
+        "memory: {} (estimate; {limit})",
         build::memory_estimate(sc)
     ));
     Ok(s)

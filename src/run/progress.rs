@@ -2,7 +2,8 @@
 //! simulated time, the step rate and an ETA from the rate of the last
 //! [`WINDOW`] (not the average since the start, which start-up costs and
 //! changing contact counts make wrong); elsewhere (CI, pipes, log files)
-//! one plain line every [`PLAIN_EVERY`]. A spinner while the model is built.
+//! one plain line every [`PLAIN_EVERY`] (or every `EFGDEM_PROGRESS_EVERY`
+//! seconds). A spinner while the model is built.
 
 use indicatif::{ProgressBar, ProgressStyle};
 use std::collections::VecDeque;
@@ -13,19 +14,31 @@ use std::time::{Duration, Instant};
 pub const WINDOW: Duration = Duration::from_secs(20);
 /// Interval of the plain progress lines when stderr is not a terminal.
 pub const PLAIN_EVERY: Duration = Duration::from_secs(10);
+/// The interval of the plain lines: [`PLAIN_EVERY`], or
+/// `EFGDEM_PROGRESS_EVERY` seconds when that is set to a number ≥ 0.
+fn plain_every() -> Duration {
+    std::env::var("EFGDEM_PROGRESS_EVERY")
+        .ok()
+        .and_then(|s| s.trim().parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s >= 0.0)
+        .map_or(PLAIN_EVERY, Duration::from_secs_f64)
+}
+
 /// The display is refreshed at most this often.
 const TICK: Duration = Duration::from_millis(200);
 
 enum Display {
     Hidden,
     Bar(ProgressBar),
-    /// Lines on stderr; when the last one was written.
-    Plain(Instant),
+    /// Lines on stderr; when the last one was written, and how often.
+    Plain(Instant, Duration),
 }
 
 /// Progress of a time-stepped run of `total` steps.
 pub struct Progress {
     display: Display,
+    /// What is being stepped, in the plain lines (a run: none).
+    label: Option<String>,
     total: usize,
     /// Recent (instant, step) samples, at least [`TICK`] apart.
     samples: VecDeque<(Instant, usize)>,
@@ -56,25 +69,40 @@ impl Progress {
     /// Progress from step `start` (0, or the step a restart resumes at)
     /// to `total`.
     pub fn new(start: usize, total: usize, quiet: bool) -> Self {
+        Self::with_label(None, start, total, quiet)
+    }
+
+    /// Progress of a preparation (`what`: e.g. `a gravity deposit`) of
+    /// `total` steps; [`update`](Self::update) it with `t` = NaN (no time).
+    pub fn labelled(what: &str, total: usize, quiet: bool) -> Self {
+        Self::with_label(Some(what.to_string()), 0, total, quiet)
+    }
+
+    fn with_label(label: Option<String>, start: usize, total: usize, quiet: bool) -> Self {
         let now = Instant::now();
         let display = if quiet {
             Display::Hidden
         } else if std::io::stderr().is_terminal() {
             let pb = ProgressBar::new(total as u64);
+            let prefix = label.as_ref().map_or(String::new(), |l| format!("{l}: "));
             pb.set_style(
-                ProgressStyle::with_template(
-                    "{elapsed_precise} [{bar:40}] {pos}/{len} steps {msg}",
-                )
+                ProgressStyle::with_template(&format!(
+                    "{prefix}{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} steps {{msg}}"
+                ))
                 .expect("static template")
                 .progress_chars("=> "),
             );
             pb.set_position(start as u64);
             Display::Bar(pb)
         } else {
-            Display::Plain(now)
+            if let Some(l) = &label {
+                eprintln!("{l}: {total} steps …");
+            }
+            Display::Plain(now, plain_every())
         };
         Progress {
             display,
+            label,
             total,
             samples: VecDeque::from([(now, start)]),
             last_tick: now,
@@ -110,8 +138,12 @@ impl Progress {
         self.sample(now, step);
         let rate = self.rate();
         let eta = rate.map(|r| (self.total - step.min(self.total)) as f64 / r);
+        let time = match t.is_nan() {
+            true => String::new(),
+            false => format!("t = {t:.4e} s, "),
+        };
         let msg = format!(
-            "t = {t:.4e} s, {}, eta {}",
+            "{time}{}, eta {}",
             rate.map_or("— steps/s".into(), |r| format!(
                 "{} steps/s",
                 human_rate(r)
@@ -124,11 +156,14 @@ impl Progress {
                 pb.set_position(step as u64);
                 pb.set_message(msg);
             }
-            Display::Plain(last) => {
-                if now - *last >= PLAIN_EVERY {
+            Display::Plain(last, every) => {
+                if now - *last >= *every {
                     *last = now;
                     eprintln!(
-                        "step {step}/{} ({:.1} %), {msg}",
+                        "{}step {step}/{} ({:.1} %), {msg}",
+                        self.label
+                            .as_ref()
+                            .map_or(String::new(), |l| format!("{l}: ")),
                         self.total,
                         100.0 * step as f64 / self.total.max(1) as f64
                     );

@@ -14,14 +14,14 @@ use super::granular::{
     CONTACT_QUANTITIES, DISC_QUANTITIES, DampingSpec, DiscsSpec, DiscsTable, GLOBAL_QUANTITIES,
     Generator, GranularSpec, Packing, SlipNormalSpec, WALL_QUANTITIES, slip_normal,
 };
-use super::{Analysis, ContactSolve, CouplingScheme, Invalid, Scenario};
+use super::{Analysis, ContactSolve, CouplingScheme, Invalid, Scenario, Substeps};
 use crate::continuum::ComplianceMode;
 use crate::continuum::Continuum;
 use crate::coupling::CoupledModel;
+use crate::coupling::scheme::{self, Scheme};
 use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::dem::packing::{
     DiscRow, Lattice, grow_in_box, lattice_capacity, lattice_packing, overlapping_pairs,
-    settle_in_box,
 };
 use crate::dem::particles::Particles;
 use crate::dem::{BodyDamping, DT_WARN, Granular};
@@ -32,17 +32,16 @@ use crate::geom::Vec2;
 use crate::model::body::Body;
 use crate::model::{Model, Probe, System};
 
-/// Default fraction of the critical step when `simulation.dt` is omitted.
-pub const DT_SAFETY: f64 = 0.1;
+pub use crate::dem::DT_SAFETY;
 
-fn bad(path: &str, message: impl std::fmt::Display) -> Invalid {
+pub(super) fn bad(path: &str, message: impl std::fmt::Display) -> Invalid {
     Invalid {
         path: path.to_string(),
         message: message.to_string(),
     }
 }
 
-fn spec(sc: &Scenario) -> Result<&GranularSpec, Invalid> {
+pub(super) fn spec(sc: &Scenario) -> Result<&GranularSpec, Invalid> {
     sc.granular
         .as_ref()
         .ok_or_else(|| bad("granular", "the scenario has no [granular] section"))
@@ -99,7 +98,20 @@ pub fn laws(sc: &Scenario, damping: &DampingSpec) -> (Vec<ContactLaw>, BodyDampi
     (mats, body)
 }
 
-fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid> {
+/// The contact law a packing's preparation uses (of its `settle_material`,
+/// or of the discs' material; without dashpots) and the discs' density.
+pub(super) fn settle_law(sc: &Scenario, t: &DiscsTable) -> Result<(ContactLaw, f64), Invalid> {
+    let g = spec(sc)?;
+    let mi = material_index(sc, &g.material, "granular.material")? as usize;
+    let settle = match &t.settle_material {
+        Some(m) => material_index(sc, m, "granular.discs.settle_material")? as usize,
+        None => mi,
+    };
+    let (mats, _) = laws(sc, &DampingSpec::None);
+    Ok((mats[settle], sc.material[mi].density))
+}
+
+pub(super) fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid> {
     sc.material
         .iter()
         .position(|m| m.name == name)
@@ -108,11 +120,15 @@ fn material_index(sc: &Scenario, name: &str, path: &str) -> Result<u16, Invalid>
 }
 
 /// What [`model_with`] builds the model for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BuildFor {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BuildFor<'a> {
     /// A run: the gravity deposit or radius growth of a generated packing
-    /// (`method = "deposit"` or `"grow"`) is stepped.
+    /// (`method = "deposit"` or `"grow"`) is stepped, or read from its
+    /// cache ([`super::prepare::prepare`]).
     Run,
+    /// A run whose packing has been prepared: these discs (from
+    /// [`super::prepare::prepare`]).
+    Prepared(&'a [DiscRow]),
     /// `check`: no time stepping — the discs stay where the generator put
     /// them (a deposit's loose packing; a growth's random centres with the
     /// final radii) — and a static analysis factors and solves its bodies
@@ -173,122 +189,116 @@ impl std::fmt::Display for Preparation {
     }
 }
 
-/// The discs the scenario describes (generating or reading them).
+/// The discs the scenario describes (generating, preparing or reading
+/// them), before any is removed for a body.
 fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> {
     let g = spec(sc)?;
-    match &g.discs {
-        DiscsSpec::Inline(rows) => Ok(rows
-            .iter()
-            .map(|r| DiscRow {
-                pos: Vec2::new(r[0], r[1]),
-                r: r[2],
-                material: None,
-            })
-            .collect()),
-        DiscsSpec::Table(t) => {
-            if let Some(csv) = &t.csv {
-                let path = sc.resolve(csv);
-                let text = std::fs::read_to_string(&path).map_err(|e| {
-                    bad(
-                        "granular.discs.csv",
-                        format!("cannot read discs file {}: {e}", path.display()),
-                    )
-                })?;
-                return discs_from_csv(&text)
-                    .map_err(|e| bad("granular.discs.csv", format!("{}: {e}", path.display())));
-            }
-            let kind = t
-                .generate
-                .ok_or_else(|| bad("granular.discs", "nothing to generate"))?;
-            let [a, b] = t
-                .region
-                .ok_or_else(|| bad("granular.discs", "`box` is missing"))?;
-            let radius = t
-                .radius
-                .ok_or_else(|| bad("granular.discs", "`radius` is missing"))?
-                .range();
-            let (lat, gap, jitter) = match kind {
-                Generator::Square => (Lattice::Square, 0.0, t.jitter.unwrap_or(0.0)),
-                Generator::Hex => (Lattice::Hex, 0.0, t.jitter.unwrap_or(0.0)),
-                Generator::Random => (Lattice::Hex, 0.1, t.jitter.unwrap_or(1.0)),
-            };
-            let (lo, hi) = (Vec2::from(a), Vec2::from(b));
-            let steps = match purpose {
-                BuildFor::Run => t.settle_steps.unwrap_or(SETTLE_STEPS),
-                BuildFor::Check => 0,
-            };
-            if kind == Generator::Random && t.method == Packing::Grow {
-                let count = t
-                    .count
-                    .ok_or_else(|| bad("granular.discs", "`method = \"grow\"` needs `count`"))?;
-                let g = spec(sc)?;
-                let mi = material_index(sc, &g.material, "granular.material")? as usize;
-                let (mats, _) = laws(sc, &DampingSpec::None);
-                let density = sc.material[mi].density;
-                return grow_in_box(
-                    lo,
-                    hi,
-                    radius,
-                    count,
-                    t.seed,
-                    steps,
-                    mats[settle_material(sc, t)?.unwrap_or(mi)],
-                    density,
-                    g.thickness,
-                )
-                .map_err(|e| bad("granular.discs", e));
-            }
-            let rows = lattice_packing(lat, lo, hi, radius, t.count, gap, jitter, t.seed)
-                .map_err(|e| bad("granular.discs", e))?;
-            if kind == Generator::Random && t.method == Packing::Deposit && steps > 0 {
-                return deposit(sc, rows, lo, hi, steps, settle_material(sc, t)?);
+    let t = match &g.discs {
+        DiscsSpec::Inline(rows) => {
+            return Ok(rows
+                .iter()
+                .map(|r| DiscRow {
+                    pos: Vec2::new(r[0], r[1]),
+                    r: r[2],
+                    material: None,
+                })
+                .collect());
+        }
+        DiscsSpec::Table(t) => t,
+    };
+    if let Some(csv) = &t.csv {
+        let path = sc.resolve(csv);
+        let text = super::read_text(&path, super::MAX_CSV_BYTES).map_err(|e| {
+            bad(
+                "granular.discs.csv",
+                format!("cannot read discs file {}: {e}", path.display()),
+            )
+        })?;
+        return discs_from_csv(&text)
+            .map_err(|e| bad("granular.discs.csv", format!("{}: {e}", path.display())));
+    }
+    let prepared = preparation(sc).is_some();
+    match purpose {
+        BuildFor::Prepared(rows) if prepared => Ok(rows.to_vec()),
+        BuildFor::Run if prepared => match super::prepare::prepare(sc, &mut |_| true) {
+            Ok(bed) => Ok(bed.map(|b| b.rows).unwrap_or_default()),
+            Err(super::prepare::PrepareError::Invalid(e)) => Err(e),
+            Err(super::prepare::PrepareError::Stopped { step, .. }) => Err(bad(
+                "granular.discs",
+                format!("the preparation stopped after {step} steps"),
+            )),
+        },
+        _ => {
+            let rows = loose_rows(sc, t)?;
+            if prepared {
+                // `check`: the bodies in the region the preparation will fill
+                super::fill::check_bodies(sc, &rows)?;
             }
             Ok(rows)
         }
     }
 }
 
-/// The index of a packing's `settle_material`, if it names one.
-fn settle_material(sc: &Scenario, t: &DiscsTable) -> Result<Option<usize>, Invalid> {
-    t.settle_material
-        .as_ref()
-        .map(|m| material_index(sc, m, "granular.discs.settle_material").map(|i| i as usize))
-        .transpose()
+/// The discs of a generated packing as the generator places them, before
+/// any preparation: on their lattice (`loose`, and a deposit's start), or
+/// a growth's random centres with the final radii.
+pub(super) fn loose_rows(sc: &Scenario, t: &DiscsTable) -> Result<Vec<DiscRow>, Invalid> {
+    let kind = t
+        .generate
+        .ok_or_else(|| bad("granular.discs", "nothing to generate"))?;
+    let [a, b] = t
+        .region
+        .ok_or_else(|| bad("granular.discs", "`box` is missing"))?;
+    let radius = t
+        .radius
+        .ok_or_else(|| bad("granular.discs", "`radius` is missing"))?
+        .range();
+    let (lat, gap, jitter) = match kind {
+        Generator::Square => (Lattice::Square, 0.0, t.jitter.unwrap_or(0.0)),
+        Generator::Hex => (Lattice::Hex, 0.0, t.jitter.unwrap_or(0.0)),
+        Generator::Random => (Lattice::Hex, 0.1, t.jitter.unwrap_or(1.0)),
+    };
+    let (lo, hi) = (Vec2::from(a), Vec2::from(b));
+    if kind == Generator::Random && t.method == Packing::Grow {
+        let count = t
+            .count
+            .ok_or_else(|| bad("granular.discs", "`method = \"grow\"` needs `count`"))?;
+        // no step: the centres and final radii (the law is not used)
+        let (law, density) = settle_law(sc, t)?;
+        let thickness = spec(sc)?.thickness;
+        return grow_in_box(
+            lo,
+            hi,
+            radius,
+            count,
+            t.seed,
+            0,
+            law,
+            density,
+            thickness,
+            &mut |_| true,
+        )
+        .map_err(|e| bad("granular.discs", e));
+    }
+    lattice_packing(lat, lo, hi, radius, t.count, gap, jitter, t.seed)
+        .map_err(|e| bad("granular.discs", e))
 }
 
-/// Gravity deposition: settle a loose packing inside the box under gravity
-/// (the scenario's, or −9.81 ŷ if it has none), with the contact law of
-/// material `settle` (default: the discs'). Returns the settled positions
-/// (velocities are dropped).
-fn deposit(
-    sc: &Scenario,
-    rows: Vec<DiscRow>,
-    lo: Vec2,
-    hi: Vec2,
-    steps: usize,
-    settle: Option<usize>,
-) -> Result<Vec<DiscRow>, Invalid> {
-    let g = spec(sc)?;
-    let mi = material_index(sc, &g.material, "granular.material")?;
-    let (mats, _) = laws(sc, &DampingSpec::None);
-    let grav = Vec2::from(sc.simulation.gravity);
-    let grav = if grav.norm2() > 0.0 {
-        grav
-    } else {
-        Vec2::new(0.0, -9.81)
+/// The disc–body contact laws of the scenario's bodies: a body's
+/// `contact_material`, or else each disc material's own law (as for walls).
+pub fn body_laws(sc: &Scenario, mats: &[ContactLaw]) -> Vec<ContactLaw> {
+    let named = |b: &super::body::BodySpec| {
+        let m = b.contact_material.as_ref()?;
+        sc.material.iter().position(|x| &x.name == m)
     };
-    let m = &sc.material[mi as usize];
-    settle_in_box(
-        &rows,
-        lo,
-        hi,
-        mats[settle.unwrap_or(mi as usize)],
-        m.density,
-        g.thickness,
-        grav,
-        steps,
-    )
-    .map_err(|e| bad("granular.discs", e))
+    let mut out = Vec::new();
+    for b in &sc.body {
+        match named(b) {
+            Some(i) => out.push(mats[i]),
+            None => out.extend_from_slice(mats),
+        }
+    }
+    out
 }
 
 /// Build the assembly described by the scenario. `dt` is the scenario's,
@@ -299,10 +309,31 @@ pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
 
 fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> {
     let g = spec(sc)?;
-    let rows = disc_rows(sc, purpose)?;
+    let mut rows = disc_rows(sc, purpose)?;
+    // `check` does not prepare a packing: its discs are not where the
+    // bodies will find them
+    let unprepared = purpose == BuildFor::Check && preparation(sc).is_some();
+    let gone: std::collections::HashSet<usize> = overlapped(sc, &rows)
+        .into_iter()
+        .flat_map(|(_, r)| r)
+        .collect();
+    if !gone.is_empty() && !unprepared {
+        rows = (rows.into_iter().enumerate())
+            .filter_map(|(k, r)| (!gone.contains(&k)).then_some(r))
+            .collect();
+    }
     let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
-    let mut p = Particles::with_capacity(rows.len());
+    let mut p = Particles::default();
+    p.try_reserve(rows.len()).map_err(|e| {
+        bad(
+            "granular.discs",
+            format!(
+                "cannot allocate the arrays of {} discs ({e}): more than this process may use",
+                rows.len()
+            ),
+        )
+    })?;
     let v0 = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
     for (k, r) in rows.iter().enumerate() {
         let mi = match &r.material {
@@ -321,8 +352,25 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
         p.vel[k] = v0;
         let (mass, inertia) = (p.mass[k], p.inertia[k]);
         if !(mass.is_finite() && mass > 0.0 && inertia.is_finite() && inertia > 0.0) {
+            // blame the factor farthest from 1 (in orders of magnitude)
+            let disc = match &g.discs {
+                DiscsSpec::Inline(_) => format!("granular.discs.{k}"),
+                DiscsSpec::Table(_) => "granular.discs".to_string(),
+            };
+            let density = format!("material.{mi}.density");
+            let suspects = [
+                (m.density.ln().abs(), density.as_str()),
+                ((r.r * r.r).ln().abs(), disc.as_str()),
+                (g.thickness.ln().abs(), "granular.thickness"),
+            ];
+            let (_, at) = suspects.iter().fold(
+                (f64::NEG_INFINITY, "granular.thickness"),
+                |best, &(v, f)| {
+                    if v > best.0 { (v, f) } else { best }
+                },
+            );
             return Err(bad(
-                "granular.thickness",
+                at,
                 format!(
                     "disc {}: its mass ρπr²t = {mass:e} and moment of inertia m r²/2 = {inertia:e} must be finite and > 0 (ρ = {:e}, r = {:e}, t = {:e})",
                     k + 1,
@@ -338,7 +386,15 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
     gr.damping = body;
     gr.gravity = Vec2::from(sc.simulation.gravity);
     gr.thickness = g.thickness;
-    gr.dt = sc.simulation.dt.unwrap_or(DT_SAFETY * gr.critical_dt());
+    if let Some(b) = &sc.bonds {
+        let (law, rule) = super::bonds::law_and_rule(sc, b);
+        gr.bonds.law = law;
+        gr.bonds.rule = Some(rule);
+    }
+    gr.dt = match sc.simulation.dt {
+        Some(dt) => dt,
+        None => DT_SAFETY * gr.critical_step(&body_laws(sc, &gr.materials)).dt,
+    };
     if !gr.dt.is_finite() || gr.dt <= 0.0 {
         return Err(bad(
             "simulation.dt",
@@ -402,11 +458,15 @@ fn bodies(sc: &Scenario, dt: Option<f64>, trial: bool) -> Result<Vec<Body>, Inva
         .collect()
 }
 
-/// The coupled model: discs, walls and bodies (EFG or FE) with each
-/// body's Newmark matrix factored for `dt × substeps`.
+/// The coupled model: discs, walls and bodies (EFG or FE), the coupled
+/// scheme and its substeps chosen ([`scheme::choose`]), each body's
+/// Newmark matrix factored for `dt × substeps`.
 fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
-    let granular = granular_with(sc, purpose)?;
-    let substeps = sc.simulation.substeps.max(1);
+    // the scheme is chosen with the discs as generated (the preparation
+    // moves them, it does not change their masses or radii): a scenario
+    // `run` would refuse is refused before any preparation, as `check` does
+    let granular = granular_with(sc, BuildFor::Check)?;
+    let substeps = sc.simulation.substeps.fixed().unwrap_or(1).max(1);
     let body_dt = granular.dt * substeps as f64;
     let mode = match sc.simulation.contact_solve {
         ContactSolve::Boundary => ComplianceMode::Boundary,
@@ -462,49 +522,36 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
         });
     }
     let mut m = CoupledModel::new(granular, bodies, &mats, substeps);
-    m.staggered |= sc.simulation.coupling == CouplingScheme::Staggered;
-    if m.path_scheme() {
-        check_subcycling(&mut m)?;
-    }
     m.geometric_stiffness = sc.simulation.geometric_stiffness;
-    Ok(m)
-}
-
-/// Largest feedback gain `k_n c` of a contact on a body within one body
-/// step that the sub-cycled scheme accepts (`c` the body step's point
-/// compliance at its contact boundary). Measured on an EFG footing driven
-/// into an undamped, frictionless bed (10–100 substeps, docs/howto/choose-scheme-and-time-step.md): `|E_diss|`
-/// ≤ 0.6 % of the work at gains 0.003–0.026; 5–544 % at 0.034–0.061 with
-/// 10 substeps (the run-time guard, [`crate::coupling::MAX_CREATED`], stops
-/// those below this limit) but 0.1 % at 0.078 with 50; 5–94 % above 0.15.
-pub const MAX_SUBCYCLING_GAIN: f64 = 0.05;
-
-/// The sub-cycled scheme predicts a body's boundary path under the last
-/// body step's loads: it needs bodies stiff against the contacts over a
-/// body step (`k_n c` small), or it creates energy.
-fn check_subcycling(m: &mut CoupledModel) -> Result<(), Invalid> {
-    let nm = m.granular.materials.len();
-    for b in 0..m.bodies.len() {
-        let kn = m.body_laws[b * nm..(b + 1) * nm]
-            .iter()
-            .fold(0.0f64, |k, l| k.max(l.kn));
-        let c = m.bodies[b]
-            .boundary_compliance()
-            .map_err(|e| bad(&format!("body.{b}"), e))?;
-        let gain = kn * c;
-        m.subcycling_gains.push(gain);
-        if gain > MAX_SUBCYCLING_GAIN {
-            return Err(bad(
-                "simulation.substeps",
-                format!(
-                    "body `{}` is too soft against the discs for {} DEM steps per body step: a contact (k_n = {kn:e}) feeds back on itself with the gain k_n·c = {gain:.3} within a body step (above {MAX_SUBCYCLING_GAIN} the predicted boundary path can create energy); use fewer substeps, 1 (the exact implicit step), or a stiffer body",
-                    m.bodies[b].name(),
-                    m.substeps
-                ),
-            ));
-        }
+    m.set_contact_iterations(sc.simulation.contact_iterations);
+    let request = scheme::Request {
+        scheme: match sc.simulation.coupling {
+            CouplingScheme::Auto => None,
+            CouplingScheme::Exact => Some(Scheme::Exact),
+            CouplingScheme::Predicted => Some(Scheme::Predicted),
+            CouplingScheme::Compliant => Some(Scheme::Compliant),
+            CouplingScheme::Staggered => Some(Scheme::Staggered),
+            CouplingScheme::Implicit => Some(match sc.simulation.substeps.fixed() {
+                None | Some(1) => Scheme::Exact,
+                Some(_) => Scheme::Predicted,
+            }),
+        },
+        substeps: sc.simulation.substeps.fixed(),
+    };
+    let choice = scheme::choose(&mut m, request)
+        .map_err(|e| bad("body.0", e))?
+        .map_err(|why| {
+            let at = match sc.simulation.substeps {
+                Substeps::Fixed(_) => "simulation.substeps",
+                Substeps::Auto => "simulation.coupling",
+            };
+            bad(at, why)
+        })?;
+    scheme::apply(&mut m, &choice).map_err(|e| bad("simulation.coupling", e))?;
+    if purpose == BuildFor::Run && preparation(sc).is_some() {
+        m.granular = granular_with(sc, purpose)?;
     }
-    Ok(())
+    Ok(m)
 }
 
 /// Build the model (see [`Scenario::build`]); problems carry field paths.
@@ -585,6 +632,11 @@ pub struct MemoryEstimate {
     pub discs: f64,
     /// Bytes of the discs, `discs ×` [`DISC_BYTES`].
     pub disc_bytes: f64,
+    /// Contact pairs beyond [`PAIRS_PER_DISC`] per disc (discs given by
+    /// their positions that overlap: a stack pressed into itself).
+    pub extra_pairs: f64,
+    /// Their bytes, `extra_pairs ×` [`PAIR_BYTES`].
+    pub pair_bytes: f64,
     /// Bytes of each body (name, bytes): its sparse operators and their
     /// Cholesky factor, the EFG shape functions at the Gauss points and, in
     /// coupled runs with `contact_solve = "boundary"`, the dense boundary
@@ -595,7 +647,7 @@ pub struct MemoryEstimate {
 impl MemoryEstimate {
     /// Bytes of the whole run.
     pub fn total(&self) -> f64 {
-        self.disc_bytes + self.bodies.iter().map(|b| b.1).sum::<f64>()
+        self.disc_bytes + self.pair_bytes + self.bodies.iter().map(|b| b.1).sum::<f64>()
     }
 }
 
@@ -637,6 +689,13 @@ impl std::fmt::Display for MemoryEstimate {
                 human_bytes(self.disc_bytes)
             ));
         }
+        if self.extra_pairs > 0.0 {
+            parts.push(format!(
+                "{} more contact pairs (overlapping discs) × ~{PAIR_BYTES} B = {}",
+                count_text(self.extra_pairs.round()),
+                human_bytes(self.pair_bytes)
+            ));
+        }
         for (name, b) in &self.bodies {
             parts.push(format!("body `{name}` {}", human_bytes(*b)));
         }
@@ -647,32 +706,99 @@ impl std::fmt::Display for MemoryEstimate {
     }
 }
 
-/// Number of discs the scenario describes, without generating them.
-fn disc_count(sc: &Scenario) -> f64 {
-    let Some(g) = &sc.granular else { return 0.0 };
+/// Contact pairs per disc that [`DISC_BYTES`] allows for (a dense
+/// packing of discs that do not overlap).
+pub const PAIRS_PER_DISC: f64 = 2.5;
+
+/// Bytes per listed contact pair beyond [`PAIRS_PER_DISC`]: the pair
+/// with its shear and rolling history, its slot in the neighbour list and
+/// the transient copies of a rebuild (measured on overlapping packings).
+pub const PAIR_BYTES: f64 = 100.0;
+
+/// Listed contact pairs (gap below the Verlet skin, `skin` or 0.1 × the
+/// largest radius) per disc of the discs `rows` (`[x, y, r]`), counted
+/// around up to 2 000 of them spread over the list: a packing given by
+/// its positions may overlap, with many contacts per disc.
+fn pairs_per_disc(rows: &[[f64; 3]], skin: Option<f64>) -> f64 {
+    let n = rows.len();
+    if n < 2 {
+        return 0.0;
+    }
+    let r_max = rows.iter().map(|r| r[2]).fold(0.0, f64::max);
+    let skin = skin.unwrap_or(0.1 * r_max);
+    let cell = 2.0 * r_max + skin;
+    if !(cell.is_finite() && cell > 0.0) {
+        return 0.0;
+    }
+    let key = |r: &[f64; 3]| ((r[0] / cell).floor() as i64, (r[1] / cell).floor() as i64);
+    let mut grid: std::collections::HashMap<(i64, i64), Vec<u32>> =
+        std::collections::HashMap::new();
+    for (k, r) in rows.iter().enumerate() {
+        grid.entry(key(r)).or_default().push(k as u32);
+    }
+    let samples = n.min(2000);
+    let mut found = 0usize;
+    for s in 0..samples {
+        let i = s * n / samples;
+        let a = &rows[i];
+        let (cx, cy) = key(a);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for &j in grid
+                    .get(&(cx + dx, cy + dy))
+                    .map_or(&[][..], |v| v.as_slice())
+                {
+                    let b = &rows[j as usize];
+                    let reach = a[2] + b[2] + skin;
+                    if j as usize != i && (a[0] - b[0]).hypot(a[1] - b[1]) < reach {
+                        found += 1;
+                    }
+                }
+            }
+        }
+    }
+    0.5 * found as f64 / samples as f64
+}
+
+/// Number of discs the scenario describes, without generating them, and
+/// the contact pairs per disc of discs given by their positions (inline
+/// or in a CSV file; `None` for generated ones, which do not overlap).
+fn disc_count(sc: &Scenario) -> (f64, Option<f64>) {
+    let Some(g) = &sc.granular else {
+        return (0.0, None);
+    };
     match &g.discs {
-        DiscsSpec::Inline(rows) => rows.len() as f64,
+        DiscsSpec::Inline(rows) => (rows.len() as f64, Some(pairs_per_disc(rows, g.skin))),
         DiscsSpec::Table(t) => {
             if let Some(csv) = &t.csv {
-                // data lines (the build reports a file it cannot read)
-                return std::fs::read_to_string(sc.resolve(csv)).map_or(0.0, |text| {
-                    text.lines()
-                        .filter(|l| !l.trim().is_empty() && !l.trim().starts_with('#'))
-                        .count() as f64
-                });
+                // the build reports a file it cannot read
+                let Ok(text) = super::read_text(&sc.resolve(csv), super::MAX_CSV_BYTES) else {
+                    return (0.0, None);
+                };
+                return match super::generate::discs_from_csv(&text) {
+                    Ok(d) => {
+                        let rows: Vec<[f64; 3]> =
+                            d.iter().map(|d| [d.pos.x, d.pos.y, d.r]).collect();
+                        (rows.len() as f64, Some(pairs_per_disc(&rows, g.skin)))
+                    }
+                    Err(_) => (0.0, None),
+                };
             }
             if let Some(c) = t.count {
-                return c as f64;
+                return (c as f64, None);
             }
             let (Some(kind), Some([a, b]), Some(r)) = (t.generate, t.region, t.radius) else {
-                return 0.0;
+                return (0.0, None);
             };
             let (lat, gap) = match kind {
                 Generator::Square => (Lattice::Square, 0.0),
                 Generator::Hex => (Lattice::Hex, 0.0),
                 Generator::Random => (Lattice::Hex, 0.1),
             };
-            lattice_capacity(lat, Vec2::from(a), Vec2::from(b), r.range().1, gap)
+            (
+                lattice_capacity(lat, Vec2::from(a), Vec2::from(b), r.range().1, gap),
+                None,
+            )
         }
     }
 }
@@ -681,14 +807,19 @@ fn disc_count(sc: &Scenario) -> f64 {
 /// measurements of `efgdem check` on EFG and FE bodies of 5 000 to
 /// 40 000 nodes (within ≈ 20 % for `d_max` 1.5–3, `gauss` 2–8).
 fn body_bytes(sc: &Scenario, b: &super::body::BodySpec) -> f64 {
-    let [nx, ny] = match (b.domain().ok().flatten(), b.spacing) {
-        // a polygon body: the grid of its bounding box
+    // a polygon body: the grid of its bounding box, and its vertices
+    let (grid, vertices) = match (b.domain().ok().flatten(), b.spacing) {
         (Some(d), Some(h)) if h > 0.0 => {
             let (lo, hi) = d.bounds();
-            [(hi.x - lo.x) / h + 1.0, (hi.y - lo.y) / h + 1.0]
+            let vertices: usize = d.loops.iter().map(|l| l.len()).sum();
+            (
+                [(hi.x - lo.x) / h + 1.0, (hi.y - lo.y) / h + 1.0],
+                vertices as f64,
+            )
         }
-        _ => b.nodes.map(|n| n as f64),
+        _ => (b.nodes.map(|n| n as f64), 0.0),
     };
+    let [nx, ny] = grid;
     let nodes = nx * ny;
     let (mut bytes, band) = match b.method {
         Method::Efg => {
@@ -702,7 +833,11 @@ fn body_bytes(sc: &Scenario, b: &super::body::BodySpec) -> f64 {
             let points = cells * (b.gauss as f64).powi(2);
             // shape functions and gradients of (2 d)² nodes per point
             let shapes = points * (2.0 * d).powi(2) * 40.0;
-            (60.0 * nnz + shapes, d.ceil())
+            // per polygon vertex: the Gauss point of its sliver and of its
+            // boundary piece, its segment in the R-tree and the
+            // visibility lists
+            let per_vertex = 2.0 * (2.0 * d).powi(2) * 40.0 + 256.0;
+            (60.0 * nnz + shapes + vertices * per_vertex, d.ceil())
         }
         // K, M, the Newmark matrix and the factor: ≈ 3.5 kB per node
         Method::FemQ4 => (3500.0 * nodes, 1.0),
@@ -727,10 +862,13 @@ fn body_bytes(sc: &Scenario, b: &super::body::BodySpec) -> f64 {
 
 /// The memory a run of `sc` needs (see [`MemoryEstimate`]).
 pub fn memory_estimate(sc: &Scenario) -> MemoryEstimate {
-    let discs = disc_count(sc);
+    let (discs, pairs) = disc_count(sc);
+    let extra_pairs = discs * (pairs.unwrap_or(0.0) - PAIRS_PER_DISC).max(0.0);
     MemoryEstimate {
         discs,
         disc_bytes: discs * DISC_BYTES,
+        extra_pairs,
+        pair_bytes: extra_pairs * PAIR_BYTES,
         bodies: sc
             .body
             .iter()
@@ -748,15 +886,67 @@ pub fn machine_memory() -> Option<f64> {
     Some(kib * 1024.0)
 }
 
-/// Refuse a run that would not fit in the machine's memory, naming the
+/// The memory this process may still use, in bytes, and what bounds it:
+/// the machine's (`MemTotal`) or, if lower, the process's address-space
+/// limit (`ulimit -v`, `RLIMIT_AS`) less what the process already maps
+/// (its code, libraries, thread stacks). `None` where neither is known
+/// (the memory check is then skipped).
+pub fn memory_limit() -> Option<(f64, String)> {
+    let machine = machine_memory().map(|m| (m, format!("machine: {}", human_bytes(m))));
+    let process = address_space_limit().map(|(limit, used)| {
+        (
+            (limit - used).max(0.0),
+            format!(
+                "process limit (ulimit -v): {} left of {}",
+                human_bytes((limit - used).max(0.0)),
+                human_bytes(limit)
+            ),
+        )
+    });
+    match (machine, process) {
+        (Some(m), Some(p)) => Some(if p.0 < m.0 { p } else { m }),
+        (m, p) => m.or(p),
+    }
+}
+
+/// `RLIMIT_AS` (bytes) and the address space already mapped (`VmSize` of
+/// `/proc/self/status`, 0 if unknown); `None` without a limit.
+#[cfg(unix)]
+fn address_space_limit() -> Option<(f64, f64)> {
+    let mut r = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit writes the struct it is given
+    if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } != 0 || r.rlim_cur == libc::RLIM_INFINITY
+    {
+        return None;
+    }
+    let used = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|t| {
+            let l = t.lines().find(|l| l.starts_with("VmSize:"))?;
+            l.split_whitespace().nth(1)?.parse::<f64>().ok()
+        })
+        .map_or(0.0, |kib| kib * 1024.0);
+    Some((r.rlim_cur as f64, used))
+}
+
+#[cfg(not(unix))]
+fn address_space_limit() -> Option<(f64, f64)> {
+    None
+}
+
+/// Refuse a run that would not fit in the memory it may use
+/// ([`memory_limit`]: the machine's, or the process's limit), naming the
 /// largest consumer: the discs (`granular.discs`, or its `count`) or a
-/// body (`body.i.nodes`).
-fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
-    let Some(machine) = machine_memory() else {
+/// body (`body.i.nodes`, `body.i.spacing` or `body.i.holes`).
+pub(super) fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
+    let Some((limit, what)) = memory_limit() else {
         return Ok(());
     };
     let est = memory_estimate(sc);
-    if est.total() <= machine {
+    if est.total() <= limit {
         return Ok(());
     }
     let biggest_body = est
@@ -765,7 +955,10 @@ fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
         .enumerate()
         .max_by(|a, b| a.1.1.total_cmp(&b.1.1));
     let path = match biggest_body {
-        Some((i, (_, b))) if *b > est.disc_bytes => format!("body.{i}.nodes"),
+        Some((i, (_, b))) if *b > est.disc_bytes + est.pair_bytes => match &sc.body[i] {
+            body if body.is_polygon() => format!("body.{i}.spacing"),
+            _ => format!("body.{i}.nodes"),
+        },
         _ => match &sc.granular.as_ref().map(|g| &g.discs) {
             Some(DiscsSpec::Table(t)) if t.count.is_some() => "granular.discs.count".into(),
             _ => "granular.discs".into(),
@@ -774,8 +967,12 @@ fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
     Err(bad(
         &path,
         format!(
-            "the run would need {est} of memory, more than this machine has ({} MemTotal); use fewer discs or nodes",
-            human_bytes(machine)
+            "the run would need {est} of memory, more than it may use ({what}{}); use fewer discs or nodes",
+            if what.starts_with("machine") {
+                " MemTotal"
+            } else {
+                ""
+            }
         ),
     ))
 }
@@ -789,15 +986,18 @@ pub const START_OVERLAP_TOL: f64 = 1e-3;
 /// checked against the bodies only, by `run`, once settled), and a time
 /// step above the DEM critical step.
 fn start_state(sc: &Scenario, g: &Granular, purpose: BuildFor) -> Result<(), Invalid> {
-    let crit = g.critical_dt();
-    if g.dt > crit {
+    let (mats, _) = laws(sc, &spec(sc)?.damping);
+    let crit = g.critical_step(&body_laws(sc, &mats));
+    if g.dt > crit.certain {
         return Err(bad(
             "simulation.dt",
             format!(
-                "dt = {:e} is {:.2} × the DEM critical step 2√(m_min/k_max) = {crit:e}: the central difference is unstable; use at most {:e} ({DT_WARN} × critical)",
+                "dt = {:e} is above {:e}, the stability limit of the normal mode of two of the lightest discs meeting (or one meeting a wall): the central difference is unstable at the first collision; the critical step of the contacts in use is {:e} (that of {}): use at most {:e} ({DT_WARN} × it; the default is {DT_SAFETY} ×)",
                 g.dt,
-                g.dt / crit,
-                DT_WARN * crit
+                crit.certain,
+                crit.dt,
+                crit.mode,
+                DT_WARN * crit.dt
             ),
         ));
     }
@@ -951,32 +1151,81 @@ fn start_state(sc: &Scenario, g: &Granular, purpose: BuildFor) -> Result<(), Inv
         }
     }
     for (bi, b) in sc.body.iter().enumerate() {
-        let lo = Vec2::from(b.rectangle.origin);
-        let hi = lo + Vec2::from(b.rectangle.size);
-        let domain = b.domain().ok().flatten();
-        let found = hits(&|x, r| {
-            if let Some(d) = &domain {
-                // polygon: overlap = r ± distance to the boundary
-                let dist = d.boundary_distance(x);
-                return if d.contains(x) { r + dist } else { r - dist };
-            }
-            let c = Vec2::new(x.x.clamp(lo.x, hi.x), x.y.clamp(lo.y, hi.y));
-            if c == x {
-                // centre inside: overlap = r + distance to the nearest edge
-                r + (x.x - lo.x).min(hi.x - x.x).min(x.y - lo.y).min(hi.y - x.y)
-            } else {
-                r - (c - x).norm()
-            }
-        });
+        let found = hits(&body_overlap(b));
         if !found.is_empty() {
-            return refuse(
-                format!("body.{bi}"),
-                format!("overlap body `{}`", b.name),
-                found,
+            let message = format!(
+                "{} disc(s) overlap body `{}` at the start: {}; set `overlapping_discs = \"remove\"` on the body to remove them, or move the body or the discs",
+                found.len(),
+                b.name,
+                list(&found)
             );
+            return Err(bad(&format!("body.{bi}"), message));
         }
     }
     Ok(())
+}
+
+/// How much a disc at `x` of radius `r` overlaps body `b` in its reference
+/// configuration: `r` ± the distance from `x` to the boundary (> 0: they
+/// overlap).
+pub fn body_overlap(b: &super::body::BodySpec) -> impl Fn(Vec2, f64) -> f64 {
+    let lo = Vec2::from(b.rectangle.origin);
+    let hi = lo + Vec2::from(b.rectangle.size);
+    let domain = b.domain().ok().flatten();
+    move |x, r| {
+        if let Some(d) = &domain {
+            // polygon: overlap = r ± distance to the boundary
+            let dist = d.boundary_distance(x);
+            return if d.contains(x) { r + dist } else { r - dist };
+        }
+        let c = Vec2::new(x.x.clamp(lo.x, hi.x), x.y.clamp(lo.y, hi.y));
+        if c == x {
+            // centre inside: overlap = r + distance to the nearest edge
+            r + (x.x - lo.x).min(hi.x - x.x).min(x.y - lo.y).min(hi.y - x.y)
+        } else {
+            r - (c - x).norm()
+        }
+    }
+}
+
+/// The discs of `rows` that each body with `overlapping_discs = "remove"`
+/// overlaps by more than [`START_OVERLAP_TOL`] of their radius (what the
+/// start-state check would refuse): `(body index, row indices)`, a disc
+/// counted for the first such body only.
+pub fn overlapped(sc: &Scenario, rows: &[DiscRow]) -> Vec<(usize, Vec<usize>)> {
+    let mut taken = vec![false; rows.len()];
+    let mut out = Vec::new();
+    for (bi, b) in sc.body.iter().enumerate() {
+        if b.overlapping_discs != super::body::OverlappingDiscs::Remove {
+            continue;
+        }
+        let overlap = body_overlap(b);
+        let hit: Vec<usize> = (0..rows.len())
+            .filter(|&k| {
+                !taken[k] && overlap(rows[k].pos, rows[k].r) > START_OVERLAP_TOL * rows[k].r
+            })
+            .collect();
+        for &k in &hit {
+            taken[k] = true;
+        }
+        out.push((bi, hit));
+    }
+    out
+}
+
+/// How many discs each body with `overlapping_discs = "remove"` removes
+/// from the discs the scenario describes (`purpose`: see [`BuildFor`]; for
+/// `check` a prepared packing's discs are those before the preparation,
+/// so the count is known only for other disc sources).
+pub fn removed_discs(sc: &Scenario, purpose: BuildFor) -> Result<Vec<(String, usize)>, Invalid> {
+    if sc.granular.is_none() {
+        return Ok(Vec::new());
+    }
+    let rows = disc_rows(sc, purpose)?;
+    Ok(overlapped(sc, &rows)
+        .into_iter()
+        .map(|(bi, r)| (sc.body[bi].name.clone(), r.len()))
+        .collect())
 }
 
 /// Bind every `[[probe]]` to its target in `model`, in scenario order.

@@ -178,6 +178,13 @@ impl BodySpec {
         self.bc.push(bc);
         self
     }
+    /// Remove the discs the body overlaps when the run starts (after the
+    /// preparation of a generated packing) instead of refusing them
+    /// (`overlapping_discs = "remove"`).
+    pub fn remove_overlapping_discs(mut self) -> Self {
+        self.overlapping_discs = super::body::OverlappingDiscs::Remove;
+        self
+    }
     /// The edges discs can touch.
     pub fn contact_edges(mut self, edges: &[Edge]) -> Self {
         self.contact_edges = edges.iter().map(|&e| e.into()).collect();

@@ -1,6 +1,7 @@
 //! `[[measure]]`: stress, porosity, coordination number and fabric of the
 //! discs in a region ([`crate::dem::measure`]), as `history.csv` columns
-//! `<name>_sxx`, `<name>_syy`, … — one bound [`Probe::Measure`] per column,
+//! `<name>_sxx_cpos`, `<name>_syy_cpos`, … (stresses compression
+//! positive, as the names say) — one bound [`Probe::Measure`] per column,
 //! so that every driver records them as it records the probes; the columns
 //! of one region share one pass over the contacts per state
 //! ([`MeasureMemo`]).
@@ -9,7 +10,7 @@
 //! [[measure]]
 //! name = "core"
 //! rectangle = [[0.05, 0.05], [0.25, 0.25]]    # or centre = [x, y], radius = r
-//! quantities = ["sxx", "syy", "porosity"]      # default: all eight
+//! quantities = ["sxx_cpos", "syy_cpos", "porosity"]   # default: all eight
 //! ```
 
 use super::{Invalid, Problems, Scenario};
@@ -23,11 +24,14 @@ use serde::Deserialize;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeasureSpec {
-    /// Prefix of the history columns: `<name>_sxx`, ….
+    /// Prefix of the history columns: `<name>_sxx_cpos`, ….
     pub name: String,
-    /// `[[x0, y0], [x1, y1]]`: a rectangle …
+    /// `[[x0, y0], [x1, y1]]` (or `{ origin, size }`, [`super::rect`]): a
+    /// rectangle …
+    #[serde(default, deserialize_with = "super::rect::corners")]
     pub rectangle: Option<[[f64; 2]; 2]>,
-    /// … or the centre of a circle …
+    /// … or the centre of a circle (`center` is the same field) …
+    #[serde(alias = "center")]
     pub centre: Option<[f64; 2]>,
     /// … and its radius.
     pub radius: Option<f64>,
@@ -110,13 +114,19 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             p.check(!qs.is_empty(), at("quantities"), "must not be empty");
             let mut seen = std::collections::HashSet::new();
             for (k, q) in qs.iter().enumerate() {
+                let renamed = ["sxx", "syy", "sxy"].contains(&q.as_str());
                 p.check(
                     Quantity::from_name(q).is_some(),
                     format!("measure.{i}.quantities.{k}"),
-                    format!(
-                        "unknown quantity `{q}` (allowed: {})",
-                        Quantity::ALL.map(Quantity::name).join(", ")
-                    ),
+                    match renamed {
+                        true => format!(
+                            "`{q}` is now `{q}_cpos`: the same compression-positive stress, named by its sign (a body's `{q}` probe is tension positive)"
+                        ),
+                        false => format!(
+                            "unknown quantity `{q}` (allowed: {})",
+                            Quantity::ALL.map(Quantity::name).join(", ")
+                        ),
+                    },
                 );
                 p.check(
                     seen.insert(q.as_str()),

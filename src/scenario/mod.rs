@@ -8,12 +8,16 @@
 //! Every field and its default is documented in `docs/scenario.md`.
 
 pub mod body;
+pub mod bonds;
 pub mod build;
 pub mod builder;
 pub mod crack;
+pub mod fill;
 pub mod generate;
 pub mod granular;
 pub mod measure;
+pub mod prepare;
+pub mod rect;
 
 use serde::Deserialize;
 use std::fmt;
@@ -37,6 +41,8 @@ pub struct Scenario {
     /// Rigid walls (line segments).
     #[serde(default)]
     pub wall: Vec<granular::WallSpec>,
+    /// Parallel bonds between the discs.
+    pub bonds: Option<bonds::BondsSpec>,
     /// History outputs, one `history.csv` column each.
     #[serde(default)]
     pub probe: Vec<Probe>,
@@ -105,13 +111,17 @@ pub struct Simulation {
     /// Worker threads; 0 = all cores. Results do not depend on it.
     #[serde(default)]
     pub threads: usize,
-    /// Coupled runs: DEM steps per body (Newmark) step; the body sees the
-    /// contact loads averaged over them (ERRATA E11). Default 1.
-    #[serde(default = "one")]
-    pub substeps: usize,
-    /// Coupled runs: how disc–body contact forces reach the bodies.
+    /// Coupled runs: DEM steps per body (Newmark) step, or `"auto"` (the
+    /// default: chosen with the scheme, [`crate::coupling::scheme`]).
+    #[serde(default)]
+    pub substeps: Substeps,
+    /// Coupled runs: the coupled scheme (default `"auto"`).
     #[serde(default)]
     pub coupling: CouplingScheme,
+    /// Coupled runs: Newton iterations a contact solve may take before the
+    /// run stops (default 30).
+    #[serde(default = "newton_cap")]
+    pub contact_iterations: usize,
     /// Coupled runs: how a body gives the compliance of the implicit contact
     /// step.
     #[serde(default)]
@@ -142,18 +152,75 @@ pub enum ContactSolve {
     Direct,
 }
 
-/// `[simulation] coupling`: `"implicit"` (default: contact springs solved
-/// inside each body's Newmark step) or `"staggered"` (the body takes the
-/// contact forces of the previous state as loads — the plain explicit
-/// transfer, kept for comparison and used with `substeps` > 1).
+fn newton_cap() -> usize {
+    crate::coupling::implicit::MAX_NEWTON
+}
+
+/// `[simulation] substeps`: a count, or `"auto"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Substeps {
+    /// Chosen with the scheme.
+    #[default]
+    Auto,
+    /// This many DEM steps per body step.
+    Fixed(usize),
+}
+
+impl<'de> Deserialize<'de> for Substeps {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            N(i64),
+            S(String),
+        }
+        match Raw::deserialize(d)? {
+            Raw::N(n) if n >= 0 => Ok(Substeps::Fixed(n as usize)),
+            Raw::N(n) => Err(serde::de::Error::custom(format!(
+                "expected a positive integer or \"auto\", got {n}"
+            ))),
+            Raw::S(s) if s == "auto" => Ok(Substeps::Auto),
+            Raw::S(s) => Err(serde::de::Error::custom(format!(
+                "expected a positive integer or \"auto\", got \"{s}\""
+            ))),
+        }
+    }
+}
+
+impl Substeps {
+    /// The count, if one is given.
+    pub fn fixed(&self) -> Option<usize> {
+        match self {
+            Substeps::Auto => None,
+            Substeps::Fixed(n) => Some(*n),
+        }
+    }
+}
+
+/// `[simulation] coupling`: the coupled scheme
+/// ([`crate::coupling::scheme`]): `"auto"` (default: the fastest safe one,
+/// with `substeps`), `"exact"`, `"predicted"`, `"compliant"`,
+/// `"staggered"` (the body takes the contact forces of the previous state
+/// as loads — the plain explicit transfer, kept for comparison), or
+/// `"implicit"` (the exact step with `substeps = 1`, the predicted scheme
+/// with more).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum CouplingScheme {
-    /// Contact springs solved inside each body's Newmark step.
+    /// Chosen with `substeps`.
     #[default]
-    Implicit,
+    Auto,
+    /// A body step per DEM step, the contacts implicit in it.
+    Exact,
+    /// Sub-cycled, the boundary on its predicted path.
+    Predicted,
+    /// Sub-cycled, the boundary giving way to the contacts through the
+    /// body step's compliance in every DEM step.
+    Compliant,
     /// The body takes the previous state's contact forces as loads.
     Staggered,
+    /// The exact step with one substep, the predicted scheme with more.
+    Implicit,
 }
 
 impl Default for Simulation {
@@ -165,8 +232,9 @@ impl Default for Simulation {
             end_time: None,
             gravity: [0.0, 0.0],
             threads: 0,
-            substeps: 1,
-            coupling: CouplingScheme::Implicit,
+            substeps: Substeps::Auto,
+            coupling: CouplingScheme::Auto,
+            contact_iterations: newton_cap(),
             contact_solve: ContactSolve::Boundary,
             geometric_stiffness: true,
         }
@@ -399,10 +467,71 @@ impl fmt::Display for Located {
     }
 }
 
+/// Largest scenario file read ([`load`]): 256 MiB.
+pub const MAX_SCENARIO_BYTES: u64 = 256 << 20;
+
+/// Largest discs CSV file read (`discs = { csv = … }`): 1 GiB, some 20
+/// million discs.
+pub const MAX_CSV_BYTES: u64 = 1 << 30;
+
+/// The bytes of the file `path`, refused if it is a directory or a device
+/// (`/dev/zero`) or has more than `max` bytes (a pipe that does not end, a
+/// file that is not what it is said to be): nothing is read without bound.
+pub fn read_bounded(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let f = std::fs::File::open(path)?;
+    let kind = f.metadata()?.file_type();
+    if kind.is_dir() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::IsADirectory,
+            "a directory, not a file",
+        ));
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_char_device() || kind.is_block_device() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "a device, not a file",
+            ));
+        }
+    }
+    let too_large = || {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "larger than {} MiB, more than such a file can be (is it the right file?)",
+                max >> 20
+            ),
+        )
+    };
+    // a regular file says its size; anything else (a pipe) is read up to it
+    if kind.is_file() && f.metadata()?.len() > max {
+        return Err(too_large());
+    }
+    let mut bytes = Vec::new();
+    f.take(max + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max {
+        return Err(too_large());
+    }
+    Ok(bytes)
+}
+
+/// The text of the file `path` ([`read_bounded`]), which must be UTF-8.
+pub fn read_text(path: &Path, max: u64) -> std::io::Result<String> {
+    String::from_utf8(read_bounded(path, max)?).map_err(|e| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+        )
+    })
+}
+
 /// Read, parse and validate a scenario file.
 pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
     let file = path.display().to_string();
-    let src = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
+    let src = read_text(path, MAX_SCENARIO_BYTES).map_err(|source| ScenarioError::Io {
         file: file.clone(),
         source,
     })?;
@@ -416,11 +545,18 @@ pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
 
 /// Parse and validate scenario text; `file` names it in error messages.
 pub fn parse(src: &str, file: &str) -> Result<Scenario, ScenarioError> {
-    let sc: Scenario = toml::from_str(src).map_err(|e| ScenarioError::Invalid {
+    // strict tables: a struct given as an array is refused, not read
+    // field by field in order
+    let sc: Result<Scenario, toml::de::Error> =
+        toml::Deserializer::parse(src).and_then(crate::strict::deserialize);
+    let sc: Scenario = sc.map_err(|e| ScenarioError::Invalid {
         file: file.to_string(),
         errors: vec![Located {
             line: e.span().map(|s| line_of(src, s.start)),
-            field: String::new(),
+            field: e
+                .span()
+                .and_then(|s| field_at(src, s.start))
+                .map_or_else(String::new, |p| display_path(&p)),
             message: e.message().trim().to_string(),
         }],
     })?;
@@ -483,6 +619,19 @@ impl Scenario {
         build::model_with(self, build::BuildFor::Check).map_err(|p| self.located(vec![p]))
     }
 
+    /// [`build`](Self::build) with the discs of its packing's preparation
+    /// given: `bed`, from [`prepare::prepare`] (which `build` runs itself).
+    pub fn build_prepared(
+        &self,
+        bed: &[crate::dem::packing::DiscRow],
+    ) -> Result<crate::model::Model, ScenarioError> {
+        let problems = self.validate();
+        if !problems.is_empty() {
+            return Err(self.located(problems));
+        }
+        build::model_with(self, build::BuildFor::Prepared(bed)).map_err(|p| self.located(vec![p]))
+    }
+
     /// The `[[probe]]`s bound to their targets in `model` (built from this
     /// scenario), in file order.
     pub fn probes(
@@ -536,10 +685,20 @@ impl Scenario {
             "must be two finite numbers [gx, gy]",
         );
         p.check(self.output.every >= 1, "output.every", "must be ≥ 1");
+        if let Some(n) = sim.substeps.fixed() {
+            p.check(
+                (1..=100_000).contains(&n),
+                "simulation.substeps",
+                format!("must be \"auto\" or between 1 and 100000 (got {n})"),
+            );
+        }
         p.check(
-            (1..=100_000).contains(&sim.substeps),
-            "simulation.substeps",
-            format!("must be between 1 and 100000 (got {})", sim.substeps),
+            (1..=1000).contains(&sim.contact_iterations),
+            "simulation.contact_iterations",
+            format!(
+                "must be between 1 and 1000 (got {})",
+                sim.contact_iterations
+            ),
         );
         let mut names = std::collections::HashSet::new();
         for (i, m) in self.material.iter().enumerate() {
@@ -580,6 +739,7 @@ impl Scenario {
         );
         body::validate(self, &mut p);
         granular::validate(self, &mut p);
+        bonds::validate(self, &mut p);
         measure::validate(self, &mut p);
         p.0
     }
@@ -622,6 +782,48 @@ pub fn display_path(path: &str) -> String {
         }
     }
     s
+}
+
+/// The dotted path (`body.0.rectangle`) of the innermost value of the TOML
+/// text `src` that holds byte offset `off`, if a value does (the field a
+/// type error is about).
+fn field_at(src: &str, off: usize) -> Option<String> {
+    use toml_edit::{Item, TableLike, Value};
+    fn value(v: &Value, path: String, off: usize) -> Option<String> {
+        let span = v.span()?;
+        if !span.contains(&off) {
+            return None;
+        }
+        let inner = match v {
+            Value::Array(a) => a
+                .iter()
+                .enumerate()
+                .find_map(|(i, x)| value(x, format!("{path}.{i}"), off)),
+            Value::InlineTable(t) => table(t, &path, off),
+            _ => None,
+        };
+        inner.or(Some(path))
+    }
+    fn table(t: &dyn TableLike, prefix: &str, off: usize) -> Option<String> {
+        t.iter().find_map(|(k, item)| {
+            let path = if prefix.is_empty() {
+                k.to_string()
+            } else {
+                format!("{prefix}.{k}")
+            };
+            match item {
+                Item::Value(v) => value(v, path, off),
+                Item::Table(t) => table(t, &path, off),
+                Item::ArrayOfTables(a) => a
+                    .iter()
+                    .enumerate()
+                    .find_map(|(i, t)| table(t, &format!("{path}.{i}"), off)),
+                Item::None => None,
+            }
+        })
+    }
+    let doc = toml_edit::Document::parse(src.to_string()).ok()?;
+    table(doc.as_table(), "", off)
 }
 
 /// Byte offset of the deepest part of `path` present in the document: the
@@ -688,6 +890,25 @@ mod tests {
         assert_eq!(line("body.1.name"), Some(7));
         // missing field: falls back to the nearest enclosing entry
         assert_eq!(line("body.1.nodes"), Some(7));
+    }
+
+    #[test]
+    fn a_type_error_names_its_field() {
+        let src = "[[body]]\nname = \"a\"\nrectangle = [[0.1, 0.1], [0.3, 0.2]]\nelastic = { E = \"x\" }\n";
+        let off = |s: &str| src.find(s).unwrap();
+        assert_eq!(
+            field_at(src, off("[[0.1")).as_deref(),
+            Some("body.0.rectangle")
+        );
+        assert_eq!(
+            field_at(src, off("0.3")).as_deref(),
+            Some("body.0.rectangle.1.0")
+        );
+        assert_eq!(
+            field_at(src, off("\"x\"")).as_deref(),
+            Some("body.0.elastic.E")
+        );
+        assert_eq!(field_at(src, 0), None);
     }
 
     #[test]

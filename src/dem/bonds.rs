@@ -1,0 +1,729 @@
+//! Parallel bonds between discs: the bonded-particle model of Potyondy &
+//! Cundall (2004), in 2D.
+//!
+//! A parallel bond is a finite piece of cement between two discs a and b:
+//! a strip of half-width `R̄ = λ̄ min(r_a, r_b)` across the contact, through
+//! the disc thickness t, acting in parallel with the linear contact law
+//! (the grains still touch). With the unit normal `n` from a to b and
+//! `t = perp(n)`, the bond carries a normal force `F_n` (compression
+//! positive), a shear force `F_s` along t and a moment `M` (on a; b gets
+//! the opposite), updated from the relative motion of the step
+//! (Potyondy & Cundall 2004, Eqs. 6–9):
+//!
+//! ```text
+//! A = 2 R̄ t,   I = (2/3) R̄³ t          (area and second moment of the strip)
+//! ΔF_n =  k̄_n A Δu_n,   Δu_n = (v_a − v_b)·n Δt
+//! ΔF_s = −k̄_s A Δu_s,   Δu_s = [(v_a − v_b)·t + ω_a l_a + ω_b l_b] Δt
+//! ΔM   = −k̄_n I Δθ,     Δθ  = (ω_a − ω_b) Δt
+//! ```
+//!
+//! `k̄_n`, `k̄_s` are stiffnesses per area (stress per length). The lever
+//! arms `l_a = d r_a/(r_a + r_b)`, `l_b = d r_b/(r_a + r_b)` put the bond's
+//! centre on the line of centres (d apart), dividing it as the radii:
+//! `l_a + l_b = d`, so a rigid rotation of the pair shears nothing, and
+//! the same arms give the moments `l_a F_s` and `l_b F_s` of the shear
+//! force (the pair is work-consistent). The force on a is
+//! `−F_n n + F_s t`, its moment `l_a F_s + M`; b gets `−(−F_n n + F_s t)`
+//! and `l_b F_s − M`.
+//!
+//! Strength (beam theory on the strip): the largest tensile stress and the
+//! shear stress are
+//!
+//! ```text
+//! σ = −F_n/A + |M| R̄/I,   τ = |F_s|/A
+//! ```
+//!
+//! and the bond breaks, in tension, when `σ ≥ σ_c`, else in shear when
+//! `τ ≥ τ_c` — a fixed shear strength, or the cohesion–friction strength
+//! `τ_c = c + σ_n tan φ` with the mean normal stress `σ_n = F_n/A`
+//! (compression positive, as PFC's `pb` model). Strengths may scatter
+//! from bond to bond (normal, seeded by the pair of disc ids: the same on
+//! any thread count, rank or restart). A broken bond is removed; it exerts
+//! no force in the step it breaks, and the energy it held,
+//! `F_n²/(2k̄_nA) + F_s²/(2k̄_sA) + M²/(2k̄_nI)` ([`bond_energy`]; taken
+//! between its forces before and after the step, [`released`]), is
+//! *released* (counted in the energy account). A bond made at step n has
+//! zero force in the state of step n.
+//!
+//! # Data layout (MPI-ready)
+//!
+//! A bond is plain data keyed by the *ids* of its discs, never by slots
+//! ([`BondList`]): the pair `(a, b)`, `a < b`, its radius, its two
+//! strengths and its three forces, in arrays indexed by the bond, sorted
+//! by `(a, b)`. So a bond can be sent with its discs to another rank
+//! and merged into that rank's list. Everything derived — the slots of the
+//! two discs, the per-bond force of the step, the per-disc index of bonds —
+//! is rebuilt from the list ([`Bonds::refresh`]). Each step evaluates every
+//! bond independently (in parallel, from the state before the step) into
+//! a per-bond buffer; each disc then adds the forces of its bonds in the
+//! order of the partner's id (inside the contact sweep), so the result does
+//! not depend on the number of threads or on where the bonds are stored.
+
+use super::particles::Particles;
+use crate::geom::Vec2;
+use rayon::prelude::*;
+
+/// Shear strength of a bond.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum ShearStrength {
+    /// A fixed strength `τ_c` (stress).
+    Fixed(f64),
+    /// Cohesion–friction: `τ_c = c + σ_n tan φ`, σ_n the bond's mean normal
+    /// stress (compression positive).
+    Coulomb {
+        /// Cohesion c (stress).
+        cohesion: f64,
+        /// tan φ of the friction angle φ.
+        tan_phi: f64,
+    },
+}
+
+/// The material of the parallel bonds of an assembly.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BondLaw {
+    /// Radius multiplier λ̄: `R̄ = λ̄ min(r_a, r_b)`.
+    pub radius_factor: f64,
+    /// Normal stiffness per area `k̄_n` (stress per length).
+    pub kn: f64,
+    /// Shear stiffness per area `k̄_s`.
+    pub ks: f64,
+    /// Mean tensile strength σ_c (stress).
+    pub tensile: f64,
+    /// Shear strength (its mean; the cohesion of a cohesion–friction one).
+    pub shear: ShearStrength,
+    /// Coefficient of variation of the strengths: each bond's σ_c and τ_c
+    /// (or c) are the means times `1 + scatter · z`, z standard normal
+    /// clipped to ±3 (0: every bond has the means).
+    pub scatter: f64,
+    /// Seed of the scatter.
+    pub seed: u64,
+}
+
+impl Default for BondLaw {
+    fn default() -> Self {
+        BondLaw {
+            radius_factor: 1.0,
+            kn: 0.0,
+            ks: 0.0,
+            tensile: f64::INFINITY,
+            shear: ShearStrength::Fixed(f64::INFINITY),
+            scatter: 0.0,
+            seed: 1,
+        }
+    }
+}
+
+/// Which pairs are bonded, and when.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BondRule {
+    /// Bond at the start of this step (0: before the first step).
+    pub at_step: usize,
+    /// Bond pairs whose gap `d − r_a − r_b` is below `gap × min(r_a, r_b)`
+    /// (touching and overlapping pairs included).
+    pub gap: f64,
+    /// Only pairs whose two centres lie in this box `(lo, hi)`.
+    pub region: Option<(Vec2, Vec2)>,
+    /// Only pairs whose two discs are of these materials (empty: any).
+    pub materials: Vec<u16>,
+}
+
+/// How a bond broke.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum BreakMode {
+    /// The largest tensile stress reached σ_c.
+    Tension,
+    /// The shear stress reached τ_c.
+    Shear,
+}
+
+impl BreakMode {
+    /// `tension` or `shear`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BreakMode::Tension => "tension",
+            BreakMode::Shear => "shear",
+        }
+    }
+}
+
+/// A broken bond: the crack it leaves.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BrokenBond {
+    /// Steps done before the step in which it broke.
+    pub step: usize,
+    /// Time of the state it broke in (`step × Δt`).
+    pub time: f64,
+    /// Disc ids (0-based), `a < b`.
+    pub a: u32,
+    /// Second disc id.
+    pub b: u32,
+    /// The bond's centre then.
+    pub pos: Vec2,
+    /// Unit normal from a to b then (the crack runs along `perp(normal)`).
+    pub normal: Vec2,
+    /// The bond's radius R̄ (half the crack's length).
+    pub radius: f64,
+    /// Tension or shear.
+    pub mode: BreakMode,
+    /// Energy the bond held when it broke.
+    pub energy: f64,
+}
+
+/// The bonds of an assembly and their history: plain arrays keyed by disc
+/// ids (see the module docs), everything a checkpoint saves.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BondList {
+    /// First disc id of each bond (`a < b`); bonds sorted by `(a, b)`.
+    pub a: Vec<u32>,
+    /// Second disc id.
+    pub b: Vec<u32>,
+    /// Bond radius R̄.
+    pub radius: Vec<f64>,
+    /// Tensile strength σ_c of each bond.
+    pub tensile: Vec<f64>,
+    /// Shear strength τ_c (or cohesion c) of each bond.
+    pub shear: Vec<f64>,
+    /// Normal force F_n (compression positive).
+    pub fn_: Vec<f64>,
+    /// Shear force F_s along `t = perp(n)`.
+    pub fs: Vec<f64>,
+    /// Moment M on disc a.
+    pub moment: Vec<f64>,
+    /// The rule has been applied.
+    pub created: bool,
+    /// The bonds were made in this step: its increment is not theirs.
+    pub fresh: bool,
+    /// Number of bonds made by the rule.
+    pub made: usize,
+    /// Every bond broken so far, in the order they broke (a step's in
+    /// `(a, b)` order).
+    pub broken: Vec<BrokenBond>,
+    /// Energy released by broken bonds so far.
+    pub released: f64,
+}
+
+/// Keep the elements `k` of `v` for which `keep[k]` holds (in order).
+fn keep_only<T>(v: &mut Vec<T>, keep: &[bool]) {
+    let mut k = 0;
+    v.retain(|_| {
+        k += 1;
+        keep[k - 1]
+    });
+}
+
+impl BondList {
+    /// Number of intact bonds.
+    pub fn len(&self) -> usize {
+        self.a.len()
+    }
+
+    /// No intact bond.
+    pub fn is_empty(&self) -> bool {
+        self.a.is_empty()
+    }
+
+    /// Keep the bonds for which `keep(k)` holds (in order).
+    fn retain(&mut self, keep: &[bool]) {
+        keep_only(&mut self.a, keep);
+        keep_only(&mut self.b, keep);
+        keep_only(&mut self.radius, keep);
+        keep_only(&mut self.tensile, keep);
+        keep_only(&mut self.shear, keep);
+        keep_only(&mut self.fn_, keep);
+        keep_only(&mut self.fs, keep);
+        keep_only(&mut self.moment, keep);
+    }
+
+    /// Is the list consistent for `n` discs (equal lengths, sorted pairs
+    /// `a < b < n`)?
+    pub fn check(&self, n: usize) -> Result<(), String> {
+        let m = self.a.len();
+        if [
+            self.b.len(),
+            self.radius.len(),
+            self.tensile.len(),
+            self.shear.len(),
+            self.fn_.len(),
+            self.fs.len(),
+            self.moment.len(),
+        ]
+        .iter()
+        .any(|&l| l != m)
+        {
+            return Err("the bond arrays differ in length".into());
+        }
+        let pairs_ok = self
+            .a
+            .iter()
+            .zip(&self.b)
+            .all(|(&a, &b)| a < b && (b as usize) < n);
+        let sorted = (1..m).all(|k| (self.a[k - 1], self.b[k - 1]) < (self.a[k], self.b[k]));
+        if !pairs_ok || !sorted {
+            return Err("the bonds are not sorted pairs of disc ids".into());
+        }
+        Ok(())
+    }
+}
+
+/// What one bond does in a step: the force on disc a (b gets its
+/// opposite) and the moments on a and b.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BondForce {
+    /// Force on disc a.
+    pub f: Vec2,
+    /// Moment on disc a.
+    pub ma: f64,
+    /// Moment on disc b.
+    pub mb: f64,
+}
+
+/// Area `A = 2R̄t` and second moment `I = (2/3)R̄³t` of a bond of radius
+/// `r` through thickness `t`.
+#[inline(always)]
+pub fn section(r: f64, t: f64) -> (f64, f64) {
+    (2.0 * r * t, 2.0 / 3.0 * r * r * r * t)
+}
+
+/// Energy stored in a bond with forces `(F_n, F_s, M)`, area A and second
+/// moment I: `F_n²/(2k̄_nA) + F_s²/(2k̄_sA) + M²/(2k̄_nI)`.
+#[inline]
+pub fn bond_energy(law: &BondLaw, (fn_, fs, m): (f64, f64, f64), a: f64, i: f64) -> f64 {
+    let mut e = 0.0;
+    if law.kn > 0.0 {
+        e += 0.5 * fn_ * fn_ / (law.kn * a) + 0.5 * m * m / (law.kn * i);
+    }
+    if law.ks > 0.0 {
+        e += 0.5 * fs * fs / (law.ks * a);
+    }
+    e
+}
+
+/// The energy a bond releases when it breaks in a step that took its
+/// forces from `old` to `new`: `F_old F_new/(2k)` per component. This is
+/// the product form that closes the central difference's discrete energy
+/// balance exactly for a linear spring: with the kinetic energy taken as
+/// `½ m v_{n−½}·v_{n+½}` and a spring's energy `½ k x_n²`, the stored
+/// energy is conserved step by step, and a spring removed at step n (its
+/// force no longer applied from x_n on) takes `½ k x_{n−1} x_n` with it.
+/// It differs from `F_new²/(2k)` by one step's increment.
+#[inline]
+pub fn released(
+    law: &BondLaw,
+    (n0, s0, m0): (f64, f64, f64),
+    (n1, s1, m1): (f64, f64, f64),
+    (a, i): (f64, f64),
+) -> f64 {
+    let mut e = 0.0;
+    if law.kn > 0.0 {
+        e += 0.5 * n0 * n1 / (law.kn * a) + 0.5 * m0 * m1 / (law.kn * i);
+    }
+    if law.ks > 0.0 {
+        e += 0.5 * s0 * s1 / (law.ks * a);
+    }
+    e
+}
+
+/// The largest tensile stress `σ = −F_n/A + |M|R̄/I` and the shear stress
+/// `τ = |F_s|/A` of a bond.
+#[inline(always)]
+pub fn stresses(fn_: f64, fs: f64, m: f64, r: f64, a: f64, i: f64) -> (f64, f64) {
+    (-fn_ / a + m.abs() * r / i, fs.abs() / a)
+}
+
+/// Does a bond with these forces break, and how? Tension first
+/// (`σ ≥ σ_c`), then shear (`τ ≥ τ_c`, `τ_c = c + σ_n tan φ` for a
+/// cohesion–friction strength).
+#[inline(always)]
+pub fn breaks(
+    law: &BondLaw,
+    (fn_, fs, m): (f64, f64, f64),
+    r: f64,
+    (a, i): (f64, f64),
+    tensile: f64,
+    shear: f64,
+) -> Option<BreakMode> {
+    let (sigma, tau) = stresses(fn_, fs, m, r, a, i);
+    let tau_c = match law.shear {
+        ShearStrength::Fixed(_) => shear,
+        ShearStrength::Coulomb { tan_phi, .. } => shear + fn_ / a * tan_phi,
+    };
+    if sigma >= tensile {
+        Some(BreakMode::Tension)
+    } else if tau >= tau_c {
+        Some(BreakMode::Shear)
+    } else {
+        None
+    }
+}
+
+/// SplitMix64: a well-mixed 64-bit hash step.
+fn splitmix(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Two standard normal numbers for the pair `(a, b)` under `seed` (Box–
+/// Muller on a hash of the three: the same wherever the bond is made).
+fn normals(seed: u64, a: u32, b: u32) -> (f64, f64) {
+    let h1 = splitmix(seed ^ splitmix(((a as u64) << 32) | b as u64));
+    let h2 = splitmix(h1);
+    let u1 = ((h1 >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+    let u2 = (h2 >> 11) as f64 / (1u64 << 53) as f64;
+    let r = (-2.0 * u1.ln()).sqrt();
+    let phi = 2.0 * std::f64::consts::PI * u2;
+    (r * phi.cos(), r * phi.sin())
+}
+
+/// The strengths `(σ_c, τ_c or c)` of the bond between discs `a < b`.
+pub fn strengths(law: &BondLaw, a: u32, b: u32) -> (f64, f64) {
+    let shear = match law.shear {
+        ShearStrength::Fixed(t) => t,
+        ShearStrength::Coulomb { cohesion, .. } => cohesion,
+    };
+    if law.scatter == 0.0 {
+        return (law.tensile, shear);
+    }
+    let (z1, z2) = normals(law.seed, a, b);
+    let f = |z: f64| 1.0 + law.scatter * z.clamp(-3.0, 3.0);
+    (law.tensile * f(z1), shear * f(z2))
+}
+
+/// The parallel bonds of an assembly: law, creation rule, the bond list
+/// and what each step derives from it.
+#[derive(Debug, Clone, Default)]
+pub struct Bonds {
+    /// The bonds' material.
+    pub law: BondLaw,
+    /// Which pairs are bonded and when (`None`: no bonds).
+    pub rule: Option<BondRule>,
+    /// The bonds and their history (saved by a checkpoint).
+    pub list: BondList,
+    /// Slots of the two discs of each bond.
+    slots: Vec<[u32; 2]>,
+    /// What each bond does in the present step.
+    pub(super) buf: Vec<BondForce>,
+    /// Bonds of the disc in slot `s`: `list[first[s]..first[s + 1]]` (empty
+    /// without bonds).
+    pub(super) first: Vec<u32>,
+    /// Per disc, `2k` (the disc is bond k's a) or `2k + 1` (its b), in the
+    /// order of the partner's id.
+    pub(super) per_disc: Vec<u32>,
+    /// The slots or the list changed since the index was built.
+    stale: bool,
+}
+
+impl Bonds {
+    /// Does the assembly have bonds (a rule, whether applied yet or not)?
+    pub fn active(&self) -> bool {
+        self.rule.is_some()
+    }
+
+    /// The index needs rebuilding (the discs were renumbered, the list was
+    /// replaced).
+    pub fn invalidate(&mut self) {
+        self.stale = true;
+    }
+
+    /// Rebuild the slots of each bond and the per-disc index from the
+    /// list (if stale).
+    pub fn refresh(&mut self, p: &Particles) {
+        if !self.stale && self.first.len() == p.len() + 1 {
+            return;
+        }
+        self.stale = false;
+        let l = &self.list;
+        self.slots.clear();
+        self.slots.extend(
+            l.a.iter()
+                .zip(&l.b)
+                .map(|(&a, &b)| [p.slot[a as usize], p.slot[b as usize]]),
+        );
+        let n = p.len();
+        self.first.clear();
+        self.first.resize(n + 1, 0);
+        if l.is_empty() {
+            self.per_disc.clear();
+            return;
+        }
+        for s in &self.slots {
+            self.first[s[0] as usize + 1] += 1;
+            self.first[s[1] as usize + 1] += 1;
+        }
+        for d in 0..n {
+            self.first[d + 1] += self.first[d];
+        }
+        let mut fill = self.first.clone();
+        self.per_disc.clear();
+        self.per_disc.resize(2 * l.len(), 0);
+        // bonds in (a, b) order: each disc meets its partners in id order
+        for (k, s) in self.slots.iter().enumerate() {
+            for (side, &slot) in s.iter().enumerate() {
+                let f = &mut fill[slot as usize];
+                self.per_disc[*f as usize] = (2 * k + side) as u32;
+                *f += 1;
+            }
+        }
+        self.buf.resize(l.len(), BondForce::default());
+    }
+
+    /// Apply the rule: bond every pair `(i, j)` of `pairs` (slots) that it
+    /// accepts. The bonds are sorted by their disc ids.
+    pub fn create(&mut self, p: &Particles, pairs: impl Iterator<Item = (usize, usize)>) {
+        let Some(rule) = &self.rule else { return };
+        let inside = |x: Vec2| {
+            rule.region
+                .is_none_or(|(lo, hi)| x.x >= lo.x && x.x <= hi.x && x.y >= lo.y && x.y <= hi.y)
+        };
+        let material_ok =
+            |s: usize| rule.materials.is_empty() || rule.materials.contains(&p.material[s]);
+        let mut made: Vec<(u32, u32)> = pairs
+            .filter(|&(i, j)| {
+                let (ri, rj) = (p.radius[i], p.radius[j]);
+                let gap = (p.pos[j] - p.pos[i]).norm() - ri - rj;
+                gap < rule.gap * ri.min(rj)
+                    && inside(p.pos[i])
+                    && inside(p.pos[j])
+                    && material_ok(i)
+                    && material_ok(j)
+            })
+            .map(|(i, j)| {
+                let (a, b) = (p.id[i], p.id[j]);
+                (a.min(b), a.max(b))
+            })
+            .collect();
+        made.sort_unstable();
+        made.dedup();
+        let l = &mut self.list;
+        l.created = true;
+        l.fresh = true;
+        l.made = made.len();
+        for &(a, b) in &made {
+            let (sa, sb) = (p.slot[a as usize] as usize, p.slot[b as usize] as usize);
+            let (tensile, shear) = strengths(&self.law, a, b);
+            l.a.push(a);
+            l.b.push(b);
+            l.radius
+                .push(self.law.radius_factor * p.radius[sa].min(p.radius[sb]));
+            l.tensile.push(tensile);
+            l.shear.push(shear);
+            l.fn_.push(0.0);
+            l.fs.push(0.0);
+            l.moment.push(0.0);
+        }
+        self.stale = true;
+    }
+
+    /// Evaluate every bond from the state before the step (positions at t,
+    /// velocities at t − Δt/2) into the per-bond forces, updating the
+    /// bonds' forces; break and remove the bonds whose stresses reach their
+    /// strength (recorded in [`BondList::broken`] with `step` and `time`).
+    /// Bonds made in this step start from zero force (the increment of the
+    /// step that brought the discs here is not theirs).
+    pub fn evaluate(&mut self, p: &Particles, thickness: f64, dt: f64, step: usize, time: f64) {
+        self.refresh(p);
+        let l = &mut self.list;
+        let law = self.law;
+        let dt = if std::mem::take(&mut l.fresh) {
+            0.0
+        } else {
+            dt
+        };
+        let (radius, tensile, shear) = (&l.radius, &l.tensile, &l.shear);
+        let slots = &self.slots;
+        let broken: Vec<(usize, BreakMode, f64)> = self
+            .buf
+            .par_iter_mut()
+            .zip(l.fn_.par_iter_mut())
+            .zip(l.fs.par_iter_mut())
+            .zip(l.moment.par_iter_mut())
+            .enumerate()
+            .with_min_len(1024)
+            .filter_map(|(k, (((out, fn_), fs), m))| {
+                let [i, j] = slots[k].map(|s| s as usize);
+                let r = radius[k];
+                let sec = section(r, thickness);
+                let old = (*fn_, *fs, *m);
+                *out = bond_step(p, i, j, &law, sec, dt, (fn_, fs, m));
+                // the stresses of the updated forces; a broken bond acts no more
+                let new = (*fn_, *fs, *m);
+                let mode = breaks(&law, new, r, sec, tensile[k], shear[k])?;
+                *out = BondForce::default();
+                Some((k, mode, released(&law, old, new, sec)))
+            })
+            .collect();
+        if !broken.is_empty() {
+            self.remove_broken(p, &broken, step, time);
+        }
+    }
+
+    /// Remove the bonds `broken` (index, mode, energy released; ascending),
+    /// recording each.
+    fn remove_broken(
+        &mut self,
+        p: &Particles,
+        broken: &[(usize, BreakMode, f64)],
+        step: usize,
+        time: f64,
+    ) {
+        let l = &mut self.list;
+        let mut keep = vec![true; l.len()];
+        for &(k, mode, energy) in broken {
+            keep[k] = false;
+            let [i, j] = self.slots[k].map(|s| s as usize);
+            let (n, d) = super::contact::normal_between(p.pos[i], p.pos[j]);
+            let la = d * p.radius[i] / (p.radius[i] + p.radius[j]);
+            l.released += energy;
+            l.broken.push(BrokenBond {
+                step,
+                time,
+                a: l.a[k],
+                b: l.b[k],
+                pos: p.pos[i] + n * la,
+                normal: n,
+                radius: l.radius[k],
+                mode,
+                energy,
+            });
+        }
+        l.retain(&keep);
+        keep_only(&mut self.buf, &keep);
+        self.stale = true;
+        self.refresh(p);
+    }
+
+    /// Energy stored in the intact bonds.
+    pub fn energy(&self, thickness: f64) -> f64 {
+        let l = &self.list;
+        (0..l.len())
+            .map(|k| {
+                let (a, i) = section(l.radius[k], thickness);
+                bond_energy(&self.law, (l.fn_[k], l.fs[k], l.moment[k]), a, i)
+            })
+            .sum()
+    }
+
+    /// Bonds broken so far in tension and in shear.
+    pub fn broken_counts(&self) -> (usize, usize) {
+        let t = self
+            .list
+            .broken
+            .iter()
+            .filter(|b| b.mode == BreakMode::Tension)
+            .count();
+        (t, self.list.broken.len() - t)
+    }
+
+    /// The critical time step of the bonded discs alone (known before the
+    /// bonds are made): over every disc i, `2√(m_i/k)` with the largest
+    /// translational stiffness a bond can give it, `k = max(k̄_n, k̄_s) A_i`
+    /// plus `kn_contact` (the contact law in parallel), and `2√(I_i/k_θ)`
+    /// with its rotational stiffness `k_θ = k̄_n I_b + k̄_s A_i r_i²`, where
+    /// `A_i = 2λ̄ r_i t`, `I_b = (2/3)(λ̄ r_i)³ t` is the largest bond it
+    /// can have (`R̄ ≤ λ̄ r_i`); infinity without a bond rule.
+    pub fn critical_dt(&self, p: &Particles, thickness: f64, kn_contact: f64) -> f64 {
+        if self.rule.is_none() {
+            return f64::INFINITY;
+        }
+        let law = &self.law;
+        (0..p.len())
+            .map(|s| {
+                let r = p.radius[s];
+                let (a, ib) = section(law.radius_factor * r, thickness);
+                let kt = law.kn.max(law.ks) * a + kn_contact;
+                let kr = law.kn * ib + law.ks * a * r * r;
+                let mut dt = f64::INFINITY;
+                if p.mass[s] > 0.0 && kt > 0.0 {
+                    dt = dt.min(2.0 * (p.mass[s] / kt).sqrt());
+                }
+                if p.inertia[s] > 0.0 && kr > 0.0 {
+                    dt = dt.min(2.0 * (p.inertia[s] / kr).sqrt());
+                }
+                dt
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Bytes held (capacity).
+    pub fn heap_bytes(&self) -> usize {
+        let l = &self.list;
+        (l.a.capacity() + l.b.capacity()) * 4
+            + (l.radius.capacity()
+                + l.tensile.capacity()
+                + l.shear.capacity()
+                + l.fn_.capacity()
+                + l.fs.capacity()
+                + l.moment.capacity())
+                * 8
+            + l.broken.capacity() * std::mem::size_of::<BrokenBond>()
+            + self.slots.capacity() * 8
+            + self.buf.capacity() * std::mem::size_of::<BondForce>()
+            + (self.first.capacity() + self.per_disc.capacity()) * 4
+    }
+}
+
+/// One bond between the discs in slots i (its a) and j (its b): update its
+/// forces `(F_n, F_s, M)` by the increments of the step (module docs) and
+/// return what it does to the two discs.
+#[inline(always)]
+fn bond_step(
+    p: &Particles,
+    i: usize,
+    j: usize,
+    law: &BondLaw,
+    (area, inertia): (f64, f64),
+    dt: f64,
+    (fn_, fs, m): (&mut f64, &mut f64, &mut f64),
+) -> BondForce {
+    let (n, d) = super::contact::normal_between(p.pos[i], p.pos[j]);
+    let t = n.perp();
+    let (ri, rj) = (p.radius[i], p.radius[j]);
+    let la = d * ri / (ri + rj);
+    let lb = d * rj / (ri + rj);
+    let dv = p.vel[i] - p.vel[j];
+    let (wi, wj) = (p.omega[i], p.omega[j]);
+    let vn = dv.dot(n);
+    let vt = dv.dot(t) + wi * la + wj * lb;
+    *fn_ += law.kn * area * vn * dt;
+    *fs -= law.ks * area * vt * dt;
+    *m -= law.kn * inertia * (wi - wj) * dt;
+    BondForce {
+        f: n * -*fn_ + t * *fs,
+        ma: la * *fs + *m,
+        mb: lb * *fs - *m,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn section_of_a_unit_strip() {
+        let (a, i) = section(0.5, 2.0);
+        assert_eq!(a, 2.0);
+        // ∫ y² dA over |y| ≤ R̄, thickness t: (2/3) R̄³ t
+        assert!((i - 2.0 / 3.0 * 0.125 * 2.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn scatter_is_seeded_by_the_pair_and_has_the_asked_spread() {
+        let law = BondLaw {
+            tensile: 10.0,
+            shear: ShearStrength::Fixed(20.0),
+            scatter: 0.1,
+            seed: 3,
+            ..Default::default()
+        };
+        assert_eq!(strengths(&law, 4, 9), strengths(&law, 4, 9));
+        assert_ne!(strengths(&law, 4, 9), strengths(&law, 4, 10));
+        let n = 20_000u32;
+        let s: Vec<f64> = (0..n).map(|k| strengths(&law, k, k + 1).0).collect();
+        let mean = s.iter().sum::<f64>() / n as f64;
+        let sd = (s.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+        assert!((mean - 10.0).abs() < 0.02, "{mean}");
+        assert!((sd - 1.0).abs() < 0.03, "{sd}");
+        assert!(s.iter().all(|&x| (7.0..=13.0).contains(&x)));
+    }
+}
