@@ -736,6 +736,8 @@ impl Decomposed {
             walls = tmp.walls;
         }
         GranularState {
+            // bonded assemblies are not decomposed
+            bonds: Default::default(),
             step: g.step,
             time: g.time,
             max_disp: g.max_disp,

@@ -282,6 +282,8 @@ impl Granular {
     pub fn with_discs(&self, particles: Particles) -> Granular {
         Granular {
             particles,
+            // bonded assemblies are not decomposed
+            bonds: Bonds::default(),
             walls: self.walls.clone(),
             materials: self.materials.clone(),
             laws: self.laws.clone(),

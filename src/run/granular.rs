@@ -24,7 +24,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
         eprintln!("warning: {w}");
         warnings.push(w);
     }
-    let cols = columns(&run, &model);
+    let cols = columns(&run, model.granular().is_some_and(|g| g.bonds.active()));
     let mut outputs = Outputs::open(&run, &model, &cols)?;
     let every = sc.output.every.max(1);
     let vtk_every = sc.output.vtk_every;
@@ -85,10 +85,10 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
 
 /// The history columns of a granular run: `step, t`, the probes, and
 /// [`BOND_COLUMNS`] with bonds.
-pub(super) fn columns<'a>(run: &'a Run, model: &Model) -> Vec<&'a str> {
+pub(super) fn columns<'a>(run: &'a Run, bonded: bool) -> Vec<&'a str> {
     let mut cols = vec!["step", "t"];
     cols.extend(run.probes.iter().map(|p| p.0.as_str()));
-    if model.granular().is_some_and(|g| g.bonds.active()) {
+    if bonded {
         cols.extend(BOND_COLUMNS);
     }
     cols

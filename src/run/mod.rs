@@ -128,6 +128,7 @@ pub enum RunError {
         step: usize,
         /// Steps of the whole preparation.
         steps: usize,
+    },
     /// The scenario cannot run on several ranks (exit code 2).
     #[error("{0}")]
     Ranks(String),

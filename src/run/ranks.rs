@@ -61,7 +61,7 @@ pub(super) fn run(
         g.prepare_contacts();
     }
     let steps = whole.steps;
-    let warnings: Vec<String> = granular(&whole).dt_warning().into_iter().collect();
+    let warnings: Vec<String> = granular(&whole).dt_warning(&[]).into_iter().collect();
     if root {
         warnings.iter().for_each(|w| eprintln!("warning: {w}"));
     }
@@ -133,7 +133,8 @@ fn drive(
     steps: usize,
 ) -> Result<(Ended, f64, usize), RunError> {
     let (sc, opts) = (run.sc, run.opts);
-    let cols = columns(run);
+    // bonded scenarios do not run on several ranks
+    let cols = columns(run, false);
     let mut row = vec![0.0; cols.len()];
     let opened = model
         .as_ref()
