@@ -96,7 +96,6 @@ impl CrackNodes {
 /// offset is far below any length the discretisation resolves.
 pub const FACE_OFFSET: f64 = 1e-6;
 
-
 impl PolygonMesh {
     /// Nodes and triangulation of `domain` at spacing `h`.
     pub fn new(domain: &Domain, h: f64) -> Result<PolygonMesh, String> {
@@ -997,9 +996,11 @@ fn finish(
         .iter()
         .flatten()
         .flat_map(|ids| ids.windows(2).map(|w| [vid(w[0]), vid(w[1])]))
-        .chain(cracks.iter().flat_map(|c| {
-            c.nodes.windows(2).map(|w| [vid(w[0][0]), vid(w[1][0])])
-        }))
+        .chain(
+            cracks
+                .iter()
+                .flat_map(|c| c.nodes.windows(2).map(|w| [vid(w[0][0]), vid(w[1][0])])),
+        )
         .collect();
     let tris = triangulate(&verts, &constraints, domain).map_err(|e| e.to_string())?;
     let triangles = tris

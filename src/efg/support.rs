@@ -292,10 +292,18 @@ impl Support {
             }
             // a tip turns back on its crack: prev = next = its neighbour
             if is_tip[0] {
-                tips.push(Corner { at: pts[0], prev: pts[1], next: pts[1] });
+                tips.push(Corner {
+                    at: pts[0],
+                    prev: pts[1],
+                    next: pts[1],
+                });
             }
             if is_tip[1] {
-                tips.push(Corner { at: pts[n - 1], prev: pts[n - 2], next: pts[n - 2] });
+                tips.push(Corner {
+                    at: pts[n - 1],
+                    prev: pts[n - 2],
+                    next: pts[n - 2],
+                });
             }
         }
         let boxed = |n: &[f64; 4], (a, b): (Vec2, Vec2)| {
@@ -307,9 +315,8 @@ impl Support {
         let mut crack_start = vec![0u32];
         let mut crack_items = Vec::new();
         for n in &self.node {
-            crack_items.extend(
-                (0..pieces.len() as u32).filter(|&i| boxed(n, pieces[i as usize].0)),
-            );
+            crack_items
+                .extend((0..pieces.len() as u32).filter(|&i| boxed(n, pieces[i as usize].0)));
             crack_start.push(crack_items.len() as u32);
         }
         let segments: Vec<(Vec2, Vec2)> = domain.segments().collect();
@@ -402,9 +409,9 @@ impl Support {
                 verts.extend(v.tips.iter().copied().filter(|t| {
                     t.at != xi
                         && (t.at - xi).norm() < reach
-                        && v.near_cracks(k)
-                            .iter()
-                            .any(|&i| v.cracks[i as usize].0.0 == t.at || v.cracks[i as usize].0.1 == t.at)
+                        && v.near_cracks(k).iter().any(|&i| {
+                            v.cracks[i as usize].0.0 == t.at || v.cracks[i as usize].0.1 == t.at
+                        })
                 }));
                 let geo = Self::geodesics(&v, k, xi, &verts, reach);
                 v.geo

@@ -153,7 +153,9 @@ impl Frames {
                 Dataset::Body(i) => {
                     write_body(model.body(i), self.nodal[i].0.as_ref(), self.format, &path)?
                 }
-                Dataset::BodyCracks(i) => crack_frame(model, i, &self.nodal[i].0, self.format, &path)?,
+                Dataset::BodyCracks(i) => {
+                    crack_frame(model, i, &self.nodal[i].0, self.format, &path)?
+                }
             }
             series.add(t, &f)?;
             written.push(path);
