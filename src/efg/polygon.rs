@@ -245,7 +245,6 @@ impl PolygonMesh {
                 node_spacing[next] = node_spacing[next].max(d);
             }
         }
-        let n_boundary = nodes.len();
         let crack_nodes = crack_face_nodes(
             &list,
             domain,
@@ -254,7 +253,6 @@ impl PolygonMesh {
             &mut node_spacing,
             &mut segments,
             &extra,
-            n_boundary,
         )?;
         // the levels, finest first: h_r·2^k below h, then h
         let finest = bands.iter().map(|r| r.spacing).fold(h, f64::min);
@@ -801,8 +799,8 @@ fn crack_face_nodes(
     node_spacing: &mut Vec<f64>,
     segments: &mut [Vec<Vec<At>>],
     extra: &[Vec2],
-    n_boundary: usize,
 ) -> Result<Vec<CrackNodes>, String> {
+    let n_boundary = nodes.len();
     let ends = crack::check(domain, cracks).map_err(|e| e.to_string())?;
     let mut out = Vec::with_capacity(cracks.len());
     for (c, ends) in cracks.iter().zip(ends) {
