@@ -120,9 +120,26 @@ def interrupt_after(seconds):
     return t, sent
 
 
-@pytest.mark.parametrize("call", ["run", "step"])
-def test_ctrl_c_interrupts_a_long_call_within_a_second(call):
-    m = efgdem.Model.from_dict(SETTLING)
+# The cantilever in time: a dynamic continuum model.
+VIBRATING = dict(
+    CANTILEVER,
+    simulation={"dt": 1.0e-4, "steps": 100000},
+    body=[
+        dict(
+            CANTILEVER["body"][0],
+            elastic={"E": 1.0e7, "nu": 0.3, "density": 1000.0},
+        )
+    ],
+)
+
+
+@pytest.mark.parametrize(
+    "call,scenario",
+    [("run", SETTLING), ("step", SETTLING), ("run", VIBRATING), ("step", VIBRATING)],
+    ids=["run-granular", "step-granular", "run-continuum", "step-continuum"],
+)
+def test_ctrl_c_interrupts_a_long_call_within_a_second(call, scenario):
+    m = efgdem.Model.from_dict(scenario)
     timer, sent = interrupt_after(0.5)
     with pytest.raises(KeyboardInterrupt):
         if call == "run":
