@@ -282,10 +282,17 @@ impl Run<'_> {
         let names: Vec<&str> = self.probes.iter().map(|p| p.0.as_str()).collect();
         let path = self.opts.out_dir.join("history.csv");
         let ext = crate::output::csv::extrema(&path, &names)?;
-        summary["probes"] = names
+        summary["probes"] = self
+            .probes
             .iter()
             .zip(ext)
-            .filter_map(|(n, e)| Some((n.to_string(), json!(e?))))
+            .filter_map(|((n, p), e)| {
+                let mut e = json!(e?);
+                if let Some(s) = p.sign() {
+                    e["sign"] = json!(s);
+                }
+                Some((n.clone(), e))
+            })
             .collect::<serde_json::Map<_, _>>()
             .into();
         if let (Some(b), Some(p)) = (&self.bed, build::preparation(self.sc)) {

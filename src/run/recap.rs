@@ -69,9 +69,13 @@ fn probes(s: &mut String, probes: &Value) {
             Some(t) => format!(" at t = {}", num(t)),
             None => String::new(),
         };
+        let sign = match e["sign"].as_str() {
+            Some(s) => format!("  ({s})"),
+            None => String::new(),
+        };
         let _ = writeln!(
             s,
-            "  {name:<w$}  {:>10};  min {}{},  max {}{}",
+            "  {name:<w$}  {:>10};  min {}{},  max {}{}{sign}",
             num(f(&e["final"])),
             num(f(&e["min"])),
             at("t_min"),
