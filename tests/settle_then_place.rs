@@ -479,3 +479,28 @@ fixed = true
     }
     std::fs::remove_dir_all(root).unwrap();
 }
+
+/// A cache that cannot be written loses the cache, not the preparation:
+/// the run goes on with the prepared bed and says so.
+#[test]
+fn a_cache_that_cannot_be_written_does_not_stop_the_run() {
+    let root = tmpdir("stp-cache-io");
+    // a file where the cache's directory would be
+    std::fs::write(root.join("blocker"), "not a directory").unwrap();
+    let file = root.join("bed.toml");
+    std::fs::write(&file, bed(EMBEDDED, true, Some("blocker/bed.csv"), 3, 2000)).unwrap();
+    let out = root.join("out");
+    let o = run_with(&file, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: the prepared packing could not be saved in its cache"),
+        "{err}"
+    );
+    let s = summary(&out);
+    assert!(s["preparation"]["cache_written"].is_null());
+    let why = s["preparation"]["cache_error"].as_str().unwrap();
+    assert!(why.contains("blocker/bed.csv"), "{why}");
+    assert_eq!(s["status"], "completed");
+    std::fs::remove_dir_all(root).unwrap();
+}

@@ -215,6 +215,11 @@ fn prepare_packing(sc: &Scenario, opts: &RunOptions) -> Result<Option<Bed>, RunE
     }
     match result {
         Ok(bed) => {
+            if let Some(e) = bed.as_ref().and_then(|b| b.cache_error.as_ref()) {
+                eprintln!(
+                    "warning: the prepared packing could not be saved in its cache ({e}); the run goes on with it"
+                );
+            }
             if let Some(b) = &bed
                 && !opts.quiet
             {
@@ -302,6 +307,7 @@ impl Run<'_> {
                 "discs": b.rows.len(),
                 "cache_read": b.read_from,
                 "cache_written": b.written_to,
+                "cache_error": b.cache_error,
             });
         }
         if !self.removed.is_empty() {
