@@ -64,16 +64,29 @@ pub enum RunError {
     /// The scenario is invalid or cannot be built (exit code 2).
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
-    /// Writing an output file failed.
-    #[error("i/o: {0}")]
-    Io(#[from] std::io::Error),
-    /// The output directory cannot be created or read.
-    #[error("output directory {}: {source}", path.display())]
+    /// Writing an output file failed (exit code 1); the message names the
+    /// file.
+    #[error("{0}")]
+    Io(std::io::Error),
+    /// The output directory cannot be created or read (exit code 1).
+    #[error("output directory {}: {error}", path.display())]
     OutDir {
         /// The directory.
         path: PathBuf,
-        /// What failed.
-        source: std::io::Error,
+        /// What failed (in the message, once).
+        error: std::io::Error,
+    },
+    /// Another run holds the output directory (exit code 2).
+    #[error(
+        "output directory {} is in use by another efgdem run{}; wait for it to end or choose another (-o)",
+        path.display(),
+        holder.map_or_else(String::new, |p| format!(" (process {p})"))
+    )]
+    Busy {
+        /// The directory.
+        path: PathBuf,
+        /// The process id the holder wrote in the lock file.
+        holder: Option<u32>,
     },
     /// The output directory holds files and `overwrite` was not given
     /// (exit code 2).
@@ -124,6 +137,34 @@ pub enum RunError {
     },
 }
 
+impl From<std::io::Error> for RunError {
+    fn from(e: std::io::Error) -> Self {
+        RunError::Io(e)
+    }
+}
+
+impl RunError {
+    /// The exit code of `efgdem run` for this error: 2 bad input or a
+    /// refused restart (the scenario, a checkpoint, a busy or non-empty
+    /// output directory, a state that does not fit), 1 an i/o failure, 3 a
+    /// numerical failure (an instability, a solve), 128 + signal a stop.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            RunError::Scenario(_)
+            | RunError::NotEmpty(_)
+            | RunError::Busy { .. }
+            | RunError::Restart { .. }
+            | RunError::Model(ModelError::State(_) | ModelError::Static | ModelError::Usage(_)) => {
+                2
+            }
+            RunError::Io(_) | RunError::OutDir { .. } => 1,
+            RunError::Model(_) => 3,
+            RunError::Interrupted { signal, .. }
+            | RunError::InterruptedPreparing { signal, .. } => 128 + (*signal as u8 & 0x7f),
+        }
+    }
+}
+
 impl From<crate::model::body::BodyError> for RunError {
     fn from(e: crate::model::body::BodyError) -> Self {
         RunError::Model(e.into())
@@ -142,12 +183,31 @@ impl From<crate::coupling::CouplingError> for RunError {
     }
 }
 
+/// The number of worker threads to start for `requested` (0: one per
+/// core): never more than the machine runs at once
+/// ([`std::thread::available_parallelism`]), since more only cost memory
+/// and time (results do not depend on it) and an absurd count would never
+/// finish starting. The note says when the count was lowered.
+pub fn worker_threads(requested: usize) -> (usize, Option<String>) {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    match requested {
+        0 => (cores, None),
+        n if n <= cores => (n, None),
+        n => (
+            cores,
+            Some(format!(
+                "{n} threads asked for; this machine runs {cores} at once: using {cores} (results do not depend on it)"
+            )),
+        ),
+    }
+}
+
 /// Build `sc` and run it, writing `summary.json`, `history.csv` and frames
 /// into `opts.out_dir`. Returns the summary that was written. A generated
 /// packing's preparation (deposit, growth) is shown with its step count
 /// and ETA, and stopped by a stop request.
 pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
-    session::prepare_out_dir(opts)?;
+    let _held = session::prepare_out_dir(opts)?;
     let t0 = Instant::now();
     let bed = prepare_packing(sc, opts)?;
     let spin = progress::spinner("building the model", opts.quiet);
@@ -170,6 +230,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
         .map_or(build::BuildFor::Run, |b| build::BuildFor::Prepared(&b.rows));
     let removed = build::removed_discs(sc, purpose).map_err(|p| sc.located(vec![p]))?;
     let probes = sc.probes(&model)?;
+    let last_step = std::cell::Cell::new(model.step);
     let run = Run {
         sc,
         opts,
@@ -178,12 +239,24 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
         restart,
         bed,
         removed,
+        last_step: &last_step,
     };
-    match model.system {
+    let result = match model.system {
         System::Continuum { .. } => continuum::run(run, model),
         System::Granular(_) => granular::run(run, model),
         System::Coupled(_) => coupled::run(run, model),
+    };
+    if let Err(e @ (RunError::Io(_) | RunError::OutDir { .. })) = &result {
+        // say so in summary.json if the disk still takes it; the files
+        // already written are whole (history.csv cut back to its last row)
+        let summary = serde_json::json!({
+            "status": "failed",
+            "error": e.to_string(),
+            "last_step": last_step.get(),
+        });
+        let _ = crate::output::write_json(&opts.out_dir.join("summary.json"), &summary);
     }
+    result
 }
 
 /// The scenario's packing preparation, if any: read from its cache, or
@@ -277,6 +350,8 @@ struct Run<'a> {
     bed: Option<Bed>,
     /// Discs removed for each body with `overlapping_discs = "remove"`.
     removed: Vec<(String, usize)>,
+    /// The last step taken (for the summary of a run that fails).
+    last_step: &'a std::cell::Cell<usize>,
 }
 
 impl Run<'_> {
@@ -374,9 +449,9 @@ pub fn check(sc: &Scenario) -> Result<String, RunError> {
             )),
         }
     }
-    let machine = build::machine_memory().map_or_else(|| "unknown".to_string(), build::human_bytes);
+    let limit = build::memory_limit().map_or_else(|| "unknown".to_string(), |(_, what)| what);
     s.push_str(&format!(
-        "memory: {} (estimate; machine: {machine})",
+        "memory: {} (estimate; {limit})",
         build::memory_estimate(sc)
     ));
     Ok(s)

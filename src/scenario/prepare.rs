@@ -237,8 +237,8 @@ fn read_cache(sc: &Scenario, path: Option<&Path>) -> Result<Option<Vec<DiscRow>>
             ),
         )
     };
-    let text =
-        std::fs::read_to_string(path).map_err(|e| refuse(format!("cannot read it ({e})")))?;
+    let text = super::read_text(path, super::MAX_CSV_BYTES)
+        .map_err(|e| refuse(format!("cannot read it ({e})")))?;
     if !text.starts_with(HEADER) {
         return Err(refuse("not a packing efgdem prepared".into()));
     }
