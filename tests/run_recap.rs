@@ -117,6 +117,8 @@ fn a_coupled_run_ends_with_its_probes_energy_and_files_on_stdout() {
     for f in ["history.csv", "summary.json", "beam.pvd", "discs.pvd"] {
         assert!(files.contains(f), "{f}: {files}");
     }
+    // only what a user looks at: no lock, no temporary file
+    assert!(!files.contains(" .") && !files.contains(".tmp"), "{files}");
     assert!(
         stdout.contains(&format!("efgdem view {}", out.display())),
         "{stdout}"

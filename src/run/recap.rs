@@ -152,7 +152,8 @@ fn files(s: &mut String, out: &Path) {
     let mut names: Vec<String> = dir
         .filter_map(Result::ok)
         .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| !n.ends_with(".tmp") && n != "frames")
+        // not the frames' folder, temporary or hidden files (the lock)
+        .filter(|n| !n.ends_with(".tmp") && !n.starts_with('.') && n != "frames")
         .collect();
     names.sort();
     let _ = writeln!(s, "files in {}: {}", out.display(), names.join(", "));
