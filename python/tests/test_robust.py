@@ -93,10 +93,15 @@ def test_a_dict_nested_30000_deep_raises():
 
 def test_a_table_given_as_an_array_is_refused():
     d = dict(CANTILEVER)
-    d["body"] = [dict(CANTILEVER["body"][0], rectangle=[[0.1, 0.1], [0.3, 0.2]])]
+    d["body"] = [dict(CANTILEVER["body"][0], elastic=[3.0e7, 0.3])]
     with pytest.raises(efgdem.ScenarioError) as e:
         efgdem.Model.from_dict(d)
-    assert "body[0].rectangle: invalid type: sequence, expected a table" in str(e.value)
+    assert "body[0].elastic: invalid type: sequence, expected a table" in str(e.value)
+    # a rectangle's corners are its second form; a pair that is not the
+    # corners (an origin and a size) is refused
+    d["body"] = [dict(CANTILEVER["body"][0], rectangle=[[0.1, 0.1], [0.3, 0.05]])]
+    with pytest.raises(efgdem.ScenarioError, match="lower-left and upper-right corners"):
+        efgdem.Model.from_dict(d)
 
 
 def test_run_to_a_non_finite_time_raises():
