@@ -396,8 +396,6 @@ struct Run<'a> {
     bed: Option<Bed>,
     /// Discs removed for each body with `overlapping_discs = "remove"`.
     removed: Vec<(String, usize)>,
-    /// The last step taken (for the summary of a run that fails).
-    last_step: &'a std::cell::Cell<usize>,
 }
 
 impl Run<'_> {
