@@ -3,8 +3,8 @@
 //!
 //! Serde's derived `Deserialize` also accepts a struct's fields in order
 //! as an array, and the TOML reader offers arrays that way, so
-//! `rectangle = [[0.1, 0.1], [0.3, 0.2]]` would silently be read as
-//! `{ origin = [0.1, 0.1], size = [0.3, 0.2] }`. [`Strict`] wraps a
+//! `elastic = [3.0e7, 0.3]` would silently be read as
+//! `{ E = 3.0e7, nu = 0.3 }`. [`Strict`] wraps a
 //! deserializer so that every struct below it refuses an array ("invalid
 //! type: sequence, expected a table"); [`table`] does the same for the
 //! struct variants of untagged enums (which serde replays from a buffer

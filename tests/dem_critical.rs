@@ -25,7 +25,9 @@ cohesion = 1.0e9
 const DAMPING: &str = r#"damping = { kind = "critical-ratio", zeta = 0.2, zeta_shear = 0.1 }"#;
 
 /// Two discs (r = 1 cm) side by side on a floor under gravity, just
-/// touching.
+/// touching, between two walls 0.5 mm away (the kicked pair would
+/// otherwise roll off the floor's end and fall, which the per-step check
+/// rightly stops after a few hundred seconds).
 fn pair(dt: &str) -> String {
     format!(
         r#"[simulation]
@@ -42,6 +44,16 @@ discs = [[0.0, 0.01, 0.01], [0.01999, 0.01, 0.01]]
 name = "floor"
 from = [-1.0, 0.0]
 to = [1.0, 0.0]
+
+[[wall]]
+name = "left"
+from = [-0.0105, 0.0]
+to = [-0.0105, 0.1]
+
+[[wall]]
+name = "right"
+from = [0.0305, 0.0]
+to = [0.0305, 0.1]
 "#
     )
 }

@@ -1670,18 +1670,21 @@ quantity = "uy"
 }
 
 /// Any table could be written as a positional array: `rectangle = [[0.1,
-/// 0.1], [0.3, 0.2]]` on a body was read as origin and size.
+/// 0.1], [0.3, 0.2]]` on a body was read as origin and size. A rectangle
+/// is now read as its corners (its second form), and corners that are
+/// not lower-left, upper-right are refused; every other table refuses an
+/// array.
 #[test]
 fn regression_tables_given_as_arrays_are_refused_with_their_field() {
     let e = refused(
         "rect.toml",
         &cantilever("48.0, 12.0", "parabolic_shear = -1000.0").replace(
             "rectangle = { origin = [0.0, -6.0], size = [48.0, 12.0] }",
-            "rectangle = [[0.1, 0.1], [0.3, 0.2]]",
+            "rectangle = [[0.1, 0.1], [0.3, 0.05]]",
         ),
     );
     assert!(
-        e.starts_with("rect.toml:5: body[0].rectangle: invalid type: sequence, expected a table"),
+        e.starts_with("rect.toml:5: body[0].rectangle: the corners [[x0, y0], [x1, y1]] of a rectangle are its lower-left and upper-right corners"),
         "{e}"
     );
     let e = refused(

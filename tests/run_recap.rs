@@ -117,6 +117,8 @@ fn a_coupled_run_ends_with_its_probes_energy_and_files_on_stdout() {
     for f in ["history.csv", "summary.json", "beam.pvd", "discs.pvd"] {
         assert!(files.contains(f), "{f}: {files}");
     }
+    // only what a user looks at: no lock, no temporary file
+    assert!(!files.contains(" .") && !files.contains(".tmp"), "{files}");
     assert!(
         stdout.contains(&format!("efgdem view {}", out.display())),
         "{stdout}"
@@ -189,5 +191,108 @@ fn a_granular_run_ends_with_the_discs_energies() {
         .unwrap();
     assert!(close(after(y1, "max "), 0.1), "{y1}");
     assert!(after(y1, "min ") < 0.1, "{y1}");
+    std::fs::remove_dir_all(root).unwrap();
+}
+
+/// Timoshenko's cantilever (examples/timoshenko.toml), bent down by its
+/// tip load: the top fibre at the root is in tension, σ_xx = P L c / I =
+/// 1000 · 48 · 6 / 144 = 2000 Pa. The summary says which way a stress
+/// counts, next to its value.
+#[test]
+fn a_stress_probe_says_its_sign_convention() {
+    let root = tmpdir("recap-sign");
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/timoshenko.toml");
+    let out = root.join("out");
+    let o = bin()
+        .args(["run", example, "-q", "-o", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&out);
+    let top = &s["probes"]["sxx_root_top"];
+    assert_eq!(top["sign"], "tension positive");
+    let v = top["final"].as_f64().unwrap();
+    assert!((v - 2000.0).abs() < 0.05 * 2000.0, "{v}");
+    let line = stdout.lines().find(|l| l.contains("sxx_root_top")).unwrap();
+    assert!(line.ends_with("(tension positive)"), "{line}");
+    // a displacement has no sign convention to state
+    assert!(s["probes"]["tip_uy"].get("sign").is_none());
+    std::fs::remove_dir_all(root).unwrap();
+}
+
+/// Discs pressing on a floor: the `[[measure]]` stress and the wall's
+/// stress are compression positive, and > 0.
+#[test]
+fn granular_stresses_are_compression_positive() {
+    let root = tmpdir("recap-cpos");
+    let file = root.join("bed.toml");
+    std::fs::write(
+        &file,
+        r#"
+[simulation]
+steps = 3000
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "m"
+density = 2650.0
+kn = 1.0e6
+ks = 5.0e5
+friction = 0.5
+
+[granular]
+material = "m"
+discs = { generate = "hex", box = [[0.0, 0.0], [0.1, 0.05]], radius = 0.004 }
+damping = { kind = "critical-ratio", zeta = 0.5 }
+
+[[wall]]
+name = "floor"
+from = [0.0, 0.0]
+to = [0.1, 0.0]
+
+[[wall]]
+name = "left"
+from = [0.0, 0.0]
+to = [0.0, 0.1]
+
+[[wall]]
+name = "right"
+from = [0.1, 0.0]
+to = [0.1, 0.1]
+
+[[probe]]
+name = "floor_s"
+wall = "floor"
+quantity = "wall_stress"
+
+[[measure]]
+name = "bed"
+rectangle = [[0.0, 0.0], [0.1, 0.05]]
+quantities = ["syy_cpos", "porosity"]
+"#,
+    )
+    .unwrap();
+    let out = root.join("out");
+    let o = bin()
+        .args([
+            "run",
+            file.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let p = &summary(&out)["probes"];
+    for name in ["floor_s", "bed_syy_cpos"] {
+        assert_eq!(p[name]["sign"], "compression positive", "{name}");
+        assert!(p[name]["final"].as_f64().unwrap() > 0.0, "{name}: {p}");
+        let line = stdout.lines().find(|l| l.contains(name)).unwrap();
+        assert!(line.ends_with("(compression positive)"), "{line}");
+    }
+    assert!(p["bed_porosity"].get("sign").is_none());
     std::fs::remove_dir_all(root).unwrap();
 }

@@ -418,3 +418,89 @@ fn the_refusal_the_page_shows_is_what_check_says() {
     assert_eq!(said, shown);
     std::fs::remove_dir_all(root).unwrap();
 }
+
+/// A polygon body (a culvert with a circular opening) in a growth's box
+/// is refused at its `outline`; partly in the box too; above it, not.
+#[test]
+fn a_polygon_body_in_a_growth_is_refused_at_its_outline() {
+    let root = tmpdir("stp-polygon");
+    let scenario = |y0: f64| {
+        let y1 = y0 + 0.1;
+        format!(
+            r#"
+[simulation]
+dt = 1.0e-5
+steps = 10
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "sand"
+density = 2650.0
+kn = 5.0e7
+
+[granular]
+material = "sand"
+discs = {{ generate = "random", method = "grow", box = [[0.0, 0.0], [0.3, 0.2]], radius = [0.003, 0.004], count = 300 }}
+
+[[body]]
+name = "culvert"
+outline = [[0.1, {y0}], [0.2, {y0}], [0.2, {y1}], [0.1, {y1}]]
+holes = [{{ centre = [0.15, {yc}], radius = 0.03 }}]
+spacing = 0.01
+elastic = {{ E = 30.0e9, nu = 0.2, density = 2400.0 }}
+
+[[body.bc]]
+edge = "outline"
+fixed = true
+"#,
+            yc = y0 + 0.05
+        )
+    };
+    let file = root.join("culvert.toml");
+    for (y0, refused) in [(0.05, true), (0.15, true), (0.25, false)] {
+        let text = scenario(y0);
+        let line = text.lines().position(|l| l.starts_with("outline")).unwrap() + 1;
+        std::fs::write(&file, text).unwrap();
+        let o = bin()
+            .args(["check", file.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        match refused {
+            true => {
+                assert_eq!(o.status.code(), Some(2), "{y0}: {err}");
+                assert!(
+                    err.contains(&format!("culvert.toml:{line}: body[0].outline: body `culvert` lies where discs will be: the radius growth")),
+                    "{y0}: {err}"
+                );
+            }
+            false => assert!(o.status.success(), "{y0}: {err}"),
+        }
+    }
+    std::fs::remove_dir_all(root).unwrap();
+}
+
+/// A cache that cannot be written loses the cache, not the preparation:
+/// the run goes on with the prepared bed and says so.
+#[test]
+fn a_cache_that_cannot_be_written_does_not_stop_the_run() {
+    let root = tmpdir("stp-cache-io");
+    // a file where the cache's directory would be
+    std::fs::write(root.join("blocker"), "not a directory").unwrap();
+    let file = root.join("bed.toml");
+    std::fs::write(&file, bed(EMBEDDED, true, Some("blocker/bed.csv"), 3, 2000)).unwrap();
+    let out = root.join("out");
+    let o = run_with(&file, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: the prepared packing could not be saved in its cache"),
+        "{err}"
+    );
+    let s = summary(&out);
+    assert!(s["preparation"]["cache_written"].is_null());
+    let why = s["preparation"]["cache_error"].as_str().unwrap();
+    assert!(why.contains("blocker/bed.csv"), "{why}");
+    assert_eq!(s["status"], "completed");
+    std::fs::remove_dir_all(root).unwrap();
+}

@@ -93,10 +93,15 @@ def test_a_dict_nested_30000_deep_raises():
 
 def test_a_table_given_as_an_array_is_refused():
     d = dict(CANTILEVER)
-    d["body"] = [dict(CANTILEVER["body"][0], rectangle=[[0.1, 0.1], [0.3, 0.2]])]
+    d["body"] = [dict(CANTILEVER["body"][0], elastic=[3.0e7, 0.3])]
     with pytest.raises(efgdem.ScenarioError) as e:
         efgdem.Model.from_dict(d)
-    assert "body[0].rectangle: invalid type: sequence, expected a table" in str(e.value)
+    assert "body[0].elastic: invalid type: sequence, expected a table" in str(e.value)
+    # a rectangle's corners are its second form; a pair that is not the
+    # corners (an origin and a size) is refused
+    d["body"] = [dict(CANTILEVER["body"][0], rectangle=[[0.1, 0.1], [0.3, 0.05]])]
+    with pytest.raises(efgdem.ScenarioError, match="lower-left and upper-right corners"):
+        efgdem.Model.from_dict(d)
 
 
 def test_run_to_a_non_finite_time_raises():
@@ -120,9 +125,26 @@ def interrupt_after(seconds):
     return t, sent
 
 
-@pytest.mark.parametrize("call", ["run", "step"])
-def test_ctrl_c_interrupts_a_long_call_within_a_second(call):
-    m = efgdem.Model.from_dict(SETTLING)
+# The cantilever in time: a dynamic continuum model.
+VIBRATING = dict(
+    CANTILEVER,
+    simulation={"dt": 1.0e-4, "steps": 100000},
+    body=[
+        dict(
+            CANTILEVER["body"][0],
+            elastic={"E": 1.0e7, "nu": 0.3, "density": 1000.0},
+        )
+    ],
+)
+
+
+@pytest.mark.parametrize(
+    "call,scenario",
+    [("run", SETTLING), ("step", SETTLING), ("run", VIBRATING), ("step", VIBRATING)],
+    ids=["run-granular", "step-granular", "run-continuum", "step-continuum"],
+)
+def test_ctrl_c_interrupts_a_long_call_within_a_second(call, scenario):
+    m = efgdem.Model.from_dict(scenario)
     timer, sent = interrupt_after(0.5)
     with pytest.raises(KeyboardInterrupt):
         if call == "run":

@@ -352,7 +352,7 @@ impl PolygonMesh {
 
     /// Gauss points of the triangles: Dunavant's degree-5 rule on each
     /// triangle split into `sub²` sub-triangles (a sliver along a boundary
-    /// finer than the nodes: one point, [`sliver`](Self::sliver)).
+    /// finer than the nodes: one point, see `sliver`).
     ///
     /// A refined mesh splits each triangle into `(sub · k)²`, with
     /// `k = ⌈ℓ / (c · h_min)⌉`, `ℓ` the triangle's longest side and `h_min`

@@ -480,39 +480,67 @@ impl Support {
         Self::blocked(v, k, xi, p)
     }
 
-    /// Is the straight path `a → b` blocked by a boundary segment near
-    /// node `k`?
+    /// Is the straight path `a → b` blocked by a boundary segment or a
+    /// crack near node `k`? A short list of segments near the node is scanned; a long
+    /// one (a dense boundary) is searched along the path in the domain's
+    /// index. Both test the same segments, exactly.
     #[inline]
     fn blocked(v: &Visibility, k: usize, a: Vec2, b: Vec2) -> bool {
-        use crate::geom::polygon::{on_segment, properly_cross};
-        // the segments near the path, from the domain's index, that are
-        // near node k (its sorted list)
+        use crate::geom::polygon::on_segment;
+        use crate::geom::segment_index::Segment;
+        /// Above this many segments near a node, the index is searched.
+        const SCAN_UP_TO: usize = 64;
         let near = v.near(k);
-        let index = v.domain.index();
-        let mine = |s: &crate::geom::segment_index::Segment| {
-            near.binary_search(&((v.first[s.lp] + s.seg) as u32))
-                .is_ok()
-        };
-        if index
-            .along(a, b)
-            .any(|s| properly_cross(a, b, s.a, s.b) && mine(s))
-        {
-            return true;
-        }
         // the cracks near node k: crossed, or passed through an opaque point
         let through = |p: Vec2| p != a && p != b && on_segment(a, b, p);
         if v.near_cracks(k).iter().any(|&i| {
             let ((c, d), [oc, od]) = v.cracks[i as usize];
-            properly_cross(a, b, c, d) || (oc && through(c)) || (od && through(d))
+            crate::geom::polygon::properly_cross(a, b, c, d)
+                || (oc && through(c))
+                || (od && through(d))
         }) {
             return true;
         }
-        // both ends on the boundary: the ray may run outside Ω
-        let on = |p: Vec2| {
-            index
-                .in_box(p, p)
-                .any(|s| on_segment(s.a, s.b, p) && mine(s))
+        if near.len() <= SCAN_UP_TO {
+            let segs = || near.iter().map(|&s| v.segments[s as usize]);
+            return Self::blocked_by(v, a, b, segs(), |p| {
+                segs().any(|(c, d)| on_segment(c, d, p))
+            });
+        }
+        let index = v.domain.index();
+        // near node k: in its sorted list
+        let mine = |s: &&Segment| {
+            near.binary_search(&((v.first[s.lp] + s.seg) as u32))
+                .is_ok()
         };
+        Self::blocked_by(
+            v,
+            a,
+            b,
+            index.along(a, b).filter(mine).map(|s| (s.a, s.b)),
+            |p| {
+                index
+                    .in_box(p, p)
+                    .filter(mine)
+                    .any(|s| on_segment(s.a, s.b, p))
+            },
+        )
+    }
+
+    /// Is `a → b` blocked: does it cross one of `segments` (those that may
+    /// cross it) properly, or, with both ends on the boundary (`on`), run
+    /// outside Ω?
+    fn blocked_by(
+        v: &Visibility,
+        a: Vec2,
+        b: Vec2,
+        mut segments: impl Iterator<Item = (Vec2, Vec2)>,
+        on: impl Fn(Vec2) -> bool,
+    ) -> bool {
+        if segments.any(|(c, d)| crate::geom::polygon::properly_cross(a, b, c, d)) {
+            return true;
+        }
+        // both ends on the boundary: the ray may run outside Ω
         if on(a) && on(b) {
             let m = (a + b) * 0.5;
             let tol = 1e-9 * (b - a).norm();

@@ -118,6 +118,28 @@ pub enum Probe {
     },
 }
 
+impl Probe {
+    /// The sign convention of a stress probe, for the summary: a body's
+    /// stress is tension positive (continuum convention), the discs'
+    /// (`[[measure]]`) and a wall's compression positive.
+    pub fn sign(&self) -> Option<&'static str> {
+        use measure::Quantity as Q;
+        match self {
+            Probe::BodyPoint { field, .. } if matches!(field.as_str(), "sxx" | "syy" | "sxy") => {
+                Some("tension positive")
+            }
+            Probe::Measure {
+                quantity: Q::Sxx | Q::Syy | Q::Sxy,
+                ..
+            } => Some("compression positive"),
+            Probe::Wall { quantity, .. } if quantity == "wall_stress" => {
+                Some("compression positive")
+            }
+            _ => None,
+        }
+    }
+}
+
 /// The last [`measure::contacts`] of a region with a key of the state it
 /// was taken from: the columns of one `[[measure]]` read one pass over the
 /// contacts instead of one each. The key mixes the step count, the time,

@@ -106,8 +106,10 @@ impl Checkpoint {
         };
         let (version, body) = body.split_at_checked(4).unwrap_or((&[], &[]));
         if version != VERSION.to_le_bytes() {
+            let v = <[u8; 4]>::try_from(version)
+                .map_or_else(|_| "?".into(), |v| u32::from_le_bytes(v).to_string());
             return Err(bad(format!(
-                "checkpoint format {version:?} is not this efgdem's ({VERSION})"
+                "checkpoint format {v} is not this efgdem's ({VERSION}), or the file is damaged; run the scenario afresh"
             )));
         }
         let Some((body, crc)) = body.split_last_chunk::<4>() else {

@@ -181,12 +181,13 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     out.hist.flush()?;
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let mut extrema = serde_json::Map::new();
-    for ((name, _), [min, max, last]) in probes.iter().zip(&ext) {
+    for ((name, probe), [min, max, last]) in probes.iter().zip(&ext) {
         summary[name.as_str()] = json!(last);
-        extrema.insert(
-            name.clone(),
-            json!({ "min": min, "max": max, "final": last }),
-        );
+        let mut e = json!({ "min": min, "max": max, "final": last });
+        if let Some(s) = probe.sign() {
+            e["sign"] = json!(s);
+        }
+        extrema.insert(name.clone(), e);
     }
     summary["probes"] = Value::Object(extrema);
     let System::Continuum { bodies, .. } = &model.system else {

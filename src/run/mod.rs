@@ -325,6 +325,11 @@ fn prepare_packing(sc: &Scenario, opts: &RunOptions, quiet: bool) -> Result<Opti
     }
     match result {
         Ok(bed) => {
+            if let Some(e) = bed.as_ref().and_then(|b| b.cache_error.as_ref()) {
+                eprintln!(
+                    "warning: the prepared packing could not be saved in its cache ({e}); the run goes on with it"
+                );
+            }
             if let Some(b) = &bed
                 && !quiet
             {
@@ -394,10 +399,17 @@ impl Run<'_> {
         let names: Vec<&str> = self.probes.iter().map(|p| p.0.as_str()).collect();
         let path = self.opts.out_dir.join("history.csv");
         let ext = crate::output::csv::extrema(&path, &names)?;
-        summary["probes"] = names
+        summary["probes"] = self
+            .probes
             .iter()
             .zip(ext)
-            .filter_map(|(n, e)| Some((n.to_string(), json!(e?))))
+            .filter_map(|((n, p), e)| {
+                let mut e = json!(e?);
+                if let Some(s) = p.sign() {
+                    e["sign"] = json!(s);
+                }
+                Some((n.clone(), e))
+            })
             .collect::<serde_json::Map<_, _>>()
             .into();
         if let (Some(b), Some(p)) = (&self.bed, build::preparation(self.sc)) {
@@ -407,6 +419,7 @@ impl Run<'_> {
                 "discs": b.rows.len(),
                 "cache_read": b.read_from,
                 "cache_written": b.written_to,
+                "cache_error": b.cache_error,
             });
         }
         if !self.removed.is_empty() {

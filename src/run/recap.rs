@@ -69,9 +69,13 @@ fn probes(s: &mut String, probes: &Value) {
             Some(t) => format!(" at t = {}", num(t)),
             None => String::new(),
         };
+        let sign = match e["sign"].as_str() {
+            Some(s) => format!("  ({s})"),
+            None => String::new(),
+        };
         let _ = writeln!(
             s,
-            "  {name:<w$}  {:>10};  min {}{},  max {}{}",
+            "  {name:<w$}  {:>10};  min {}{},  max {}{}{sign}",
             num(f(&e["final"])),
             num(f(&e["min"])),
             at("t_min"),
@@ -148,7 +152,8 @@ fn files(s: &mut String, out: &Path) {
     let mut names: Vec<String> = dir
         .filter_map(Result::ok)
         .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| !n.ends_with(".tmp") && n != "frames")
+        // not the frames' folder, temporary or hidden files (the lock)
+        .filter(|n| !n.ends_with(".tmp") && !n.starts_with('.') && n != "frames")
         .collect();
     names.sort();
     let _ = writeln!(s, "files in {}: {}", out.display(), names.join(", "));

@@ -170,8 +170,8 @@ pub fn check_bodies(sc: &Scenario, rows: &[DiscRow]) -> Result<(), Invalid> {
         if body.overlapping_discs == OverlappingDiscs::Remove {
             continue;
         }
-        let inside = area_inside(body, &region);
-        if inside > 1e-9 * (body.rectangle.size[0] * body.rectangle.size[1]) {
+        let own: f64 = loops(body).iter().map(|l| 0.5 * signed_area2(l)).sum();
+        if area_inside(body, &region) > 1e-9 * own {
             let field = if body.is_polygon() {
                 "outline"
             } else {

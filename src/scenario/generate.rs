@@ -2,7 +2,11 @@
 //! are `x,y,r[,material]`; a header line naming its columns (`x`, `y`, `r`,
 //! and optionally `material` and `id`, in any order, as `discs_final.csv`
 //! writes `x,y,r,id`) is read by name. An `id` column must number the rows
-//! 1, 2, 3, … in order: disc numbers are row numbers.
+//! 1, 2, 3, … in order: disc numbers are row numbers. Every data line has
+//! the same number of fields (the header's, else the first line's; a row
+//! without a material leaves the field empty: `0.1,0.2,0.01,`), and the
+//! text ends with a line end: a file cut short (half a row, a disc of the
+//! wrong size) is refused, not read.
 
 use crate::dem::packing::DiscRow;
 use crate::geom::Vec2;
@@ -20,9 +24,9 @@ pub fn discs_from_csv(text: &str) -> Result<Vec<DiscRow>, String> {
     let mut out = Vec::new();
     // the position of x, y, r, material, id in a row
     let mut cols: [Option<usize>; 5] = [Some(0), Some(1), Some(2), Some(3), None];
-    let mut width = 3..=4;
-    // the number of fields every line has, and where it comes from
-    let mut same: Option<(usize, &str)> = None;
+    let mut named = false;
+    // the number of fields, and where it comes from
+    let mut width: Option<(usize, &str)> = None;
     for (k, line) in text.lines().enumerate() {
         let l = line.trim();
         if l.is_empty() || l.starts_with('#') {
@@ -30,27 +34,21 @@ pub fn discs_from_csv(text: &str) -> Result<Vec<DiscRow>, String> {
         }
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
         if out.is_empty() && f[0].parse::<f64>().is_err() && k == first_data_line(text) {
-            same = Some((f.len(), "header"));
             // `x,y,r` (or `x,y,r,material`) is the positional layout
-            if let Some(named) = header(&f, k)?.filter(|n| n[..3] != cols[..3] || n[4].is_some()) {
-                cols = named;
-                width = f.len()..=f.len();
+            if let Some(n) = header(&f, k)?.filter(|n| n[..3] != cols[..3] || n[4].is_some()) {
+                (cols, named) = (n, true);
             }
+            width = Some((f.len(), "header"));
             continue;
         }
-        if !width.contains(&f.len()) {
-            let what = if cols[4].is_some() || width != (3..=4) {
-                format!("{} fields (as the header)", width.start())
-            } else {
-                "x,y,r[,material]".to_string()
-            };
+        if !named && !(3..=4).contains(&f.len()) {
             return Err(format!(
-                "line {}: expected {what}, got {} fields",
+                "line {}: expected x,y,r[,material], got {} fields",
                 k + 1,
                 f.len()
             ));
         }
-        let (want, from) = *same.get_or_insert((f.len(), "first line"));
+        let (want, from) = *width.get_or_insert((f.len(), "first line"));
         if f.len() != want {
             return Err(format!(
                 "line {}: {} fields where the {from} has {want} (every line has the same fields; leave a material empty rather than out)",
@@ -178,7 +176,7 @@ mod tests {
         let e = discs_from_csv("x,y,r,q\n0,0,1,1\n").unwrap_err();
         assert!(e.contains("unknown column `q`"), "{e}");
         let e = discs_from_csv("x,y,r,id\n0,0,1\n").unwrap_err();
-        assert!(e.contains("expected 4 fields"), "{e}");
+        assert!(e.contains("3 fields where the header has 4"), "{e}");
         // another header is skipped, as before
         assert_eq!(
             discs_from_csv("X [m],Y [m],R [m]\n0,0,1\n").unwrap().len(),

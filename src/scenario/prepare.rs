@@ -30,6 +30,9 @@ pub struct Bed {
     pub read_from: Option<PathBuf>,
     /// The cache file it was written to.
     pub written_to: Option<PathBuf>,
+    /// Why the cache file could not be written (the bed is still good:
+    /// the run goes on with it).
+    pub cache_error: Option<String>,
 }
 
 /// Why a preparation did not give a packing.
@@ -77,6 +80,7 @@ pub fn prepare(sc: &Scenario, watch: Watch) -> Result<Option<Bed>, PrepareError>
             rows,
             read_from: cache,
             written_to: None,
+            cache_error: None,
         }));
     }
     let loose = loose_rows(sc, t)?;
@@ -108,14 +112,19 @@ pub fn prepare(sc: &Scenario, watch: Watch) -> Result<Option<Bed>, PrepareError>
         },
         e => PrepareError::Invalid(bad("granular.discs", e)),
     })?;
-    if let Some(path) = &cache {
-        write_cache(sc, path, &rows)
-            .map_err(|e| bad("granular.discs.cache", format!("{}: {e}", path.display())))?;
-    }
+    // a cache that cannot be written loses nothing but the cache
+    let (written_to, cache_error) = match cache {
+        Some(path) => match write_cache(sc, &path, &rows) {
+            Ok(()) => (Some(path), None),
+            Err(e) => (None, Some(format!("{}: {e}", path.display()))),
+        },
+        None => (None, None),
+    };
     Ok(Some(Bed {
         rows,
         read_from: None,
-        written_to: cache,
+        written_to,
+        cache_error,
     }))
 }
 
