@@ -6,6 +6,7 @@
 //! | discs | `discs.pvd` | `frames/discs_NNNNNNN.vtp` |
 //! | contacts of every kind | `contacts.pvd` | `frames/contacts_NNNNNNN.vtp` |
 //! | walls (if any) | `walls.pvd` | `frames/walls_NNNNNNN.vtp` |
+//! | broken parallel bonds (with `[bonds]`) | `cracks.pvd` | `frames/cracks_NNNNNNN.vtp` |
 //! | each body | `<body>.pvd` | `frames/<body>_NNNNNNN.vtu` |
 //! | the cracks of each EFG body with cracks | `<body>_cracks.pvd` | `frames/<body>_cracks_NNNNNNN.vtp` |
 //!
