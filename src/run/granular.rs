@@ -29,18 +29,8 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
     let every = sc.output.every.max(1);
     let vtk_every = sc.output.vtk_every;
     let mut row = vec![0.0; cols.len()];
-    let record = |model: &Model, row: &mut Vec<f64>, out: &mut Outputs| {
-        row[0] = model.step as f64;
-        row[1] = model.time();
-        for (k, (_, s)) in run.probes.iter().enumerate() {
-            row[2 + k] = model.probe(s);
-        }
-        if bonded {
-            let n = row.len() - BOND_COLUMNS.len();
-            row[n..].copy_from_slice(&bond_row(granular(model)));
-        }
-        out.hist.row(row)
-    };
+    let record =
+        |model: &Model, row: &mut Vec<f64>, out: &mut Outputs| record(&run, model, row, out);
     if run.restart.is_none() {
         // the contact list of the start state (for probes and the first frame)
         if let System::Granular(g) = &mut model.system {
@@ -83,7 +73,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
     if !matches!(ended, Ended::Unstable(_) | Ended::Failed(_)) {
         write_discs_csv(gr, &out.join("discs_final.csv"))?;
     }
-    if bonded {
+    if model.granular().is_some_and(|g| g.bonds.active()) {
         write_bond_breaks(gr, &out.join("bond_breaks.csv"))?;
     }
     let mut summary = summary(&run, &model, warnings, wall_s, model.step - start);
@@ -136,13 +126,12 @@ pub(super) fn summary(
     let gr = granular(model);
     let n = gr.particles.len();
     let (dd, dw) = gr.touching();
-    let e = gr.energies();
     let crit = gr.critical_step(&[]);
     let mut summary = json!({
         "kind": "granular",
         "discs": n,
         "walls": gr.walls.len(),
-        "steps": steps,
+        "steps": model.steps,
         "dt": gr.dt,
         "critical_dt": crit.dt,
         "critical_mode": crit.mode,
@@ -151,23 +140,20 @@ pub(super) fn summary(
         "threads": rayon::current_num_threads(),
         "build_seconds": run.build_s,
         "run_seconds": wall_s,
-        "particle_steps_per_second": if wall_s > 0.0 { (n * (model.step - start)) as f64 / wall_s } else { 0.0 },
+        "particle_steps_per_second": if wall_s > 0.0 { (n * steps) as f64 / wall_s } else { 0.0 },
         "neighbour_rebuilds": gr.grid.rebuilds,
         "contacts": { "disc_disc": dd, "disc_wall": dw, "listed_pairs": gr.contacts.len() },
         "bytes_per_disc": gr.heap_bytes() as f64 / n.max(1) as f64,
-        "energies": e,
+        "energies": gr.energies(),
         "wall_forces": gr.walls.iter().map(|w| json!({"name": w.name, "force": [w.force.x, w.force.y], "position_from": [w.a.x, w.a.y]})).collect::<Vec<_>>(),
         "warnings": warnings,
     });
-    run.annotate(&mut summary)?;
-    if bonded {
+    if gr.bonds.active() {
         let (t, s) = gr.bonds.broken_counts();
         let l = &gr.bonds.list;
         summary["bonds"] = json!({"made": l.made, "intact": l.len(), "broken_tension": t, "broken_shear": s, "released_energy": l.released});
     }
-    ended.record(&mut summary, &model);
-    write_json(&out.join("summary.json"), &summary)?;
-    ended.result(summary, &model, out)
+    summary
 }
 
 /// What `efgdem check` prints for a granular scenario.
@@ -210,6 +196,6 @@ pub(super) fn time_step_line(dt: f64, crit: &crate::dem::critical::Critical) -> 
     )
 }
 
-fn granular(model: &Model) -> &crate::dem::Granular {
+pub(super) fn granular(model: &Model) -> &crate::dem::Granular {
     model.granular().expect("a granular model")
 }
