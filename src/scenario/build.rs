@@ -548,7 +548,9 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
             bad(at, why)
         })?;
     scheme::apply(&mut m, &choice).map_err(|e| bad("simulation.coupling", e))?;
-    if purpose == BuildFor::Run && preparation(sc).is_some() {
+    // the discs of the run: prepared (here or by the caller), with those a
+    // body placed after the preparation overlaps removed
+    if purpose != BuildFor::Check && preparation(sc).is_some() {
         m.granular = granular_with(sc, purpose)?;
     }
     Ok(m)
