@@ -159,9 +159,8 @@ impl RunError {
             }
             RunError::Io(_) | RunError::OutDir { .. } => 1,
             RunError::Model(_) => 3,
-            RunError::Interrupted { signal, .. } | RunError::InterruptedPreparing { signal, .. } => {
-                128 + (*signal as u8 & 0x7f)
-            }
+            RunError::Interrupted { signal, .. }
+            | RunError::InterruptedPreparing { signal, .. } => 128 + (*signal as u8 & 0x7f),
         }
     }
 }
