@@ -374,14 +374,11 @@ fn cut(nodes: &[Node], rows: &[u32], n: usize) -> Vec<(usize, usize)> {
         return Vec::new();
     }
     let mut cand: Vec<usize> = (0..ns).filter(|&k| parent[k] == usize::MAX).collect();
-    loop {
-        let Some((i, &k)) = cand
-            .iter()
-            .enumerate()
-            .max_by_key(|&(i, &k)| (cost[k], usize::MAX - i))
-        else {
-            break;
-        };
+    while let Some((i, &k)) = cand
+        .iter()
+        .enumerate()
+        .max_by_key(|&(i, &k)| (cost[k], usize::MAX - i))
+    {
         if cost[k] * CUT <= total || children[k].is_empty() {
             break;
         }
