@@ -323,21 +323,21 @@ fn tutorial_step_3_footing() {
     );
     page.quote("averages 149 N", "149", h.mean("reaction", 0.0, 0.15));
     page.quote("325 N between", "325", h.mean("reaction", 0.15, 0.25));
-    page.quote("425 N over 0.1–0.4 s", "425", h.mean("reaction", 0.1, 0.4));
+    page.quote("400 N over 0.1–0.4 s", "400", h.mean("reaction", 0.1, 0.4));
     page.quote(
-        "peaks at 1146 N",
-        "1146",
+        "peaks at 1006 N",
+        "1006",
         s["peak_contact_force"].as_f64().unwrap(),
     );
     page.quote(
-        "1146 N at t = 0.400 s",
-        "0.400",
+        "1006 N at t = 0.407 s",
+        "0.407",
         s["peak_contact_time"].as_f64().unwrap(),
     );
-    page.quote("reaction ends at 698 N", "698", h.last("reaction"));
-    page.quote("`W_ext` = 6.80 J", "6.80", h.last("W_ext"));
-    page.quote("`E_diss` = 6.02 J", "6.02", h.last("E_diss"));
-    page.quote("`E_contact` = 0.77 J", "0.77", h.last("E_contact"));
+    page.quote("reaction ends at 657 N", "657", h.last("reaction"));
+    page.quote("`W_ext` = 6.37 J", "6.37", h.last("W_ext"));
+    page.quote("`E_diss` = 5.64 J", "5.64", h.last("E_diss"));
+    page.quote("`E_contact` = 0.72 J", "0.72", h.last("E_contact"));
     page.finish();
 }
 
