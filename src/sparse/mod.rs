@@ -9,16 +9,13 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use rayon::prelude::*;
 use std::sync::Arc;
-
-mod supernodal;
-use supernodal::{Structure, TreeSolve};
 
 /// Errors of the sparse linear algebra.
 #[derive(Debug, thiserror::Error)]
@@ -342,8 +339,6 @@ pub struct Cholesky {
     values: Vec<f64>,
     solve_mem: MemBuffer,
     par: Par,
-    /// The threaded solve of a supernodal factor (`None`: simplicial).
-    tree: Option<TreeSolve>,
 }
 
 impl std::fmt::Debug for Cholesky {
@@ -381,24 +376,11 @@ impl Cholesky {
         let par = par(symbolic.len_val());
         let solve_mem = MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq))
             .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
-        let tree = match symbolic.raw() {
-            SymbolicCholeskyRaw::Supernodal(sn) => Some(TreeSolve::new(Structure {
-                begin: sn.supernode_begin(),
-                end: sn.supernode_end(),
-                val_ptr: sn.col_ptr_for_val(),
-                pattern: (0..sn.n_supernodes())
-                    .map(|k| sn.supernode(k).pattern())
-                    .collect(),
-                perm: symbolic.perm().map(|p| p.arrays()),
-            })),
-            SymbolicCholeskyRaw::Simplicial(_) => None,
-        };
         let mut c = Cholesky {
             values: vec![0.0; symbolic.len_val()],
             symbolic,
             solve_mem,
             par,
-            tree,
         };
         c.refactor(a)?;
         Ok(c)
@@ -429,12 +411,6 @@ impl Cholesky {
         Ok(())
     }
 
-    /// The share of `L` its solves read on several threads at once (0 for
-    /// a factor solved sequentially).
-    pub fn parallel_share(&self) -> f64 {
-        self.tree.as_ref().map_or(0.0, TreeSolve::parallel_share)
-    }
-
     /// Number of stored entries of `L`.
     pub fn nnz_l(&self) -> usize {
         self.values.len()
@@ -442,14 +418,12 @@ impl Cholesky {
 
     /// Overwrite `rhs` with `A⁻¹ rhs`. Does not allocate.
     ///
-    /// A supernodal factor is solved on the threads, subtree by subtree of
-    /// its elimination tree (the same result on any number of them); a
-    /// simplicial one (small or very sparse) sequentially.
+    /// Sequential: a solve with one right-hand side reads `L` twice and
+    /// does two flops per entry, so it is bound by memory bandwidth, and
+    /// splitting its supernodes over threads only adds their
+    /// synchronisation: a second thread must never make a step slower.
+    /// The factorisation uses the threads.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
-        if let Some(t) = &mut self.tree {
-            t.solve(&self.values, rhs);
-            return;
-        }
         let n = rhs.len();
         let llt = LltRef::new(&self.symbolic, &self.values);
         llt.solve_in_place_with_conj(
@@ -605,39 +579,6 @@ pub(crate) mod tests {
                 row_idx,
             }),
             values,
-        }
-    }
-
-    /// The threaded supernodal solve agrees with faer's sequential one to
-    /// round-off and is bitwise the same on 1, 2 and 3 threads.
-    #[test]
-    fn tree_solve_matches_faer_and_ignores_the_thread_count() {
-        let a = grid(70, 60, 2);
-        let n = a.n();
-        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
-        let solve = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
-                let mut ch = Cholesky::factor(&a).unwrap();
-                assert!(ch.tree.as_ref().is_some_and(|t| t.parallel_parts() >= 2));
-                let mut x = b.clone();
-                ch.solve_in_place(&mut x);
-                let mut reference = b.clone();
-                ch.solve_columns(&mut reference, 1).unwrap();
-                (x, reference)
-            })
-        };
-        let (x1, reference) = solve(1);
-        let scale = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (p, q) in x1.iter().zip(&reference) {
-            assert!((p - q).abs() <= 1e-13 * scale, "{p} vs {q}");
-        }
-        for threads in [2, 3] {
-            let (x, _) = solve(threads);
-            assert!(x.iter().zip(&x1).all(|(p, q)| p.to_bits() == q.to_bits()));
         }
     }
 
