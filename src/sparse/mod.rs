@@ -492,7 +492,7 @@ pub(crate) mod tests {
             let p = a.pattern.clone();
             for j in 0..p.n {
                 for k in p.col_ptr[j] + 1..p.col_ptr[j + 1] {
-                    if (p.row_idx[k] + j) % 3 == 0 {
+                    if (p.row_idx[k] + j).is_multiple_of(3) {
                         a.values[k] = 0.0;
                     }
                 }
