@@ -85,6 +85,7 @@ pub mod reproduce;
 pub mod run;
 pub mod scenario;
 pub mod sparse;
+pub mod strict;
 pub mod study;
 
 pub use geom::Vec2;

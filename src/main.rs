@@ -2,8 +2,6 @@
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
-use efgdem::coupling::CouplingError;
-use efgdem::model::ModelError;
 use efgdem::run::RunError;
 use efgdem::scenario::{self, ScenarioError};
 use std::path::PathBuf;
@@ -98,6 +96,32 @@ enum Cmd {
     },
 }
 
+/// Print a line on standard output. A closed pipe (`efgdem check … | head
+/// -2`) ends the program quietly (exit 0); another failure (`> /dev/full`)
+/// is reported once, exit 1 (an i/o failure).
+fn say(args: std::fmt::Arguments) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    let written = out
+        .write_fmt(args)
+        .and_then(|()| out.write_all(b"\n"))
+        .and_then(|()| out.flush());
+    if let Err(e) = written {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        let _ = writeln!(std::io::stderr(), "error: writing to standard output: {e}");
+        std::process::exit(1);
+    }
+}
+
+/// `println!` through [`say`].
+macro_rules! say {
+    ($($t:tt)*) => {
+        say(format_args!($($t)*))
+    };
+}
+
 fn main() -> ExitCode {
     efgdem::run::memory::keep_large_allocations_mapped();
     let cli = Cli::parse();
@@ -109,25 +133,14 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             let run = e.chain().find_map(|c| c.downcast_ref::<RunError>());
-            // Bad input is exit code 2, an unstable run 3, a stopped one
-            // 128 + signal (the shell's convention); anything else 1.
-            let code = match run {
-                Some(RunError::Scenario(se)) => {
-                    eprintln!("error: {se}");
-                    return ExitCode::from(2);
-                }
-                Some(RunError::NotEmpty(_) | RunError::Restart { .. }) => 2,
-                Some(RunError::Model(
-                    ModelError::Unstable(_)
-                    | ModelError::Coupling(
-                        CouplingError::Unstable { .. } | CouplingError::Subcycling { .. },
-                    ),
-                )) => 3,
-                Some(RunError::Interrupted { signal, .. }) => 128 + (*signal as u8 & 0x7f),
-                _ => 1,
-            };
+            // 2 bad input, 1 i/o, 3 numerical, 128 + signal a stop
+            // (RunError::exit_code); anything else 1
+            if let Some(RunError::Scenario(se)) = run {
+                eprintln!("error: {se}");
+                return ExitCode::from(2);
+            }
             eprintln!("error: {e:#}");
-            ExitCode::from(code)
+            ExitCode::from(run.map_or(1, RunError::exit_code))
         }
     }
 }
@@ -153,6 +166,10 @@ fn stop_on_signals() -> anyhow::Result<Arc<AtomicUsize>> {
 /// (in a bare harness that cost 35 % on 10 000 dense discs; in `efgdem run`
 /// the difference was within the machine's noise).
 fn in_pool<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> anyhow::Result<T> {
+    let (n, note) = efgdem::run::worker_threads(n);
+    if let Some(note) = note {
+        eprintln!("warning: {note}");
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build()
@@ -219,29 +236,32 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             if !(tol > 0.0 && tol < 1.0) {
                 anyhow::bail!("--tol must be in (0, 1), got {tol}");
             }
-            println!("{:>12}  {:>8}  {:>8}  reason", "dt", "bounded", "seconds");
+            say!("{:>12}  {:>8}  {:>8}  reason", "dt", "bounded", "seconds");
             let r = in_pool(0, || {
                 efgdem::study::study_dt(&sc, tol, |t| {
-                    println!(
+                    say!(
                         "{:>12.5e}  {:>8}  {:>8.2}  {}",
-                        t.dt, t.bounded, t.seconds, t.reason
+                        t.dt,
+                        t.bounded,
+                        t.seconds,
+                        t.reason
                     )
                 })
             })??;
-            println!("DEM critical step 2√(m_min/k_max): {:.5e}", r.dt_critical);
+            say!("DEM critical step 2√(m_min/k_max): {:.5e}", r.dt_critical);
             match r.dt_max {
-                Some(dt) => println!(
+                Some(dt) => say!(
                     "largest bounded dt: {dt:.5e} ({:.3} × the DEM critical step)",
                     dt / r.dt_critical
                 ),
-                None => println!("no bounded dt found down to 1e-4 × the scenario's dt"),
+                None => say!("no bounded dt found down to 1e-4 × the scenario's dt"),
             }
         }
         Cmd::View { out, no_open } => view(&out, no_open)?,
         Cmd::Check { file } => {
             let sc = scenario::load(&file)?;
             let report = efgdem::run::check(&sc)?;
-            println!("{}: ok\n{report}", file.display());
+            say!("{}: ok\n{report}", file.display());
         }
     }
     Ok(())
@@ -259,7 +279,7 @@ fn view(out: &std::path::Path, no_open: bool) -> anyhow::Result<()> {
     }
     let script =
         view::write_script(out).with_context(|| format!("writing into {}", out.display()))?;
-    println!("wrote {}", script.display());
+    say!("wrote {}", script.display());
     let how = format!(
         "open it with `paraview --script={0}`, or render an image with `pvbatch {0} --screenshot view.png` (headless: `xvfb-run pvbatch …`)",
         script.display()
@@ -274,8 +294,8 @@ fn view(out: &std::path::Path, no_open: bool) -> anyhow::Result<()> {
                 anyhow::bail!("{} exited with {status}; {how}", pv.display());
             }
         }
-        (false, None) => println!("ParaView (`paraview`) is not on PATH; {how}"),
-        (true, _) => println!("{how}"),
+        (false, None) => say!("ParaView (`paraview`) is not on PATH; {how}"),
+        (true, _) => say!("{how}"),
     }
     Ok(())
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 
 /// Layers from the bottom; a module may use modules of lower layers only.
 const LAYERS: &[&[&str]] = &[
-    &["geom", "sparse"],
+    &["geom", "sparse", "strict"],
     &["continuum"],
     &["efg", "fem", "dem"],
     &["coupling"],

@@ -31,7 +31,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, MutexGuard, TryLockError};
+use std::sync::{Arc, Mutex, MutexGuard, TryLockError};
+use std::time::{Duration, Instant};
 
 pyo3::create_exception!(
     efgdem,
@@ -173,18 +174,32 @@ fn model_error(e: impl std::fmt::Display) -> PyErr {
     ModelError::new_err(e.to_string())
 }
 
-/// `obj` (a dict of the scenario schema) as a TOML value; `path` names
-/// where it is, for messages.
-fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
-    use toml::Value;
-    let bad = |what: String| {
-        let at = if path.is_empty() {
-            String::new()
-        } else {
-            format!("{path}: ")
-        };
-        ScenarioError::new_err(format!("{DICT_FILE}: {at}{what}"))
+/// Deepest nesting of dicts and lists accepted by `Model.from_dict` (the
+/// scenario schema needs 5).
+const MAX_DEPTH: usize = 32;
+
+/// A `ScenarioError` about the value at `path` of a dict.
+fn dict_error(path: &str, what: &str) -> PyErr {
+    let at = if path.is_empty() {
+        String::new()
+    } else {
+        format!("{path}: ")
     };
+    ScenarioError::new_err(format!("{DICT_FILE}: {at}{what}"))
+}
+
+/// `obj` (a dict of the scenario schema) as a TOML value; `path` names
+/// where it is, for messages. A dict or list that contains itself, or
+/// nesting deeper than [`MAX_DEPTH`], is refused (rather than recursing
+/// until the stack overflows).
+fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
+    to_toml_in(obj, path, &mut Vec::new())
+}
+
+/// [`to_toml`] inside the containers `open` (their addresses, outermost
+/// first).
+fn to_toml_in(obj: &Bound<'_, PyAny>, path: &str, open: &mut Vec<usize>) -> PyResult<toml::Value> {
+    use toml::Value;
     if let Ok(b) = obj.cast::<PyBool>() {
         return Ok(Value::Boolean(b.is_true()));
     }
@@ -192,7 +207,7 @@ fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
         return obj
             .extract::<i64>()
             .map(Value::Integer)
-            .map_err(|_| bad("an integer out of the 64-bit range".into()));
+            .map_err(|_| dict_error(path, "an integer out of the 64-bit range"));
     }
     if let Ok(f) = obj.cast::<PyFloat>() {
         return Ok(Value::Float(f.value()));
@@ -200,11 +215,59 @@ fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
     if let Ok(s) = obj.cast::<PyString>() {
         return Ok(Value::String(s.to_str()?.to_owned()));
     }
+    let container = obj.is_instance_of::<PyDict>()
+        || obj.is_instance_of::<PyList>()
+        || obj.is_instance_of::<PyTuple>();
+    if container {
+        let at = obj.as_ptr() as usize;
+        if open.contains(&at) {
+            return Err(dict_error(
+                path,
+                "contains itself (a dict or list inside its own value): a scenario is a tree",
+            ));
+        }
+        if open.len() >= MAX_DEPTH {
+            return Err(dict_error(
+                path,
+                &format!("nested more than {MAX_DEPTH} levels deep; a scenario needs a few"),
+            ));
+        }
+        open.push(at);
+        let v = container_to_toml(obj, path, open);
+        open.pop();
+        return v;
+    }
+    // numpy arrays and scalars (and anything else with a `tolist`)
+    if obj.hasattr("tolist")? {
+        let l = obj.call_method0("tolist")?;
+        if !l.is(obj) {
+            return to_toml_in(&l, path, open);
+        }
+    }
+    Err(dict_error(
+        path,
+        &format!(
+            "a value of type `{}` has no TOML form (use dicts, lists, str, int, float, bool)",
+            obj.get_type().name()?
+        ),
+    ))
+}
+
+/// A dict as a TOML table, a list or tuple as an array ([`to_toml_in`]).
+fn container_to_toml(
+    obj: &Bound<'_, PyAny>,
+    path: &str,
+    open: &mut Vec<usize>,
+) -> PyResult<toml::Value> {
+    use toml::Value;
     if let Ok(d) = obj.cast::<PyDict>() {
         let mut t = toml::Table::new();
         for (k, v) in d.iter() {
             let Ok(k) = k.extract::<String>() else {
-                return Err(bad(format!("keys must be strings (got {})", k.repr()?)));
+                return Err(dict_error(
+                    path,
+                    &format!("keys must be strings (got {})", k.repr()?),
+                ));
             };
             if v.is_none() {
                 continue; // TOML has no null: an absent key takes the default
@@ -214,34 +277,25 @@ fn to_toml(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
             } else {
                 format!("{path}.{k}")
             };
-            t.insert(k, to_toml(&v, &sub)?);
+            t.insert(k, to_toml_in(&v, &sub, open)?);
         }
         return Ok(Value::Table(t));
     }
-    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
-        let mut a = Vec::new();
-        for (i, v) in obj.try_iter()?.enumerate() {
-            a.push(to_toml(&v?, &format!("{path}[{i}]"))?);
-        }
-        return Ok(Value::Array(a));
+    let mut a = Vec::new();
+    for (i, v) in obj.try_iter()?.enumerate() {
+        a.push(to_toml_in(&v?, &format!("{path}[{i}]"), open)?);
     }
-    // numpy arrays and scalars (and anything else with a `tolist`)
-    if obj.hasattr("tolist")? {
-        let l = obj.call_method0("tolist")?;
-        if !l.is(obj) {
-            return to_toml(&l, path);
-        }
-    }
-    Err(bad(format!(
-        "a value of type `{}` has no TOML form (use dicts, lists, str, int, float, bool)",
-        obj.get_type().name()?
-    )))
+    Ok(Value::Array(a))
 }
 
 /// What the model needs besides the Rust model: probes, a pool, caches.
 struct Inner {
     model: Model,
-    pool: rayon::ThreadPool,
+    /// The worker threads (started by the process `pool_pid`: a process
+    /// forked from it has none of them and starts its own).
+    pool: Arc<rayon::ThreadPool>,
+    threads: usize,
+    pool_pid: u32,
     probes: Vec<(String, Probe)>,
     /// Per body: its nodes bound for sampling (on first use).
     node_at: Vec<Option<Vec<At>>>,
@@ -281,7 +335,9 @@ impl Inner {
         let buffers = granular_buffers(model.granular());
         Inner {
             model,
-            pool,
+            threads: pool.current_num_threads(),
+            pool: Arc::new(pool),
+            pool_pid: std::process::id(),
             probes,
             node_at: (0..nb).map(|_| None).collect(),
             frames: HashMap::new(),
@@ -298,28 +354,49 @@ impl Inner {
         );
     }
 
-    /// `n` steps (inside the model's pool). Granular runs store the disc
-    /// forces of the last step only (as `efgdem run` stores them only at
-    /// frame steps; they are never read by the physics).
-    fn step(&mut self, n: usize) -> Result<(), efgdem::model::ModelError> {
-        let Inner { model, pool, .. } = self;
-        pool.install(|| {
-            for k in 0..n {
-                set_store_forces(model, k + 1 == n);
-                model.step()?;
-            }
-            Ok::<_, efgdem::model::ModelError>(())
-        })?;
-        self.check_buffers();
+    /// The model's pool, started again in a process forked from the one
+    /// that started it (its threads do not survive `fork`: using them
+    /// would wait for ever).
+    fn ensure_pool(&mut self) -> PyResult<()> {
+        if self.pool_pid != std::process::id() {
+            let pool = Arc::new(thread_pool(self.threads)?);
+            // the old pool's threads are gone: dropping it could wait on
+            // them; it is left as it is
+            std::mem::forget(std::mem::replace(&mut self.pool, pool));
+            self.pool_pid = std::process::id();
+        }
         Ok(())
     }
 
-    /// Step until `t` (within half a step, as `Model::run_until`).
-    fn run(&mut self, t: f64) -> Result<usize, efgdem::model::ModelError> {
+    /// Up to `n` steps inside the model's pool, for at most about
+    /// [`SLICE`] (then the caller checks for Ctrl-C); the number taken.
+    /// Granular runs store the disc forces of the step that ends the call's
+    /// `left` steps only (as `efgdem run` stores them only at frame steps;
+    /// they are never read by the physics).
+    fn steps_for(&mut self, n: usize, left: usize) -> Result<usize, efgdem::model::ModelError> {
         let Inner { model, pool, .. } = self;
+        let t0 = Instant::now();
+        let done = pool.install(|| {
+            let mut k = 0;
+            while k < n && (k == 0 || t0.elapsed() < SLICE) {
+                set_store_forces(model, k + 1 == left);
+                model.step()?;
+                k += 1;
+            }
+            Ok::<_, efgdem::model::ModelError>(k)
+        })?;
+        self.check_buffers();
+        Ok(done)
+    }
+
+    /// Steps until `t` (within half a step, as `Model::run_until`) for at
+    /// most about [`SLICE`]; the number taken.
+    fn run_for(&mut self, t: f64) -> Result<usize, efgdem::model::ModelError> {
+        let Inner { model, pool, .. } = self;
+        let t0 = Instant::now();
         let n = pool.install(|| {
             let mut n = 0;
-            while model.time() + 0.5 * model.dt < t {
+            while model.time() + 0.5 * model.dt < t && (n == 0 || t0.elapsed() < SLICE) {
                 // the last steps store the disc forces (2.5 dt: rounding of t)
                 set_store_forces(model, model.time() + 2.5 * model.dt >= t);
                 model.step()?;
@@ -434,12 +511,28 @@ struct PyModel {
     inner: Mutex<Inner>,
 }
 
-fn build(py: Python<'_>, sc: Scenario, threads: Option<usize>, dict: bool) -> PyResult<PyModel> {
-    let n = threads.unwrap_or(sc.simulation.threads);
-    let pool = rayon::ThreadPoolBuilder::new()
+/// Longest time a call steps with the GIL released before it checks for
+/// signals (Ctrl-C raises `KeyboardInterrupt` between two steps).
+const SLICE: Duration = Duration::from_millis(50);
+
+/// A pool of `n` worker threads (0: one per core; never more than the
+/// machine runs at once, with a `RuntimeWarning` when fewer than asked).
+fn thread_pool(n: usize) -> PyResult<rayon::ThreadPool> {
+    let (n, note) = efgdem::run::worker_threads(n);
+    if let Some(note) = note {
+        Python::attach(|py| {
+            let warning = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
+            PyErr::warn(py, &warning, &std::ffi::CString::new(note)?, 1)
+        })?;
+    }
+    rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build()
-        .map_err(model_error)?;
+        .map_err(model_error)
+}
+
+fn build(py: Python<'_>, sc: Scenario, threads: Option<usize>, dict: bool) -> PyResult<PyModel> {
+    let pool = thread_pool(threads.unwrap_or(sc.simulation.threads))?;
     let built = py.detach(|| {
         pool.install(|| {
             let model = sc.build()?;
@@ -496,7 +589,9 @@ impl PyModel {
     /// "material": [{...}], "granular": {...}, "wall": [...]}`; `None`
     /// values are left out). Relative paths in it resolve against
     /// `base_dir` (default: the working directory). Raises `ScenarioError`
-    /// (`<dict>: field: message`).
+    /// (`<dict>: field: message`), also for a dict or list that contains
+    /// itself or is nested more than 32 levels deep. `threads` above the
+    /// machine's count are lowered to it (a `RuntimeWarning`).
     #[staticmethod]
     #[pyo3(signature = (scenario, base_dir = None, threads = None))]
     fn from_dict(
@@ -513,20 +608,46 @@ impl PyModel {
     }
 
     /// Advance `n` time steps (the GIL is released while stepping).
-    /// Raises `ModelError` if a step fails.
+    /// Raises `ModelError` if a step fails; Ctrl-C raises
+    /// `KeyboardInterrupt` within a fraction of a second, the model left
+    /// after a whole step.
     #[pyo3(signature = (n = 1))]
     fn step(&self, py: Python<'_>, n: usize) -> PyResult<()> {
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
-        py.detach(|| inner.step(n)).map_err(model_error)
+        inner.ensure_pool()?;
+        let mut left = n;
+        while left > 0 {
+            left -= py
+                .detach(|| inner.steps_for(left, left))
+                .map_err(model_error)?;
+            py.check_signals()?;
+        }
+        Ok(())
     }
 
     /// Step until the time reaches `until` (within half a step); returns the
-    /// number of steps taken (the GIL is released while stepping).
+    /// number of steps taken (the GIL is released while stepping). `until`
+    /// must be finite (`ValueError`); Ctrl-C raises `KeyboardInterrupt`
+    /// within a fraction of a second, the model left after a whole step.
     fn run(&self, py: Python<'_>, until: f64) -> PyResult<usize> {
+        if !until.is_finite() {
+            return Err(PyValueError::new_err(format!(
+                "run(until={until}): the end time must be a finite number"
+            )));
+        }
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
-        py.detach(|| inner.run(until)).map_err(model_error)
+        inner.ensure_pool()?;
+        let mut n = 0;
+        loop {
+            let k = py.detach(|| inner.run_for(until)).map_err(model_error)?;
+            if k == 0 {
+                return Ok(n);
+            }
+            n += k;
+            py.check_signals()?;
+        }
     }
 
     /// The model's whole evolving state as bytes (discs, walls, contact
@@ -539,8 +660,9 @@ impl PyModel {
     }
 
     /// Restore bytes of `save_state` (of a model built from the same
-    /// scenario). Raises `ModelError` if they do not fit this model (it is
-    /// then left as it was). Live numpy views stay valid.
+    /// scenario). Raises `ModelError` if they do not fit this model or are
+    /// damaged (the bytes carry a checksum: any altered bit is refused);
+    /// the model is then left as it was. Live numpy views stay valid.
     fn restore_state(&self, state: &[u8]) -> PyResult<()> {
         let mut g = self.lock()?;
         let s = efgdem::model::ModelState::from_bytes(state).map_err(model_error)?;
@@ -549,10 +671,12 @@ impl PyModel {
         Ok(())
     }
 
-    /// Solve a static continuum model (`analysis = "static"`).
+    /// Solve a static continuum model (`analysis = "static"`). Raises
+    /// `ModelError` for a model with discs (it has no static solve).
     fn solve_static(&self, py: Python<'_>) -> PyResult<()> {
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
+        inner.ensure_pool()?;
         py.detach(|| {
             let Inner { model, pool, .. } = inner;
             pool.install(|| model.solve_static())
@@ -918,7 +1042,13 @@ impl PyModel {
     fn write_frame(&self, py: Python<'_>, dir: PathBuf) -> PyResult<Vec<PathBuf>> {
         let mut g = self.lock()?;
         let inner: &mut Inner = &mut g;
-        py.detach(|| write_frame(inner, &dir)).map_err(|e| match e {
+        inner.ensure_pool()?;
+        // inside the model's pool: the frames compress in parallel
+        py.detach(|| {
+            let pool = Arc::clone(&inner.pool);
+            pool.install(|| write_frame(inner, &dir))
+        })
+        .map_err(|e| match e {
             FrameError::Io(e) => PyIOError::new_err(format!("{}: {e}", dir.display())),
             FrameError::Model(e) => model_error(e),
         })

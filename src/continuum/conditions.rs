@@ -152,21 +152,21 @@ pub enum Prescribed {
     /// A constant ū.
     Value(f64),
     /// `ū = a + b x + c y` at the reference position.
-    Linear(LinearField),
+    Linear(#[serde(deserialize_with = "crate::strict::table")] LinearField),
     /// An edge moving at constant velocity for `until_step` steps: `ū` is
     /// [`MotionField::displacement`], zero at t = 0.
-    Motion(MotionField),
+    Motion(#[serde(deserialize_with = "crate::strict::table")] MotionField),
     /// `ū = (a + b x + c y) · table(t)`: a linear field scaled in time
     /// (e.g. a base rotating about its toe).
-    ScaledLinear(ScaledLinear),
+    ScaledLinear(#[serde(deserialize_with = "crate::strict::table")] ScaledLinear),
     /// `ū = table(t)` along the edge.
-    Table(TableField),
+    Table(#[serde(deserialize_with = "crate::strict::table")] TableField),
     /// `ū = ∫₀ᵗ table`: a prescribed velocity, integrated exactly.
-    VelocityTable(VelocityTableField),
+    VelocityTable(#[serde(deserialize_with = "crate::strict::table")] VelocityTableField),
     /// A servo holding a target force on the body.
-    Servo(ServoField),
+    Servo(#[serde(deserialize_with = "crate::strict::table")] ServoField),
     /// One motion after another (constant velocity, servo, rest).
-    Phases(PhasesField),
+    Phases(#[serde(deserialize_with = "crate::strict::table")] PhasesField),
 }
 
 /// `{ linear = [a, b, c], table = [[t, s], …] }`.

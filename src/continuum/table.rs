@@ -52,6 +52,18 @@ impl Table {
         None
     }
 
+    /// A jump: the first two consecutive points at most `dt` apart in
+    /// time (at the same time with `dt` = 0) whose values differ, as
+    /// `(t, from, to)`. A prescribed displacement that jumps has an
+    /// infinite velocity (or one step's worth of it): no time step can
+    /// follow it.
+    pub fn jump(&self, dt: f64) -> Option<(f64, f64, f64)> {
+        self.points.windows(2).find_map(|w| {
+            let ([t0, v0], [t1, v1]) = (w[0], w[1]);
+            (t1 - t0 <= dt && v1 != v0).then_some((t0, v0, v1))
+        })
+    }
+
     /// The index of the segment `[t_k, t_{k+1})` holding `t`, or `None`
     /// before the first or at/after the last point.
     fn segment(&self, t: f64) -> Option<usize> {

@@ -550,12 +550,13 @@ impl Granular {
         }
     }
 
-    /// Is every disc state finite?
+    /// Is every disc state, and every wall's position, finite?
     pub fn is_finite(&self) -> bool {
         let p = &self.particles;
         p.pos
             .iter()
             .chain(&p.vel)
+            .chain(self.walls.iter().flat_map(|w| [&w.a, &w.b]))
             .all(|v| v.x.is_finite() && v.y.is_finite())
             && p.omega.iter().all(|w| w.is_finite())
     }

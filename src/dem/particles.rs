@@ -85,6 +85,27 @@ impl Particles {
         }
     }
 
+    /// Room for `n` more discs in every array, or the allocation error
+    /// (a run too large for the memory it may use is refused with it
+    /// instead of aborting the process).
+    pub fn try_reserve(&mut self, n: usize) -> Result<(), std::collections::TryReserveError> {
+        self.pos.try_reserve_exact(n)?;
+        self.vel.try_reserve_exact(n)?;
+        self.theta.try_reserve_exact(n)?;
+        self.omega.try_reserve_exact(n)?;
+        self.radius.try_reserve_exact(n)?;
+        self.mass.try_reserve_exact(n)?;
+        self.inertia.try_reserve_exact(n)?;
+        self.inv_mass.try_reserve_exact(n)?;
+        self.inv_inertia.try_reserve_exact(n)?;
+        self.force.try_reserve_exact(n)?;
+        self.torque.try_reserve_exact(n)?;
+        self.fixity.try_reserve_exact(n)?;
+        self.material.try_reserve_exact(n)?;
+        self.id.try_reserve_exact(n)?;
+        self.slot.try_reserve_exact(n)
+    }
+
     /// Append a disc of radius `r`, density `rho` and thickness `t` at rest.
     /// Mass `m = ρ π r² t`, inertia `I = m r²/2`.
     pub fn push(&mut self, pos: Vec2, r: f64, rho: f64, thickness: f64, material: u16) {

@@ -134,7 +134,8 @@ impl EfgBody {
         let size = Vec2::from(spec.rectangle.size);
         // nodes, supports, domain quadrature, and per bc its boundary
         // pieces (a, b, outward normal, sub-segments)
-        type Pieces = Vec<(Vec2, Vec2, Option<Vec2>, usize)>;
+        // (a, b, outward normal, sub-segments, Gauss points per sub-segment)
+        type Pieces = Vec<(Vec2, Vec2, Option<Vec2>, usize, usize)>;
         let (xs, ys, support, domain, mesh, pieces): (_, _, _, _, _, Vec<Pieces>) = if let Some(
             poly,
         ) =
@@ -170,12 +171,16 @@ impl EfgBody {
                         bc.edge
                     )));
                 }
+                // a piece that only follows a boundary finer than the nodes
+                // (it ends at a vertex that is not a node) is short: one
+                // Gauss point
                 pieces.push(
                     mesh.pieces(&e.segments)
                         .into_iter()
-                        .map(|(a, b)| {
+                        .map(|(a, b, fine)| {
                             let d = b - a;
-                            (a, b, Some(Vec2::new(d.y, -d.x) * (1.0 / d.norm())), 1)
+                            let g = if fine { 1 } else { n };
+                            (a, b, Some(Vec2::new(d.y, -d.x) * (1.0 / d.norm())), 1, g)
                         })
                         .collect(),
                 );
@@ -206,7 +211,7 @@ impl EfgBody {
             for bc in &spec.bc {
                 let e = bc.side().map_err(invalid)?;
                 let (a, b) = edge_ends(origin, size, e);
-                pieces.push(vec![(a, b, None, segs(e))]);
+                pieces.push(vec![(a, b, None, segs(e), n)]);
             }
             (xs, ys, support, domain, None, pieces)
         };
@@ -217,8 +222,8 @@ impl EfgBody {
         let mut penalty_bc: Vec<usize> = Vec::new();
         for (bi, bc) in spec.bc.iter().enumerate().filter(|(_, b)| !b.is_load()) {
             let (cx, cy) = constrained(bc);
-            for &(a, b, _, m) in &pieces[bi] {
-                for q in quadrature::edge_points(a, b, m, n) {
+            for &(a, b, _, m, g) in &pieces[bi] {
+                for q in quadrature::edge_points(a, b, m, g) {
                     points.push(q.x);
                     let w = q.w * t * alpha;
                     roles.push(PointRole::Penalty(
@@ -301,8 +306,8 @@ impl EfgBody {
             } else {
                 &mut f_permanent
             };
-            for &(a, b, normal, m) in &pieces[bi] {
-                for QuadPoint { x, w } in quadrature::edge_points(a, b, m, n) {
+            for &(a, b, normal, m, g) in &pieces[bi] {
+                for QuadPoint { x, w } in quadrature::edge_points(a, b, m, g) {
                     let tr = match normal {
                         Some(nv) => traction_normal(bc, a, b, x, nv),
                         None => traction_at(bc, a, b, x),
@@ -799,10 +804,20 @@ impl EfgBody {
         Ok((num / den).sqrt())
     }
 
-    /// Shape functions at every node position (for nodal output).
+    /// The points of the body's frames: the nodes, and for a polygon body
+    /// the boundary vertices that are not nodes after them (the corners
+    /// of its triangles, [`PolygonMesh::points`]).
+    pub fn frame_points(&self) -> Vec<Vec2> {
+        match &self.mesh {
+            Some(m) => m.points.clone(),
+            None => (0..self.n_nodes()).map(|i| self.node(i)).collect(),
+        }
+    }
+
+    /// Shape functions at every [frame point](Self::frame_points) (for
+    /// nodal output).
     pub fn nodal_shapes(&self) -> Result<PointShapes, EfgError> {
-        let pts: Vec<Vec2> = (0..self.n_nodes()).map(|i| self.node(i)).collect();
-        assemble::point_shapes(&self.support, &pts)
+        assemble::point_shapes(&self.support, &self.frame_points())
             .map_err(|e| EfgError::coverage(e, self.d_max, &self.name))
     }
 }

@@ -19,7 +19,7 @@ pub type EfgContinuum = WithBoundary<EfgBody>;
 impl EfgBody {
     /// The contact chains of a polygon body (`None` for a rectangle): along
     /// the named edges `names` (all loops if `None`), through the boundary
-    /// nodes with `refine` points per piece between them, body on the left
+    /// points (nodes and vertices) with `refine` points per piece between them, body on the left
     /// (holes run clockwise). Consecutive segments of a loop join into one
     /// chain; a whole loop is one closed chain. Unknown names are an error.
     pub fn polygon_chains(
@@ -30,7 +30,7 @@ impl EfgBody {
         let m = self.mesh.as_ref()?;
         let refine = refine.max(1);
         let mut on: Vec<Vec<bool>> = m
-            .segment_nodes
+            .segment_points
             .iter()
             .map(|s| vec![names.is_none(); s.len()])
             .collect();
@@ -46,7 +46,7 @@ impl EfgBody {
             }
         }
         let mut chains = Vec::new();
-        for (l, segs) in m.segment_nodes.iter().enumerate() {
+        for (l, segs) in m.segment_points.iter().enumerate() {
             let n = segs.len();
             let sel = &on[l];
             // start after an unselected segment (or at 0 for a whole loop)
@@ -69,12 +69,12 @@ impl EfgBody {
                     cur.pop(); // the previous segment's end = this start
                 }
                 for w in segs[k].windows(2) {
-                    let (a, b) = (m.nodes[w[0]], m.nodes[w[1]]);
+                    let (a, b) = (m.points[w[0]], m.points[w[1]]);
                     for j in 0..refine {
                         cur.push(a + (b - a) * (j as f64 / refine as f64));
                     }
                 }
-                cur.push(m.nodes[*segs[k].last().expect("a segment has 2 nodes")]);
+                cur.push(m.points[*segs[k].last().expect("a segment has 2 points")]);
             }
             if !cur.is_empty() {
                 chains.push(cur);

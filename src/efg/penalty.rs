@@ -160,7 +160,10 @@ impl Penalty {
                 .map(|k| s + k)
                 .expect("the pattern covers the node pairs of every penalty point")
         };
-        let mut add = Vec::new();
+        // added in place, in the order of the points (the list of additions
+        // it replaces cost 6 kB per point at its peak: 64 MB for a fixed
+        // outline of 10 000 vertices)
+        let values = &mut kbar.values;
         for g in 0..self.len() {
             let [wx, wy] = self.weight[g];
             let (s, e) = (self.ptr[g], self.ptr[g + 1]);
@@ -172,13 +175,10 @@ impl Penalty {
                     if j < i {
                         continue;
                     }
-                    add.push((pos(2 * j, 2 * i), self.phi[b] * fx));
-                    add.push((pos(2 * j + 1, 2 * i + 1), self.phi[b] * fy));
+                    values[pos(2 * j, 2 * i)] += self.phi[b] * fx;
+                    values[pos(2 * j + 1, 2 * i + 1)] += self.phi[b] * fy;
                 }
             }
-        }
-        for (k, v) in add {
-            kbar.values[k] += v;
         }
         kbar
     }

@@ -1,9 +1,20 @@
 //! Node sets and background integration of polygon bodies: a regular grid
 //! at spacing `h` clipped to Ω (grid nodes closer than `h/2` to the
-//! boundary dropped), nodes along every boundary segment at spacing ≤ `h`
-//! (all vertices included), and the constrained Delaunay triangulation of
-//! these nodes with the boundary pieces as constraints, which covers Ω
+//! boundary dropped), nodes along every loop at spacing ≤ `h`, and the
+//! constrained Delaunay triangulation of these nodes and the loops'
+//! vertices with the boundary pieces as constraints, which covers Ω
 //! exactly: there are no cut cells, every Gauss point is inside Ω.
+//!
+//! **Boundary nodes** ([`PolygonMesh::points`]): every vertex is a node
+//! where the outline is coarse; where it is finer than the nodes (a circle
+//! of 1 000 segments, a digitised outline), a vertex is a node only if it
+//! is a corner (the boundary turns by more than [`CORNER`] there) or at
+//! least [`MIN_VERTEX_GAP`] `· h` along the loop from the previous node and
+//! from the next corner. Between two nodes the boundary (one segment or several) gets
+//! nodes at equal steps of at most `h`. The other vertices stay corners of
+//! the triangles only, so the integration still follows the true boundary,
+//! but nodes are never much closer than `h/4`: nodes at every vertex of a
+//! dense outline make the stiffness matrix numerically singular.
 //!
 //! **Refinement near edges** ([`Refine`], [`PolygonMesh::refined`]): a
 //! graded size field `s(x) = min(h, min_r [h_r + G · max(0, d_r(x) − w_r)])`
@@ -35,16 +46,20 @@ pub struct PolygonMesh {
     pub spacing: f64,
     /// Node positions: boundary nodes first (loop by loop), then the grid.
     pub nodes: Vec<Vec2>,
+    /// The triangles' corners: the nodes, then the boundary vertices that
+    /// are not nodes (module docs).
+    pub points: Vec<Vec2>,
     /// Each node's spacing `h_I` (its support half-width is `d_max · h_I`):
     /// `h` for every node of an unrefined mesh.
     pub node_spacing: Vec<f64>,
     /// `d_max` of a refined mesh (its quadrature adapts to the supports);
     /// `None` without refinement.
     pub refined_d_max: Option<f64>,
-    /// Per loop, per segment: the nodes along it, from its start vertex to
-    /// its end vertex (both included).
-    pub segment_nodes: Vec<Vec<Vec<usize>>>,
-    /// Triangles (counter-clockwise) of the integration triangulation.
+    /// Per loop, per segment: the points (of [`points`](Self::points))
+    /// along it, from its start vertex to its end vertex (both included).
+    pub segment_points: Vec<Vec<Vec<usize>>>,
+    /// Triangles (counter-clockwise) of the integration triangulation,
+    /// indices into [`points`](Self::points).
     pub triangles: Vec<[usize; 3]>,
 }
 
@@ -54,34 +69,14 @@ impl PolygonMesh {
         if !(h > 0.0 && h.is_finite()) {
             return Err(format!("spacing must be positive, not {h}"));
         }
-        let mut nodes: Vec<Vec2> = Vec::new();
-        let mut segment_nodes = Vec::with_capacity(domain.loops.len());
-        let mut constraints = Vec::new();
-        for l in &domain.loops {
-            let n = l.len();
-            let first = nodes.len();
-            let mut segs = Vec::with_capacity(n);
-            for i in 0..n {
-                let (a, b) = l.segment(i);
-                let m = ((b - a).norm() / h).ceil().max(1.0) as usize;
-                let mut ids = Vec::with_capacity(m + 1);
-                ids.push(nodes.len());
-                nodes.push(a);
-                for k in 1..m {
-                    ids.push(nodes.len());
-                    nodes.push(a + (b - a) * (k as f64 / m as f64));
-                }
-                // the end vertex is the next segment's start (first for the last)
-                ids.push(if i + 1 == n { first } else { nodes.len() });
-                segs.push(ids);
-            }
-            for ids in &segs {
-                for w in ids.windows(2) {
-                    constraints.push([w[0], w[1]]);
-                }
-            }
-            segment_nodes.push(segs);
-        }
+        let Boundary {
+            mut nodes,
+            segments,
+            extra,
+        } = Boundary::new(domain, &|_| h, &|poly| {
+            let m = (length(poly) / h).ceil().max(1.0) as usize;
+            even(poly, m)
+        });
         let (lo, hi) = domain.bounds();
         let nx = ((hi.x - lo.x) / h).floor() as usize;
         let ny = ((hi.y - lo.y) / h).floor() as usize;
@@ -96,14 +91,15 @@ impl PolygonMesh {
                 }
             }
         }
-        let triangles = triangulate(&nodes, &constraints, domain).map_err(|e| e.to_string())?;
+        let (points, segment_points, triangles) = finish(&nodes, extra, &segments, domain)?;
         Ok(PolygonMesh {
             domain: domain.clone(),
             spacing: h,
             node_spacing: vec![h; nodes.len()],
             refined_d_max: None,
             nodes,
-            segment_nodes,
+            points,
+            segment_points,
             triangles,
         })
     }
@@ -139,38 +135,29 @@ impl PolygonMesh {
             }
         }
         let size = SizeField { domain, h, refine };
-        let mut nodes: Vec<Vec2> = Vec::new();
-        let mut node_spacing: Vec<f64> = Vec::new();
-        let mut segment_nodes = Vec::with_capacity(domain.loops.len());
-        let mut constraints = Vec::new();
-        for l in &domain.loops {
-            let n = l.len();
-            let first = nodes.len();
-            let mut segs = Vec::with_capacity(n);
-            for i in 0..n {
-                let (a, b) = l.segment(i);
-                let mut ids = vec![nodes.len()];
-                nodes.push(a);
-                node_spacing.push(size.at(a));
-                for t in size.stations(a, b) {
-                    let p = a + (b - a) * t;
-                    ids.push(nodes.len());
-                    nodes.push(p);
-                    node_spacing.push(size.at(p));
-                }
-                ids.push(if i + 1 == n { first } else { nodes.len() });
-                segs.push(ids);
+        let Boundary {
+            mut nodes,
+            segments,
+            extra,
+        } = Boundary::new(domain, &|p| size.at(p), &|poly| size.stations(poly));
+        let mut node_spacing: Vec<f64> = nodes.iter().map(|&p| size.at(p)).collect();
+        // a boundary node's spacing: at least its distances to the
+        // neighbouring nodes along the loop
+        for segs in &segments {
+            let ids: Vec<usize> = segs
+                .iter()
+                .flat_map(|s| s.split_last().map_or(&[][..], |(_, r)| r))
+                .filter_map(|a| match a {
+                    At::Node(k) => Some(*k),
+                    At::Vertex(_) => None,
+                })
+                .collect();
+            for (i, &k) in ids.iter().enumerate() {
+                let next = ids[(i + 1) % ids.len()];
+                let d = (nodes[next] - nodes[k]).norm();
+                node_spacing[k] = node_spacing[k].max(d);
+                node_spacing[next] = node_spacing[next].max(d);
             }
-            for ids in &segs {
-                for w in ids.windows(2) {
-                    constraints.push([w[0], w[1]]);
-                    // a boundary node's spacing: at least its pieces' lengths
-                    let d = (nodes[w[1]] - nodes[w[0]]).norm();
-                    node_spacing[w[0]] = node_spacing[w[0]].max(d);
-                    node_spacing[w[1]] = node_spacing[w[1]].max(d);
-                }
-            }
-            segment_nodes.push(segs);
         }
         // the levels, finest first: h_r·2^k below h, then h
         let finest = refine.iter().map(|r| r.spacing).fold(h, f64::min);
@@ -253,20 +240,22 @@ impl PolygonMesh {
                 }
             }
         }
-        let triangles = triangulate(&nodes, &constraints, domain).map_err(|e| e.to_string())?;
+        let (points, segment_points, triangles) = finish(&nodes, extra, &segments, domain)?;
         Ok(PolygonMesh {
             domain: domain.clone(),
             spacing: h,
             nodes,
+            points,
             node_spacing,
             refined_d_max: Some(d_max),
-            segment_nodes,
+            segment_points,
             triangles,
         })
     }
 
     /// Gauss points of the triangles: Dunavant's degree-5 rule on each
-    /// triangle split into `sub²` sub-triangles.
+    /// triangle split into `sub²` sub-triangles (a sliver along a boundary
+    /// finer than the nodes: one point, [`sliver`](Self::sliver)).
     ///
     /// A refined mesh splits each triangle into `(sub · k)²`, with
     /// `k = ⌈ℓ / (c · h_min)⌉`, `ℓ` the triangle's longest side and `h_min`
@@ -284,11 +273,15 @@ impl PolygonMesh {
         let tris: Vec<[Vec2; 3]> = self
             .triangles
             .iter()
-            .map(|t| t.map(|i| self.nodes[i]))
+            .map(|t| t.map(|i| self.points[i]))
             .collect();
         let mut out = Vec::with_capacity(tris.len() * 7 * sub * sub);
         let Some(d_max) = self.refined_d_max else {
-            quadrature::triangle_points(&tris, sub, &mut out);
+            for (tri, ids) in tris.iter().zip(&self.triangles) {
+                if !self.sliver(ids, tri, &mut out) {
+                    quadrature::triangle_points(std::slice::from_ref(tri), sub, &mut out);
+                }
+            }
             return out;
         };
         let (lo, _) = self.domain.bounds();
@@ -297,7 +290,10 @@ impl PolygonMesh {
         for (k, p) in self.nodes.iter().enumerate() {
             bins.insert(*p, k);
         }
-        for tri in &tris {
+        for (tri, ids) in tris.iter().zip(&self.triangles) {
+            if self.sliver(ids, tri, &mut out) {
+                continue;
+            }
             let (mut a, mut b) = (tri[0], tri[0]);
             for v in &tri[1..] {
                 a = Vec2::new(a.x.min(v.x), a.y.min(v.y));
@@ -325,13 +321,33 @@ impl PolygonMesh {
         out
     }
 
-    /// The boundary pieces (between consecutive boundary nodes) of the
-    /// segments `(loop, segment)`, each `(a, b)` with the body on the left.
-    pub fn pieces(&self, segments: &[(usize, usize)]) -> Vec<(Vec2, Vec2)> {
+    /// A triangle with a corner at a vertex that is not a node only
+    /// follows a boundary finer than the nodes: a sliver along it, where
+    /// the shape functions hardly vary. It gets one Gauss point, at its
+    /// centroid (exact for the constant strains of the patch test), pushed
+    /// to `out`; `false` for any other triangle.
+    fn sliver(&self, ids: &[usize; 3], tri: &[Vec2; 3], out: &mut Vec<QuadPoint>) -> bool {
+        if ids.iter().all(|&i| i < self.nodes.len()) {
+            return false;
+        }
+        let [a, b, c] = *tri;
+        out.push(QuadPoint {
+            x: (a + b + c) * (1.0 / 3.0),
+            w: 0.5 * (b - a).cross(c - a).abs(),
+        });
+        true
+    }
+
+    /// The boundary pieces (between consecutive boundary points) of the
+    /// segments `(loop, segment)`, each `(a, b, fine)` with the body on the
+    /// left; `fine`: an end is a vertex that is not a node (the boundary is
+    /// finer than the nodes there).
+    pub fn pieces(&self, segments: &[(usize, usize)]) -> Vec<(Vec2, Vec2, bool)> {
         let mut out = Vec::new();
         for &(l, s) in segments {
-            for w in self.segment_nodes[l][s].windows(2) {
-                out.push((self.nodes[w[0]], self.nodes[w[1]]));
+            for w in self.segment_points[l][s].windows(2) {
+                let fine = w.iter().any(|&i| i >= self.nodes.len());
+                out.push((self.points[w[0]], self.points[w[1]], fine));
             }
         }
         out
@@ -339,7 +355,7 @@ impl PolygonMesh {
 
     /// Every boundary piece of every loop.
     pub fn all_segments(&self) -> Vec<(usize, usize)> {
-        self.segment_nodes
+        self.segment_points
             .iter()
             .enumerate()
             .flat_map(|(l, segs)| (0..segs.len()).map(move |s| (l, s)))
@@ -387,17 +403,19 @@ impl SizeField<'_> {
         })
     }
 
-    /// Interior stations `t ∈ (0, 1)` of boundary nodes on `a → b`: `N =
-    /// ⌈∫ ds/s⌉` pieces of equal `∫ ds/s` (trapezoidal on a fine sampling),
-    /// so that no piece is longer than about the local `s`.
-    fn stations(&self, a: Vec2, b: Vec2) -> Vec<f64> {
-        let len = (b - a).norm();
+    /// The interior boundary nodes of the polyline `poly` (one segment or
+    /// several, between two nodes): `N = ⌈∫ ds/s⌉` pieces of equal
+    /// `∫ ds/s` (trapezoidal on a fine sampling), so that no piece is
+    /// longer than about the local `s`; each node with the segment of
+    /// `poly` it lies on.
+    fn stations(&self, poly: &[Vec2]) -> Vec<(usize, Vec2)> {
+        let len = length(poly);
         let finest = self.refine.iter().map(|r| r.spacing).fold(self.h, f64::min);
         let m = ((8.0 * len / finest).ceil() as usize).clamp(1, 1 << 20);
         let mut cum = vec![0.0; m + 1];
-        let mut prev = 1.0 / self.at(a);
+        let mut prev = 1.0 / self.at(poly[0]);
         for j in 1..=m {
-            let cur = 1.0 / self.at(a + (b - a) * (j as f64 / m as f64));
+            let cur = 1.0 / self.at(point_at(poly, j as f64 / m as f64).1);
             cum[j] = cum[j - 1] + 0.5 * (prev + cur) * len / m as f64;
             prev = cur;
         }
@@ -411,10 +429,217 @@ impl SizeField<'_> {
                 j += 1;
             }
             let f = (target - cum[j]) / (cum[j + 1] - cum[j]);
-            out.push((j as f64 + f) / m as f64);
+            out.push(point_at(poly, (j as f64 + f) / m as f64));
         }
         out
     }
+}
+
+/// Turn of the boundary (radians) from which a vertex is a corner, and a
+/// node whatever the spacing (module docs): 30°.
+pub const CORNER: f64 = std::f64::consts::PI / 6.0;
+
+/// Least distance along the loop, in units of the local spacing, of a
+/// vertex that is not a corner from the previous node and the next corner
+/// for it to be a node: ¼. Outlines drawn with chords of `h/2` or `h/4`
+/// keep every vertex as a node; a circle of 1 000 segments at `h/10` each
+/// keeps one in three.
+pub const MIN_VERTEX_GAP: f64 = 0.25;
+
+/// Length of the polyline `poly`.
+fn length(poly: &[Vec2]) -> f64 {
+    poly.windows(2).map(|w| (w[1] - w[0]).norm()).sum()
+}
+
+/// The point at fraction `u` of the length of `poly`, with the segment it
+/// is on (`a + (b − a) u` exactly for one segment).
+fn point_at(poly: &[Vec2], u: f64) -> (usize, Vec2) {
+    if poly.len() == 2 {
+        return (0, poly[0] + (poly[1] - poly[0]) * u);
+    }
+    let mut left = u * length(poly);
+    let last = poly.len() - 2;
+    for (k, w) in poly.windows(2).enumerate() {
+        let l = (w[1] - w[0]).norm();
+        if left <= l || k == last {
+            return (k, w[0] + (w[1] - w[0]) * (left / l).min(1.0));
+        }
+        left -= l;
+    }
+    unreachable!("a polyline has a segment")
+}
+
+/// `m − 1` interior nodes dividing `poly` into `m` equal lengths.
+fn even(poly: &[Vec2], m: usize) -> Vec<(usize, Vec2)> {
+    (1..m)
+        .map(|k| point_at(poly, k as f64 / m as f64))
+        .collect()
+}
+
+/// A boundary point before the interior nodes are numbered: a node, or a
+/// vertex that is not one (`extra[i]`).
+#[derive(Debug, Clone, Copy)]
+enum At {
+    Node(usize),
+    Vertex(usize),
+}
+
+/// The boundary nodes of a domain (module docs).
+struct Boundary {
+    /// Loop by loop, in vertex order.
+    nodes: Vec<Vec2>,
+    /// Per loop, per segment: its points from start to end vertex.
+    segments: Vec<Vec<Vec<At>>>,
+    /// The vertices that are not nodes.
+    extra: Vec<Vec2>,
+}
+
+/// The nodes inside a polyline between two neighbouring boundary nodes
+/// (their index along it and position).
+type InteriorNodes<'a> = dyn Fn(&[Vec2]) -> Vec<(usize, Vec2)> + 'a;
+
+impl Boundary {
+    /// `spacing(x)`: the node spacing at `x`; `interior(poly)`: the nodes
+    /// inside the polyline between two neighbouring nodes.
+    fn new(domain: &Domain, spacing: &dyn Fn(Vec2) -> f64, interior: &InteriorNodes) -> Boundary {
+        let mut b = Boundary {
+            nodes: Vec::new(),
+            segments: Vec::with_capacity(domain.loops.len()),
+            extra: Vec::new(),
+        };
+        for l in &domain.loops {
+            let pts = &l.points;
+            let n = pts.len();
+            let keep = vertex_nodes(pts, spacing);
+            // per segment, the interior nodes on it (in order along it)
+            let mut on: Vec<Vec<Vec2>> = vec![Vec::new(); n];
+            let kept: Vec<usize> = (0..n).filter(|&i| keep[i]).collect();
+            for (k, &i) in kept.iter().enumerate() {
+                let j = kept[(k + 1) % kept.len()];
+                let span = if j > i { j - i } else { j + n - i };
+                let poly: Vec<Vec2> = (0..=span).map(|t| pts[(i + t) % n]).collect();
+                let mut inner = interior(&poly);
+                if kept.len() == 1 && inner.len() < 2 {
+                    // a whole loop between one node and itself: 3 nodes
+                    inner = even(&poly, 3);
+                }
+                for (seg, p) in inner {
+                    on[(i + seg) % n].push(p);
+                }
+            }
+            let mut segs: Vec<Vec<At>> = Vec::with_capacity(n);
+            let mut start = Vec::with_capacity(n);
+            for i in 0..n {
+                let at = if keep[i] {
+                    b.nodes.push(pts[i]);
+                    At::Node(b.nodes.len() - 1)
+                } else {
+                    b.extra.push(pts[i]);
+                    At::Vertex(b.extra.len() - 1)
+                };
+                start.push(at);
+                let mut ids = vec![at];
+                for &p in &on[i] {
+                    b.nodes.push(p);
+                    ids.push(At::Node(b.nodes.len() - 1));
+                }
+                segs.push(ids);
+            }
+            for i in 0..n {
+                segs[i].push(start[(i + 1) % n]);
+            }
+            b.segments.push(segs);
+        }
+        b
+    }
+}
+
+/// Which vertices of a loop are nodes (module docs): corners, and vertices
+/// at least [`MIN_VERTEX_GAP`] × the local spacing along the loop from the
+/// previous node and from the next corner. Every vertex where the loop is
+/// coarse.
+fn vertex_nodes(pts: &[Vec2], spacing: &dyn Fn(Vec2) -> f64) -> Vec<bool> {
+    let n = pts.len();
+    let cos_corner = CORNER.cos();
+    let mut corner: Vec<bool> = (0..n)
+        .map(|i| {
+            let (d1, d2) = (pts[i] - pts[(i + n - 1) % n], pts[(i + 1) % n] - pts[i]);
+            d1.dot(d2) < cos_corner * d1.norm() * d2.norm()
+        })
+        .collect();
+    let Some(s0) = corner.iter().position(|&c| c) else {
+        corner[0] = true;
+        return vertex_nodes_from(pts, &corner, 0, spacing);
+    };
+    vertex_nodes_from(pts, &corner, s0, spacing)
+}
+
+/// [`vertex_nodes`] walking from corner `s0`.
+fn vertex_nodes_from(
+    pts: &[Vec2],
+    corner: &[bool],
+    s0: usize,
+    spacing: &dyn Fn(Vec2) -> f64,
+) -> Vec<bool> {
+    let n = pts.len();
+    let seg = |i: usize| (pts[(i + 1) % n] - pts[i]).norm();
+    // arc length from vertex i to the next corner (backwards from s0)
+    let mut to_corner = vec![0.0; n];
+    let mut acc = 0.0;
+    for t in (1..=n).rev() {
+        let i = (s0 + t) % n;
+        if corner[i] {
+            acc = 0.0;
+        }
+        to_corner[i] = acc;
+        acc += seg((i + n - 1) % n);
+    }
+    let mut keep = corner.to_vec();
+    let mut since = 0.0;
+    for t in 1..n {
+        let i = (s0 + t) % n;
+        since += seg((i + n - 1) % n);
+        if corner[i] {
+            since = 0.0;
+            continue;
+        }
+        let gap = MIN_VERTEX_GAP * spacing(pts[i]);
+        if since >= gap && to_corner[i] >= gap {
+            keep[i] = true;
+            since = 0.0;
+        }
+    }
+    keep
+}
+
+/// The triangulation of the nodes and the extra vertices with the
+/// boundary pieces as constraints: the points (nodes, then `extra`), the
+/// segments' points as indices into them, the triangles.
+#[allow(clippy::type_complexity)]
+fn finish(
+    nodes: &[Vec2],
+    extra: Vec<Vec2>,
+    segments: &[Vec<Vec<At>>],
+    domain: &Domain,
+) -> Result<(Vec<Vec2>, Vec<Vec<Vec<usize>>>, Vec<[usize; 3]>), String> {
+    let n = nodes.len();
+    let index = |a: &At| match *a {
+        At::Node(k) => k,
+        At::Vertex(e) => n + e,
+    };
+    let segment_points: Vec<Vec<Vec<usize>>> = segments
+        .iter()
+        .map(|segs| segs.iter().map(|s| s.iter().map(index).collect()).collect())
+        .collect();
+    let constraints: Vec<[usize; 2]> = segment_points
+        .iter()
+        .flatten()
+        .flat_map(|ids| ids.windows(2).map(|w| [w[0], w[1]]))
+        .collect();
+    let mut points = nodes.to_vec();
+    points.extend(extra);
+    let triangles = triangulate(&points, &constraints, domain).map_err(|e| e.to_string())?;
+    Ok((points, segment_points, triangles))
 }
 
 /// A uniform bin grid of points (node lookup by neighbourhood).
@@ -531,7 +756,7 @@ mod tests {
             assert!(
                 (m.node_spacing[k] - s).abs() < 0.02 * s + 0.01 * hr
                     || k < m
-                        .segment_nodes
+                        .segment_points
                         .iter()
                         .flatten()
                         .map(Vec::len)

@@ -2,6 +2,7 @@
 //! polygonal domains ([`polygon`]) and their triangulation ([`triangulate`]).
 
 pub mod polygon;
+pub mod segment_index;
 pub mod triangulate;
 
 use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};

@@ -10,6 +10,7 @@
 //! direction rotated by −90°, as the contact chains expect.
 
 use super::Vec2;
+use super::segment_index::SegmentIndex;
 
 /// A closed loop: segment `i` runs from `points[i]` to `points[(i + 1) % n]`.
 #[derive(Debug, Clone, PartialEq)]
@@ -53,12 +54,21 @@ pub struct NamedEdge {
 }
 
 /// An outline with holes and named edges: the domain Ω of a polygon body.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Domain {
     /// Loop 0: outline (CCW); loops 1..: holes (stored CW).
     pub loops: Vec<Loop>,
     /// Named edges.
     pub edges: Vec<NamedEdge>,
+    /// The loops' segments, indexed (as stored).
+    index: SegmentIndex,
+}
+
+impl PartialEq for Domain {
+    fn eq(&self, o: &Domain) -> bool {
+        // the index is a function of the loops
+        self.loops == o.loops && self.edges == o.edges
+    }
 }
 
 /// Why a polygon was refused.
@@ -219,42 +229,13 @@ impl Domain {
             .map(|points| Loop { points })
             .collect();
         for (k, l) in user.iter().enumerate() {
-            check_loop(l, &loop_name(k))?;
+            check_loop_points(l, &loop_name(k))?;
         }
-        let outline = &user[0];
-        for (k, h) in user.iter().enumerate().skip(1) {
-            for (i, &p) in h.points.iter().enumerate() {
-                if !inside_loop(&outline.points, p) {
-                    return Err(PolygonError::HolePlacement {
-                        what: format!(
-                            "hole {k} is not strictly inside the outline: its vertex {i} ({}, {}) is outside or on it",
-                            p.x, p.y
-                        ),
-                    });
-                }
-            }
-            if let Some((i, j)) = first_meeting(h, outline) {
-                return Err(PolygonError::HolePlacement {
-                    what: format!(
-                        "hole {k} is not strictly inside the outline: its segment {i} meets the outline's segment {j}"
-                    ),
-                });
-            }
-            for (m, g) in user.iter().enumerate().skip(1).take(k - 1) {
-                if let Some((i, j)) = first_meeting(h, g) {
-                    return Err(PolygonError::HolePlacement {
-                        what: format!(
-                            "holes {m} and {k} overlap: segment {j} of hole {m} meets segment {i} of hole {k}"
-                        ),
-                    });
-                }
-                if inside_loop(&g.points, h.points[0]) || inside_loop(&h.points, g.points[0]) {
-                    return Err(PolygonError::HolePlacement {
-                        what: format!("holes {m} and {k} overlap: one lies inside the other"),
-                    });
-                }
-            }
+        let index = SegmentIndex::new(&user);
+        for (k, l) in user.iter().enumerate() {
+            check_simple(l, k, &index, &loop_name(k))?;
         }
+        check_holes(&user, &index)?;
         let loops: Vec<Loop> = user
             .iter()
             .enumerate()
@@ -296,19 +277,25 @@ impl Domain {
                 segments: out,
             });
         }
+        let index = SegmentIndex::new(&loops);
         Ok(Domain {
             loops,
             edges: named,
+            index,
         })
     }
 
     /// Is `p` inside Ω (strictly inside the outline and outside every hole;
-    /// points on the boundary count as outside)?
+    /// points on the boundary count as outside)? The crossing number over
+    /// every loop: the holes lie inside the outline and apart, so an odd
+    /// count means inside the outline and in no hole.
     pub fn contains(&self, p: Vec2) -> bool {
-        inside_loop(&self.loops[0].points, p)
-            && self.loops[1..]
-                .iter()
-                .all(|h| !inside_loop(&h.points, p) && !on_loop(&h.points, p))
+        !self.index.on_boundary(p) && self.index.crossings(p).count() % 2 == 1
+    }
+
+    /// The boundary segments, indexed (storage indexing: holes reversed).
+    pub fn index(&self) -> &SegmentIndex {
+        &self.index
     }
 
     /// All boundary segments `(a, b)`, loop by loop, body on the left.
@@ -325,9 +312,7 @@ impl Domain {
 
     /// Distance from `p` to the nearest boundary segment.
     pub fn boundary_distance(&self, p: Vec2) -> f64 {
-        self.segments()
-            .map(|(a, b)| (p - super::closest_on_segment(p, a, b).1).norm())
-            .fold(f64::INFINITY, f64::min)
+        self.index.distance(p)
     }
 
     /// Lower-left and upper-right corners of the outline's bounding box.
@@ -349,25 +334,83 @@ impl Domain {
     }
 }
 
-fn on_loop(points: &[Vec2], p: Vec2) -> bool {
-    let n = points.len();
-    (0..n).any(|i| on_segment(points[i], points[(i + 1) % n], p))
+/// Is `p` strictly inside loop `lp` of `index` (crossing number; a point
+/// on the loop is not)?
+fn inside(index: &SegmentIndex, lp: usize, p: Vec2) -> bool {
+    !index
+        .in_box(p, p)
+        .any(|s| s.lp == lp && on_segment(s.a, s.b, p))
+        && index.crossings(p).filter(|&m| m == lp).count() % 2 == 1
 }
 
-fn first_meeting(a: &Loop, b: &Loop) -> Option<(usize, usize)> {
-    for i in 0..a.len() {
-        let (p, q) = a.segment(i);
-        for j in 0..b.len() {
-            let (r, s) = b.segment(j);
-            if segments_meet(p, q, r, s) {
-                return Some((i, j));
+/// The first `(i, j)` (by `i`, then `j`) with segment `i` of loop `a`
+/// meeting segment `j` of a loop `b` in `others`, with its `b`, the
+/// smallest `b` first.
+fn first_meeting(
+    loops: &[Loop],
+    index: &SegmentIndex,
+    a: usize,
+    others: std::ops::Range<usize>,
+) -> Option<(usize, usize, usize)> {
+    (0..loops[a].len())
+        .filter_map(|i| {
+            let (p, q) = loops[a].segment(i);
+            index
+                .near_segment(p, q)
+                .filter(|s| others.contains(&s.lp) && segments_meet(p, q, s.a, s.b))
+                .map(|s| (s.lp, i, s.seg))
+                .min()
+        })
+        .min()
+}
+
+/// Holes strictly inside the outline, apart from each other.
+fn check_holes(user: &[Loop], index: &SegmentIndex) -> Result<(), PolygonError> {
+    for (k, h) in user.iter().enumerate().skip(1) {
+        for (i, &p) in h.points.iter().enumerate() {
+            if !inside(index, 0, p) {
+                return Err(PolygonError::HolePlacement {
+                    what: format!(
+                        "hole {k} is not strictly inside the outline: its vertex {i} ({}, {}) is outside or on it",
+                        p.x, p.y
+                    ),
+                });
             }
         }
+        if let Some((_, i, j)) = first_meeting(user, index, k, 0..1) {
+            return Err(PolygonError::HolePlacement {
+                what: format!(
+                    "hole {k} is not strictly inside the outline: its segment {i} meets the outline's segment {j}"
+                ),
+            });
+        }
+        if let Some((m, i, j)) = first_meeting(user, index, k, 1..k) {
+            return Err(PolygonError::HolePlacement {
+                what: format!(
+                    "holes {m} and {k} overlap: segment {j} of hole {m} meets segment {i} of hole {k}"
+                ),
+            });
+        }
     }
-    None
+    // apart and not crossing: a hole inside another has its first vertex
+    // inside it
+    for (k, h) in user.iter().enumerate().skip(1) {
+        let mut odd = std::collections::BTreeMap::new();
+        for m in index.crossings(h.points[0]).filter(|&m| m != 0 && m != k) {
+            *odd.entry(m).or_insert(0usize) += 1;
+        }
+        if let Some((&m, _)) = odd.iter().find(|(_, c)| *c % 2 == 1) {
+            let (m, k) = (m.min(k), m.max(k));
+            return Err(PolygonError::HolePlacement {
+                what: format!("holes {m} and {k} overlap: one lies inside the other"),
+            });
+        }
+    }
+    Ok(())
 }
 
-fn check_loop(l: &Loop, what: &str) -> Result<(), PolygonError> {
+/// At least 3 vertices, all finite, no zero-length segment.
+fn check_loop_points(l: &Loop, what: &str) -> Result<(), PolygonError> {
     let n = l.len();
     if n < 3 {
         return Err(PolygonError::TooFew {
@@ -394,30 +437,46 @@ fn check_loop(l: &Loop, what: &str) -> Result<(), PolygonError> {
             });
         }
     }
-    for i in 0..n {
-        let (a, b) = l.segment(i);
-        for j in i + 1..n {
-            let (c, d) = l.segment(j);
-            let adjacent = j == i + 1 || (i == 0 && j == n - 1);
-            let bad = if adjacent {
-                // share one vertex: bad only if they fold back on each other
-                let (shared, p, q) = if j == i + 1 { (b, a, d) } else { (a, b, c) };
-                orient(shared, p, q) == 0 && (p - shared).dot(q - shared) > 0.0
-            } else {
-                segments_meet(a, b, c, d)
-            };
-            if bad {
-                return Err(PolygonError::SelfIntersecting {
-                    what: what.into(),
-                    i,
-                    j,
-                    a: a.to_array(),
-                    b: b.to_array(),
-                    c: c.to_array(),
-                    d: d.to_array(),
-                });
-            }
+    Ok(())
+}
+
+/// Loop `k` (indexed in `index`) is simple — no two segments meet except
+/// neighbours at their shared vertex, and those do not fold back — and
+/// counter-clockwise. The first offending pair (by `i`, then `j`) is
+/// reported.
+fn check_simple(l: &Loop, k: usize, index: &SegmentIndex, what: &str) -> Result<(), PolygonError> {
+    let n = l.len();
+    let bad_pair = |i: usize, j: usize| {
+        let ((a, b), (c, d)) = (l.segment(i), l.segment(j));
+        let adjacent = j == i + 1 || (i == 0 && j == n - 1);
+        if adjacent {
+            // share one vertex: bad only if they fold back on each other
+            let (shared, p, q) = if j == i + 1 { (b, a, d) } else { (a, b, c) };
+            orient(shared, p, q) == 0 && (p - shared).dot(q - shared) > 0.0
+        } else {
+            segments_meet(a, b, c, d)
         }
+    };
+    let first = (0..n).find_map(|i| {
+        let (a, b) = l.segment(i);
+        index
+            .near_segment(a, b)
+            .filter(|s| s.lp == k && s.seg > i && bad_pair(i, s.seg))
+            .map(|s| s.seg)
+            .min()
+            .map(|j| (i, j))
+    });
+    if let Some((i, j)) = first {
+        let ((a, b), (c, d)) = (l.segment(i), l.segment(j));
+        return Err(PolygonError::SelfIntersecting {
+            what: what.into(),
+            i,
+            j,
+            a: a.to_array(),
+            b: b.to_array(),
+            c: c.to_array(),
+            d: d.to_array(),
+        });
     }
     let area = 0.5 * l.signed_area2();
     if area <= 0.0 {

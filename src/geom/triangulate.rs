@@ -21,10 +21,27 @@ pub fn triangulate(
     constraints: &[[usize; 2]],
     domain: &Domain,
 ) -> Result<Vec<[usize; 3]>, TriangulationError> {
-    let verts: Vec<Point2<f64>> = points.iter().map(|p| Point2::new(p.x, p.y)).collect();
+    // coordinates below spade's smallest magnitude (1.8e-43) become 0: a
+    // displacement nothing else can resolve either
+    let verts: Vec<Point2<f64>> = points
+        .iter()
+        .map(|p| spade::mitigate_underflow(Point2::new(p.x, p.y)))
+        .collect();
     let cdt =
         ConstrainedDelaunayTriangulation::<Point2<f64>>::bulk_load_cdt(verts, constraints.to_vec())
-            .map_err(|e| TriangulationError(format!("{e:?}")))?;
+            .map_err(|e| {
+                TriangulationError(match e {
+                    spade::InsertionError::TooLarge => format!(
+                        "a coordinate is larger than {:e} in magnitude",
+                        spade::MAX_ALLOWED_VALUE
+                    ),
+                    spade::InsertionError::NAN => "a coordinate is not a number".into(),
+                    _ => format!(
+                        "a coordinate is non-zero but below {:e} in magnitude",
+                        spade::MIN_ALLOWED_VALUE
+                    ),
+                })
+            })?;
     if cdt.num_vertices() != points.len() {
         return Err(TriangulationError(format!(
             "{} of {} nodes coincide with others",

@@ -44,6 +44,10 @@ pub enum ModelError {
     /// A static model has no time steps (call [`Model::solve_static`]).
     #[error("a static analysis has no time steps; call solve_static()")]
     Static,
+    /// A call that does not fit the model: a static solve of a model with
+    /// discs, a non-finite end time.
+    #[error("{0}")]
+    Usage(String),
 }
 
 /// What is simulated.
@@ -106,6 +110,11 @@ impl Model {
         t_end: f64,
         mut after: impl FnMut(&Model) -> ControlFlow<()>,
     ) -> Result<usize, ModelError> {
+        if !t_end.is_finite() {
+            return Err(ModelError::Usage(format!(
+                "run until t = {t_end}: the end time must be a finite number"
+            )));
+        }
         let mut n = 0;
         while self.time() + 0.5 * self.dt < t_end {
             self.step()?;
@@ -118,11 +127,15 @@ impl Model {
     }
 
     /// Solve the static problem of every body (continuum static analysis).
+    /// A model with discs has none ([`ModelError::Usage`]).
     pub fn solve_static(&mut self) -> Result<(), ModelError> {
-        if let System::Continuum { bodies, .. } = &mut self.system {
-            for b in bodies {
-                b.solve_static()?;
-            }
+        let System::Continuum { bodies, .. } = &mut self.system else {
+            return Err(ModelError::Usage(
+                "a model with discs has no static solve (only continuum bodies have one); advance it with step() or run()".into(),
+            ));
+        };
+        for b in bodies {
+            b.solve_static()?;
         }
         Ok(())
     }

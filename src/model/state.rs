@@ -23,8 +23,10 @@
 //! (scratch buffers, segment grids, timing).
 //!
 //! [`ModelState::to_bytes`] writes [`STATE_FORMAT_VERSION`] (4 bytes,
-//! little endian) and then the state in the `postcard` format (f64 as
-//! their 8 bytes: exact).
+//! little endian), the state in the `postcard` format (f64 as their 8
+//! bytes: exact) and a CRC-32 of all that (4 bytes, little endian), so
+//! that damaged bytes (any single flipped bit, a cut) are refused by
+//! [`ModelState::from_bytes`] instead of restored.
 
 use super::{Model, ModelError, System};
 use crate::continuum::{BodyState, StateError};
@@ -35,8 +37,9 @@ use crate::dem::state::GranularState;
 /// a saved type changes.
 /// (2: walls keep both ends of the Verlet reference, for joined ends;
 /// 3: walls keep the integral velocity of a servo with integral action;
-/// 4: bodies keep their drives' state and the work of timed loads.)
-pub const STATE_FORMAT_VERSION: u32 = 4;
+/// 4: bodies keep their drives' state and the work of timed loads;
+/// 5: a CRC-32 of the bytes at their end.)
+pub const STATE_FORMAT_VERSION: u32 = 5;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -71,18 +74,20 @@ impl SystemState {
 
 impl ModelState {
     /// The state as bytes: [`STATE_FORMAT_VERSION`] (u32, little endian),
-    /// then the `postcard` encoding.
+    /// the `postcard` encoding, the CRC-32 of both (u32, little endian).
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut out = STATE_FORMAT_VERSION.to_le_bytes().to_vec();
         // postcard cannot fail on these types (no maps, no unsized data)
         postcard::to_io(self, &mut out).expect("postcard encodes a model state");
+        out.extend_from_slice(&crc32fast::hash(&out).to_le_bytes());
         out
     }
 
     /// A state from [`to_bytes`](Self::to_bytes); refused when the version
-    /// differs, the bytes are truncated or malformed, or bytes are left over.
+    /// differs, the checksum does not match (damaged or cut bytes), the
+    /// bytes are malformed, or bytes are left over.
     pub fn from_bytes(bytes: &[u8]) -> Result<ModelState, StateError> {
-        let Some((head, body)) = bytes.split_first_chunk::<4>() else {
+        let Some((head, _)) = bytes.split_first_chunk::<4>() else {
             return Err(StateError::new("a model state of fewer than 4 bytes"));
         };
         let version = u32::from_le_bytes(*head);
@@ -91,7 +96,16 @@ impl ModelState {
                 "a model state of format version {version}; this build reads version {STATE_FORMAT_VERSION}"
             )));
         }
-        let (s, rest) = postcard::take_from_bytes::<ModelState>(body)
+        let Some((content, crc)) = bytes.split_last_chunk::<4>().filter(|(c, _)| c.len() >= 4)
+        else {
+            return Err(StateError::new("a model state cut short"));
+        };
+        if crc32fast::hash(content) != u32::from_le_bytes(*crc) {
+            return Err(StateError::new(
+                "a damaged model state: its bytes do not match their checksum (altered or cut short since save_state)",
+            ));
+        }
+        let (s, rest) = postcard::take_from_bytes::<ModelState>(&content[4..])
             .map_err(|e| StateError::new(format!("a malformed model state: {e}")))?;
         if !rest.is_empty() {
             return Err(StateError::new(format!(

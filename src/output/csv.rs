@@ -1,151 +1,172 @@
 //! `history.csv`: one row per recorded step, streamed to disk, and read
 //! back ([`History`]) by post-processing.
 
+use super::io_at;
 use crate::dem::Granular;
 use std::fs::File;
-use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::io::{Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-/// A CSV time-series writer. Rows are buffered and flushed at least once a
-/// second and on drop, so an interrupted run loses at most a second of rows.
+/// A CSV time-series writer. Rows are buffered and written at least once a
+/// second and on drop, so an interrupted run loses at most a second of
+/// rows. The file holds whole rows only: rows reach the buffer whole, and a
+/// write that fails (a full disk) is undone by cutting the file back to its
+/// last whole row before the error (which names the file) is returned.
 pub struct HistoryWriter {
-    out: BufWriter<File>,
+    file: File,
+    path: PathBuf,
     ncols: usize,
     /// Columns written as integers (`step`).
     integer: Vec<bool>,
-    /// The row being formatted: rows reach the buffer whole, so the file
-    /// never ends in half a row.
-    line: String,
+    /// Whole rows not yet written to the file.
+    buf: Vec<u8>,
     last_flush: Instant,
-    /// Bytes of the file so far (written or buffered).
-    bytes: u64,
+    /// Bytes of the file known to be written (whole rows).
+    written: u64,
 }
+
+/// Rows buffered before they are written, whatever the time.
+const BUFFER: usize = 1 << 16;
 
 impl HistoryWriter {
     /// Create `path` and write the header line.
     pub fn create(path: &Path, columns: &[&str]) -> std::io::Result<Self> {
-        let mut out = BufWriter::new(File::create(path)?);
-        let header = format!("{}\n", columns.join(","));
-        out.write_all(header.as_bytes())?;
-        out.flush()?;
-        Ok(Self::with(out, columns, header.len() as u64))
+        let file = File::create(path).map_err(|e| io_at(path, e))?;
+        let mut w = Self::with(file, path, columns, 0);
+        w.buf
+            .extend_from_slice(format!("{}\n", columns.join(",")).as_bytes());
+        w.flush()?;
+        Ok(w)
     }
 
     /// Continue `path` (a restart): keep its first `bytes` bytes (what a
     /// checkpoint recorded with [`bytes`](Self::bytes)), drop the rest, and
-    /// append from there. Fails if the file is shorter or its header is
-    /// not `columns`.
+    /// append from there. Fails (`InvalidData`, the message naming the file)
+    /// if the file is shorter or its header is not `columns`.
     pub fn resume(path: &Path, columns: &[&str], bytes: u64) -> std::io::Result<Self> {
-        use std::io::{Error, ErrorKind, Read, Seek, SeekFrom};
+        use std::io::{Error, ErrorKind, Read};
         let bad =
             |m: String| Error::new(ErrorKind::InvalidData, format!("{}: {m}", path.display()));
         let mut f = std::fs::OpenOptions::new()
             .read(true)
             .write(true)
-            .open(path)?;
+            .open(path)
+            .map_err(|e| io_at(path, e))?;
         let header = format!("{}\n", columns.join(","));
         let mut first = vec![0; header.len()];
         if f.read_exact(&mut first).is_err() || first != header.as_bytes() {
             return Err(bad(format!("the header is not `{}`", header.trim_end())));
         }
-        let len = f.metadata()?.len();
+        let len = f.metadata().map_err(|e| io_at(path, e))?.len();
         if len < bytes {
             return Err(bad(format!(
                 "{len} bytes, shorter than the {bytes} the checkpoint recorded"
             )));
         }
-        f.set_len(bytes)?;
-        f.seek(SeekFrom::End(0))?;
-        Ok(Self::with(BufWriter::new(f), columns, bytes))
+        f.set_len(bytes)
+            .and_then(|_| f.seek(SeekFrom::End(0)))
+            .map_err(|e| io_at(path, e))?;
+        Ok(Self::with(f, path, columns, bytes))
     }
 
-    fn with(out: BufWriter<File>, columns: &[&str], bytes: u64) -> Self {
+    fn with(file: File, path: &Path, columns: &[&str], written: u64) -> Self {
         HistoryWriter {
-            out,
+            file,
+            path: path.to_path_buf(),
             ncols: columns.len(),
             integer: columns.iter().map(|c| *c == "step").collect(),
-            line: String::new(),
+            buf: Vec::with_capacity(BUFFER),
             last_flush: Instant::now(),
-            bytes,
+            written,
         }
     }
 
     /// Length of the file once flushed (header and every row so far).
     pub fn bytes(&self) -> u64 {
-        self.bytes
+        self.written + self.buf.len() as u64
     }
 
     /// Append one row; `values.len()` must equal the number of columns.
     pub fn row(&mut self, values: &[f64]) -> std::io::Result<()> {
-        use std::fmt::Write as _;
+        use std::io::Write as _;
         debug_assert_eq!(values.len(), self.ncols, "history row width");
-        self.line.clear();
         for (i, v) in values.iter().enumerate() {
             if i > 0 {
-                self.line.push(',');
+                self.buf.push(b',');
             }
+            // writing into a Vec cannot fail
             let _ = if self.integer[i] {
-                write!(self.line, "{}", *v as i64)
+                write!(self.buf, "{}", *v as i64)
             } else {
-                write!(self.line, "{v:e}")
+                write!(self.buf, "{v:e}")
             };
         }
-        self.line.push('\n');
-        self.out.write_all(self.line.as_bytes())?;
-        self.bytes += self.line.len() as u64;
-        if self.last_flush.elapsed() > Duration::from_secs(1) {
+        self.buf.push(b'\n');
+        if self.buf.len() >= BUFFER || self.last_flush.elapsed() > Duration::from_secs(1) {
             self.flush()?;
         }
         Ok(())
     }
 
-    /// Write the buffered rows to the file now.
+    /// Write the buffered rows to the file now. On failure the file is cut
+    /// back to the rows written before, and the rows are dropped.
     pub fn flush(&mut self) -> std::io::Result<()> {
         self.last_flush = Instant::now();
-        self.out.flush()
+        if self.buf.is_empty() {
+            return Ok(());
+        }
+        match self.file.write_all(&self.buf) {
+            Ok(()) => {
+                self.written += self.buf.len() as u64;
+                self.buf.clear();
+                Ok(())
+            }
+            Err(e) => {
+                self.buf.clear();
+                // cutting back frees space: it works on a full disk too
+                let _ = self
+                    .file
+                    .set_len(self.written)
+                    .and_then(|_| self.file.seek(SeekFrom::Start(self.written)));
+                Err(io_at(&self.path, e))
+            }
+        }
     }
 }
 
 impl Drop for HistoryWriter {
     fn drop(&mut self) {
-        let _ = self.out.flush();
+        let _ = self.flush();
     }
 }
 
 /// Read a CSV written by [`HistoryWriter`] back: header and numeric rows.
+/// A row with another number of fields than the header, or a field that is
+/// not a number, is refused (`InvalidData`, with the file and line).
 pub fn read(path: &Path) -> std::io::Result<(Vec<String>, Vec<Vec<f64>>)> {
-    let text = std::fs::read_to_string(path)?;
-    let mut lines = text.lines();
-    let header = lines
-        .next()
-        .unwrap_or("")
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| {
-            l.split(',')
-                .map(|v| v.trim().parse::<f64>().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
-    Ok((header, rows))
+    let text = std::fs::read_to_string(path).map_err(|e| io_at(path, e))?;
+    let h = History::parse(&text).map_err(|e| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("{}: {e}", path.display()),
+        )
+    })?;
+    Ok((h.columns, h.rows))
 }
 
-/// Write the discs as `x,y,r,vx,vy,omega` in scenario order (readable as a
-/// `discs = { csv = ... }` source: the extra columns are... not accepted,
-/// so only `x,y,r` are written).
-pub fn write_discs_csv(gr: &Granular, path: &std::path::Path) -> std::io::Result<()> {
+/// Write the discs as `x,y,r` in scenario order (readable as a `discs =
+/// { csv = ... }` source), atomically: a reader never sees part of it.
+pub fn write_discs_csv(gr: &Granular, path: &Path) -> std::io::Result<()> {
     let p = &gr.particles;
-    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
-    writeln!(w, "x,y,r")?;
-    for id in 0..p.len() {
-        let k = p.slot[id] as usize;
-        writeln!(w, "{:e},{:e},{:e}", p.pos[k].x, p.pos[k].y, p.radius[k])?;
-    }
-    w.flush()
+    super::write_atomic(path, true, |w| {
+        writeln!(w, "x,y,r")?;
+        for id in 0..p.len() {
+            let k = p.slot[id] as usize;
+            writeln!(w, "{:e},{:e},{:e}", p.pos[k].x, p.pos[k].y, p.radius[k])?;
+        }
+        Ok(())
+    })
 }
 
 #[cfg(test)]
@@ -180,7 +201,16 @@ pub struct History {
 
 impl History {
     /// Parse the text of a `history.csv` (a header line, then numbers).
+    /// Refused: a row of another width than the header, a field that is
+    /// not a number, a text that does not end with a line end (a file cut
+    /// short: its last number may be cut too).
     pub fn parse(text: &str) -> Result<History, String> {
+        if !text.is_empty() && !text.ends_with('\n') {
+            return Err(format!(
+                "line {}: the last row has no line end: the file was cut short",
+                text.lines().count()
+            ));
+        }
         let mut lines = text.lines().filter(|l| !l.trim().is_empty());
         let columns: Vec<String> = lines
             .next()

@@ -56,8 +56,20 @@ impl PvdSeries {
                 let mut buf = String::with_capacity(line.len() + PVD_TAIL.len());
                 buf.push_str(&line);
                 buf.push_str(PVD_TAIL);
-                f.seek(SeekFrom::Start(*tail))?;
-                f.write_all(buf.as_bytes())?;
+                let at = *tail;
+                let written = f
+                    .seek(SeekFrom::Start(at))
+                    .and_then(|_| f.write_all(buf.as_bytes()));
+                if let Err(e) = written {
+                    // put the closing tail back where it was (no more room
+                    // is needed), so the file stays whole without the entry
+                    self.entries.pop();
+                    let _ = f
+                        .seek(SeekFrom::Start(at))
+                        .and_then(|_| f.write_all(PVD_TAIL.as_bytes()))
+                        .and_then(|_| f.set_len(at + PVD_TAIL.len() as u64));
+                    return Err(super::io_at(&self.path, e));
+                }
                 *tail += line.len() as u64;
                 Ok(())
             }
@@ -94,10 +106,11 @@ impl PvdSeries {
         }
         let tail = s.len() as u64;
         s.push_str(PVD_TAIL);
-        let tmp = self.path.with_extension("pvd.tmp");
-        std::fs::write(&tmp, s)?;
-        std::fs::rename(tmp, &self.path)?;
-        let f = File::options().write(true).open(&self.path)?;
+        super::write_atomic(&self.path, false, |f| f.write_all(s.as_bytes()))?;
+        let f = File::options()
+            .write(true)
+            .open(&self.path)
+            .map_err(|e| super::io_at(&self.path, e))?;
         self.file = Some((f, tail));
         Ok(())
     }
@@ -238,22 +251,15 @@ impl VtkFile {
     /// (temporary file + rename: a reader never sees half a frame).
     pub fn write(mut self, kind: &str, path: &Path) -> std::io::Result<()> {
         self.close(kind);
-        let tmp = path.with_extension(format!(
-            "{}.tmp",
-            path.extension().and_then(|e| e.to_str()).unwrap_or("")
-        ));
-        {
-            let mut w = std::io::BufWriter::with_capacity(1 << 16, File::create(&tmp)?);
+        super::write_atomic(path, false, |w| {
             w.write_all(self.xml.as_bytes())?;
             if self.format != VtkFormat::Ascii {
                 w.write_all(b"<AppendedData encoding=\"raw\">\n_")?;
                 w.write_all(&self.appended)?;
                 w.write_all(b"\n</AppendedData>\n")?;
             }
-            w.write_all(b"</VTKFile>\n")?;
-            w.flush()?;
-        }
-        std::fs::rename(tmp, path)
+            w.write_all(b"</VTKFile>\n")
+        })
     }
 }
 

@@ -216,7 +216,8 @@ pub fn write_body(
 
 /// The true displacement, velocity, strain and stress at every node.
 fn efg_fields(b: &EfgBody, shapes: &PointShapes) -> NodalFields {
-    let n = b.n_nodes();
+    let points = b.frame_points();
+    let n = points.len();
     let mut f = NodalFields {
         reference: Vec::with_capacity(n),
         u: Vec::with_capacity(n),
@@ -225,7 +226,7 @@ fn efg_fields(b: &EfgBody, shapes: &PointShapes) -> NodalFields {
         strain: Vec::with_capacity(n),
     };
     let mut row = ShapeRow::new();
-    for i in 0..n {
+    for (i, p) in points.iter().enumerate() {
         row.idx.clear();
         row.phi.clear();
         row.dx.clear();
@@ -237,7 +238,7 @@ fn efg_fields(b: &EfgBody, shapes: &PointShapes) -> NodalFields {
             row.dy.push(shapes.val[k][2]);
         }
         let smp = b.sample_row(&row);
-        f.reference.push(b.node(i).to_array());
+        f.reference.push(p.to_array());
         f.u.push(smp.u.to_array());
         f.v.push(smp.v.to_array());
         f.stress.push(smp.stress);

@@ -1,20 +1,24 @@
 //! `checkpoint.bin`: everything a run needs to continue as if it had never
 //! stopped — the model's state ([`ModelState`]), the driver's own running
 //! values (energy account, extrema, events), and the output cursors (length
-//! of `history.csv`, the `.pvd` series' entries) — with a format version
-//! and a fingerprint of the scenario, written atomically.
+//! of `history.csv`, the `.pvd` series' entries) — with a format version,
+//! a fingerprint of the scenario and a CRC-32 of the whole content, written
+//! atomically. A damaged file (any single flipped bit, a cut, an overwrite)
+//! is refused with its path rather than used.
 
 use super::RunError;
 use crate::model::{Model, ModelState};
 use crate::scenario::Scenario;
 use crate::scenario::granular::{DiscsSpec, DiscsTable};
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// First bytes of a checkpoint file.
 const MAGIC: &[u8; 8] = b"EFGDEMCK";
 /// Version of the envelope below (the model state has its own).
-const VERSION: u32 = 2;
+/// (3: a CRC-32 of the file's content at its end.)
+const VERSION: u32 = 3;
 
 /// File name of the checkpoint in the output directory.
 pub const FILE: &str = "checkpoint.bin";
@@ -51,7 +55,10 @@ pub(super) fn fingerprint(sc: &Scenario) -> u64 {
         sc.granular.as_ref().map(|g| &g.discs)
     {
         // an unreadable file fails the build with its own error
-        text.extend(std::fs::read(sc.resolve(csv)).unwrap_or_default());
+        text.extend(
+            crate::scenario::read_bounded(&sc.resolve(csv), crate::scenario::MAX_CSV_BYTES)
+                .unwrap_or_default(),
+        );
     }
     text.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
         (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
@@ -77,28 +84,23 @@ impl Checkpoint {
         }
     }
 
-    /// Write to `path` atomically (temporary file, synced, renamed).
+    /// Write to `path` atomically (temporary file, synced, renamed):
+    /// [`MAGIC`], [`VERSION`], the content, its CRC-32.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        use std::io::Write;
-        let body = postcard::to_stdvec(self).expect("a checkpoint serialises");
-        let tmp = path.with_extension("bin.tmp");
-        {
-            let mut f = std::fs::File::create(&tmp)?;
-            f.write_all(MAGIC)?;
-            f.write_all(&VERSION.to_le_bytes())?;
-            f.write_all(&body)?;
-            f.sync_all()?;
-        }
-        std::fs::rename(tmp, path)
+        let mut bytes = MAGIC.to_vec();
+        bytes.extend_from_slice(&VERSION.to_le_bytes());
+        postcard::to_io(self, &mut bytes).expect("a checkpoint serialises");
+        bytes.extend_from_slice(&crc32fast::hash(&bytes).to_le_bytes());
+        crate::output::write_atomic(path, true, |f| f.write_all(&bytes))
     }
 
-    /// Read `path` and check it belongs to `sc`.
+    /// Read `path` and check it is whole and belongs to `sc`.
     pub fn read(path: &Path, sc: &Scenario) -> Result<Self, RunError> {
         let bad = |message: String| RunError::Restart {
             path: path.to_path_buf(),
             message,
         };
-        let bytes = std::fs::read(path).map_err(|e| bad(e.to_string()))?;
+        let bytes = read_checkpoint_file(path).map_err(|e| bad(e.to_string()))?;
         let Some(body) = bytes.strip_prefix(MAGIC) else {
             return Err(bad("not an efgdem checkpoint".into()));
         };
@@ -107,6 +109,14 @@ impl Checkpoint {
             return Err(bad(format!(
                 "checkpoint format {version:?} is not this efgdem's ({VERSION})"
             )));
+        }
+        let Some((body, crc)) = body.split_last_chunk::<4>() else {
+            return Err(bad("damaged checkpoint: cut short".into()));
+        };
+        if crc32fast::hash(&bytes[..bytes.len() - 4]) != u32::from_le_bytes(*crc) {
+            return Err(bad(
+                "damaged checkpoint: its content does not match its checksum (the file was altered or cut short after it was written); run the scenario afresh or use an intact copy".into(),
+            ));
         }
         let mut ck: Checkpoint =
             postcard::from_bytes(body).map_err(|e| bad(format!("damaged checkpoint: {e}")))?;
@@ -137,6 +147,19 @@ impl Checkpoint {
             message: format!("damaged driver values: {e}"),
         })
     }
+}
+
+/// The bytes of the checkpoint file `path`: its first bytes only unless
+/// they are [`MAGIC`] (a device or another file is not read on).
+fn read_checkpoint_file(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path)?;
+    let mut bytes = Vec::new();
+    (&mut f).take(MAGIC.len() as u64).read_to_end(&mut bytes)?;
+    if bytes == MAGIC {
+        f.read_to_end(&mut bytes)?;
+    }
+    Ok(bytes)
 }
 
 /// Where a run's checkpoints go.

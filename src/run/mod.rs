@@ -61,16 +61,29 @@ pub enum RunError {
     /// The scenario is invalid or cannot be built (exit code 2).
     #[error(transparent)]
     Scenario(#[from] ScenarioError),
-    /// Writing an output file failed.
-    #[error("i/o: {0}")]
-    Io(#[from] std::io::Error),
-    /// The output directory cannot be created or read.
-    #[error("output directory {}: {source}", path.display())]
+    /// Writing an output file failed (exit code 1); the message names the
+    /// file.
+    #[error("{0}")]
+    Io(std::io::Error),
+    /// The output directory cannot be created or read (exit code 1).
+    #[error("output directory {}: {error}", path.display())]
     OutDir {
         /// The directory.
         path: PathBuf,
-        /// What failed.
-        source: std::io::Error,
+        /// What failed (in the message, once).
+        error: std::io::Error,
+    },
+    /// Another run holds the output directory (exit code 2).
+    #[error(
+        "output directory {} is in use by another efgdem run{}; wait for it to end or choose another (-o)",
+        path.display(),
+        holder.map_or_else(String::new, |p| format!(" (process {p})"))
+    )]
+    Busy {
+        /// The directory.
+        path: PathBuf,
+        /// The process id the holder wrote in the lock file.
+        holder: Option<u32>,
     },
     /// The output directory holds files and `overwrite` was not given
     /// (exit code 2).
@@ -107,6 +120,33 @@ pub enum RunError {
     },
 }
 
+impl From<std::io::Error> for RunError {
+    fn from(e: std::io::Error) -> Self {
+        RunError::Io(e)
+    }
+}
+
+impl RunError {
+    /// The exit code of `efgdem run` for this error: 2 bad input or a
+    /// refused restart (the scenario, a checkpoint, a busy or non-empty
+    /// output directory, a state that does not fit), 1 an i/o failure, 3 a
+    /// numerical failure (an instability, a solve), 128 + signal a stop.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            RunError::Scenario(_)
+            | RunError::NotEmpty(_)
+            | RunError::Busy { .. }
+            | RunError::Restart { .. }
+            | RunError::Model(ModelError::State(_) | ModelError::Static | ModelError::Usage(_)) => {
+                2
+            }
+            RunError::Io(_) | RunError::OutDir { .. } => 1,
+            RunError::Model(_) => 3,
+            RunError::Interrupted { signal, .. } => 128 + (*signal as u8 & 0x7f),
+        }
+    }
+}
+
 impl From<crate::model::body::BodyError> for RunError {
     fn from(e: crate::model::body::BodyError) -> Self {
         RunError::Model(e.into())
@@ -125,10 +165,29 @@ impl From<crate::coupling::CouplingError> for RunError {
     }
 }
 
+/// The number of worker threads to start for `requested` (0: one per
+/// core): never more than the machine runs at once
+/// ([`std::thread::available_parallelism`]), since more only cost memory
+/// and time (results do not depend on it) and an absurd count would never
+/// finish starting. The note says when the count was lowered.
+pub fn worker_threads(requested: usize) -> (usize, Option<String>) {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    match requested {
+        0 => (cores, None),
+        n if n <= cores => (n, None),
+        n => (
+            cores,
+            Some(format!(
+                "{n} threads asked for; this machine runs {cores} at once: using {cores} (results do not depend on it)"
+            )),
+        ),
+    }
+}
+
 /// Build `sc` and run it, writing `summary.json`, `history.csv` and frames
 /// into `opts.out_dir`. Returns the summary that was written.
 pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunError> {
-    session::prepare_out_dir(opts)?;
+    let _held = session::prepare_out_dir(opts)?;
     let t0 = Instant::now();
     let what = match build::preparation(sc) {
         Some(p) => format!("building the model: {} ({} DEM steps)", p.what(), p.steps),
@@ -147,18 +206,31 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<serde_json::Value, RunErr
     spin.finish_and_clear();
     let build_s = t0.elapsed().as_secs_f64();
     let probes = sc.probes(&model)?;
+    let last_step = std::cell::Cell::new(model.step);
     let run = Run {
         sc,
         opts,
         probes,
         build_s,
         restart,
+        last_step: &last_step,
     };
-    match model.system {
+    let result = match model.system {
         System::Continuum { .. } => continuum::run(run, model),
         System::Granular(_) => granular::run(run, model),
         System::Coupled(_) => coupled::run(run, model),
+    };
+    if let Err(e @ (RunError::Io(_) | RunError::OutDir { .. })) = &result {
+        // say so in summary.json if the disk still takes it; the files
+        // already written are whole (history.csv cut back to its last row)
+        let summary = serde_json::json!({
+            "status": "failed",
+            "error": e.to_string(),
+            "last_step": last_step.get(),
+        });
+        let _ = crate::output::write_json(&opts.out_dir.join("summary.json"), &summary);
     }
+    result
 }
 
 /// What a driver gets besides the model.
@@ -171,6 +243,8 @@ struct Run<'a> {
     build_s: f64,
     /// The checkpoint the model was restored from.
     restart: Option<Checkpoint>,
+    /// The last step taken (for the summary of a run that fails).
+    last_step: &'a std::cell::Cell<usize>,
 }
 
 /// What `efgdem check` prints: sizes, coverage, time-step diagnostics, the
@@ -194,9 +268,9 @@ pub fn check(sc: &Scenario) -> Result<String, RunError> {
             "preparation: {p}; the discs above are the generated ones, before it\n"
         ));
     }
-    let machine = build::machine_memory().map_or_else(|| "unknown".to_string(), build::human_bytes);
+    let limit = build::memory_limit().map_or_else(|| "unknown".to_string(), |(_, what)| what);
     s.push_str(&format!(
-        "memory: {} (estimate; machine: {machine})",
+        "memory: {} (estimate; {limit})",
         build::memory_estimate(sc)
     ));
     Ok(s)

@@ -22,31 +22,121 @@ const OWN_FILES: [&str; 4] = [
     "checkpoint.bin",
 ];
 
-/// Make the output directory ready: created if missing; a non-empty one is
-/// refused unless `overwrite`, which removes the files a run writes there
-/// (and nothing else). A restart continues the outputs already there.
-pub(super) fn prepare_out_dir(opts: &RunOptions) -> Result<(), RunError> {
+/// The file that marks an output directory as held by a run: locked
+/// (`flock`) for as long as the run lasts, with the holder's process id in
+/// it. The kernel releases the lock when the process ends, however it
+/// ends, so a lock file left by a killed run is stale and simply taken
+/// over; the file itself stays (removing it would race with the next run).
+pub const LOCK_FILE: &str = ".efgdem.lock";
+
+/// An output directory held by this run (released on drop).
+#[derive(Debug)]
+pub(super) struct DirLock(#[allow(dead_code)] Option<std::fs::File>);
+
+/// Lock `f` for this process without waiting (`flock`, exclusive):
+/// whether it is held now (`false`: another process holds it); `None` on
+/// a file system without locks.
+#[cfg(unix)]
+fn try_flock(f: &std::fs::File) -> std::io::Result<Option<bool>> {
+    use std::os::fd::AsRawFd;
+    // SAFETY: flock on the descriptor `f` owns for as long as it lives
+    if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } == 0 {
+        return Ok(Some(true));
+    }
+    let e = std::io::Error::last_os_error();
+    match e.raw_os_error() {
+        Some(libc::EWOULDBLOCK) => Ok(Some(false)),
+        Some(libc::ENOLCK | libc::EOPNOTSUPP | libc::ENOSYS) => Ok(None),
+        _ => Err(e),
+    }
+}
+
+#[cfg(not(unix))]
+fn try_flock(_: &std::fs::File) -> std::io::Result<Option<bool>> {
+    Ok(None)
+}
+
+/// Hold `dir` for this run: refused with [`RunError::Busy`] while another
+/// run (of this or another process) holds it.
+fn lock_dir(dir: &Path) -> Result<DirLock, RunError> {
+    use std::io::{Read, Seek, Write};
+    let path = dir.join(LOCK_FILE);
+    let io = |error| RunError::OutDir {
+        path: dir.to_path_buf(),
+        error,
+    };
+    let mut f = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .map_err(|e| io(crate::output::io_at(&path, e)))?;
+    // a process forked by this one keeps the lock until it executes its
+    // program (a moment): ask again for a second before calling it busy
+    let lock = || try_flock(&f).map_err(|e| io(crate::output::io_at(&path, e)));
+    let mut held = lock()?;
+    for _ in 0..20 {
+        if held != Some(false) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        held = lock()?;
+    }
+    match held {
+        Some(true) => {}
+        Some(false) => {
+            let mut text = String::new();
+            let _ = f.read_to_string(&mut text);
+            return Err(RunError::Busy {
+                path: dir.to_path_buf(),
+                holder: text.trim().parse().ok(),
+            });
+        }
+        // a file system without locks: run unguarded, as before
+        None => return Ok(DirLock(None)),
+    }
+    f.set_len(0)
+        .and_then(|_| f.rewind())
+        .and_then(|_| writeln!(f, "{}", std::process::id()))
+        .map_err(|e| io(crate::output::io_at(&path, e)))?;
+    Ok(DirLock(Some(f)))
+}
+
+/// Make the output directory ready and hold it for this run ([`LOCK_FILE`]):
+/// created if missing; a non-empty one is refused unless `overwrite`, which
+/// removes the files a run writes there (and nothing else). A restart
+/// continues the outputs already there. A directory another run holds is
+/// refused, whatever the options.
+pub(super) fn prepare_out_dir(opts: &RunOptions) -> Result<DirLock, RunError> {
     let dir = &opts.out_dir;
-    let io = |source| RunError::OutDir {
+    let io = |error| RunError::OutDir {
         path: dir.clone(),
-        source,
+        error,
     };
     if opts.restart.is_some() {
-        return match dir.join("history.csv").is_file() {
-            true => Ok(()),
-            false => Err(io(std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                "no history.csv to continue: restart into the directory of the stopped run (-o)",
-            ))),
-        };
+        if !dir.join("history.csv").is_file() {
+            return Err(RunError::Restart {
+                path: opts.restart.clone().unwrap_or_default(),
+                message: format!(
+                    "{} has no history.csv to continue: restart into the directory of the stopped run (-o)",
+                    dir.display()
+                ),
+            });
+        }
+        return lock_dir(dir);
     }
     std::fs::create_dir_all(dir).map_err(io)?;
+    let lock = lock_dir(dir)?;
     let entries: Vec<_> = std::fs::read_dir(dir)
         .map_err(io)?
-        .collect::<Result<_, _>>()
-        .map_err(io)?;
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(io)?
+        .into_iter()
+        .filter(|e| e.file_name() != LOCK_FILE)
+        .collect();
     if entries.is_empty() {
-        return Ok(());
+        return Ok(lock);
     }
     if !opts.overwrite {
         return Err(RunError::NotEmpty(dir.clone()));
@@ -62,7 +152,7 @@ pub(super) fn prepare_out_dir(opts: &RunOptions) -> Result<(), RunError> {
             std::fs::remove_file(&path).map_err(io)?;
         }
     }
-    Ok(())
+    Ok(lock)
 }
 
 /// Is an output with period `every` (0: never) due at `step` of `steps`?
@@ -141,8 +231,13 @@ impl Outputs {
         let mut frames = Frames::new(model, dir)?.with_format(run.sc.output.vtk_format);
         let hist = match &run.restart {
             Some(ck) => {
-                frames.resume(ck.series.clone())?;
-                HistoryWriter::resume(&path, columns, ck.history_bytes)?
+                // the outputs do not fit the checkpoint: a refused restart
+                let refused = |e: std::io::Error| RunError::Restart {
+                    path: run.opts.restart.clone().unwrap_or_default(),
+                    message: e.to_string(),
+                };
+                frames.resume(ck.series.clone()).map_err(refused)?;
+                HistoryWriter::resume(&path, columns, ck.history_bytes).map_err(refused)?
             }
             None => HistoryWriter::create(&path, columns)?,
         };
@@ -172,7 +267,9 @@ impl<'a> Session<'a> {
         if model.step >= model.steps {
             return Ok(Some(Ended::Completed));
         }
-        match model.step() {
+        let r = model.step();
+        self.run.last_step.set(model.step);
+        match r {
             Ok(()) => Ok(None),
             Err(ModelError::Unstable(i)) => Ok(Some(Ended::Unstable(i))),
             Err(e) => Err(e.into()),
@@ -224,8 +321,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("efgdem-outdir-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let mut opts = RunOptions::new(&dir);
-        prepare_out_dir(&opts).unwrap();
-        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        drop(prepare_out_dir(&opts).unwrap());
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
         std::fs::create_dir_all(dir.join("frames")).unwrap();
         for f in [
             "history.csv",
@@ -239,12 +336,19 @@ mod tests {
         }
         assert!(matches!(prepare_out_dir(&opts), Err(RunError::NotEmpty(_))));
         opts.overwrite = true;
-        prepare_out_dir(&opts).unwrap();
-        let left: Vec<_> = std::fs::read_dir(&dir)
+        let held = prepare_out_dir(&opts).unwrap();
+        // held: refused to another run, with or without --overwrite
+        match prepare_out_dir(&opts) {
+            Err(RunError::Busy { holder, .. }) => assert_eq!(holder, Some(std::process::id())),
+            other => panic!("{other:?}"),
+        }
+        drop(held);
+        let mut left: Vec<_> = std::fs::read_dir(&dir)
             .unwrap()
             .map(|e| e.unwrap().file_name().into_string().unwrap())
             .collect();
-        assert_eq!(left, vec!["notes.txt"]);
+        left.sort();
+        assert_eq!(left, vec![LOCK_FILE, "notes.txt"]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

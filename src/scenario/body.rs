@@ -140,8 +140,14 @@ pub enum HoleSpec {
     /// Vertices.
     Points(Vec<[f64; 2]>),
     /// A circle as a regular polygon.
-    Circle(CircleSpec),
+    Circle(#[serde(deserialize_with = "crate::strict::table")] CircleSpec),
 }
+
+/// Most vertices of a polygon body, its outline and holes together
+/// (circles count their segments): 100 000. Preparing one costs
+/// `O(N log N)`; past that, the boundary is finer than any node spacing
+/// a body of this size can have.
+pub const MAX_POLYGON_VERTICES: usize = 100_000;
 
 /// `{ center = [x, y], radius = r, segments = n }`.
 #[derive(Debug, Clone, Copy, Deserialize)]
@@ -186,19 +192,49 @@ impl BodySpec {
         let Some(outline) = &self.outline else {
             return Ok(None);
         };
+        // the vertices first, so that an absurd count is refused before
+        // anything is allocated for it
+        let mut total = outline.len();
+        for (k, h) in self.holes.iter().enumerate() {
+            let (n, field) = match h {
+                HoleSpec::Points(p) => (p.len(), format!("holes.{k}")),
+                HoleSpec::Circle(c) => (c.segments, format!("holes.{k}.segments")),
+            };
+            total = total.saturating_add(n);
+            if total > MAX_POLYGON_VERTICES {
+                return Err((
+                    field,
+                    format!(
+                        "{n} vertices/segments: a polygon body has at most {MAX_POLYGON_VERTICES} vertices in all (outline and holes)"
+                    ),
+                ));
+            }
+        }
+        if outline.len() > MAX_POLYGON_VERTICES {
+            return Err((
+                "outline".into(),
+                format!(
+                    "{} vertices: a polygon body has at most {MAX_POLYGON_VERTICES} vertices in all (outline and holes)",
+                    outline.len()
+                ),
+            ));
+        }
         let outline: Vec<Vec2> = outline.iter().map(|&p| p.into()).collect();
         let mut holes = Vec::with_capacity(self.holes.len());
         for (k, h) in self.holes.iter().enumerate() {
             holes.push(match h {
                 HoleSpec::Points(p) => p.iter().map(|&q| q.into()).collect(),
                 HoleSpec::Circle(c) => {
-                    if !(c.radius > 0.0 && c.radius.is_finite()) || c.segments < 3 {
+                    if !(c.radius > 0.0 && c.radius.is_finite()) {
                         return Err((
-                            format!("holes.{k}"),
-                            format!(
-                                "a circle needs radius > 0 and segments ≥ 3 (got radius {}, segments {})",
-                                c.radius, c.segments
-                            ),
+                            format!("holes.{k}.radius"),
+                            format!("a circle needs a finite radius > 0 (got {})", c.radius),
+                        ));
+                    }
+                    if c.segments < 3 {
+                        return Err((
+                            format!("holes.{k}.segments"),
+                            format!("a circle needs at least 3 segments (got {})", c.segments),
                         ));
                     }
                     circle(c.center.into(), c.radius, c.segments)
@@ -770,7 +806,19 @@ fn validate_drive(sc: &Scenario, v: &Prescribed, gamma: f64, at: &str, p: &mut P
         );
     };
     match v.drive_law() {
-        Some(DriveLaw::Table(tb)) => check_table(&tb, &format!("{at}.table"), p),
+        Some(DriveLaw::Table(tb)) => {
+            check_table(&tb, &format!("{at}.table"), p);
+            // no time step follows a displacement that jumps: say so here
+            // rather than let the run blow up and suggest a smaller Δt
+            if let Some((t, from, to)) = tb.jump(0.0) {
+                p.push(
+                    format!("{at}.table"),
+                    format!(
+                        "a prescribed jump: the table goes from {from} to {to} at once at t = {t} (two points at the same time); a prescribed displacement must be continuous (no time step can follow a jump): ramp it over several steps"
+                    ),
+                );
+            }
+        }
         Some(DriveLaw::VelocityTable(tb)) => check_table(&tb, &format!("{at}.velocity_table"), p),
         Some(DriveLaw::Servo(sv)) => servo(&sv, &format!("{at}.servo"), p),
         Some(DriveLaw::Phases(ps)) => {

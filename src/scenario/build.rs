@@ -188,7 +188,7 @@ fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> 
         DiscsSpec::Table(t) => {
             if let Some(csv) = &t.csv {
                 let path = sc.resolve(csv);
-                let text = std::fs::read_to_string(&path).map_err(|e| {
+                let text = super::read_text(&path, super::MAX_CSV_BYTES).map_err(|e| {
                     bad(
                         "granular.discs.csv",
                         format!("cannot read discs file {}: {e}", path.display()),
@@ -302,7 +302,16 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
     let rows = disc_rows(sc, purpose)?;
     let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
-    let mut p = Particles::with_capacity(rows.len());
+    let mut p = Particles::default();
+    p.try_reserve(rows.len()).map_err(|e| {
+        bad(
+            "granular.discs",
+            format!(
+                "cannot allocate the arrays of {} discs ({e}): more than this process may use",
+                rows.len()
+            ),
+        )
+    })?;
     let v0 = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
     for (k, r) in rows.iter().enumerate() {
         let mi = match &r.material {
@@ -321,8 +330,25 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
         p.vel[k] = v0;
         let (mass, inertia) = (p.mass[k], p.inertia[k]);
         if !(mass.is_finite() && mass > 0.0 && inertia.is_finite() && inertia > 0.0) {
+            // blame the factor farthest from 1 (in orders of magnitude)
+            let disc = match &g.discs {
+                DiscsSpec::Inline(_) => format!("granular.discs.{k}"),
+                DiscsSpec::Table(_) => "granular.discs".to_string(),
+            };
+            let density = format!("material.{mi}.density");
+            let suspects = [
+                (m.density.ln().abs(), density.as_str()),
+                ((r.r * r.r).ln().abs(), disc.as_str()),
+                (g.thickness.ln().abs(), "granular.thickness"),
+            ];
+            let (_, at) = suspects.iter().fold(
+                (f64::NEG_INFINITY, "granular.thickness"),
+                |best, &(v, f)| {
+                    if v > best.0 { (v, f) } else { best }
+                },
+            );
             return Err(bad(
-                "granular.thickness",
+                at,
                 format!(
                     "disc {}: its mass ρπr²t = {mass:e} and moment of inertia m r²/2 = {inertia:e} must be finite and > 0 (ρ = {:e}, r = {:e}, t = {:e})",
                     k + 1,
@@ -585,6 +611,11 @@ pub struct MemoryEstimate {
     pub discs: f64,
     /// Bytes of the discs, `discs ×` [`DISC_BYTES`].
     pub disc_bytes: f64,
+    /// Contact pairs beyond [`PAIRS_PER_DISC`] per disc (discs given by
+    /// their positions that overlap: a stack pressed into itself).
+    pub extra_pairs: f64,
+    /// Their bytes, `extra_pairs ×` [`PAIR_BYTES`].
+    pub pair_bytes: f64,
     /// Bytes of each body (name, bytes): its sparse operators and their
     /// Cholesky factor, the EFG shape functions at the Gauss points and, in
     /// coupled runs with `contact_solve = "boundary"`, the dense boundary
@@ -595,7 +626,7 @@ pub struct MemoryEstimate {
 impl MemoryEstimate {
     /// Bytes of the whole run.
     pub fn total(&self) -> f64 {
-        self.disc_bytes + self.bodies.iter().map(|b| b.1).sum::<f64>()
+        self.disc_bytes + self.pair_bytes + self.bodies.iter().map(|b| b.1).sum::<f64>()
     }
 }
 
@@ -637,6 +668,13 @@ impl std::fmt::Display for MemoryEstimate {
                 human_bytes(self.disc_bytes)
             ));
         }
+        if self.extra_pairs > 0.0 {
+            parts.push(format!(
+                "{} more contact pairs (overlapping discs) × ~{PAIR_BYTES} B = {}",
+                count_text(self.extra_pairs.round()),
+                human_bytes(self.pair_bytes)
+            ));
+        }
         for (name, b) in &self.bodies {
             parts.push(format!("body `{name}` {}", human_bytes(*b)));
         }
@@ -647,32 +685,99 @@ impl std::fmt::Display for MemoryEstimate {
     }
 }
 
-/// Number of discs the scenario describes, without generating them.
-fn disc_count(sc: &Scenario) -> f64 {
-    let Some(g) = &sc.granular else { return 0.0 };
+/// Contact pairs per disc that [`DISC_BYTES`] allows for (a dense
+/// packing of discs that do not overlap).
+pub const PAIRS_PER_DISC: f64 = 2.5;
+
+/// Bytes per listed contact pair beyond [`PAIRS_PER_DISC`]: the pair
+/// with its shear and rolling history, its slot in the neighbour list and
+/// the transient copies of a rebuild (measured on overlapping packings).
+pub const PAIR_BYTES: f64 = 100.0;
+
+/// Listed contact pairs (gap below the Verlet skin, `skin` or 0.1 × the
+/// largest radius) per disc of the discs `rows` (`[x, y, r]`), counted
+/// around up to 2 000 of them spread over the list: a packing given by
+/// its positions may overlap, with many contacts per disc.
+fn pairs_per_disc(rows: &[[f64; 3]], skin: Option<f64>) -> f64 {
+    let n = rows.len();
+    if n < 2 {
+        return 0.0;
+    }
+    let r_max = rows.iter().map(|r| r[2]).fold(0.0, f64::max);
+    let skin = skin.unwrap_or(0.1 * r_max);
+    let cell = 2.0 * r_max + skin;
+    if !(cell.is_finite() && cell > 0.0) {
+        return 0.0;
+    }
+    let key = |r: &[f64; 3]| ((r[0] / cell).floor() as i64, (r[1] / cell).floor() as i64);
+    let mut grid: std::collections::HashMap<(i64, i64), Vec<u32>> =
+        std::collections::HashMap::new();
+    for (k, r) in rows.iter().enumerate() {
+        grid.entry(key(r)).or_default().push(k as u32);
+    }
+    let samples = n.min(2000);
+    let mut found = 0usize;
+    for s in 0..samples {
+        let i = s * n / samples;
+        let a = &rows[i];
+        let (cx, cy) = key(a);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for &j in grid
+                    .get(&(cx + dx, cy + dy))
+                    .map_or(&[][..], |v| v.as_slice())
+                {
+                    let b = &rows[j as usize];
+                    let reach = a[2] + b[2] + skin;
+                    if j as usize != i && (a[0] - b[0]).hypot(a[1] - b[1]) < reach {
+                        found += 1;
+                    }
+                }
+            }
+        }
+    }
+    0.5 * found as f64 / samples as f64
+}
+
+/// Number of discs the scenario describes, without generating them, and
+/// the contact pairs per disc of discs given by their positions (inline
+/// or in a CSV file; `None` for generated ones, which do not overlap).
+fn disc_count(sc: &Scenario) -> (f64, Option<f64>) {
+    let Some(g) = &sc.granular else {
+        return (0.0, None);
+    };
     match &g.discs {
-        DiscsSpec::Inline(rows) => rows.len() as f64,
+        DiscsSpec::Inline(rows) => (rows.len() as f64, Some(pairs_per_disc(rows, g.skin))),
         DiscsSpec::Table(t) => {
             if let Some(csv) = &t.csv {
-                // data lines (the build reports a file it cannot read)
-                return std::fs::read_to_string(sc.resolve(csv)).map_or(0.0, |text| {
-                    text.lines()
-                        .filter(|l| !l.trim().is_empty() && !l.trim().starts_with('#'))
-                        .count() as f64
-                });
+                // the build reports a file it cannot read
+                let Ok(text) = super::read_text(&sc.resolve(csv), super::MAX_CSV_BYTES) else {
+                    return (0.0, None);
+                };
+                return match super::generate::discs_from_csv(&text) {
+                    Ok(d) => {
+                        let rows: Vec<[f64; 3]> =
+                            d.iter().map(|d| [d.pos.x, d.pos.y, d.r]).collect();
+                        (rows.len() as f64, Some(pairs_per_disc(&rows, g.skin)))
+                    }
+                    Err(_) => (0.0, None),
+                };
             }
             if let Some(c) = t.count {
-                return c as f64;
+                return (c as f64, None);
             }
             let (Some(kind), Some([a, b]), Some(r)) = (t.generate, t.region, t.radius) else {
-                return 0.0;
+                return (0.0, None);
             };
             let (lat, gap) = match kind {
                 Generator::Square => (Lattice::Square, 0.0),
                 Generator::Hex => (Lattice::Hex, 0.0),
                 Generator::Random => (Lattice::Hex, 0.1),
             };
-            lattice_capacity(lat, Vec2::from(a), Vec2::from(b), r.range().1, gap)
+            (
+                lattice_capacity(lat, Vec2::from(a), Vec2::from(b), r.range().1, gap),
+                None,
+            )
         }
     }
 }
@@ -681,14 +786,19 @@ fn disc_count(sc: &Scenario) -> f64 {
 /// measurements of `efgdem check` on EFG and FE bodies of 5 000 to
 /// 40 000 nodes (within ≈ 20 % for `d_max` 1.5–3, `gauss` 2–8).
 fn body_bytes(sc: &Scenario, b: &super::body::BodySpec) -> f64 {
-    let [nx, ny] = match (b.domain().ok().flatten(), b.spacing) {
-        // a polygon body: the grid of its bounding box
+    // a polygon body: the grid of its bounding box, and its vertices
+    let (grid, vertices) = match (b.domain().ok().flatten(), b.spacing) {
         (Some(d), Some(h)) if h > 0.0 => {
             let (lo, hi) = d.bounds();
-            [(hi.x - lo.x) / h + 1.0, (hi.y - lo.y) / h + 1.0]
+            let vertices: usize = d.loops.iter().map(|l| l.len()).sum();
+            (
+                [(hi.x - lo.x) / h + 1.0, (hi.y - lo.y) / h + 1.0],
+                vertices as f64,
+            )
         }
-        _ => b.nodes.map(|n| n as f64),
+        _ => (b.nodes.map(|n| n as f64), 0.0),
     };
+    let [nx, ny] = grid;
     let nodes = nx * ny;
     let (mut bytes, band) = match b.method {
         Method::Efg => {
@@ -702,7 +812,11 @@ fn body_bytes(sc: &Scenario, b: &super::body::BodySpec) -> f64 {
             let points = cells * (b.gauss as f64).powi(2);
             // shape functions and gradients of (2 d)² nodes per point
             let shapes = points * (2.0 * d).powi(2) * 40.0;
-            (60.0 * nnz + shapes, d.ceil())
+            // per polygon vertex: the Gauss point of its sliver and of its
+            // boundary piece, its segment in the R-tree and the
+            // visibility lists
+            let per_vertex = 2.0 * (2.0 * d).powi(2) * 40.0 + 256.0;
+            (60.0 * nnz + shapes + vertices * per_vertex, d.ceil())
         }
         // K, M, the Newmark matrix and the factor: ≈ 3.5 kB per node
         Method::FemQ4 => (3500.0 * nodes, 1.0),
@@ -727,10 +841,13 @@ fn body_bytes(sc: &Scenario, b: &super::body::BodySpec) -> f64 {
 
 /// The memory a run of `sc` needs (see [`MemoryEstimate`]).
 pub fn memory_estimate(sc: &Scenario) -> MemoryEstimate {
-    let discs = disc_count(sc);
+    let (discs, pairs) = disc_count(sc);
+    let extra_pairs = discs * (pairs.unwrap_or(0.0) - PAIRS_PER_DISC).max(0.0);
     MemoryEstimate {
         discs,
         disc_bytes: discs * DISC_BYTES,
+        extra_pairs,
+        pair_bytes: extra_pairs * PAIR_BYTES,
         bodies: sc
             .body
             .iter()
@@ -748,15 +865,67 @@ pub fn machine_memory() -> Option<f64> {
     Some(kib * 1024.0)
 }
 
-/// Refuse a run that would not fit in the machine's memory, naming the
+/// The memory this process may still use, in bytes, and what bounds it:
+/// the machine's (`MemTotal`) or, if lower, the process's address-space
+/// limit (`ulimit -v`, `RLIMIT_AS`) less what the process already maps
+/// (its code, libraries, thread stacks). `None` where neither is known
+/// (the memory check is then skipped).
+pub fn memory_limit() -> Option<(f64, String)> {
+    let machine = machine_memory().map(|m| (m, format!("machine: {}", human_bytes(m))));
+    let process = address_space_limit().map(|(limit, used)| {
+        (
+            (limit - used).max(0.0),
+            format!(
+                "process limit (ulimit -v): {} left of {}",
+                human_bytes((limit - used).max(0.0)),
+                human_bytes(limit)
+            ),
+        )
+    });
+    match (machine, process) {
+        (Some(m), Some(p)) => Some(if p.0 < m.0 { p } else { m }),
+        (m, p) => m.or(p),
+    }
+}
+
+/// `RLIMIT_AS` (bytes) and the address space already mapped (`VmSize` of
+/// `/proc/self/status`, 0 if unknown); `None` without a limit.
+#[cfg(unix)]
+fn address_space_limit() -> Option<(f64, f64)> {
+    let mut r = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit writes the struct it is given
+    if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } != 0 || r.rlim_cur == libc::RLIM_INFINITY
+    {
+        return None;
+    }
+    let used = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|t| {
+            let l = t.lines().find(|l| l.starts_with("VmSize:"))?;
+            l.split_whitespace().nth(1)?.parse::<f64>().ok()
+        })
+        .map_or(0.0, |kib| kib * 1024.0);
+    Some((r.rlim_cur as f64, used))
+}
+
+#[cfg(not(unix))]
+fn address_space_limit() -> Option<(f64, f64)> {
+    None
+}
+
+/// Refuse a run that would not fit in the memory it may use
+/// ([`memory_limit`]: the machine's, or the process's limit), naming the
 /// largest consumer: the discs (`granular.discs`, or its `count`) or a
-/// body (`body.i.nodes`).
+/// body (`body.i.nodes`, `body.i.spacing` or `body.i.holes`).
 fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
-    let Some(machine) = machine_memory() else {
+    let Some((limit, what)) = memory_limit() else {
         return Ok(());
     };
     let est = memory_estimate(sc);
-    if est.total() <= machine {
+    if est.total() <= limit {
         return Ok(());
     }
     let biggest_body = est
@@ -765,7 +934,10 @@ fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
         .enumerate()
         .max_by(|a, b| a.1.1.total_cmp(&b.1.1));
     let path = match biggest_body {
-        Some((i, (_, b))) if *b > est.disc_bytes => format!("body.{i}.nodes"),
+        Some((i, (_, b))) if *b > est.disc_bytes + est.pair_bytes => match &sc.body[i] {
+            body if body.is_polygon() => format!("body.{i}.spacing"),
+            _ => format!("body.{i}.nodes"),
+        },
         _ => match &sc.granular.as_ref().map(|g| &g.discs) {
             Some(DiscsSpec::Table(t)) if t.count.is_some() => "granular.discs.count".into(),
             _ => "granular.discs".into(),
@@ -774,8 +946,12 @@ fn check_memory(sc: &Scenario) -> Result<(), Invalid> {
     Err(bad(
         &path,
         format!(
-            "the run would need {est} of memory, more than this machine has ({} MemTotal); use fewer discs or nodes",
-            human_bytes(machine)
+            "the run would need {est} of memory, more than it may use ({what}{}); use fewer discs or nodes",
+            if what.starts_with("machine") {
+                " MemTotal"
+            } else {
+                ""
+            }
         ),
     ))
 }

@@ -79,7 +79,7 @@ pub enum DiscsSpec {
     /// `[x, y, r]` per disc, disc k (1-based) on row k.
     Inline(Vec<[f64; 3]>),
     /// A CSV file or a generator.
-    Table(DiscsTable),
+    Table(#[serde(deserialize_with = "crate::strict::table")] DiscsTable),
 }
 
 /// `discs = { ... }`.
@@ -471,7 +471,8 @@ pub fn opposite_wall(sc: &Scenario, i: usize) -> Option<usize> {
 
 /// The walls that the ends `from` and `to` of wall `i` are joined to: a
 /// servo or strain-rate wall, not parallel to it, on which the end lies
-/// (within 10⁻⁹ of the two lengths).
+/// (within 10⁻⁹ of the shorter of the two lengths: a tolerance of the
+/// longer would join a short wall's end to a very long wall metres away).
 pub fn joined_ends(sc: &Scenario, i: usize) -> [Option<u32>; 2] {
     let (a, b, u, l) = ends(&sc.wall[i]);
     let on = |p: Vec2| {
@@ -481,7 +482,7 @@ pub fn joined_ends(sc: &Scenario, i: usize) -> [Option<u32>; 2] {
             }
             let (aj, bj, uj, lj) = ends(w);
             u.cross(uj).abs() > PARALLEL
-                && (crate::geom::closest_on_segment(p, aj, bj).1 - p).norm() <= 1e-9 * (l + lj)
+                && (crate::geom::closest_on_segment(p, aj, bj).1 - p).norm() <= 1e-9 * l.min(lj)
         })
     };
     [on(a).map(|j| j as u32), on(b).map(|j| j as u32)]
@@ -750,11 +751,21 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
         DiscsSpec::Table(t) => {
             validate_table(t, p);
             if let Some(m) = &t.settle_material {
-                p.check(
-                    sc.material(m).is_some(),
-                    "granular.discs.settle_material",
-                    format!("no [[material]] named `{m}`"),
-                );
+                match sc.material.iter().position(|x| &x.name == m) {
+                    None => p.push(
+                        "granular.discs.settle_material",
+                        format!("no [[material]] named `{m}`"),
+                    ),
+                    // the preparation's contacts use it: a stiffness is needed
+                    Some(i) => p.check(
+                        sc.material[i].kn.is_finite() && sc.material[i].kn > 0.0,
+                        format!("material.{i}.kn"),
+                        format!(
+                            "material `{m}` is the packing's settle_material: its contacts need kn > 0 (got {})",
+                            sc.material[i].kn
+                        ),
+                    ),
+                }
             }
         }
     }
@@ -796,7 +807,13 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
             format!("wall `{}` is defined twice", w.name),
         );
         let finite = w.from.iter().chain(&w.to).all(|x| x.is_finite());
-        p.check(finite, at("to"), "end points must be finite");
+        for (end, xy) in [("from", w.from), ("to", w.to)] {
+            p.check(
+                xy.iter().all(|x| x.is_finite()),
+                at(end),
+                format!("must be two finite numbers (got {xy:?})"),
+            );
+        }
         p.check(
             !finite || w.from != w.to,
             at("to"),

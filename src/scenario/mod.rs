@@ -393,10 +393,71 @@ impl fmt::Display for Located {
     }
 }
 
+/// Largest scenario file read ([`load`]): 256 MiB.
+pub const MAX_SCENARIO_BYTES: u64 = 256 << 20;
+
+/// Largest discs CSV file read (`discs = { csv = … }`): 1 GiB, some 20
+/// million discs.
+pub const MAX_CSV_BYTES: u64 = 1 << 30;
+
+/// The bytes of the file `path`, refused if it is a directory or a device
+/// (`/dev/zero`) or has more than `max` bytes (a pipe that does not end, a
+/// file that is not what it is said to be): nothing is read without bound.
+pub fn read_bounded(path: &Path, max: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let f = std::fs::File::open(path)?;
+    let kind = f.metadata()?.file_type();
+    if kind.is_dir() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::IsADirectory,
+            "a directory, not a file",
+        ));
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_char_device() || kind.is_block_device() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "a device, not a file",
+            ));
+        }
+    }
+    let too_large = || {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "larger than {} MiB, more than such a file can be (is it the right file?)",
+                max >> 20
+            ),
+        )
+    };
+    // a regular file says its size; anything else (a pipe) is read up to it
+    if kind.is_file() && f.metadata()?.len() > max {
+        return Err(too_large());
+    }
+    let mut bytes = Vec::new();
+    f.take(max + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max {
+        return Err(too_large());
+    }
+    Ok(bytes)
+}
+
+/// The text of the file `path` ([`read_bounded`]), which must be UTF-8.
+pub fn read_text(path: &Path, max: u64) -> std::io::Result<String> {
+    String::from_utf8(read_bounded(path, max)?).map_err(|e| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+        )
+    })
+}
+
 /// Read, parse and validate a scenario file.
 pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
     let file = path.display().to_string();
-    let src = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
+    let src = read_text(path, MAX_SCENARIO_BYTES).map_err(|source| ScenarioError::Io {
         file: file.clone(),
         source,
     })?;
@@ -410,11 +471,18 @@ pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
 
 /// Parse and validate scenario text; `file` names it in error messages.
 pub fn parse(src: &str, file: &str) -> Result<Scenario, ScenarioError> {
-    let sc: Scenario = toml::from_str(src).map_err(|e| ScenarioError::Invalid {
+    // strict tables: a struct given as an array is refused, not read
+    // field by field in order
+    let sc: Result<Scenario, toml::de::Error> =
+        toml::Deserializer::parse(src).and_then(crate::strict::deserialize);
+    let sc: Scenario = sc.map_err(|e| ScenarioError::Invalid {
         file: file.to_string(),
         errors: vec![Located {
             line: e.span().map(|s| line_of(src, s.start)),
-            field: String::new(),
+            field: e
+                .span()
+                .and_then(|s| field_at(src, s.start))
+                .map_or_else(String::new, |p| display_path(&p)),
             message: e.message().trim().to_string(),
         }],
     })?;
@@ -618,6 +686,48 @@ pub fn display_path(path: &str) -> String {
     s
 }
 
+/// The dotted path (`body.0.rectangle`) of the innermost value of the TOML
+/// text `src` that holds byte offset `off`, if a value does (the field a
+/// type error is about).
+fn field_at(src: &str, off: usize) -> Option<String> {
+    use toml_edit::{Item, TableLike, Value};
+    fn value(v: &Value, path: String, off: usize) -> Option<String> {
+        let span = v.span()?;
+        if !span.contains(&off) {
+            return None;
+        }
+        let inner = match v {
+            Value::Array(a) => a
+                .iter()
+                .enumerate()
+                .find_map(|(i, x)| value(x, format!("{path}.{i}"), off)),
+            Value::InlineTable(t) => table(t, &path, off),
+            _ => None,
+        };
+        inner.or(Some(path))
+    }
+    fn table(t: &dyn TableLike, prefix: &str, off: usize) -> Option<String> {
+        t.iter().find_map(|(k, item)| {
+            let path = if prefix.is_empty() {
+                k.to_string()
+            } else {
+                format!("{prefix}.{k}")
+            };
+            match item {
+                Item::Value(v) => value(v, path, off),
+                Item::Table(t) => table(t, &path, off),
+                Item::ArrayOfTables(a) => a
+                    .iter()
+                    .enumerate()
+                    .find_map(|(i, t)| table(t, &format!("{path}.{i}"), off)),
+                Item::None => None,
+            }
+        })
+    }
+    let doc = toml_edit::Document::parse(src.to_string()).ok()?;
+    table(doc.as_table(), "", off)
+}
+
 /// Byte offset of the deepest part of `path` present in the document: the
 /// key of the field if it is there, else the nearest enclosing entry.
 fn locate(doc: &toml_edit::Document<String>, path: &str) -> Option<usize> {
@@ -682,6 +792,25 @@ mod tests {
         assert_eq!(line("body.1.name"), Some(7));
         // missing field: falls back to the nearest enclosing entry
         assert_eq!(line("body.1.nodes"), Some(7));
+    }
+
+    #[test]
+    fn a_type_error_names_its_field() {
+        let src = "[[body]]\nname = \"a\"\nrectangle = [[0.1, 0.1], [0.3, 0.2]]\nelastic = { E = \"x\" }\n";
+        let off = |s: &str| src.find(s).unwrap();
+        assert_eq!(
+            field_at(src, off("[[0.1")).as_deref(),
+            Some("body.0.rectangle")
+        );
+        assert_eq!(
+            field_at(src, off("0.3")).as_deref(),
+            Some("body.0.rectangle.1.0")
+        );
+        assert_eq!(
+            field_at(src, off("\"x\"")).as_deref(),
+            Some("body.0.elastic.E")
+        );
+        assert_eq!(field_at(src, 0), None);
     }
 
     #[test]
