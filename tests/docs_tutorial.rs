@@ -323,21 +323,21 @@ fn tutorial_step_3_footing() {
     );
     page.quote("averages 218 N", "218", h.mean("reaction", 0.0, 0.15));
     page.quote("337 N between", "337", h.mean("reaction", 0.15, 0.25));
-    page.quote("515 N over 0.1–0.4 s", "515", h.mean("reaction", 0.1, 0.4));
+    page.quote("501 N over 0.1–0.4 s", "501", h.mean("reaction", 0.1, 0.4));
     page.quote(
-        "peaks at 1193 N",
-        "1193",
+        "peaks at 1257 N",
+        "1257",
         s["peak_contact_force"].as_f64().unwrap(),
     );
     page.quote(
-        "1193 N at t = 0.398 s",
-        "0.398",
+        "1257 N at t = 0.400 s",
+        "0.400",
         s["peak_contact_time"].as_f64().unwrap(),
     );
-    page.quote("reaction ends at 672 N", "672", h.last("reaction"));
-    page.quote("`W_ext` = 8.12 J", "8.12", h.last("W_ext"));
-    page.quote("`E_diss` = 7.33 J", "7.33", h.last("E_diss"));
-    page.quote("`E_contact` = 0.78 J", "0.78", h.last("E_contact"));
+    page.quote("reaction ends at 281 N", "281", h.last("reaction"));
+    page.quote("`W_ext` = 7.81 J", "7.81", h.last("W_ext"));
+    page.quote("`E_diss` = 7.52 J", "7.52", h.last("E_diss"));
+    page.quote("`E_contact` = 0.29 J", "0.29", h.last("E_contact"));
     page.finish();
 }
 
