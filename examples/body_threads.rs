@@ -77,10 +77,9 @@ fn main() {
             let mut b = body_setup::plate(n);
             let nm = b.newmark().expect("dynamic");
             println!(
-                "plate {n} × {n}: {} DOFs, nnz(L) = {}, {:.0} % of L solved in parallel parts",
+                "plate {n} × {n}: {} DOFs, nnz(L) = {}",
                 b.n_dofs(),
-                nm.factor_nnz(),
-                100.0 * nm.factor().parallel_share()
+                nm.factor_nnz()
             );
             b.advance().expect("step");
             report(&interleaved(steps, reps, |_| b.advance().expect("step")));

@@ -51,11 +51,9 @@ traction = [0.0, -1.0e6]
     let t = Instant::now();
     b.start_dynamic(1e-4).expect("factor");
     println!(
-        "Newmark setup (factor M for Ü₀, then α₁M + α₄C + K̄): {:.3} s; nnz(L) = {}, solved {:.0} % in parallel parts",
+        "Newmark setup (factor M for Ü₀, then α₁M + α₄C + K̄): {:.3} s; nnz(L) = {}",
         t.elapsed().as_secs_f64(),
-        b.newmark().map_or(0, |nm| nm.factor_nnz()),
-        b.newmark()
-            .map_or(0.0, |nm| 100.0 * nm.factor().parallel_share())
+        b.newmark().map_or(0, |nm| nm.factor_nnz())
     );
     let t = Instant::now();
     for _ in 0..steps {

@@ -10,7 +10,6 @@ const LAYERS: &[&[&str]] = &[
     &["continuum"],
     &["efg", "fem", "dem"],
     &["coupling"],
-    &["decomp"],
     &["model"],
     &["scenario"],
     &["output"],

@@ -546,8 +546,8 @@ impl Solver {
         let phi = residual(&self.w, out, &mut self.t, &mut self.st);
         let mut step = 1.0;
         loop {
-            for k in 0..m {
-                self.scratch[k] = self.w[k] + d[k] * step;
+            for ((x, &w), &dk) in self.scratch[..m].iter_mut().zip(&self.w).zip(d) {
+                *x = w + dk * step;
             }
             let trial: Vec<Eval> = (contacts.iter().zip(&self.scratch))
                 .map(|(c, w)| c.eval(*w))

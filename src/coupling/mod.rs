@@ -813,7 +813,6 @@ impl CoupledModel {
                 let solved = w
                     .solver
                     .solve(&w.lin, &w.base, &w.free, &mut s, &mut w.evals);
-                drop(s);
                 self.newton_iterations = unsolved(solved, body.name(), &self.granular)?;
                 self.compliance_products += w.solver.products;
                 solve_time += tc.elapsed().as_secs_f64();

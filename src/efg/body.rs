@@ -148,7 +148,7 @@ impl EfgBody {
         // (a, b, outward normal, sub-segments, Gauss points per sub-segment)
         type Pieces = Vec<(Vec2, Vec2, Option<Vec2>, usize, usize)>;
         let cracked_rectangle = (spec.polygon.is_none() && !spec.cracks.is_empty())
-            .then(|| rectangle_polygon(spec))
+            .then(|| rectangle_polygon(&spec.rectangle, spec.nodes))
             .transpose()
             .map_err(invalid)?;
         let (xs, ys, support, domain, mesh, pieces): (_, _, _, _, _, Vec<Pieces>) = if let Some(
@@ -895,13 +895,16 @@ impl EfgBody {
 /// (counter-clockwise from the lower left), the four sides named `bottom`,
 /// `right`, `top`, `left`, at the spacing `min(width/(nx − 1),
 /// height/(ny − 1))` of its node grid.
-fn rectangle_polygon(spec: &BodyParams) -> Result<crate::continuum::PolygonShape, String> {
-    let [nx, ny] = spec.nodes;
+pub fn rectangle_polygon(
+    rectangle: &crate::continuum::Rectangle,
+    nodes: [usize; 2],
+) -> Result<crate::continuum::PolygonShape, String> {
+    let [nx, ny] = nodes;
     if nx < 2 || ny < 2 {
         return Err("the node grid needs at least 2 × 2 nodes".into());
     }
-    let o = Vec2::from(spec.rectangle.origin);
-    let s = Vec2::from(spec.rectangle.size);
+    let o = Vec2::from(rectangle.origin);
+    let s = Vec2::from(rectangle.size);
     let corners = vec![
         o,
         Vec2::new(o.x + s.x, o.y),

@@ -526,6 +526,9 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
     m.set_contact_iterations(sc.simulation.contact_iterations);
     let request = scheme::Request {
         scheme: match sc.simulation.coupling {
+            // a drive's `until_step` counts body steps: the automatic
+            // choice must not sub-cycle it (that would move its phases)
+            CouplingScheme::Auto if step_counted_drive(sc) => Some(Scheme::Exact),
             CouplingScheme::Auto => None,
             CouplingScheme::Exact => Some(Scheme::Exact),
             CouplingScheme::Predicted => Some(Scheme::Predicted),
@@ -548,10 +551,28 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
             bad(at, why)
         })?;
     scheme::apply(&mut m, &choice).map_err(|e| bad("simulation.coupling", e))?;
-    if purpose == BuildFor::Run && preparation(sc).is_some() {
+    // the discs of the run: prepared (here or by the caller), with those a
+    // body placed after the preparation overlaps removed
+    if purpose != BuildFor::Check && preparation(sc).is_some() {
         m.granular = granular_with(sc, purpose)?;
     }
     Ok(m)
+}
+
+/// Whether a body has a prescribed motion whose phases or end are counted
+/// in body steps (`until_step`): a sub-cycled scheme would take them
+/// `substeps` times later, so the automatic choice keeps the exact step.
+fn step_counted_drive(sc: &Scenario) -> bool {
+    use crate::continuum::conditions::Prescribed;
+    let counted = |p: &Option<Prescribed>| match p {
+        Some(Prescribed::Motion(m)) => m.until_step.is_some(),
+        Some(Prescribed::Phases(ph)) => ph.phases.iter().any(|q| q.until_step.is_some()),
+        _ => false,
+    };
+    sc.body
+        .iter()
+        .flat_map(|b| &b.bc)
+        .any(|c| counted(&c.ux) || counted(&c.uy))
 }
 
 /// Build the model (see [`Scenario::build`]); problems carry field paths.

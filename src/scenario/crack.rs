@@ -17,6 +17,7 @@
 use super::Problems;
 use super::body::{BodySpec, Method};
 use crate::continuum::{CrackShape, Fracture};
+use crate::efg::body::rectangle_polygon;
 use crate::geom::Vec2;
 use crate::geom::crack::{Crack, check};
 use crate::geom::polygon::Domain;
@@ -82,34 +83,16 @@ impl FractureSpec {
     }
 }
 
-/// The domain a body's cracks live in: its polygon, or its rectangle as
-/// one.
-fn body_domain(b: &BodySpec, polygon: Option<&Domain>) -> Option<Domain> {
-    if let Some(d) = polygon {
-        return Some(d.clone());
-    }
-    let o = Vec2::from(b.rectangle.origin);
-    let s = Vec2::from(b.rectangle.size);
-    let corners = vec![
-        o,
-        Vec2::new(o.x + s.x, o.y),
-        o + s,
-        Vec2::new(o.x, o.y + s.y),
-    ];
-    Domain::new(corners, vec![], vec![]).ok()
-}
-
-/// The node spacing of body `b` (a polygon's `spacing`, a rectangle's
-/// grid spacing).
-fn body_spacing(b: &BodySpec) -> f64 {
-    match b.spacing {
-        Some(h) => h,
-        None => {
-            let [nx, ny] = b.nodes;
-            let s = b.rectangle.size;
-            (s[0] / nx.saturating_sub(1).max(1) as f64)
-                .min(s[1] / ny.saturating_sub(1).max(1) as f64)
-        }
+/// The domain a body's cracks live in (its polygon, or its rectangle as
+/// the polygon it is meshed as) and its node spacing; `None` when the
+/// body's own checks fail.
+fn body_domain(b: &BodySpec, polygon: Option<&Domain>) -> Option<(Domain, f64)> {
+    match (polygon, b.spacing) {
+        (Some(d), Some(h)) => Some((d.clone(), h)),
+        (Some(_), None) => None,
+        (None, _) => rectangle_polygon(&b.rectangle, b.nodes)
+            .ok()
+            .map(|p| (p.domain, p.spacing)),
     }
 }
 
@@ -138,7 +121,9 @@ pub fn validate(i: usize, b: &BodySpec, polygon: Option<&Domain>, coupled: bool,
         );
         return;
     }
-    let h = body_spacing(b);
+    let Some((domain, h)) = body_domain(b, polygon) else {
+        return;
+    };
     for (k, c) in b.crack.iter().enumerate() {
         let at = |f: &str| format!("body.{i}.crack.{k}.{f}");
         if let Some(sp) = c.spacing {
@@ -162,9 +147,10 @@ pub fn validate(i: usize, b: &BodySpec, polygon: Option<&Domain>, coupled: bool,
                 "`width` is the width of the band at `spacing`: give `spacing` too",
             );
         }
-        if let (Some(sp), Some(d)) = (c.spacing, polygon.map(Domain::area))
+        if let Some(sp) = c.spacing
             && sp > 0.0
         {
+            let d = domain.area();
             let len: f64 = c
                 .points
                 .windows(2)
@@ -179,11 +165,9 @@ pub fn validate(i: usize, b: &BodySpec, polygon: Option<&Domain>, coupled: bool,
             );
         }
     }
-    if let Some(d) = body_domain(b, polygon) {
-        let cracks: Vec<Crack> = b.crack.iter().map(|c| c.shape().crack).collect();
-        if let Err(e) = check(&d, &cracks) {
-            p.push(format!("body.{i}.crack.{}.points", e.crack), e.message);
-        }
+    let cracks: Vec<Crack> = b.crack.iter().map(|c| c.shape().crack).collect();
+    if let Err(e) = check(&domain, &cracks) {
+        p.push(format!("body.{i}.crack.{}.points", e.crack), e.message);
     }
     if let Some(f) = &b.fracture {
         let at = |f: &str| format!("body.{i}.fracture.{f}");

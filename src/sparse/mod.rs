@@ -9,16 +9,13 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use rayon::prelude::*;
 use std::sync::Arc;
-
-mod supernodal;
-use supernodal::{Structure, TreeSolve};
 
 /// Errors of the sparse linear algebra.
 #[derive(Debug, thiserror::Error)]
@@ -171,11 +168,14 @@ impl SymCsc {
 }
 
 /// A symmetric matrix by rows, both triangles, its nonzero entries only:
-/// products `y += A x` row by row on the threads (each row one sum in
-/// column order, the same on any number of threads).
+/// products `y += A x` row by row on the threads, each row summed in the
+/// order of [`SymCsc::mul_add`] (bitwise its result, on any number of
+/// threads).
 #[derive(Debug, Clone)]
 pub struct SymRows {
     start: Vec<usize>,
+    /// Per row, its first entry on or right of the diagonal.
+    mid: Vec<usize>,
     col: Vec<u32>,
     val: Vec<f64>,
 }
@@ -224,27 +224,45 @@ impl SymRows {
                 }
             }
         }
-        SymRows { start, col, val }
+        let mid = (0..p.n)
+            .map(|i| start[i] + col[start[i]..start[i + 1]].partition_point(|&c| (c as usize) < i))
+            .collect();
+        SymRows {
+            start,
+            mid,
+            col,
+            val,
+        }
     }
 
-    /// `y += A x`.
+    /// `y += A x`: per row, the entries left of the diagonal added to `y_i`
+    /// one by one, then the sum of the others (as the lower-triangle
+    /// product scatters its columns and gathers the diagonal's column).
     pub fn mul_add(&self, x: &[f64], y: &mut [f64]) {
-        let row = |i: usize| {
-            let (s, e) = (self.start[i], self.start[i + 1]);
-            let mut acc = 0.0;
-            for (c, v) in self.col[s..e].iter().zip(&self.val[s..e]) {
-                acc += v * x[*c as usize];
+        let row = |i: usize, yi: &mut f64| {
+            let (s, m, e) = (self.start[i], self.mid[i], self.start[i + 1]);
+            let term = |q: usize| self.val[q] * x[self.col[q] as usize];
+            let mut left = *yi;
+            for q in s..m {
+                left += term(q);
             }
-            acc
+            if m < e {
+                let mut right = term(m);
+                for q in m + 1..e {
+                    right += term(q);
+                }
+                left += right;
+            }
+            *yi = left;
         };
         if self.val.len() < 1 << 15 {
-            y.iter_mut().enumerate().for_each(|(i, yi)| *yi += row(i));
+            y.iter_mut().enumerate().for_each(|(i, yi)| row(i, yi));
         } else {
             y.par_chunks_mut(ROWS_PER_TASK)
                 .enumerate()
                 .for_each(|(b, ys)| {
                     for (k, yi) in ys.iter_mut().enumerate() {
-                        *yi += row(b * ROWS_PER_TASK + k);
+                        row(b * ROWS_PER_TASK + k, yi);
                     }
                 });
         }
@@ -321,8 +339,6 @@ pub struct Cholesky {
     values: Vec<f64>,
     solve_mem: MemBuffer,
     par: Par,
-    /// The threaded solve of a supernodal factor (`None`: simplicial).
-    tree: Option<TreeSolve>,
 }
 
 impl std::fmt::Debug for Cholesky {
@@ -360,24 +376,11 @@ impl Cholesky {
         let par = par(symbolic.len_val());
         let solve_mem = MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq))
             .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
-        let tree = match symbolic.raw() {
-            SymbolicCholeskyRaw::Supernodal(sn) => Some(TreeSolve::new(Structure {
-                begin: sn.supernode_begin(),
-                end: sn.supernode_end(),
-                val_ptr: sn.col_ptr_for_val(),
-                pattern: (0..sn.n_supernodes())
-                    .map(|k| sn.supernode(k).pattern())
-                    .collect(),
-                perm: symbolic.perm().map(|p| p.arrays()),
-            })),
-            SymbolicCholeskyRaw::Simplicial(_) => None,
-        };
         let mut c = Cholesky {
             values: vec![0.0; symbolic.len_val()],
             symbolic,
             solve_mem,
             par,
-            tree,
         };
         c.refactor(a)?;
         Ok(c)
@@ -408,12 +411,6 @@ impl Cholesky {
         Ok(())
     }
 
-    /// The share of `L` its solves read on several threads at once (0 for
-    /// a factor solved sequentially).
-    pub fn parallel_share(&self) -> f64 {
-        self.tree.as_ref().map_or(0.0, TreeSolve::parallel_share)
-    }
-
     /// Number of stored entries of `L`.
     pub fn nnz_l(&self) -> usize {
         self.values.len()
@@ -421,14 +418,12 @@ impl Cholesky {
 
     /// Overwrite `rhs` with `A⁻¹ rhs`. Does not allocate.
     ///
-    /// A supernodal factor is solved on the threads, subtree by subtree of
-    /// its elimination tree (the same result on any number of them); a
-    /// simplicial one (small or very sparse) sequentially.
+    /// Sequential: a solve with one right-hand side reads `L` twice and
+    /// does two flops per entry, so it is bound by memory bandwidth, and
+    /// splitting its supernodes over threads only adds their
+    /// synchronisation: a second thread must never make a step slower.
+    /// The factorisation uses the threads.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
-        if let Some(t) = &mut self.tree {
-            t.solve(&self.values, rhs);
-            return;
-        }
         let n = rhs.len();
         let llt = LltRef::new(&self.symbolic, &self.values);
         llt.solve_in_place_with_conj(
@@ -492,17 +487,35 @@ pub(crate) mod tests {
         }
     }
 
-    /// The row-wise product of the nonzeros equals the lower-triangle one.
+    /// The row-wise product of the nonzeros is bitwise the lower-triangle
+    /// one, on 1 and 2 threads (a matrix large enough for the threads).
     #[test]
-    fn sym_rows_product_matches() {
-        let mut a = grid(9, 8, 2);
-        a.values.iter_mut().step_by(3).for_each(|v| *v = 0.0);
-        let x: Vec<f64> = (0..a.n()).map(|i| (i as f64 * 0.7).sin()).collect();
-        let (mut y1, mut y2) = (vec![1.0; a.n()], vec![1.0; a.n()]);
-        a.mul_add(&x, &mut y1);
-        SymRows::new(&a).mul_add(&x, &mut y2);
-        for (p, q) in y1.iter().zip(&y2) {
-            assert!((p - q).abs() < 1e-13, "{p} vs {q}");
+    fn sym_rows_product_is_bitwise_the_lower_triangle_one() {
+        for (nx, ny) in [(9, 8), (60, 40)] {
+            let mut a = grid(nx, ny, 2);
+            // zeros off the diagonal, as a mass matrix on a stiffness pattern
+            let p = a.pattern.clone();
+            for j in 0..p.n {
+                for k in p.col_ptr[j] + 1..p.col_ptr[j + 1] {
+                    if (p.row_idx[k] + j).is_multiple_of(3) {
+                        a.values[k] = 0.0;
+                    }
+                }
+            }
+            let x: Vec<f64> = (0..a.n()).map(|i| (i as f64 * 0.7).sin()).collect();
+            let y0: Vec<f64> = (0..a.n()).map(|i| (i as f64 * 0.3).cos()).collect();
+            let mut y1 = y0.clone();
+            a.mul_add(&x, &mut y1);
+            let rows = SymRows::new(&a);
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let mut y2 = y0.clone();
+                pool.install(|| rows.mul_add(&x, &mut y2));
+                assert!(y1.iter().zip(&y2).all(|(p, q)| p.to_bits() == q.to_bits()));
+            }
         }
     }
 
@@ -571,39 +584,6 @@ pub(crate) mod tests {
                 row_idx,
             }),
             values,
-        }
-    }
-
-    /// The threaded supernodal solve agrees with faer's sequential one to
-    /// round-off and is bitwise the same on 1, 2 and 3 threads.
-    #[test]
-    fn tree_solve_matches_faer_and_ignores_the_thread_count() {
-        let a = grid(70, 60, 2);
-        let n = a.n();
-        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
-        let solve = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
-                let mut ch = Cholesky::factor(&a).unwrap();
-                assert!(ch.tree.as_ref().is_some_and(|t| t.parallel_parts() >= 2));
-                let mut x = b.clone();
-                ch.solve_in_place(&mut x);
-                let mut reference = b.clone();
-                ch.solve_columns(&mut reference, 1).unwrap();
-                (x, reference)
-            })
-        };
-        let (x1, reference) = solve(1);
-        let scale = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (p, q) in x1.iter().zip(&reference) {
-            assert!((p - q).abs() <= 1e-13 * scale, "{p} vs {q}");
-        }
-        for threads in [2, 3] {
-            let (x, _) = solve(threads);
-            assert!(x.iter().zip(&x1).all(|(p, q)| p.to_bits() == q.to_bits()));
         }
     }
 
