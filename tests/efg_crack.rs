@@ -68,6 +68,8 @@ fn griffith(beta: f64, h: f64, ratio: f64, width: f64) -> (EfgBody, [f64; 2]) {
         crack: Crack::new(vec![Vec2::new(-c, -s), Vec2::new(c, s)]),
         spacing: Some(h / ratio),
         width,
+        friction: 0.0,
+        face_stiffness: None,
     });
     let mut b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
     b.solve_static().unwrap();
@@ -112,6 +114,8 @@ fn edge_crack(a: f64, half: f64, h: f64, ratio: f64, width: f64) -> EfgBody {
         crack: Crack::new(vec![Vec2::new(0.0, 0.0), Vec2::new(a, 0.0)]),
         spacing: Some(h / ratio),
         width,
+        friction: 0.0,
+        face_stiffness: None,
     });
     let mut b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
     b.solve_static().unwrap();
@@ -307,6 +311,8 @@ fn a_stress_parallel_to_a_crack_is_reproduced() {
             crack: Crack::new(vec![Vec2::new(-c, -s), Vec2::new(c, s)]),
             spacing: None,
             width: 0.0,
+            friction: 0.0,
+            face_stiffness: None,
         });
         let mut b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
         b.solve_static().unwrap();

@@ -67,6 +67,8 @@ fn griffith(beta: f64, kic: f64, increment: Option<f64>) -> (EfgBody, [f64; 2]) 
         crack: Crack::new(vec![Vec2::new(-c, -s), Vec2::new(c, s)]),
         spacing: Some(0.05),
         width: 0.2,
+        friction: 0.0,
+        face_stiffness: None,
     });
     p.fracture = Some(Fracture {
         toughness: kic,
@@ -167,6 +169,8 @@ fn fixed_grips(a: f64) -> EfgBody {
         crack: Crack::new(vec![Vec2::new(0.0, 0.0), Vec2::new(a, 0.0)]),
         spacing: Some(0.0125),
         width: 0.05,
+        friction: 0.0,
+        face_stiffness: None,
     });
     p.fracture = Some(Fracture {
         toughness: 1e-9,

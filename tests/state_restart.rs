@@ -945,3 +945,39 @@ to = [0.3, 0.0]
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// [`bed_on_plate`] with an edge crack from the middle of the plate's top
+/// down to mid-depth: the discs rest on the cracked top, its faces join
+/// the contact chain and close under the bed (frictional face contact).
+fn bed_on_cracked_plate() -> String {
+    bed_on_plate("efg", "")
+        + r#"
+[[body.crack]]
+points = [[0.1, 0.0], [0.1, -0.02]]
+spacing = 0.0025
+friction = 0.5
+"#
+}
+
+/// A coupled run with a cracked body restarts bitwise, and runs bitwise
+/// the same on 1 and 2 threads.
+#[test]
+fn bed_on_cracked_plate_restarts_bitwise_on_1_and_2_threads() {
+    let src = bed_on_cracked_plate();
+    let (n, k) = (400, 230);
+    let ends: Vec<Vec<u8>> = [1, 2]
+        .into_iter()
+        .map(|threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let (a, c, _) = restart(&src, n, k);
+                    assert_same(&a, &c);
+                    a.save_state().to_bytes()
+                })
+        })
+        .collect();
+    assert!(ends[0] == ends[1], "1 and 2 threads agree");
+}

@@ -69,6 +69,12 @@ pub struct CrackShape {
     pub spacing: Option<f64>,
     /// Width of the refined band along the crack.
     pub width: f64,
+    /// Friction coefficient of the faces in contact.
+    pub friction: f64,
+    /// Stiffness of the faces in contact, stress per length (`None`:
+    /// `100 E / h` with `h` the crack's station spacing: overlaps far
+    /// below the node spacing, a well-conditioned contact solve).
+    pub face_stiffness: Option<f64>,
 }
 
 /// Crack growth in an EFG body with cracks ([`crate::efg::growth`]): a tip

@@ -16,7 +16,10 @@
 //! with `E′ = E` (plane stress) or `E/(1 − ν²)` (plane strain). Traction-
 //! free, straight faces within the ring and no body force there make it
 //! independent of the ring (its domain independence is a check of the
-//! discrete field).
+//! discrete field). Faces that touch carry tractions `t`; then
+//! `I −= ∫_faces t_i uᵃ_i,1 q ds` (the divergence theorem over the ring
+//! leaves that line integral on the faces; the auxiliary faces are free),
+//! summed over the face points' forces.
 
 use crate::geom::Vec2;
 use std::f64::consts::PI;
@@ -116,6 +119,17 @@ pub struct Ring {
 }
 
 impl Ring {
+    /// `q` at `r`.
+    pub fn q(&self, r: f64) -> f64 {
+        if r <= self.inner {
+            return 1.0;
+        }
+        if r >= self.outer {
+            return 0.0;
+        }
+        let s = (r - self.inner) / (self.outer - self.inner);
+        1.0 - 3.0 * s * s + 2.0 * s * s * s
+    }
     /// `dq/dr` at `r` (0 outside the ring).
     pub fn dq_dr(&self, r: f64) -> f64 {
         if r <= self.inner || r >= self.outer {
@@ -130,13 +144,18 @@ impl Ring {
 /// `[K_I, K_II]` at the tip `tip` advancing along the unit vector `dir`,
 /// from the interaction integral over `points` (`(x, weight)`; those
 /// outside the ring are skipped) with the actual field `sample(x)`, in a
-/// material of `E`, ν (plane strain or stress).
+/// material of `E`, ν (plane strain or stress), less the work of the
+/// face forces `faces` (`(x, f)`: a force `f` per thickness on the body
+/// at the face point `x`, on its side of the crack) on the auxiliary
+/// field.
+#[allow(clippy::too_many_arguments)]
 pub fn interaction_integral(
     tip: Vec2,
     dir: Vec2,
     ring: Ring,
     points: &[(Vec2, f64)],
     mut sample: impl FnMut(Vec2) -> Option<TipSample>,
+    faces: &[(Vec2, Vec2)],
     (e, nu, plane_strain): (f64, f64, bool),
 ) -> [f64; 2] {
     let (mu, kappa) = mu_kappa(e, nu, plane_strain);
@@ -191,6 +210,20 @@ pub fn interaction_integral(
                 }
             }
             *im += w * sum;
+        }
+    }
+    for &(x, f) in faces {
+        let d = x - tip;
+        let r = d.norm();
+        let q = ring.q(r);
+        if q == 0.0 {
+            continue;
+        }
+        let (x1, x2) = (d.dot(e1), d.dot(e2));
+        let fl = [f.dot(e1), f.dot(e2)];
+        for (mode, im) in i.iter_mut().enumerate() {
+            let (_, ga) = williams(mode, r, x2.atan2(x1), mu, kappa);
+            *im -= q * (fl[0] * ga[0][0] + fl[1] * ga[1][0]);
         }
     }
     [0.5 * ep * i[0], 0.5 * ep * i[1]]
@@ -305,7 +338,8 @@ mod tests {
                             pts.push((p, wa * wb * 0.5 * (ring.outer - ring.inner) * PI * r));
                         }
                     }
-                    let k = interaction_integral(tip, dir, ring, &pts, sample, (e, nu, strain));
+                    let k =
+                        interaction_integral(tip, dir, ring, &pts, sample, &[], (e, nu, strain));
                     let scale = exact[0].abs().max(exact[1].abs());
                     assert!(
                         (k[0] - exact[0]).abs() < 1e-4 * scale

@@ -53,8 +53,9 @@ pub struct BodyState {
     /// drives ([`WithBoundary`](super::WithBoundary)); `None` for a body
     /// of a continuum-only model.
     pub boundary: Option<BoundaryState>,
-    /// The cracks of an EFG body as they have grown (`None`: a body
-    /// without crack growth): a restart rebuilds the body with them.
+    /// The cracks of an EFG body as they have grown and the friction of
+    /// their faces (`None`: a body without cracks): a restart rebuilds
+    /// the body with them.
     pub cracks: Option<CrackState>,
 }
 
@@ -67,6 +68,9 @@ pub struct CrackState {
     pub increments: Vec<[usize; 2]>,
     /// Energy released by growth so far.
     pub fracture_energy: f64,
+    /// The shear force of each pair of crack faces in contact (its
+    /// friction's history; 0 for an open pair).
+    pub face_shear: Vec<f64>,
 }
 
 /// The running state of a drive (checkpointed).

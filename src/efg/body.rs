@@ -5,6 +5,7 @@
 
 use super::EfgError;
 use super::assemble::{self, Operators, PointRole, PointShapes};
+use super::face_contact::FaceContact;
 use super::penalty::{MovingEdge, When};
 use super::polygon::PolygonMesh;
 use super::shape::{ShapeRow, shape_functions};
@@ -126,6 +127,8 @@ pub struct EfgBody {
     pub fracture_energy: f64,
     /// Growth increments so far, per crack tip `[crack][end]`.
     pub increments: Vec<[usize; 2]>,
+    /// Contact of the crack faces (empty without cracks).
+    pub faces: FaceContact,
 }
 
 impl EfgBody {
@@ -380,6 +383,11 @@ impl EfgBody {
                 target[2 * i + 1] += el.density * gravity[1] * s;
             }
         }
+        let faces = match &mesh {
+            Some(m) => FaceContact::build(&m.cracks, &spec.cracks, &support, el.e, t)
+                .map_err(|e| EfgError::coverage(e, spec.d_max, &spec.name))?,
+            None => FaceContact::default(),
+        };
         Ok(EfgBody {
             name: spec.name.clone(),
             grid: if mesh.is_some() { [0, 0] } else { spec.nodes },
@@ -417,6 +425,7 @@ impl EfgBody {
             spec: spec.clone(),
             gravity,
             fracture_energy: 0.0,
+            faces,
         })
     }
 
@@ -452,6 +461,13 @@ impl EfgBody {
         self.ops.penalty.add_load(&mut f, When::Now);
         let mut ch = Cholesky::factor(&self.ops.kbar())?;
         ch.solve_in_place(&mut f);
+        // the faces of the cracks in contact, from the unloaded state
+        self.faces.refactored();
+        self.faces.shear.iter_mut().for_each(|s| *s = 0.0);
+        let zero = vec![0.0; f.len()];
+        self.faces
+            .solve(&mut |x| ch.solve_in_place(x), &zero, &mut f)
+            .map_err(|e| self.face_error(e))?;
         self.state.u = f;
         self.state.v.iter_mut().for_each(|x| *x = 0.0);
         self.state.a.iter_mut().for_each(|x| *x = 0.0);
@@ -484,6 +500,7 @@ impl EfgBody {
         )?;
         let nm = Newmark::new(m, c, kbar, self.params)?;
         self.newmark = Some(nm);
+        self.faces.refactored();
         Ok(())
     }
 
@@ -629,6 +646,18 @@ impl EfgBody {
             }
             self.refine_pending = false;
         }
+        // the crack faces in contact at the end of the step, with all
+        // other forces of the step in U₊
+        if !self.faces.is_empty() {
+            let mut u1 = nm.solution().to_vec();
+            let r = self
+                .faces
+                .solve(&mut |x| nm.solve_in_place(x), &self.state.u, &mut u1);
+            nm.solution_mut().copy_from_slice(&u1);
+            if let Err(e) = r {
+                return Err(self.face_error(e));
+            }
+        }
         // work of the moving edges over the step, trapezoidal in time
         let (pen, step, dt) = (&self.ops.penalty, self.step, self.params.dt);
         let (t0, t1) = (step as f64 * dt, (step + 1) as f64 * dt);
@@ -649,6 +678,13 @@ impl EfgBody {
         Ok(())
     }
 
+    fn face_error(&self, source: super::face_contact::Unsettled) -> EfgError {
+        EfgError::FaceContact {
+            body: self.name.clone(),
+            source,
+        }
+    }
+
     /// What changes while the body steps ([`BodyState`]): `U`, `U̇`, `Ü`,
     /// clock, pending point loads, work of the moving edges. Call between
     /// steps (never between [`predict`](Self::predict) and
@@ -665,10 +701,11 @@ impl EfgBody {
             load_work: self.load_work,
             reactions: Vec::new(),
             boundary: None,
-            cracks: self.spec.fracture.map(|_| CrackState {
+            cracks: (!self.spec.cracks.is_empty()).then(|| CrackState {
                 cracks: self.cracks().iter().map(|c| c.crack.clone()).collect(),
                 increments: self.increments.clone(),
                 fracture_energy: self.fracture_energy,
+                face_shear: self.faces.shear.clone(),
             }),
         }
     }
@@ -719,8 +756,17 @@ impl EfgBody {
             }
             *self = new;
         }
+        if c.face_shear.len() != self.faces.shear.len() {
+            return Err(StateError::new(format!(
+                "body `{}`: {} saved pairs of crack faces, the body has {}",
+                self.name,
+                c.face_shear.len(),
+                self.faces.shear.len()
+            )));
+        }
         self.increments.clone_from(&c.increments);
         self.fracture_energy = c.fracture_energy;
+        self.faces.shear.clone_from(&c.face_shear);
         Ok(())
     }
 
@@ -796,9 +842,10 @@ impl EfgBody {
     }
     /// Energy of the penalty springs, from their gap to the prescribed
     /// displacement at the present time (moving edges included):
-    /// `½ Σ_g (u(x_g) − ū_g)ᵀ W_g (u(x_g) − ū_g)` (E4, [`super::penalty`]).
+    /// `½ Σ_g (u(x_g) − ū_g)ᵀ W_g (u(x_g) − ū_g)` (E4, [`super::penalty`]),
+    /// and of the crack faces in contact ([`FaceContact::energy`]).
     pub fn penalty_energy(&self) -> f64 {
-        self.ops.penalty.energy(&self.state.u, When::Now)
+        self.ops.penalty.energy(&self.state.u, When::Now) + self.faces.energy()
     }
     /// Strain energy including the penalty springs:
     /// [`elastic_energy`](Self::elastic_energy) +

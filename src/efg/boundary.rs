@@ -45,6 +45,16 @@ impl EfgBody {
                 on[l][s] = true;
             }
         }
+        // a point's reference position: a face node's own (off the crack,
+        // on its face), so that its row is its face's
+        let pos = |i: usize| m.nodes.get(i).copied().unwrap_or(m.points[i]);
+        let detours = mouth_detours(m);
+        // points from `a` towards `b` (excluded), `refine` per piece
+        let piece = |cur: &mut Vec<Vec2>, a: Vec2, b: Vec2| {
+            for j in 0..refine {
+                cur.push(a + (b - a) * (j as f64 / refine as f64));
+            }
+        };
         let mut chains = Vec::new();
         for (l, segs) in m.segment_points.iter().enumerate() {
             let n = segs.len();
@@ -57,24 +67,48 @@ impl EfgBody {
                 continue;
             };
             let mut cur: Vec<Vec2> = Vec::new();
+            let mut last: Option<usize> = None; // the previous segment's end
             for t in 0..n {
                 let k = (k0 + t) % n;
                 if !sel[k] {
                     if !cur.is_empty() {
                         chains.push(std::mem::take(&mut cur));
                     }
+                    last = None;
                     continue;
                 }
-                if !cur.is_empty() {
-                    cur.pop(); // the previous segment's end = this start
-                }
-                for w in segs[k].windows(2) {
-                    let (a, b) = (m.points[w[0]], m.points[w[1]]);
-                    for j in 0..refine {
-                        cur.push(a + (b - a) * (j as f64 / refine as f64));
+                let start = segs[k][0];
+                if let Some(e) = last {
+                    cur.pop(); // the previous segment's end: again below
+                    if let Some(d) = detours.get(&(e, start)) {
+                        // into a crack along one face, out along the other
+                        let mut a = pos(e);
+                        for &b in d {
+                            piece(&mut cur, a, b);
+                            a = b;
+                        }
+                        piece(&mut cur, a, pos(start));
                     }
                 }
-                cur.push(m.points[*segs[k].last().expect("a segment has 2 points")]);
+                for w in segs[k].windows(2) {
+                    piece(&mut cur, pos(w[0]), pos(w[1]));
+                }
+                let end = *segs[k].last().expect("a segment has 2 points");
+                cur.push(pos(end));
+                last = Some(end);
+            }
+            // a whole loop that starts at a crack's mouth closes through it
+            if let (Some(e), true) = (last, (0..n).all(|k| sel[k])) {
+                if let Some(d) = detours.get(&(e, segs[0][0])) {
+                    cur.pop();
+                    let mut a = pos(e);
+                    for &b in d {
+                        piece(&mut cur, a, b);
+                        a = b;
+                    }
+                    piece(&mut cur, a, pos(segs[0][0]));
+                    cur.push(cur[0]);
+                }
             }
             if !cur.is_empty() {
                 chains.push(cur);
@@ -82,6 +116,50 @@ impl EfgBody {
         }
         Some(Ok(chains))
     }
+}
+
+/// The way round each crack mouth of a polygon mesh, keyed by the face
+/// nodes the outline reaches it with and leaves it from (the end of the
+/// segment before the mouth, the start of the one after): the face nodes
+/// of the face on the side the outline comes from, from the mouth to the
+/// tip, then those of the other face back to the mouth (the mouth's own
+/// two excluded). The outline goes round the crack with the body on its
+/// left, as it goes round the body.
+fn mouth_detours(
+    m: &super::polygon::PolygonMesh,
+) -> std::collections::HashMap<(usize, usize), Vec<Vec2>> {
+    use crate::geom::crack::End;
+    let starts: std::collections::HashSet<usize> =
+        m.segment_points.iter().flatten().map(|s| s[0]).collect();
+    let mut out = std::collections::HashMap::new();
+    for c in &m.cracks {
+        let last = c.nodes.len() - 1;
+        for (e, j) in [(0, 0), (1, last)] {
+            if !matches!(c.ends[e], End::Mouth(..)) {
+                continue;
+            }
+            let pair = c.nodes[j];
+            // the node that starts the segment after the mouth
+            let after = usize::from(starts.contains(&pair[1]));
+            let before = 1 - after;
+            let inward: Vec<usize> = if j == 0 {
+                (1..=last).collect()
+            } else {
+                (0..last).rev().collect()
+            };
+            let node = |i: usize| m.nodes[i];
+            let mut way: Vec<Vec2> = inward.iter().map(|&k| node(c.nodes[k][before])).collect();
+            way.extend(
+                inward
+                    .iter()
+                    .rev()
+                    .skip(1)
+                    .map(|&k| node(c.nodes[k][after])),
+            );
+            out.insert((pair[before], pair[after]), way);
+        }
+    }
+    out
 }
 
 impl ContactBody for EfgBody {

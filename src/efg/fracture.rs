@@ -105,6 +105,13 @@ impl EfgBody {
             ring,
             &points,
             sample,
+            &self.faces.face_forces(
+                self.material.thickness,
+                (
+                    tip.crack,
+                    tip.end as f64 * self.cracks()[tip.crack].crack.length(),
+                ),
+            ),
             (m.e, m.nu, m.plane == Plane::Strain),
         );
         match err {

@@ -6,12 +6,14 @@
 //! - [`assemble`]: K, M (via the Gram matrix), C, penalty (E4, E5), in parallel.
 //! - [`penalty`]: the penalty points: `K^α`, `F^α(t)`, the springs' energy and force.
 //! - [`body`]: [`EfgBody`], built from a scenario `[[body]]`.
+//! - [`face_contact`]: contact of closing crack faces (penalty, Coulomb friction).
 //! - [`fracture`]: stress intensity factors at the tips of its cracks.
 //! - [`growth`]: cracks that grow by the maximum hoop-stress criterion.
 
 pub mod assemble;
 pub mod body;
 pub mod boundary;
+pub mod face_contact;
 pub mod fracture;
 pub mod growth;
 pub mod penalty;
@@ -42,6 +44,15 @@ pub enum EfgError {
     /// is not supported).
     #[error(transparent)]
     Solve(#[from] crate::sparse::SparseError),
+    /// The contact of closing crack faces did not settle.
+    #[error("body `{body}`: {source}")]
+    FaceContact {
+        /// Name of the body.
+        body: String,
+        /// The solve's last residual.
+        #[source]
+        source: face_contact::Unsettled,
+    },
     /// A step was asked for before [`EfgBody::start_dynamic`].
     #[error("advance() called before start_dynamic()")]
     NotStarted,

@@ -6,6 +6,8 @@
 //! points = [[0.0, 0.5], [0.2, 0.5]]   # a mouth on the boundary, a tip inside
 //! spacing = 0.01                      # node spacing along the crack
 //! width = 0.04                        # width of the refined band (default 4 × spacing)
+//! friction = 0.6                      # of the faces in contact (default 0)
+//! face_stiffness = 1.0e14             # Pa/m (default 100 E / spacing)
 //! [body.fracture]
 //! toughness = 2.0e6                   # K_Ic
 //! increment = 0.02                    # Δa (default: 5 × the tip's node spacing)
@@ -34,6 +36,12 @@ pub struct CrackSpec {
     pub spacing: Option<f64>,
     /// Width of the band at `spacing` on each side (default 4 × spacing).
     pub width: Option<f64>,
+    /// Friction coefficient of the faces in contact (default 0).
+    #[serde(default)]
+    pub friction: f64,
+    /// Stiffness of the faces in contact, stress per length (default
+    /// 100 E / the crack's node spacing).
+    pub face_stiffness: Option<f64>,
 }
 
 /// Crack growth by the maximum hoop-stress criterion.
@@ -67,6 +75,8 @@ impl CrackSpec {
             crack: Crack::new(self.points.iter().map(|&p| p.into()).collect()),
             spacing: self.spacing,
             width: self.width.unwrap_or(4.0 * self.spacing.unwrap_or(0.0)),
+            friction: self.friction,
+            face_stiffness: self.face_stiffness,
         }
     }
 }
@@ -114,12 +124,11 @@ pub fn validate(i: usize, b: &BodySpec, polygon: Option<&Domain>, coupled: bool,
         );
         return;
     }
-    if coupled {
+    if coupled && b.fracture.is_some() {
         p.push(
-            at("crack"),
-            "cracks are available in continuum runs (static or dynamic); a coupled run cannot have them yet (discs do not touch crack faces)",
+            at("fracture"),
+            "crack growth is available in continuum runs (static or dynamic); in a coupled run the cracks stay as given (leave out `[body.fracture]`)",
         );
-        return;
     }
     let Some((domain, h)) = body_domain(b, polygon) else {
         return;
@@ -133,6 +142,14 @@ pub fn validate(i: usize, b: &BodySpec, polygon: Option<&Domain>, coupled: bool,
                 at("spacing"),
                 format!("must be > 0 and below the body's node spacing {h} (got {sp})"),
             );
+        }
+        p.check(
+            c.friction.is_finite() && c.friction >= 0.0,
+            at("friction"),
+            format!("must be a finite number ≥ 0 (got {})", c.friction),
+        );
+        if let Some(k) = c.face_stiffness {
+            p.positive(k, at("face_stiffness"));
         }
         if let Some(w) = c.width {
             let ok = w.is_finite() && w > 0.0;

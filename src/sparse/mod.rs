@@ -459,6 +459,43 @@ impl Cholesky {
     }
 }
 
+/// Solve `a x = b` in place (`b ← x`), Gaussian elimination with partial
+/// pivoting; `a` is n × n row-major and is destroyed.
+pub fn gauss_solve(a: &mut [f64], b: &mut [f64], n: usize) {
+    for col in 0..n {
+        let piv = (col..n)
+            .max_by(|&i, &j| a[i * n + col].abs().total_cmp(&a[j * n + col].abs()))
+            .unwrap_or(col);
+        if a[piv * n + col] == 0.0 {
+            continue;
+        }
+        if piv != col {
+            for k in 0..n {
+                a.swap(piv * n + k, col * n + k);
+            }
+            b.swap(piv, col);
+        }
+        let d = a[col * n + col];
+        for i in col + 1..n {
+            let f = a[i * n + col] / d;
+            if f != 0.0 {
+                for k in col..n {
+                    a[i * n + k] -= f * a[col * n + k];
+                }
+                b[i] -= f * b[col];
+            }
+        }
+    }
+    for col in (0..n).rev() {
+        let mut x = b[col];
+        for k in col + 1..n {
+            x -= a[col * n + k] * b[k];
+        }
+        let d = a[col * n + col];
+        b[col] = if d != 0.0 { x / d } else { 0.0 };
+    }
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
