@@ -55,6 +55,16 @@ impl EfgBody {
                 cur.push(a + (b - a) * (j as f64 / refine as f64));
             }
         };
+        // from the face node `e` into a crack along one face, out along
+        // the other to the face node `start`
+        let round = |cur: &mut Vec<Vec2>, e: usize, way: &[Vec2], start: usize| {
+            let mut a = pos(e);
+            for &b in way {
+                piece(cur, a, b);
+                a = b;
+            }
+            piece(cur, a, pos(start));
+        };
         let mut chains = Vec::new();
         for (l, segs) in m.segment_points.iter().enumerate() {
             let n = segs.len();
@@ -81,13 +91,7 @@ impl EfgBody {
                 if let Some(e) = last {
                     cur.pop(); // the previous segment's end: again below
                     if let Some(d) = detours.get(&(e, start)) {
-                        // into a crack along one face, out along the other
-                        let mut a = pos(e);
-                        for &b in d {
-                            piece(&mut cur, a, b);
-                            a = b;
-                        }
-                        piece(&mut cur, a, pos(start));
+                        round(&mut cur, e, d, start);
                     }
                 }
                 for w in segs[k].windows(2) {
@@ -98,17 +102,13 @@ impl EfgBody {
                 last = Some(end);
             }
             // a whole loop that starts at a crack's mouth closes through it
-            if let (Some(e), true) = (last, (0..n).all(|k| sel[k])) {
-                if let Some(d) = detours.get(&(e, segs[0][0])) {
-                    cur.pop();
-                    let mut a = pos(e);
-                    for &b in d {
-                        piece(&mut cur, a, b);
-                        a = b;
-                    }
-                    piece(&mut cur, a, pos(segs[0][0]));
-                    cur.push(cur[0]);
-                }
+            if let Some(e) = last
+                && (0..n).all(|k| sel[k])
+                && let Some(d) = detours.get(&(e, segs[0][0]))
+            {
+                cur.pop();
+                round(&mut cur, e, d, segs[0][0]);
+                cur.push(cur[0]);
             }
             if !cur.is_empty() {
                 chains.push(cur);
