@@ -42,8 +42,9 @@ use crate::dem::state::GranularState;
 /// 6: the compliant sub-cycled scheme's boundary path, the sub-cycling
 /// energy guard's count;
 /// 7: the granular state keeps the parallel bonds;
-/// 8: EFG bodies keep their grown cracks.)
-pub const STATE_FORMAT_VERSION: u32 = 8;
+/// 8: the coupled state records the automatic scheme's fallback;
+/// 9: EFG bodies keep their grown cracks and their faces' friction.)
+pub const STATE_FORMAT_VERSION: u32 = 9;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
