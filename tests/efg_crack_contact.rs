@@ -11,12 +11,11 @@ use efgdem::geom::crack::Crack;
 
 const E: f64 = 1000.0;
 
-/// A unit square on rollers (left `ux = 0`, bottom `uy = 0`) under the
-/// vertical traction `p` on its top (negative: compression), with a crack
-/// of half-length `a` at `beta` degrees from the horizontal through its
-/// centre, friction `mu`; nodes at 0.05, 0.0125 along the crack. The
-/// whole square's solution is the uniform `σ_yy = p`, `σ_xx = σ_xy = 0`.
-fn plate(p: f64, a: f64, beta: f64, mu: f64) -> EfgBody {
+/// A unit square of density `rho` on rollers (left `ux = 0`, bottom
+/// `uy = 0`) under the vertical traction `p` on its top (negative:
+/// compression), nodes at 0.05, with `crack`. The whole square's
+/// solution is the uniform `σ_yy = p`, `σ_xx = σ_xy = 0`.
+fn square(p: f64, rho: f64, crack: Option<CrackShape>) -> BodyParams {
     let mut b = BodyParams::new(
         "plate",
         Rectangle {
@@ -24,7 +23,10 @@ fn plate(p: f64, a: f64, beta: f64, mu: f64) -> EfgBody {
             size: [1.0, 1.0],
         },
         [21, 21],
-        Elastic::new(E, 0.3),
+        Elastic {
+            density: rho,
+            ..Elastic::new(E, 0.3)
+        },
     );
     b.self_weight = false;
     b.bc = vec![
@@ -38,16 +40,27 @@ fn plate(p: f64, a: f64, beta: f64, mu: f64) -> EfgBody {
         },
         EdgeCondition::traction("top", [0.0, p]),
     ];
+    b.cracks.extend(crack);
+    b
+}
+
+/// A crack of half-length `a` at `beta` degrees from the horizontal
+/// through the square's centre, friction `mu`, nodes at 0.0125 along it.
+fn crack(a: f64, beta: f64, mu: f64) -> CrackShape {
     let (s, c) = beta.to_radians().sin_cos();
     let m = Vec2::new(0.5, 0.5);
-    b.cracks.push(CrackShape {
+    CrackShape {
         crack: Crack::new(vec![m - Vec2::new(c, s) * a, m + Vec2::new(c, s) * a]),
         spacing: Some(0.0125),
         width: 0.05,
         friction: mu,
         face_stiffness: None,
-    });
-    let mut body = EfgBody::new(&b, [0.0, 0.0]).unwrap();
+    }
+}
+
+/// The statically loaded [`square`] with a [`crack`].
+fn plate(p: f64, a: f64, beta: f64, mu: f64) -> EfgBody {
+    let mut body = EfgBody::new(&square(p, 0.0, Some(crack(a, beta, mu))), [0.0, 0.0]).unwrap();
     body.solve_static().unwrap();
     body
 }
@@ -180,44 +193,12 @@ fn friction_holds_the_shear_it_can() {
     assert!(slid > 0);
 }
 
-/// A dynamic body: the plate of [`plate`] with density 1 and its load
-/// `p` from t = 0, Δt = 0.002 (about 40 steps per period of its lowest
-/// mode); with a crack (`crack`) or whole.
-fn dynamic(p: f64, crack: bool) -> EfgBody {
-    let mut b = BodyParams::new(
-        "plate",
-        Rectangle {
-            origin: [0.0, 0.0],
-            size: [1.0, 1.0],
-        },
-        [21, 21],
-        Elastic {
-            density: 1.0,
-            ..Elastic::new(E, 0.3)
-        },
-    );
-    b.self_weight = false;
-    b.bc = vec![
-        EdgeCondition {
-            uy: Some(Prescribed::Value(0.0)),
-            ..EdgeCondition::on("bottom")
-        },
-        EdgeCondition {
-            ux: Some(Prescribed::Value(0.0)),
-            ..EdgeCondition::on("left")
-        },
-        EdgeCondition::traction("top", [0.0, p]),
-    ];
-    if crack {
-        b.cracks.push(CrackShape {
-            crack: Crack::new(vec![Vec2::new(0.3, 0.5), Vec2::new(0.7, 0.5)]),
-            spacing: Some(0.0125),
-            width: 0.05,
-            friction: 0.5,
-            face_stiffness: None,
-        });
-    }
-    let mut body = EfgBody::new(&b, [0.0, 0.0]).unwrap();
+/// A dynamic body: the [`square`] with density 1 and its load `p` from
+/// t = 0, Δt = 0.002 (about 40 steps per period of its lowest mode); with
+/// a horizontal crack of length 0.4, μ = 0.5 (`cracked`) or whole.
+fn dynamic(p: f64, cracked: bool) -> EfgBody {
+    let c = cracked.then(|| crack(0.2, 0.0, 0.5));
+    let mut body = EfgBody::new(&square(p, 1.0, c), [0.0, 0.0]).unwrap();
     body.start_dynamic(0.002).unwrap();
     body
 }
