@@ -274,3 +274,30 @@ fn dynamic_contact_restarts_and_threads_bitwise() {
     };
     assert_eq!(run(1), run(2), "1 vs 2 threads");
 }
+
+/// The contact chain of a body with an edge crack runs from the mouth
+/// along one face to the tip and back along the other: one closed loop,
+/// counter-clockwise (its area is the square's: the way round the crack
+/// encloses none), through the face nodes of both faces and the tip.
+#[test]
+fn edge_crack_faces_join_the_contact_chain() {
+    let mut c = crack(0.15, 90.0, 0.0);
+    c.crack = Crack::new(vec![Vec2::new(0.5, 1.0), Vec2::new(0.5, 0.7)]);
+    let b = EfgBody::new(&square(-1.0, 0.0, Some(c)), [0.0, 0.0]).unwrap();
+    let chains = b.polygon_chains(None, 1).unwrap().unwrap();
+    assert_eq!(chains.len(), 1);
+    let ch = &chains[0];
+    assert_eq!(ch.first(), ch.last(), "closed");
+    let area: f64 = ch.windows(2).map(|w| 0.5 * w[0].cross(w[1])).sum();
+    // less the sliver between the faces, which stand 10⁻⁶ of the
+    // crack's spacing off it: 2 × 1.25e-8 × 0.3
+    assert!((area - 1.0).abs() < 1e-8, "area {area}");
+    let on_crack = |side: f64| {
+        ch.iter()
+            .filter(|p| (p.x - 0.5) * side > 0.0 && (p.x - 0.5).abs() < 1e-6 && p.y < 0.999)
+            .count()
+    };
+    // 0.3 / 0.0125 = 24 pieces: 23 face nodes on each side below the mouth
+    assert_eq!((on_crack(-1.0), on_crack(1.0)), (23, 23));
+    assert!(ch.contains(&Vec2::new(0.5, 0.7)), "through the tip");
+}
