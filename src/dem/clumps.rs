@@ -329,6 +329,24 @@ impl Clumps {
         }
     }
 
+    /// The smallest effective mass of a contact on a clump,
+    /// `1/(1/M + R²/I)` with `R` the farthest reach of a member's rim from
+    /// the centre (a force at the rim, at right angles to the arm): the
+    /// mass that sets a clump's critical step (infinity without clumps).
+    pub fn min_effective_mass(&self, p: &Particles) -> f64 {
+        (0..self.len())
+            .map(|c| {
+                let (a, b) = (self.first[c] as usize, self.first[c + 1] as usize);
+                let reach = self.members[a..b]
+                    .iter()
+                    .zip(&self.offset[a..b])
+                    .map(|(&id, o)| o.norm() + p.radius[p.slot[id as usize] as usize])
+                    .fold(0.0, f64::max);
+                1.0 / (1.0 / self.mass[c] + reach * reach / self.inertia[c])
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Is every clump's state finite?
     pub fn is_finite(&self) -> bool {
         self.pos

@@ -356,8 +356,9 @@ impl Granular {
                 certain: f64::INFINITY,
             };
         };
+        // a clump's rotation makes a contact at its rim lighter than a disc
         let d = critical::Disc {
-            m: p.mass[k],
+            m: p.mass[k].min(self.clumps.min_effective_mass(p)),
             r: p.radius[k],
         };
         // the laws of the materials present
@@ -408,7 +409,7 @@ impl Granular {
     /// bond's stiffness ([`Bonds::critical_dt`]).
     pub fn critical_dt(&self) -> f64 {
         let k = self.k_max();
-        let m = self.particles.min_mass();
+        let m = (self.particles.min_mass()).min(self.clumps.min_effective_mass(&self.particles));
         let contacts = if k > 0.0 && m.is_finite() {
             2.0 * (m / k).sqrt()
         } else {
