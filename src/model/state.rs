@@ -42,6 +42,7 @@ use crate::dem::state::GranularState;
 /// 6: the compliant sub-cycled scheme's boundary path, the sub-cycling
 /// energy guard's count;
 /// 7: the granular state keeps the parallel bonds;
+/// 8: the automatic scheme's fallback to the exact step;
 /// 9: the granular state keeps the clumps.)
 pub const STATE_FORMAT_VERSION: u32 = 9;
 
