@@ -384,3 +384,21 @@ fn clumps_are_bitwise_independent_of_threads_and_restart() {
         assert_eq!(a.step, other.step);
     }
 }
+
+/// A measurement region holding a clump counts the clump's area once: the
+/// porosity is `1 − A_union / A_region` (to round-off), not the sum of
+/// its discs' areas.
+#[test]
+fn porosity_counts_a_clump_once() {
+    use efgdem::dem::measure::{Region, porosity};
+    let discs = [(Vec2::new(0.0, 0.0), 1.0), (Vec2::new(1.2, 0.3), 0.8)];
+    let g = assembly(&discs, &[vec![0, 1]], ContactLaw::default(), Vec::new(), 1e-3);
+    let region = Region::Rectangle {
+        lo: Vec2::new(-2.0, -2.0),
+        hi: Vec2::new(3.0, 2.0),
+    };
+    let exact = 1.0 - union_shape(&discs).area / 20.0;
+    let phi = porosity(&g, &region);
+    println!("porosity {phi} (union {exact})");
+    assert!((phi - exact).abs() < 1e-12);
+}
