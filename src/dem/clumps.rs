@@ -116,9 +116,9 @@ fn arc_moments(centre: Vec2, r: f64, p: f64, q: f64) -> [f64; 5] {
 
 /// Area, centroid and polar moment of the union of the discs `(centre,
 /// radius)`, exact: the union's boundary is made of the arcs of each
-/// circle that lie outside all the others ([`exposed_arcs`]), and area,
+/// circle that lie outside all the others (`exposed_arcs`), and area,
 /// first and second moments are boundary integrals (Green's theorem)
-/// that have closed forms on a circular arc ([`arc_moments`]). Computed
+/// that have closed forms on a circular arc (`arc_moments`). Computed
 /// about the first disc's centre (no cancellation far from the origin).
 pub fn union_shape(discs: &[(Vec2, f64)]) -> UnionShape {
     let Some(&(o, _)) = discs.first() else {
