@@ -717,6 +717,7 @@ fn with_example(ctx: &str, lines: &[String]) -> Result<toml::Table, String> {
         "probe-coupled" => ("coupled", "probe"),
         "measure" => ("granular", "measure"),
         "bonds" => ("granular", "bonds"),
+        "clumps" => ("granular", "clumps"),
         _ => return Err(format!("unknown example context `{ctx}`")),
     };
     let mut sc = base(kind);
@@ -803,6 +804,11 @@ fn with_example(ctx: &str, lines: &[String]) -> Result<toml::Table, String> {
                 .unwrap();
             merge(&mut b, &ex, &[("cohesion", "shear")]);
             sc.insert("bonds".into(), toml::Value::Table(b));
+        }
+        "clumps" => {
+            let mut c: toml::Table = "members = [[1, 2]]".parse().unwrap();
+            merge(&mut c, &ex, &[("template", "members")]);
+            sc.insert("clumps".into(), toml::Value::Table(c));
         }
         "probe" => {
             let mut p = toml::Table::new();

@@ -868,6 +868,17 @@ fn a_granular_run_restarts_with_identical_outputs() {
 }
 
 #[test]
+fn a_run_with_clumps_restarts_with_identical_outputs() {
+    // the clumps' rigid-body state is saved; discs_final.csv and the
+    // frames carry the clump numbers
+    let src = with_outputs(
+        include_str!("common/clump_pile.toml"),
+        "quantity = \"kinetic\"",
+    );
+    check_run_restart("clumps", &src, 3000, 1601);
+}
+
+#[test]
 fn a_bonded_run_restarts_with_identical_outputs() {
     // history (bond columns), bond_breaks.csv and the crack frames
     // with a cohesion–friction shear strength

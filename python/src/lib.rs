@@ -873,6 +873,60 @@ impl PyModel {
         Ok(out)
     }
 
+    /// The clump of each disc, shape (n,), id order: its number from 1 (the
+    /// frames' and `discs_final.csv`'s `clump`), 0 for a disc in no clump.
+    fn disc_clumps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let g = self.lock()?;
+        let v = by_id(g.model.granular(), |g, s| {
+            efgdem::output::csv::clump_number(g.particles.clump[s])
+        });
+        Ok(v.into_pyarray(py))
+    }
+
+    /// The clumps as a dict of numpy arrays (copies), one entry per clump
+    /// in clump order (clump k is number k + 1): `x`, `y` (centre of mass),
+    /// `vx`, `vy` (velocity at the half step), `theta` (rotation since it
+    /// was made), `omega` (spin), `mass`, `inertia` (of the union of its
+    /// discs, about the centre), `fx`, `fy`, `torque` (resultant of the
+    /// last step, gravity not included), and the members: `first` (u4,
+    /// n_clumps + 1 offsets) and `members` (u4, disc numbers from 1; clump
+    /// k's are `members[first[k]:first[k + 1]]`), `members_index` (the
+    /// same from 0). Empty arrays without clumps.
+    fn clumps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let g = self.lock()?;
+        let out = PyDict::new(py);
+        let empty = Default::default();
+        let c = g.model.granular().map_or(&empty, |gr| &gr.clumps);
+        let xy = |v: &[Vec2], y: bool| -> Vec<f64> {
+            v.iter().map(|p| if y { p.y } else { p.x }).collect()
+        };
+        for (k, v) in [
+            ("x", xy(&c.pos, false)),
+            ("y", xy(&c.pos, true)),
+            ("vx", xy(&c.vel, false)),
+            ("vy", xy(&c.vel, true)),
+            ("theta", c.theta.clone()),
+            ("omega", c.omega.clone()),
+            ("mass", c.mass.clone()),
+            ("inertia", c.inertia.clone()),
+            ("fx", xy(&c.force, false)),
+            ("fy", xy(&c.force, true)),
+            ("torque", c.torque.clone()),
+        ] {
+            out.set_item(k, v.into_pyarray(py))?;
+        }
+        let first = if c.is_empty() {
+            vec![0]
+        } else {
+            c.first.clone()
+        };
+        out.set_item("first", first.into_pyarray(py))?;
+        let members: Vec<u32> = c.members.iter().map(|k| k + 1).collect();
+        out.set_item("members", members.into_pyarray(py))?;
+        out.set_item("members_index", c.members.clone().into_pyarray(py))?;
+        Ok(out)
+    }
+
     /// The intact parallel bonds as a dict of numpy arrays (copies), one
     /// entry per bond, sorted by `(a, b)`: `a`, `b` (u4, the discs'
     /// numbers, from 1, as in the files; a < b), `a_index`, `b_index` (the

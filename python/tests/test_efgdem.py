@@ -620,3 +620,35 @@ def test_bonds_and_their_breakage_events():
         assert runs[0][1][name].tobytes() == runs[1][1][name].tobytes(), name
     for name in runs[0][0]:
         assert runs[0][0][name].tobytes() == runs[1][0][name].tobytes(), name
+
+
+CLUMP_PILE = ROOT / "tests" / "common" / "clump_pile.toml"
+
+
+def test_clumps_view():
+    import tomllib
+
+    m = efgdem.Model.from_dict(tomllib.loads(CLUMP_PILE.read_text()), threads=2)
+    c, per_disc = m.clumps(), m.disc_clumps()
+    n = len(c["x"])
+    assert n > 30 and len(c["first"]) == n + 1 and c["first"][-1] == len(c["members"])
+    assert (c["members"] == c["members_index"] + 1).all()
+    # each disc's clump number names the clump that lists it (0: none)
+    assert len(per_disc) == m.n_discs and per_disc.dtype == np.int64
+    for k in range(n):
+        for d in c["members_index"][c["first"][k] : c["first"][k + 1]]:
+            assert per_disc[d] == k + 1
+    assert (per_disc == 0).sum() == m.n_discs - len(c["members"])
+    # a clump's mass is that of the union of its discs: less than their sum
+    r = m.disc_radii()
+    for k in range(n):
+        rs = r[c["members_index"][c["first"][k] : c["first"][k + 1]]]
+        assert c["mass"][k] < 2650.0 * np.pi * (rs**2).sum()
+    m.step(500)
+    c = m.clumps()
+    assert (c["vy"] < 0).any() and np.isfinite(c["theta"]).all()
+    # members move with their clump: all of a clump's discs share its spin
+    spins = m.disc_spins()
+    for k in range(n):
+        members = c["members_index"][c["first"][k] : c["first"][k + 1]]
+        assert (spins[members] == c["omega"][k]).all()

@@ -12,6 +12,7 @@
 //! Shear histories survive rebuilds and renumberings: the new pair list is
 //! merged with the old one on the sorted keys `(i, j)`, `i < j` (slots).
 
+use super::clumps::NO_CLUMP;
 use super::contact::{ContactForce, effective_mass};
 use super::particles::Particles;
 use super::walls::Wall;
@@ -540,6 +541,7 @@ impl NeighbourGrid {
                     let start = js.len();
                     let pi = p.pos[i];
                     let ri = p.radius[i];
+                    let ci = p.clump[i];
                     let cell = self.cell_of[i] as isize;
                     let (cx, cy) = (cell % nx, cell / nx);
                     for yy in (cy - 1).max(0)..=(cy + 1).min(ny - 1) {
@@ -547,7 +549,10 @@ impl NeighbourGrid {
                             let cc = (yy * nx + xx) as usize;
                             let (a, b) = (self.cell_start[cc], self.cell_start[cc + 1]);
                             for &j in &self.cell_items[a as usize..b as usize] {
-                                if (j as usize) <= i {
+                                // no contacts within a clump
+                                if (j as usize) <= i
+                                    || (ci != NO_CLUMP && p.clump[j as usize] == ci)
+                                {
                                     continue;
                                 }
                                 let reach = ri + p.radius[j as usize] + skin;

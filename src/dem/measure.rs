@@ -10,7 +10,8 @@
 //!   Mehrabadi & Nemat-Nasser 1981; Bagi 1996):
 //!   `σ = −(1/(A t)) Σ_p Σ_{c∈p} f_c ⊗ l_c`, with `f_c` the contact force on
 //!   disc p, `l_c = x_c − x_p` its branch vector from the centre to the
-//!   contact point, A the region's area and t the disc thickness (forces
+//!   contact point (for a disc of a clump, from the clump's centre of
+//!   mass: the clump's internal forces are then counted), A the region's area and t the disc thickness (forces
 //!   act on the whole disc length). Sign: **compression positive** (the
 //!   geomechanics convention; hence the minus). `σ_xy` is the symmetric
 //!   part `½(σ_xy + σ_yx)`: the two differ by the discs' out-of-balance
@@ -19,7 +20,8 @@
 //! * porosity `1 − Σ_p A_p∩region / A`: the part of each disc's area
 //!   inside the region (exact circle–rectangle and circle–circle
 //!   intersections), whatever its centre; overlaps between discs are
-//!   counted twice (they are small);
+//!   counted twice (they are small), except within a clump, whose discs
+//!   count with the factor (union area) / (sum of their areas);
 //! * coordination number `Z = N_c / N_p`: contacts per disc, N_p the discs
 //!   with centre inside, N_c their contacts (a contact between two discs
 //!   inside counts once for each); rattlers are not excluded;
@@ -41,6 +43,7 @@
 //! [`OuterContact`]s. With no disc inside, Z and F are 0.
 
 use super::Granular;
+use super::clumps::NO_CLUMP;
 use super::contact::normal_between;
 use crate::geom::Vec2;
 
@@ -259,13 +262,30 @@ impl ContactMeasure {
 }
 
 /// Porosity of the region: `1 − Σ_p |disc_p ∩ region| / A` over every disc.
+/// A clump's discs count with the factor (area of the union) / (sum of
+/// the discs' areas), so that a clump inside the region counts its area
+/// once.
 pub fn porosity(g: &Granular, region: &Region) -> f64 {
     let p = &g.particles;
-    let solid: f64 = p
-        .pos
-        .iter()
-        .zip(&p.radius)
-        .map(|(&x, &r)| region.disc_area_inside(x, r))
+    let c = &g.clumps;
+    let share: Vec<f64> = (0..c.len())
+        .map(|k| {
+            let discs: f64 = c
+                .members_of(k)
+                .iter()
+                .map(|&id| p.mass[g.slot(id as usize)])
+                .sum();
+            c.mass[k] / discs
+        })
+        .collect();
+    let solid: f64 = (0..p.len())
+        .map(|k| {
+            let a = region.disc_area_inside(p.pos[k], p.radius[k]);
+            match p.clump[k] {
+                NO_CLUMP => a,
+                ck => a * share[ck as usize],
+            }
+        })
         .sum();
     1.0 - solid / region.area()
 }
@@ -280,6 +300,11 @@ pub fn contacts(
     outer: impl IntoIterator<Item = OuterContact>,
 ) -> ContactMeasure {
     let p = &g.particles;
+    // the centre of the body disc k belongs to: a clump's, or its own
+    let centre = |k: usize| match p.clump[k] {
+        NO_CLUMP => p.pos[k],
+        c => g.clumps.pos[c as usize],
+    };
     // Σ f ⊗ l as [xx, xy, yx, yy], Σ n ⊗ n as [xx, yy, xy], N_c
     let mut s = [0.0f64; 4];
     let mut fab = [0.0f64; 3];
@@ -309,10 +334,10 @@ pub fn contacts(
         let f = n * (-fn_tot) + n.perp() * g.contacts.shear[k];
         let xc = p.pos[i] + n * (p.radius[i] - 0.5 * delta);
         if in_i {
-            add(f, xc - p.pos[i], n);
+            add(f, xc - centre(i), n);
         }
         if in_j {
-            add(-f, xc - p.pos[j], n);
+            add(-f, xc - centre(j), n);
         }
     }
     for q in &g.contacts.walls {
@@ -324,11 +349,11 @@ pub fn contacts(
             continue;
         };
         let (c, n, fn_tot) = (wc.point, wc.normal, wc.total);
-        add(n * (-fn_tot) + n.perp() * q.fs, c - p.pos[d], n);
+        add(n * (-fn_tot) + n.perp() * q.fs, c - centre(d), n);
     }
     for o in outer {
         if region.contains(p.pos[o.slot]) {
-            add(o.force, o.point - p.pos[o.slot], o.normal);
+            add(o.force, o.point - centre(o.slot), o.normal);
         }
     }
     let np = p.pos.iter().filter(|&&x| region.contains(x)).count();

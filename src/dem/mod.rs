@@ -30,6 +30,7 @@
 
 pub mod bonds;
 pub mod broadphase;
+pub mod clumps;
 pub mod contact;
 pub mod critical;
 pub mod integrate;
@@ -51,6 +52,7 @@ pub const DT_WARN: f64 = 0.8;
 pub const DT_SAFETY: f64 = 0.5;
 use bonds::Bonds;
 use broadphase::{ContactList, NeighbourGrid};
+use clumps::Clumps;
 use contact::{ContactLaw, effective_mass, normal_between};
 use particles::Particles;
 use walls::Wall;
@@ -188,6 +190,8 @@ pub struct Granular {
     pub grid: NeighbourGrid,
     /// Parallel bonds between discs ([`bonds`]; none unless a rule is set).
     pub bonds: Bonds,
+    /// Rigid clumps of discs ([`clumps`]; none unless made).
+    pub clumps: Clumps,
     /// Largest disc displacement since the last rebuild.
     pub max_disp: f64,
     /// Keep each disc's contact force and moment of the step in
@@ -244,6 +248,7 @@ impl Granular {
             contacts: ContactList::default(),
             grid: NeighbourGrid::new(skin),
             bonds: Bonds::default(),
+            clumps: Clumps::default(),
             max_disp: 0.0,
             store_forces: true,
             external: Vec::new(),
@@ -253,6 +258,18 @@ impl Granular {
         };
         g.update_laws();
         g
+    }
+
+    /// Join the discs `ids` (scenario numbers, 0-based) into a rigid clump
+    /// ([`Clumps::add`]); returns its index. The contact list is rebuilt
+    /// at the next step (no pairs within a clump).
+    pub fn add_clump(&mut self, ids: &[usize]) -> Result<usize, DemError> {
+        let c = self
+            .clumps
+            .add(&mut self.particles, ids)
+            .map_err(DemError::Input)?;
+        self.grid.stale = true;
+        Ok(c)
     }
 
     /// Displacement of the disc in `slot` since the assembly was made (for a
@@ -339,8 +356,9 @@ impl Granular {
                 certain: f64::INFINITY,
             };
         };
+        // a clump's rotation makes a contact at its rim lighter than a disc
         let d = critical::Disc {
-            m: p.mass[k],
+            m: p.mass[k].min(self.clumps.min_effective_mass(p)),
             r: p.radius[k],
         };
         // the laws of the materials present
@@ -391,7 +409,7 @@ impl Granular {
     /// bond's stiffness ([`Bonds::critical_dt`]).
     pub fn critical_dt(&self) -> f64 {
         let k = self.k_max();
-        let m = self.particles.min_mass();
+        let m = (self.particles.min_mass()).min(self.clumps.min_effective_mass(&self.particles));
         let contacts = if k > 0.0 && m.is_finite() {
             2.0 * (m / k).sqrt()
         } else {
@@ -410,6 +428,17 @@ impl Granular {
     /// [`compute_contact_forces`](Self::compute_contact_forces) and
     /// [`integrate`](Self::integrate).
     pub fn step(&mut self) {
+        if !self.clumps.is_empty() {
+            // a clump advances once all its members' forces are summed:
+            // the phased path
+            self.prepare_contacts();
+            self.sweep::<false>();
+            self.external.clear();
+            self.wall_totals();
+            self.integrate();
+            self.last_check = None;
+            return;
+        }
         self.prepare_contacts();
         let (max_disp, bad) = self.sweep::<true>();
         self.max_disp = max_disp;
@@ -566,6 +595,7 @@ impl Granular {
     /// Phase 3: gravity, damping, central difference (Eqs. 50–54, E10),
     /// then the walls move and the clock advances.
     pub fn integrate(&mut self) {
+        self.clumps.gather(&self.particles);
         let d = integrate::central_difference(
             &mut self.particles,
             &self.grid.ref_pos,
@@ -573,8 +603,29 @@ impl Granular {
             self.damping,
             self.dt,
         );
-        self.max_disp = d;
+        self.max_disp = if self.clumps.is_empty() {
+            d
+        } else {
+            self.clumps
+                .advance(&mut self.particles, self.gravity, self.damping, self.dt);
+            self.largest_displacement()
+        };
         self.move_walls();
+    }
+
+    /// Largest disc displacement since the last rebuild (infinity without
+    /// a reference).
+    fn largest_displacement(&self) -> f64 {
+        let r = &self.grid.ref_pos;
+        let p = &self.particles.pos;
+        if r.len() != p.len() {
+            return f64::INFINITY;
+        }
+        p.iter()
+            .zip(r)
+            .map(|(&a, &b)| (a - b).norm2())
+            .fold(0.0, f64::max)
+            .sqrt()
     }
 
     /// Walls move: every velocity is found from the state before any wall
@@ -682,6 +733,7 @@ impl Granular {
             .chain(self.walls.iter().flat_map(|w| [&w.a, &w.b]))
             .all(|v| v.x.is_finite() && v.y.is_finite())
             && p.omega.iter().all(|w| w.is_finite())
+            && self.clumps.is_finite()
     }
 
     /// [`DemError::Unstable`] at the present step unless every disc state
@@ -756,9 +808,18 @@ impl Granular {
         let p = &self.particles;
         let mut e = Energies::default();
         for k in 0..p.len() {
+            if p.clump[k] != clumps::NO_CLUMP {
+                continue; // counted with its clump below
+            }
             e.kinetic += 0.5 * p.mass[k] * vel[k].norm2();
             e.rotational += 0.5 * p.inertia[k] * omega[k] * omega[k];
             e.gravity -= p.mass[k] * self.gravity.dot(p.pos[k]);
+        }
+        let c = &self.clumps;
+        for k in 0..c.len() {
+            e.kinetic += 0.5 * c.mass[k] * c.vel[k].norm2();
+            e.rotational += 0.5 * c.inertia[k] * c.omega[k] * c.omega[k];
+            e.gravity -= c.mass[k] * self.gravity.dot(c.pos[k]);
         }
         let spring = |law: &ContactLaw, delta: f64, fs: f64| {
             if delta <= 0.0 {
@@ -832,5 +893,6 @@ impl Granular {
             + self.contacts.heap_bytes()
             + self.grid.heap_bytes()
             + self.bonds.heap_bytes()
+            + self.clumps.heap_bytes()
     }
 }

@@ -50,6 +50,8 @@ pub struct Particles {
     pub id: Vec<u32>,
     /// Slot of each scenario disc: `slot[id[k]] == k`.
     pub slot: Vec<u32>,
+    /// Clump of the disc in each slot ([`super::clumps::NO_CLUMP`]: none).
+    pub clump: Vec<u32>,
 }
 
 impl Particles {
@@ -82,6 +84,7 @@ impl Particles {
             material: Vec::with_capacity(n),
             id: Vec::with_capacity(n),
             slot: Vec::with_capacity(n),
+            clump: Vec::with_capacity(n),
         }
     }
 
@@ -103,6 +106,7 @@ impl Particles {
         self.fixity.try_reserve_exact(n)?;
         self.material.try_reserve_exact(n)?;
         self.id.try_reserve_exact(n)?;
+        self.clump.try_reserve_exact(n)?;
         self.slot.try_reserve_exact(n)
     }
 
@@ -128,6 +132,7 @@ impl Particles {
         self.material.push(material);
         self.id.push(k);
         self.slot.push(k);
+        self.clump.push(super::clumps::NO_CLUMP);
     }
 
     /// Largest radius (0 when empty).
@@ -168,6 +173,7 @@ impl Particles {
         apply(&mut self.fixity, order);
         apply(&mut self.material, order);
         apply(&mut self.id, order);
+        apply(&mut self.clump, order);
         let mut new_of_old = vec![0u32; order.len()];
         for (k, &o) in order.iter().enumerate() {
             new_of_old[o as usize] = k as u32;
@@ -197,6 +203,7 @@ impl Particles {
         self.material.shrink_to_fit();
         self.id.shrink_to_fit();
         self.slot.shrink_to_fit();
+        self.clump.shrink_to_fit();
     }
 
     /// Bytes held by the per-disc arrays (capacity, not length).
@@ -206,7 +213,7 @@ impl Particles {
             + self.theta.capacity() * size_of::<f64>() * 8
             + self.fixity.capacity()
             + self.material.capacity() * 2
-            + self.id.capacity() * 4 * 2
+            + self.id.capacity() * 4 * 3
     }
 }
 

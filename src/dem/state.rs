@@ -10,7 +10,8 @@
 //! decides when the list is rebuilt and when the discs are renumbered
 //! (positions at the last rebuild, rebuild counter, largest displacement
 //! since); the parallel bonds ([`BondList`]: the intact bonds with their
-//! forces, keyed by disc ids, and the broken ones). Restored onto an
+//! forces, keyed by disc ids, and the broken ones); the clumps' rigid-body
+//! state ([`ClumpState`]; their members and shapes are rebuilt). Restored onto an
 //! assembly built from the same scenario, the
 //! assembly then steps bitwise as the one the state was saved from: the
 //! same pairs summed in the same order, the same rebuild steps.
@@ -58,6 +59,23 @@ pub struct WallPairState {
     pub mr: f64,
 }
 
+/// The clumps' rigid-body state ([`super::clumps::Clumps`]), by clump.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ClumpState {
+    /// Centres of mass.
+    pub pos: Vec<Vec2>,
+    /// Velocities (half step).
+    pub vel: Vec<Vec2>,
+    /// Rotations.
+    pub theta: Vec<f64>,
+    /// Spins (half step).
+    pub omega: Vec<f64>,
+    /// Resultant forces of the last step.
+    pub force: Vec<Vec2>,
+    /// Resultant moments of the last step.
+    pub torque: Vec<f64>,
+}
+
 /// Everything that changes while a [`Granular`] steps (module docs).
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GranularState {
@@ -103,6 +121,8 @@ pub struct GranularState {
     pub stale: bool,
     /// The parallel bonds (empty without bonds).
     pub bonds: BondList,
+    /// The clumps (empty without clumps).
+    pub clumps: ClumpState,
 }
 
 fn bad(m: String) -> StateError {
@@ -156,6 +176,14 @@ impl Granular {
             rebuilds: self.grid.rebuilds,
             stale: self.grid.stale,
             bonds: self.bonds.list.clone(),
+            clumps: ClumpState {
+                pos: self.clumps.pos.clone(),
+                vel: self.clumps.vel.clone(),
+                theta: self.clumps.theta.clone(),
+                omega: self.clumps.omega.clone(),
+                force: self.clumps.force.clone(),
+                torque: self.clumps.torque.clone(),
+            },
         }
     }
 
@@ -209,6 +237,13 @@ impl Granular {
         self.grid.stale = s.stale;
         self.bonds.list.clone_from(&s.bonds);
         self.bonds.invalidate();
+        let c = &mut self.clumps;
+        c.pos.clone_from(&s.clumps.pos);
+        c.vel.clone_from(&s.clumps.vel);
+        c.theta.clone_from(&s.clumps.theta);
+        c.omega.clone_from(&s.clumps.omega);
+        c.force.clone_from(&s.clumps.force);
+        c.torque.clone_from(&s.clumps.torque);
         Ok(())
     }
 
@@ -281,6 +316,18 @@ impl Granular {
         s.bonds
             .check(n)
             .map_err(|e| bad(format!("the saved bonds: {e}")))?;
+        let nc = self.clumps.len();
+        let c = &s.clumps;
+        if [c.pos.len(), c.vel.len(), c.force.len()]
+            .into_iter()
+            .chain([c.theta.len(), c.omega.len(), c.torque.len()])
+            .any(|len| len != nc)
+        {
+            return Err(bad(format!(
+                "the saved state has {} clumps, the model {nc}",
+                c.pos.len()
+            )));
+        }
         if !(s.ref_pos.is_empty() || s.ref_pos.len() == n)
             || !(s.wall_ref.is_empty() || s.wall_ref.len() == nw)
         {

@@ -7,7 +7,7 @@
 //! - granular: [`GranularState`] — discs in their slot order with the
 //!   slot → id map, walls, the contact list with its shear and rolling
 //!   histories, the Verlet bookkeeping (reference positions, rebuild
-//!   counter, stale flag, largest displacement), parallel bonds, clock;
+//!   counter, stale flag, largest displacement), parallel bonds, clumps, clock;
 //! - continuum: each body's [`BodyState`] — `U`, `U̇`, `Ü`, clock, pending
 //!   point loads, work of moving edges, drives (position, velocity, servo
 //!   integral, last measurement), work of timed loads, FE support
@@ -43,8 +43,9 @@ use crate::dem::state::GranularState;
 /// energy guard's count;
 /// 7: the granular state keeps the parallel bonds;
 /// 8: the coupled state records the automatic scheme's fallback;
-/// 9: EFG bodies keep their grown cracks and their faces' friction.)
-pub const STATE_FORMAT_VERSION: u32 = 9;
+/// 9: the granular state keeps the clumps;
+/// 10: EFG bodies keep their grown cracks and their faces' friction.)
+pub const STATE_FORMAT_VERSION: u32 = 10;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -217,20 +217,36 @@ pub fn extrema(path: &Path, names: &[&str]) -> std::io::Result<Vec<Option<Extrem
 }
 
 /// Write the discs as `x,y,r,id` in scenario order, `id` the disc's number
-/// (from 1, as probes and the frames' `GlobalIds` give it): a
+/// (from 1, as probes and the frames' `GlobalIds` give it), with a fifth
+/// column `clump` (the disc's clump from 1, 0 for none) when there are
+/// clumps: a
 /// `discs = { csv = ... }` source (its header names the columns), written
 /// atomically: a reader never sees part of it.
 pub fn write_discs_csv(gr: &Granular, path: &Path) -> std::io::Result<()> {
     let p = &gr.particles;
+    let clumps = !gr.clumps.is_empty();
     super::write_atomic(path, true, |w| {
-        writeln!(w, "x,y,r,id")?;
+        writeln!(w, "x,y,r,id{}", if clumps { ",clump" } else { "" })?;
         for id in 0..p.len() {
             let k = p.slot[id] as usize;
             let (x, y, r) = (p.pos[k].x, p.pos[k].y, p.radius[k]);
-            writeln!(w, "{x:e},{y:e},{r:e},{}", id + 1)?;
+            write!(w, "{x:e},{y:e},{r:e},{}", id + 1)?;
+            if clumps {
+                write!(w, ",{}", clump_number(p.clump[k]))?;
+            }
+            writeln!(w)?;
         }
         Ok(())
     })
+}
+
+/// A disc's clump as written: its number from 1, 0 for no clump.
+pub fn clump_number(c: u32) -> i64 {
+    if c == crate::dem::clumps::NO_CLUMP {
+        0
+    } else {
+        i64::from(c) + 1
+    }
 }
 
 /// The `history.csv` columns of the parallel bonds: intact bonds, bonds

@@ -105,6 +105,13 @@ pub fn write_discs(
     f.array("spin", 1, "", &by_id(&p.omega));
     f.array("force", 3, "", &by_id2(&p.force));
     f.array("torque", 1, "", &by_id(&p.torque));
+    if !g.clumps.is_empty() {
+        let clump: Vec<i64> = order
+            .iter()
+            .map(|&s| super::csv::clump_number(p.clump[s]))
+            .collect();
+        f.array("clump", 1, "", &clump);
+    }
     let z = coordination(g, contacts);
     f.array(
         "coordination",

@@ -148,6 +148,10 @@ pub(super) fn summary(
         "wall_forces": gr.walls.iter().map(|w| json!({"name": w.name, "force": [w.force.x, w.force.y], "position_from": [w.a.x, w.a.y]})).collect::<Vec<_>>(),
         "warnings": warnings,
     });
+    if !gr.clumps.is_empty() {
+        summary["clumps"] =
+            json!({"count": gr.clumps.len(), "member_discs": gr.clumps.members.len()});
+    }
     if gr.bonds.active() {
         let (t, s) = gr.bonds.broken_counts();
         let l = &gr.bonds.list;

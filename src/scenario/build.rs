@@ -19,6 +19,7 @@ use crate::continuum::ComplianceMode;
 use crate::continuum::Continuum;
 use crate::coupling::CoupledModel;
 use crate::coupling::scheme::{self, Scheme};
+use crate::dem::clumps::{Clumps, NO_CLUMP};
 use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::dem::packing::{
     DiscRow, Lattice, grow_in_box, lattice_capacity, lattice_packing, overlapping_pairs,
@@ -317,11 +318,13 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
         .into_iter()
         .flat_map(|(_, r)| r)
         .collect();
-    if !gone.is_empty() && !unprepared {
+    let removed = !gone.is_empty() && !unprepared;
+    if removed {
         rows = (rows.into_iter().enumerate())
             .filter_map(|(k, r)| (!gone.contains(&k)).then_some(r))
             .collect();
     }
+    let (rows, groups) = super::clumps::clump_rows(sc, rows, removed)?;
     let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
     let mut p = Particles::default();
@@ -381,8 +384,20 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
             ));
         }
     }
+    let mut clumps = Clumps::default();
+    for (i, m) in groups.iter().enumerate() {
+        // before the assembly is made: its start positions are the clumps'
+        clumps.add(&mut p, m).map_err(|e| {
+            let at = match sc.clumps.as_ref().is_some_and(|c| c.template.is_some()) {
+                true => "clumps.template".to_string(),
+                false => format!("clumps.members.{i}"),
+            };
+            bad(&at, e)
+        })?;
+    }
     let walls = super::granular::walls(sc, &p.pos)?;
     let mut gr = Granular::new(p, mats, walls, 1.0);
+    gr.clumps = clumps;
     gr.damping = body;
     gr.gravity = Vec2::from(sc.simulation.gravity);
     gr.thickness = g.thickness;
@@ -1121,6 +1136,11 @@ fn start_state(sc: &Scenario, g: &Granular, purpose: BuildFor) -> Result<(), Inv
         true => Vec::new(),
         false => overlapping_pairs(&p.pos, &p.radius, tol),
     };
+    // the discs of a clump overlap by design
+    let pairs: Vec<_> = pairs
+        .into_iter()
+        .filter(|&(a, b, _)| p.clump[a] == NO_CLUMP || p.clump[a] != p.clump[b])
+        .collect();
     if !pairs.is_empty() {
         let shown: Vec<String> = pairs
             .iter()

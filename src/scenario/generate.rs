@@ -12,7 +12,9 @@ use crate::dem::packing::DiscRow;
 use crate::geom::Vec2;
 
 /// Column names a header may use.
-const NAMES: [&str; 5] = ["x", "y", "r", "material", "id"];
+/// (`clump`, as `discs_final.csv` writes it for a run with clumps, is read
+/// and ignored: clumps come from the `[clumps]` section.)
+const NAMES: [&str; 6] = ["x", "y", "r", "material", "id", "clump"];
 
 /// Read discs from CSV text (see the module doc), `#` comments and blank
 /// lines ignored. Every data line has the same number of fields (the
@@ -23,7 +25,7 @@ const NAMES: [&str; 5] = ["x", "y", "r", "material", "id"];
 pub fn discs_from_csv(text: &str) -> Result<Vec<DiscRow>, String> {
     let mut out = Vec::new();
     // the position of x, y, r, material, id in a row
-    let mut cols: [Option<usize>; 5] = [Some(0), Some(1), Some(2), Some(3), None];
+    let mut cols: [Option<usize>; 6] = [Some(0), Some(1), Some(2), Some(3), None, None];
     let mut named = false;
     // the number of fields, and where it comes from
     let mut width: Option<(usize, &str)> = None;
@@ -35,7 +37,9 @@ pub fn discs_from_csv(text: &str) -> Result<Vec<DiscRow>, String> {
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
         if out.is_empty() && f[0].parse::<f64>().is_err() && k == first_data_line(text) {
             // `x,y,r` (or `x,y,r,material`) is the positional layout
-            if let Some(n) = header(&f, k)?.filter(|n| n[..3] != cols[..3] || n[4].is_some()) {
+            if let Some(n) =
+                header(&f, k)?.filter(|n| n[..3] != cols[..3] || n[4..].iter().any(Option::is_some))
+            {
                 (cols, named) = (n, true);
             }
             width = Some((f.len(), "header"));
@@ -98,16 +102,16 @@ pub fn discs_from_csv(text: &str) -> Result<Vec<DiscRow>, String> {
 /// The columns a header line names, if it names `x`, `y` and `r`: `None`
 /// for another header (skipped; the columns are then positional), an error
 /// for a column name read as a disc file's that is unknown or repeated.
-fn header(f: &[&str], k: usize) -> Result<Option<[Option<usize>; 5]>, String> {
+fn header(f: &[&str], k: usize) -> Result<Option<[Option<usize>; 6]>, String> {
     let lower: Vec<String> = f.iter().map(|s| s.to_ascii_lowercase()).collect();
     if !["x", "y", "r"].iter().all(|n| lower.iter().any(|c| c == n)) {
         return Ok(None);
     }
-    let mut cols = [None; 5];
+    let mut cols = [None; 6];
     for (i, c) in lower.iter().enumerate() {
         let Some(n) = NAMES.iter().position(|n| n == c) else {
             return Err(format!(
-                "line {}: unknown column `{}` (a header names x, y, r and optionally material and id)",
+                "line {}: unknown column `{}` (a header names x, y, r and optionally material, id and clump)",
                 k + 1,
                 f[i]
             ));

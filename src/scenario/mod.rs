@@ -11,6 +11,7 @@ pub mod body;
 pub mod bonds;
 pub mod build;
 pub mod builder;
+pub mod clumps;
 pub mod crack;
 pub mod fill;
 pub mod generate;
@@ -43,6 +44,8 @@ pub struct Scenario {
     pub wall: Vec<granular::WallSpec>,
     /// Parallel bonds between the discs.
     pub bonds: Option<bonds::BondsSpec>,
+    /// Rigid clumps of discs.
+    pub clumps: Option<clumps::ClumpsSpec>,
     /// History outputs, one `history.csv` column each.
     #[serde(default)]
     pub probe: Vec<Probe>,
@@ -740,6 +743,7 @@ impl Scenario {
         body::validate(self, &mut p);
         granular::validate(self, &mut p);
         bonds::validate(self, &mut p);
+        clumps::validate(self, &mut p);
         measure::validate(self, &mut p);
         p.0
     }
