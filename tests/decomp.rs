@@ -131,10 +131,11 @@ fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> f64 {
                     for s in 1..=steps {
                         d.step(false);
                         worst = worst.max(d.imbalance);
-                        if s % every == 0 {
-                            if let Some(st) = d.gather() {
-                                out.push(bytes(&st));
-                            }
+                        // gather is collective: every rank calls it
+                        if s % every == 0
+                            && let Some(st) = d.gather()
+                        {
+                            out.push(bytes(&st));
                         }
                     }
                     (out, worst)

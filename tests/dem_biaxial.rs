@@ -321,7 +321,14 @@ fn history_is_the_same_on_one_and_two_threads_and_post_processes() {
     );
     let s = biaxial::summarize(&setup, &p, &Options::default());
     eprintln!("{s:#?}");
-    assert!(s.sigma3_error < 0.01, "{s:?}");
+    // σ₃ is held: its worst 200-step mean within 1.5 %, nearly all within
+    // 1 %, no bias. The worst of the 91 means is a fluctuation of the
+    // packing (a realization that differs in the last bit — another order
+    // of the same sums — gives 1.2 %), while a servo that is off (wrong
+    // sign, factor of two in its gain) misses by tens of per cent.
+    assert!(s.sigma3_error < 0.015, "{s:?}");
+    assert!(s.sigma3_within_1pc > 0.98, "{s:?}");
+    assert!(s.sigma3_bias.abs() < 1e-3, "{s:?}");
     assert!(s.love_weber_error.unwrap() < 0.02, "{s:?}");
     assert_eq!(s.love_weber_rows, p.len());
     assert!(s.phi_peak > 15.0 && s.phi_peak < 40.0, "{s:?}");

@@ -468,12 +468,12 @@ impl Decomposed {
         let mut dest = vec![GONE; n];
         let mut keep: Vec<(u64, Src, bool)> = Vec::new();
         let mut near = Vec::new();
-        for s in 0..n {
+        for (s, dest) in dest.iter_mut().enumerate() {
             if p.fixity[s] & GHOST != 0 {
                 continue;
             }
             let o = self.regions.owner(p.pos[s]);
-            dest[s] = o as u32;
+            *dest = o as u32;
             self.regions.near(p.pos[s], o, width, &mut near);
             if o == me {
                 keep.push((self.key[s], Src::Old(s as u32), true));

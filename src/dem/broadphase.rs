@@ -485,7 +485,7 @@ impl GridSpec {
     }
 
     /// Rank of cell `c` in the disc ordering: vertical strips of
-    /// [`STRIP`] cells, row by row inside a strip.
+    /// `STRIP` cells, row by row inside a strip.
     pub fn strip_rank(&self, c: u32) -> u64 {
         let (cx, cy) = (c as usize % self.nx, c as usize / self.nx);
         let x0 = cx / STRIP * STRIP;
