@@ -290,3 +290,32 @@ fn a_build_without_mpi_refuses_mpirun() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("--features mpi"), "{err}");
 }
+
+/// A bonded scenario on several ranks is refused before any step (exit
+/// code 2, a message that says to run it in one process) on every rank,
+/// instead of a run whose bonds would be lost at the division.
+#[test]
+fn bonded_discs_are_refused_on_ranks() {
+    let sc = scenario::parse(include_str!("common/bonded_block.toml"), "b.toml")
+        .unwrap_or_else(|e| panic!("{e}"));
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-bonds-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut opts = efgdem::run::RunOptions::new(dir.clone());
+    opts.quiet = true;
+    let errs: Vec<_> = std::thread::scope(|s| {
+        let runs: Vec<_> = Threads::group(2)
+            .into_iter()
+            .map(|c| {
+                let (sc, opts) = (&sc, &opts);
+                s.spawn(move || efgdem::run::run_on(sc, opts, Arc::new(c)).unwrap_err())
+            })
+            .collect();
+        runs.into_iter().map(|r| r.join().unwrap()).collect()
+    });
+    for e in errs {
+        assert_eq!(e.exit_code(), 2, "{e}");
+        assert!(e.to_string().contains("one process"), "{e}");
+    }
+    assert!(!dir.join("history.csv").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
