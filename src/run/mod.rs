@@ -7,8 +7,8 @@ mod coupled;
 mod granular;
 pub mod memory;
 pub mod progress;
-pub mod recap;
 mod ranks;
+pub mod recap;
 mod session;
 
 use crate::decomp::{Comm, Solo};
@@ -174,7 +174,8 @@ impl RunError {
             RunError::Model(_) => 3,
             RunError::Interrupted { signal, .. }
             | RunError::InterruptedPreparing { signal, .. } => 128 + (*signal as u8 & 0x7f),
-            RunError::OnRank0 { code } => *code,        }
+            RunError::OnRank0 { code } => *code,
+        }
     }
 }
 
@@ -300,11 +301,7 @@ pub fn run_on(
 /// The scenario's packing preparation, if any: read from its cache, or
 /// stepped with a progress bar (steps, ETA) that a stop request ends
 /// within a step — `summary.json` then records the interruption.
-fn prepare_packing(
-    sc: &Scenario,
-    opts: &RunOptions,
-    quiet: bool,
-) -> Result<Option<Bed>, RunError> {
+fn prepare_packing(sc: &Scenario, opts: &RunOptions, quiet: bool) -> Result<Option<Bed>, RunError> {
     let Some(prep) = build::preparation(sc) else {
         return Ok(None);
     };
@@ -319,10 +316,8 @@ fn prepare_packing(
     let stop = opts.stop.clone();
     let signal = || stop.as_ref().map_or(0, |s| s.load(Ordering::Relaxed));
     let result = prepare(sc, &mut |step| {
-        bar.get_or_insert_with(|| {
-            progress::Progress::labelled(prep.what(), prep.steps, quiet)
-        })
-        .update(step, f64::NAN);
+        bar.get_or_insert_with(|| progress::Progress::labelled(prep.what(), prep.steps, quiet))
+            .update(step, f64::NAN);
         signal() == 0
     });
     if let Some(b) = &bar {
