@@ -319,3 +319,136 @@ fn bonded_discs_are_refused_on_ranks() {
     assert!(!dir.join("history.csv").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Run `sc` on one process into `dir/one`, then on each of `ranks` thread
+/// ranks into `dir/ranksN`, and compare `history.csv` and
+/// `discs_final.csv` byte for byte.
+fn same_on_ranks(sc: &scenario::Scenario, dir: &std::path::Path, ranks: &[usize]) {
+    let _ = std::fs::remove_dir_all(dir);
+    let mut opts = efgdem::run::RunOptions::new(dir.join("one"));
+    opts.quiet = true;
+    efgdem::run::run(sc, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let read = |d: &str, f: &str| std::fs::read(dir.join(d).join(f)).unwrap();
+    for &n in ranks {
+        let name = format!("ranks{n}");
+        let opts = efgdem::run::RunOptions {
+            out_dir: dir.join(&name),
+            ..opts.clone()
+        };
+        std::thread::scope(|s| {
+            for c in Threads::group(n) {
+                let opts = &opts;
+                s.spawn(move || efgdem::run::run_on(sc, opts, Arc::new(c)).unwrap());
+            }
+        });
+        for f in ["history.csv", "discs_final.csv"] {
+            assert!(read("one", f) == read(&name, f), "{n} ranks: {f} differs");
+        }
+    }
+}
+
+/// Walls whose motion changes (`phases`: proportional servos to
+/// consolidate, then a strain rate on the platens and integral servos on
+/// the sides, a small biaxial test) around a packing grown by the
+/// preparation, a `[[measure]]` region and wall probes: the files of one
+/// process on 2 and 3 ranks. Then the settled discs as a CSV disc source
+/// (its radii and ids as written) under a servo lid: the same.
+#[test]
+fn phased_walls_and_disc_sources_on_ranks() {
+    let servo = "servo = { stress = 1.0e5, max_velocity = 0.1, relaxation = 1.0 }";
+    let pi = "servo = { stress = 1.0e5, max_velocity = 0.1, relaxation = 1.0, integral = 0.1 }";
+    let wall = |name: &str, from: [f64; 2], to: [f64; 2], phases: &str| {
+        format!("[[wall]]\nname = \"{name}\"\nfrom = {from:?}\nto = {to:?}\nphases = [{phases}]\n\n")
+    };
+    let axial = format!("{{ until_step = 1500, {servo} }}, {{ strain_rate = 2.0 }}");
+    let lateral = format!("{{ until_step = 1500, {servo} }}, {{ {pi} }}");
+    let src = format!(
+        r#"[simulation]
+dt = 1.4e-6
+steps = 3000
+
+[output]
+every = 100
+
+[[material]]
+name = "grain"
+density = 2650.0
+kn = 1.0e8
+ks = 5.0e7
+friction = 0.5
+rolling_friction = 0.1
+
+[granular]
+material = "grain"
+discs = {{ generate = "random", method = "grow", box = [[0.0, 0.0], [0.024, 0.048]], radius = [0.0005, 0.001], count = 400, seed = 3, settle_steps = 3000 }}
+damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+
+{}{}{}{}[[measure]]
+name = "all"
+rectangle = [[-0.01, -0.01], [0.034, 0.058]]
+quantities = ["sxx_cpos", "syy_cpos", "porosity"]
+
+[[probe]]
+name = "sl"
+wall = "left"
+quantity = "wall_stress"
+
+[[probe]]
+name = "yt"
+wall = "top"
+quantity = "wall_y"
+"#,
+        wall("bottom", [0.0, 0.0], [0.024, 0.0], &axial),
+        wall("top", [0.0, 0.048], [0.024, 0.048], &axial),
+        wall("left", [0.0, 0.0], [0.0, 0.048], &lateral),
+        wall("right", [0.024, 0.0], [0.024, 0.048], &lateral),
+    );
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-phases-{}", std::process::id()));
+    let sc = scenario::parse(&src, "phases.toml").unwrap_or_else(|e| panic!("{e}"));
+    same_on_ranks(&sc, &dir.join("phases"), &[2, 3]);
+    // the sheared sample as a CSV disc source
+    let csv = dir.join("bed.csv");
+    std::fs::copy(dir.join("phases/one/discs_final.csv"), &csv).unwrap();
+    let src = format!(
+        r#"[simulation]
+steps = 1500
+gravity = [0.0, -9.81]
+
+[output]
+every = 100
+
+[[material]]
+name = "grain"
+density = 2650.0
+kn = 1.0e8
+ks = 5.0e7
+friction = 0.5
+rolling_friction = 0.1
+
+[granular]
+material = "grain"
+discs = {{ csv = {:?} }}
+damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+
+[[wall]]
+name = "floor"
+from = [-0.01, -0.002]
+to = [0.04, -0.002]
+
+[[wall]]
+name = "lid"
+from = [-0.01, 0.06]
+to = [0.04, 0.06]
+servo = {{ stress = 5.0e4, max_velocity = 0.1 }}
+
+[[probe]]
+name = "lid_fy"
+wall = "lid"
+quantity = "wall_fy"
+"#,
+        csv.display().to_string()
+    );
+    let sc = scenario::parse(&src, "csv.toml").unwrap_or_else(|e| panic!("{e}"));
+    same_on_ranks(&sc, &dir.join("csv"), &[2, 3]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
