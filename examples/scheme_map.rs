@@ -85,6 +85,7 @@ fn run(e: f64, scheme: Scheme, n: usize) -> Result<(f64, f64, f64, f64, f64), St
         warning: None,
         exact_overhead: 0.0,
         max_contacts: 0,
+        fallback: None,
     };
     scheme::apply(c, &choice).map_err(|e| e.to_string())?;
     let mut meter = WorkMeter::new(m.coupled().expect("coupled"));

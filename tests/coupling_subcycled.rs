@@ -385,3 +385,85 @@ fn the_automatic_scheme_keeps_the_energy_and_the_reaction_of_the_exact_step() {
         assert!((f - f1).abs() <= 0.01 * f1.abs(), "reaction {f} vs {f1}");
     }
 }
+
+/// The unstable run of [`the_energy_guard_stops_model_step`] with its
+/// scheme marked as chosen automatically: the guard's catch makes the
+/// model take the exact step from that body step on instead of failing.
+/// The run completes; the scheme creates nothing after the switch (the
+/// body's path account stays put) and the energy account's error grows by
+/// no more than the exact step's own (0.2 % of the work: twice what the
+/// exact step keeps on this bed from the start); the switch is said once,
+/// recorded in the choice and the state, and a restart after it continues
+/// bitwise, while a state from before it is refused by the switched model.
+#[test]
+fn an_automatic_scheme_that_creates_energy_falls_back_to_the_exact_step() {
+    let src = predicted(10, "2.0e9", 0.08);
+    let build = || {
+        let mut m: Model = parse(&src, "soft.toml").unwrap().build().unwrap();
+        let c = m.coupled_mut().unwrap();
+        c.choice.as_mut().unwrap().automatic = true;
+        m
+    };
+    let mut m = build();
+    let early = m.save_state();
+    let mut meter = WorkMeter::new(m.coupled().unwrap());
+    let mut at_switch = None;
+    let mut notices = Vec::new();
+    let mut mid = None;
+    while m.step < m.steps {
+        m.step().unwrap();
+        notices.extend(m.take_notices());
+        let c = m.coupled().unwrap();
+        meter.after_step(&c.granular);
+        if c.fallback.is_some() && at_switch.is_none() {
+            let e = meter.account(c);
+            at_switch = Some((e.diss, c.bodies[0].path_energy().0, m.step));
+        }
+        if at_switch.is_some_and(|(_, _, s)| m.step == s + 37) {
+            mid = Some(m.save_state());
+        }
+    }
+    let c = m.coupled().unwrap();
+    let f = c.fallback.clone().expect("the scheme fell back");
+    assert_eq!(
+        (f.from.as_str(), f.substeps, f.body.as_str()),
+        ("predicted", 10, "footing")
+    );
+    assert!(
+        (0.015..0.075).contains(&f.time),
+        "switched at t = {}",
+        f.time
+    );
+    assert!(f.created > 0.02 * f.exchanged);
+    let choice = c.choice.as_ref().unwrap();
+    assert_eq!((choice.scheme, choice.substeps), (Scheme::Exact, 1));
+    assert_eq!(choice.fallback.as_ref(), Some(&f));
+    assert_eq!(notices.len(), 1, "{notices:?}");
+    assert!(
+        notices[0].contains("the exact step is taken from step"),
+        "{}",
+        notices[0]
+    );
+    let (diss0, created0, _) = at_switch.unwrap();
+    assert_eq!(c.bodies[0].path_energy().0, created0);
+    let e = meter.account(c);
+    assert!(e.w_ext > 20.0, "the drive works: {}", e.w_ext);
+    assert!(
+        (e.diss - diss0).abs() < 2e-3 * e.w_ext,
+        "after the switch: E_diss {diss0} -> {} of {}",
+        e.diss,
+        e.w_ext
+    );
+    // a restart after the switch continues bitwise
+    let end = m.save_state().to_bytes();
+    let mut r = build();
+    let mid = mid.unwrap();
+    r.restore_state(&mid).unwrap();
+    while r.step < r.steps {
+        r.step().unwrap();
+    }
+    assert!(r.save_state().to_bytes() == end, "restart after the switch");
+    // a state of the sub-cycled scheme does not fit the switched model
+    let err = m.restore_state(&early).unwrap_err().to_string();
+    assert!(err.contains("given up for the exact step"), "{err}");
+}

@@ -522,6 +522,17 @@ struct PyModel {
 /// signals (Ctrl-C raises `KeyboardInterrupt` between two steps).
 const SLICE: Duration = Duration::from_millis(50);
 
+/// The model's warnings since they were last taken, as `RuntimeWarning`s
+/// (e.g. an automatically chosen sub-cycled scheme given up for the exact
+/// step).
+fn warn_notices(py: Python<'_>, model: &mut Model) -> PyResult<()> {
+    for note in model.take_notices() {
+        let warning = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
+        PyErr::warn(py, &warning, &std::ffi::CString::new(note)?, 1)?;
+    }
+    Ok(())
+}
+
 /// A pool of `n` worker threads (0: one per core; never more than the
 /// machine runs at once, with a `RuntimeWarning` when fewer than asked).
 fn thread_pool(n: usize) -> PyResult<rayon::ThreadPool> {
@@ -625,9 +636,9 @@ impl PyModel {
         inner.ensure_pool()?;
         let mut left = n;
         while left > 0 {
-            left -= py
-                .detach(|| inner.steps_for(left, left))
-                .map_err(model_error)?;
+            let done = py.detach(|| inner.steps_for(left, left));
+            warn_notices(py, &mut inner.model)?;
+            left -= done.map_err(model_error)?;
             py.check_signals()?;
         }
         Ok(())
@@ -648,7 +659,9 @@ impl PyModel {
         inner.ensure_pool()?;
         let mut n = 0;
         loop {
-            let k = py.detach(|| inner.run_for(until)).map_err(model_error)?;
+            let k = py.detach(|| inner.run_for(until));
+            warn_notices(py, &mut inner.model)?;
+            let k = k.map_err(model_error)?;
             if k == 0 {
                 return Ok(n);
             }

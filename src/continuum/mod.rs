@@ -331,6 +331,14 @@ pub trait Continuum: Send {
     fn set_step(&mut self, _h: f64) -> Result<(), SolveError> {
         self.set_compliant()
     }
+    /// Go on, from the present state, with steps of `dt` that are
+    /// `1/factor` of the present step (the Newmark matrix factored again,
+    /// the state and the time kept, the step count scaled; neither
+    /// sub-cycled scheme after it): a sub-cycled body falling back to the
+    /// exact step. A body that cannot says so.
+    fn retime(&mut self, _dt: f64, _factor: usize) -> Result<(), SolveError> {
+        self.set_compliant()
+    }
     /// The gain with which the contacts, acting together, feed back on
     /// themselves within one body step: the largest eigenvalue of
     /// `K^½ S K^½`, `S` the body step's compliance among all the chain
@@ -392,6 +400,10 @@ pub trait ContactBody: Send + Sync + 'static {
     /// Start (or, before the first step, start again) the time stepping
     /// with the step `dt`: the Newmark matrix factored for it.
     fn start_dynamic(&mut self, dt: f64) -> Result<(), Self::Error>;
+    /// Go on with steps of `dt`, `factor` of them per present step: the
+    /// Newmark matrix factored for it, the state kept
+    /// ([`Continuum::retime`]).
+    fn retime(&mut self, dt: f64, factor: usize) -> Result<(), Self::Error>;
     /// Nodal displacement, velocity, acceleration.
     fn state(&self) -> &State;
     /// `F += Φᵀ f` for the next step.
@@ -992,6 +1004,15 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             .map_err(|e| self.solve_error(e))?;
         self.green = None;
         self.chain_s = ChainCompliance::new(self.held_resp.len());
+        Ok(())
+    }
+    fn retime(&mut self, dt: f64, factor: usize) -> Result<(), SolveError> {
+        self.body
+            .retime(dt, factor)
+            .map_err(|e| self.solve_error(e))?;
+        self.green = None;
+        self.chain_s = ChainCompliance::new(self.held_resp.len());
+        self.path.compliant = false;
         Ok(())
     }
     /// Power iteration on `K^½ S K^½` (one solve per product), from a

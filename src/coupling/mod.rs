@@ -163,6 +163,33 @@ pub struct CoupledModel {
     pub choice: Option<scheme::Choice>,
     /// The body step (in DEM steps) the bodies are factored for.
     pub factored: usize,
+    /// An automatically chosen sub-cycled scheme given up for the exact
+    /// step ([`CoupledModel::fall_back`]; saved with the state).
+    pub fallback: Option<Fallback>,
+    /// Warnings for the user since they were last taken
+    /// ([`crate::model::Model::take_notices`]).
+    pub notices: Vec<String>,
+}
+
+/// An automatically chosen sub-cycled scheme that created energy
+/// ([`MAX_CREATED`]), replaced by the exact step from a body step's end on.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Fallback {
+    /// The scheme given up (`"predicted"` or `"compliant"`).
+    pub from: String,
+    /// Its DEM steps per body step.
+    pub substeps: usize,
+    /// The DEM step from which the exact step is taken.
+    pub step: usize,
+    /// The time then.
+    pub time: f64,
+    /// The body whose scheme created the energy.
+    pub body: String,
+    /// The energy it had created, and the work it had exchanged with the
+    /// discs.
+    pub created: f64,
+    /// See `created`.
+    pub exchanged: f64,
 }
 
 impl CoupledModel {
@@ -348,6 +375,8 @@ impl CoupledModel {
             over: Vec::new(),
             choice: None,
             factored: substeps.max(1),
+            fallback: None,
+            notices: Vec::new(),
         }
     }
 
@@ -431,10 +460,72 @@ impl CoupledModel {
                 }
             }
             if path {
-                self.energy_guard()?;
+                self.guard()?;
             }
         }
         self.timing.body += t3.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// [`energy_guard`](Self::energy_guard); an automatically chosen
+    /// scheme that it catches falls back to the exact step instead
+    /// ([`fall_back`](Self::fall_back)).
+    fn guard(&mut self) -> Result<(), CouplingError> {
+        match self.energy_guard() {
+            Err(CouplingError::Subcycling {
+                body,
+                scheme,
+                step,
+                time,
+                created,
+                exchanged,
+                ..
+            }) if self.choice.as_ref().is_some_and(|c| c.automatic) => {
+                let f = Fallback {
+                    from: scheme.into(),
+                    substeps: self.substeps,
+                    step,
+                    time,
+                    body,
+                    created,
+                    exchanged,
+                };
+                self.notices.push(format!(
+                    "body `{}`: the automatically chosen {} scheme ({} substeps) created {:.3e} J, {:.2} % of the {:.3e} J the body exchanged with the discs, above {} % for {GUARD_STEPS} body steps in a row: the exact step is taken from step {} (t = {:.6} s) on",
+                    f.body,
+                    f.from,
+                    f.substeps,
+                    f.created,
+                    100.0 * f.created / f.exchanged.max(f64::MIN_POSITIVE),
+                    f.exchanged,
+                    100.0 * MAX_CREATED,
+                    f.step,
+                    f.time
+                ));
+                self.fall_back(f)
+            }
+            r => r,
+        }
+    }
+
+    /// Take the exact step from now on (at the end of a body step): every
+    /// body factored for the DEM step with its state kept
+    /// ([`Continuum::retime`]), the disc–body forces of the present state
+    /// evaluated again before the next step. `f` says why (kept in
+    /// [`CoupledModel::fallback`] and the saved state).
+    pub fn fall_back(&mut self, f: Fallback) -> Result<(), CouplingError> {
+        let dt = self.granular.dt;
+        for b in &mut self.bodies {
+            b.retime(dt, self.substeps)?;
+        }
+        (self.substeps, self.factored, self.sub) = (1, 1, 0);
+        (self.compliant, self.staggered, self.primed) = (false, false, false);
+        self.over.clear();
+        if let Some(c) = &mut self.choice {
+            (c.scheme, c.substeps) = (scheme::Scheme::Exact, 1);
+            c.fallback = Some(f.clone());
+        }
+        self.fallback = Some(f);
         Ok(())
     }
 
@@ -561,7 +652,7 @@ impl CoupledModel {
                 b.end_path()?;
             }
             self.timing.body += tb.elapsed().as_secs_f64();
-            self.energy_guard()?;
+            self.guard()?;
         }
         Ok(())
     }

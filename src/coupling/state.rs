@@ -30,6 +30,9 @@ pub struct CoupledState {
     pub compliance_products: usize,
     /// Per body, the sub-cycling energy guard's record.
     pub over: Vec<super::GuardRecord>,
+    /// The automatically chosen sub-cycled scheme given up for the exact
+    /// step, if it was ([`CoupledModel::fall_back`]).
+    pub fallback: Option<super::Fallback>,
 }
 
 impl CoupledModel {
@@ -45,6 +48,7 @@ impl CoupledModel {
             newton_iterations: self.newton_iterations,
             compliance_products: self.compliance_products,
             over: self.over.clone(),
+            fallback: self.fallback.clone(),
         }
     }
 
@@ -61,6 +65,18 @@ impl CoupledModel {
                 "the saved state has {} bodies, the model {nb}",
                 s.bodies.len()
             )));
+        }
+        match (&s.fallback, &self.fallback) {
+            // the run had fallen back to the exact step: so does this model
+            (Some(f), None) => self
+                .fall_back(f.clone())
+                .map_err(|e| StateError::new(e.to_string()))?,
+            (None, Some(_)) => {
+                return Err(StateError::new(
+                    "the saved state is of the sub-cycled scheme this model has given up for the exact step; restore it into a model built anew",
+                ));
+            }
+            _ => {}
         }
         if s.sub >= self.substeps {
             return Err(StateError::new(format!(

@@ -433,8 +433,7 @@ impl EfgBody {
         crate::continuum::newmark::check_dynamic(dt, self.material.density, &self.name)
             .map_err(EfgError::Invalid)?;
         self.params.dt = dt;
-        let m = self.ops.gram.scaled(self.material.density);
-        let c = (self.material.damping > 0.0).then(|| self.ops.gram.scaled(self.material.damping));
+        let (m, c) = self.mass_damping();
         let mut f: Vec<f64> = (0..self.n_dofs())
             .map(|i| self.f_permanent[i] + self.f_point[i])
             .collect();
@@ -453,6 +452,28 @@ impl EfgBody {
         let nm = Newmark::new(m, c, kbar, self.params)?;
         self.newmark = Some(nm);
         Ok(())
+    }
+
+    /// Go on from the present state with steps of `dt`, `factor` of them
+    /// per present step: `α₁M + α₄C + K̄` factored for `dt`, the state (its
+    /// acceleration the last step's) and the time kept, the step count
+    /// scaled so that the time is still `step · dt`.
+    pub fn retime(&mut self, dt: f64, factor: usize) -> Result<(), EfgError> {
+        crate::continuum::newmark::check_dynamic(dt, self.material.density, &self.name)
+            .map_err(EfgError::Invalid)?;
+        self.newmark.as_ref().ok_or(EfgError::NotStarted)?;
+        self.params.dt = dt;
+        self.step *= factor;
+        let (m, c) = self.mass_damping();
+        self.newmark = Some(Newmark::new(m, c, self.ops.kbar(), self.params)?);
+        Ok(())
+    }
+
+    /// The mass matrix and the damping matrix (if any) of the body (E9).
+    fn mass_damping(&self) -> (crate::sparse::SymCsc, Option<crate::sparse::SymCsc>) {
+        let m = self.ops.gram.scaled(self.material.density);
+        let c = (self.material.damping > 0.0).then(|| self.ops.gram.scaled(self.material.damping));
+        (m, c)
     }
 
     /// The integrator, once [`EfgBody::start_dynamic`] was called.

@@ -111,6 +111,9 @@ impl ContactBody for EfgBody {
     fn start_dynamic(&mut self, dt: f64) -> Result<(), EfgError> {
         EfgBody::start_dynamic(self, dt)
     }
+    fn retime(&mut self, dt: f64, factor: usize) -> Result<(), EfgError> {
+        EfgBody::retime(self, dt, factor)
+    }
     fn state(&self) -> &State {
         &self.state
     }

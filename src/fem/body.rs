@@ -633,12 +633,7 @@ impl FemBody {
         crate::continuum::newmark::check_dynamic(dt, self.material.density, &self.name)
             .map_err(FemError::Invalid)?;
         self.params.dt = dt;
-        let m = self.mass_matrix();
-        let c = (self.material.damping > 0.0).then(|| {
-            let mut c = self.gram.scaled(self.material.damping);
-            self.set_constrained_diagonal(&mut c, 0.0);
-            c
-        });
+        let (m, c) = self.mass_damping();
         let mut f: Vec<f64> = (0..self.n_dofs())
             .map(|i| self.f_permanent[i] + self.f_point[i])
             .collect();
@@ -672,6 +667,38 @@ impl FemBody {
             let r = self.reaction(c, applied);
             self.constraints[i].reaction = r;
         }
+        self.integrator(m, c)
+    }
+
+    /// Go on from the present state with steps of `dt`, `factor` of them
+    /// per present step: `α₁M + α₄C + K` factored for `dt`, the state (its
+    /// acceleration the last step's) and the time kept, the step count
+    /// scaled so that the time is still `step · dt`.
+    pub fn retime(&mut self, dt: f64, factor: usize) -> Result<(), FemError> {
+        crate::continuum::newmark::check_dynamic(dt, self.material.density, &self.name)
+            .map_err(FemError::Invalid)?;
+        self.newmark.as_ref().ok_or(FemError::NotStarted)?;
+        self.params.dt = dt;
+        self.step *= factor;
+        let (m, c) = self.mass_damping();
+        self.integrator(m, c)
+    }
+
+    /// The mass matrix and the damping matrix (if any), prescribed DOFs
+    /// undamped.
+    fn mass_damping(&self) -> (SymCsc, Option<SymCsc>) {
+        let m = self.mass_matrix();
+        let c = (self.material.damping > 0.0).then(|| {
+            let mut c = self.gram.scaled(self.material.damping);
+            self.set_constrained_diagonal(&mut c, 0.0);
+            c
+        });
+        (m, c)
+    }
+
+    /// The Newmark integrator of `m`, `c` and the stiffness, prescribed
+    /// DOFs imposed.
+    fn integrator(&mut self, m: SymCsc, c: Option<SymCsc>) -> Result<(), FemError> {
         let mut nm = Newmark::new(m, c, self.k.clone(), self.params)?;
         nm.set_imposed(self.constrained.clone());
         self.newmark = Some(nm);

@@ -33,6 +33,9 @@ impl ContactBody for FemBody {
     fn start_dynamic(&mut self, dt: f64) -> Result<(), FemError> {
         FemBody::start_dynamic(self, dt)
     }
+    fn retime(&mut self, dt: f64, factor: usize) -> Result<(), FemError> {
+        FemBody::retime(self, dt, factor)
+    }
     fn state(&self) -> &State {
         &self.state
     }

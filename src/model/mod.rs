@@ -118,6 +118,16 @@ impl Model {
         r
     }
 
+    /// Warnings since the last call: e.g. an automatically chosen
+    /// sub-cycled scheme given up for the exact step
+    /// ([`crate::coupling::CoupledModel::fall_back`]).
+    pub fn take_notices(&mut self) -> Vec<String> {
+        match &mut self.system {
+            System::Coupled(m) => std::mem::take(&mut m.notices),
+            _ => Vec::new(),
+        }
+    }
+
     /// Step until the time reaches `t_end` (within half a step), calling
     /// `after` after every step; `after` may stop the run early by
     /// returning [`ControlFlow::Break`]. Returns the number of steps taken.

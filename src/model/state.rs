@@ -42,7 +42,7 @@ use crate::dem::state::GranularState;
 /// 6: the compliant sub-cycled scheme's boundary path, the sub-cycling
 /// energy guard's count;
 /// 7: the granular state keeps the parallel bonds.)
-pub const STATE_FORMAT_VERSION: u32 = 7;
+pub const STATE_FORMAT_VERSION: u32 = 8;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

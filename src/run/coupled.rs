@@ -496,7 +496,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
             },
         },
     });
-    if m.path_scheme() {
+    if m.path_scheme() || m.fallback.is_some() {
         summary["subcycling"] = subcycling(m);
     }
     run.annotate(&mut summary)?;
@@ -559,7 +559,12 @@ fn scheme_lines(m: &CoupledModel) -> String {
     }
     if m.path_scheme() {
         s += &format!(
-            "  a run stops if a body's scheme creates more than {} % of the work it exchanges with the discs for {GUARD_STEPS} body steps in a row\n",
+            "  {} if a body's scheme creates more than {} % of the work it exchanges with the discs for {GUARD_STEPS} body steps in a row\n",
+            if c.automatic {
+                "the run goes on with the exact step"
+            } else {
+                "a run stops"
+            },
             100.0 * MAX_CREATED
         );
     }

@@ -124,6 +124,15 @@ impl Progress {
         }
     }
 
+    /// Print a line on stderr without breaking the progress bar (shown
+    /// even with `-q`: warnings are not progress).
+    pub fn warn(&self, line: &str) {
+        match &self.display {
+            Display::Bar(pb) => pb.suspend(|| eprintln!("{line}")),
+            _ => eprintln!("{line}"),
+        }
+    }
+
     /// `step` steps are done and the model is at time `t` (cheap to call
     /// every step: it only looks at the clock).
     pub fn update(&mut self, step: usize, t: f64) {

@@ -275,6 +275,9 @@ impl<'a> Session<'a> {
         }
         let r = model.step();
         self.run.last_step.set(model.step);
+        for n in model.take_notices() {
+            self.progress.warn(&format!("warning: {n}"));
+        }
         match r {
             Ok(()) => Ok(None),
             Err(ModelError::Unstable(i)) => Ok(Some(Ended::Unstable(i))),
