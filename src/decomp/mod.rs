@@ -750,13 +750,7 @@ impl Decomposed {
             torque: discs.iter().map(|d| d.6).collect(),
             walls: walls
                 .iter()
-                .map(|w| WallState {
-                    a: w.a,
-                    b: w.b,
-                    vel: w.vel,
-                    force: w.force,
-                    integral: w.integral,
-                })
+                .map(WallState::from)
                 .collect(),
             pairs: pk.iter().map(|e| e.0).collect(),
             shear: pk.iter().map(|e| e.1).collect(),
