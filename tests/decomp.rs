@@ -358,7 +358,9 @@ fn phased_walls_and_disc_sources_on_ranks() {
     let servo = "servo = { stress = 1.0e5, max_velocity = 0.1, relaxation = 1.0 }";
     let pi = "servo = { stress = 1.0e5, max_velocity = 0.1, relaxation = 1.0, integral = 0.1 }";
     let wall = |name: &str, from: [f64; 2], to: [f64; 2], phases: &str| {
-        format!("[[wall]]\nname = \"{name}\"\nfrom = {from:?}\nto = {to:?}\nphases = [{phases}]\n\n")
+        format!(
+            "[[wall]]\nname = \"{name}\"\nfrom = {from:?}\nto = {to:?}\nphases = [{phases}]\n\n"
+        )
     };
     let axial = format!("{{ until_step = 1500, {servo} }}, {{ strain_rate = 2.0 }}");
     let lateral = format!("{{ until_step = 1500, {servo} }}, {{ {pi} }}");

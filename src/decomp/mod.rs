@@ -748,10 +748,7 @@ impl Decomposed {
             omega: discs.iter().map(|d| d.4).collect(),
             force: discs.iter().map(|d| d.5).collect(),
             torque: discs.iter().map(|d| d.6).collect(),
-            walls: walls
-                .iter()
-                .map(WallState::from)
-                .collect(),
+            walls: walls.iter().map(WallState::from).collect(),
             pairs: pk.iter().map(|e| e.0).collect(),
             shear: pk.iter().map(|e| e.1).collect(),
             rolling,

@@ -138,11 +138,7 @@ impl Granular {
             omega: p.omega.clone(),
             force: p.force.clone(),
             torque: p.torque.clone(),
-            walls: self
-                .walls
-                .iter()
-                .map(WallState::from)
-                .collect(),
+            walls: self.walls.iter().map(WallState::from).collect(),
             pairs: c.pairs().map(|(i, j)| [i as u32, j as u32]).collect(),
             shear: c.shear.clone(),
             rolling: c.rolling,
