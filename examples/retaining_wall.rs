@@ -79,6 +79,7 @@ fn main_() -> Result<(), String> {
         every: 20,
         bins: (10.0 * scale).round() as usize,
         bands: (9.0 * scale).round() as usize,
+        rest: None,
     };
     std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
     let t0 = Instant::now();
@@ -124,7 +125,7 @@ fn main_() -> Result<(), String> {
     println!(
         "backfill H = {:.1} mm, {} states averaged, mean kinetic energy {:.2e} J; run {secs:.1} s",
         1e3 * r.height,
-        r.samples,
+        r.window.samples,
         r.kinetic
     );
     println!(

@@ -62,6 +62,7 @@ fn main_() -> Result<(), String> {
         every: 20,
         bins: (12.0 * scale).round() as usize,
         bands: (11.0 * scale).round() as usize,
+        rest: None,
     };
     std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
     let t0 = Instant::now();
@@ -139,7 +140,7 @@ fn main_() -> Result<(), String> {
         ens.fills,
         ens.height_over_width,
         1e3 * ens.surface_spread,
-        runs[0].samples,
+        runs[0].window.samples,
     );
     println!(
         "pooled: ρ_b = {:.0} kg/m³; μ_w = {:.3} (left {:.3}, right {:.3}); K = {:.3}; weight balance max |error| {:.3} %",

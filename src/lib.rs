@@ -63,6 +63,8 @@
 //! 3. [`efg`], [`fem`], [`dem`]: the physics (plain parameters in, state
 //!    out; no files).
 //! 4. [`coupling`]: disc–boundary contacts, through `Continuum` only.
+//!    [`decomp`]: a granular assembly divided over ranks (MPI), bitwise
+//!    equal to the whole.
 //! 5. [`model`]: the [`model::Model`] users step and read.
 //! 6. [`scenario`]: the TOML format — parse, validate, build a `Model`.
 //! 7. [`output`]: history CSV, ParaView files, JSON, plots, progress.
@@ -74,6 +76,7 @@
 pub mod biaxial;
 pub mod continuum;
 pub mod coupling;
+pub mod decomp;
 pub mod dem;
 pub mod efg;
 pub mod fem;

@@ -164,6 +164,19 @@ fn main() -> ExitCode {
     match dispatch(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
+            // under mpirun every rank fails alike: rank 0 says why
+            let rank = ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"]
+                .iter()
+                .find_map(|v| std::env::var(v).ok()?.parse::<usize>().ok());
+            if rank.is_some_and(|r| r > 0) {
+                let run = e.chain().find_map(|c| c.downcast_ref::<RunError>());
+                let scenario = e.downcast_ref::<ScenarioError>().is_some();
+                return ExitCode::from(if scenario {
+                    2
+                } else {
+                    run.map_or(1, RunError::exit_code)
+                });
+            }
             if let Some(se) = e.downcast_ref::<ScenarioError>() {
                 eprintln!("error: {se}");
                 return ExitCode::from(2);
@@ -171,13 +184,45 @@ fn main() -> ExitCode {
             let run = e.chain().find_map(|c| c.downcast_ref::<RunError>());
             // 2 bad input, 1 i/o, 3 numerical, 128 + signal a stop
             // (RunError::exit_code); anything else 1
-            if let Some(RunError::Scenario(se)) = run {
-                eprintln!("error: {se}");
-                return ExitCode::from(2);
+            match run {
+                Some(RunError::Scenario(se)) => {
+                    eprintln!("error: {se}");
+                    ExitCode::from(2)
+                }
+                // rank 0 of the run said why
+                Some(RunError::OnRank0 { code }) => ExitCode::from(*code),
+                _ => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::from(run.map_or(1, RunError::exit_code))
+                }
             }
-            eprintln!("error: {e:#}");
-            ExitCode::from(run.map_or(1, RunError::exit_code))
         }
+    }
+}
+
+/// The ranks of this process's MPI job (`mpirun -np N`): one rank when not
+/// started by mpirun. A build without the `mpi` feature started as one of
+/// several ranks refuses to run (each copy would run the whole scenario).
+fn ranks() -> anyhow::Result<Arc<dyn efgdem::decomp::Comm>> {
+    #[cfg(feature = "mpi")]
+    {
+        match efgdem::decomp::mpi::Mpi::init() {
+            Some(m) => Ok(Arc::new(m)),
+            None => anyhow::bail!("MPI cannot be initialised with serialised thread support"),
+        }
+    }
+    #[cfg(not(feature = "mpi"))]
+    {
+        let size = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"]
+            .iter()
+            .find_map(|v| std::env::var(v).ok()?.parse::<usize>().ok());
+        if let Some(n) = size.filter(|&n| n > 1) {
+            return Err(RunError::Ranks(format!(
+                "started as one of {n} MPI ranks, but this efgdem was built without MPI: build it with `cargo build --release --features mpi` (needs a system MPI, e.g. the libopenmpi-dev, openmpi-bin and libclang-dev packages)"
+            ))
+            .into());
+        }
+        Ok(Arc::new(efgdem::decomp::Solo))
     }
 }
 
@@ -241,6 +286,8 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
             checkpoint_every,
             restart,
         } => {
+            // before anything else: a build without MPI under mpirun stops here
+            let comm = ranks()?;
             let sc = scenario::load(&file)?;
             let out = out.unwrap_or_else(|| match &restart {
                 Some(ck) => ck.parent().map_or_else(PathBuf::new, PathBuf::from),
@@ -254,16 +301,21 @@ fn dispatch(cli: Cli) -> anyhow::Result<()> {
                 restart,
                 ..efgdem::run::RunOptions::new(&out)
             };
+            let root = comm.rank() == 0;
             let t0 = std::time::Instant::now();
             let result = in_pool(threads.unwrap_or(sc.simulation.threads), || {
-                efgdem::run::run(&sc, &opts)
+                efgdem::run::run_on(&sc, &opts, comm)
             })?;
-            if let Err(e) = &result {
+            if let Err(e) = &result
+                && root
+            {
                 stopped_recap(e, &out);
             }
             let summary = result.with_context(|| format!("running {}", file.display()))?;
-            eprintln!("done in {:.3} s", t0.elapsed().as_secs_f64());
-            say!("{}", efgdem::run::recap::recap(&summary, &out).trim_end());
+            if root {
+                eprintln!("done in {:.3} s", t0.elapsed().as_secs_f64());
+                say!("{}", efgdem::run::recap::recap(&summary, &out).trim_end());
+            }
         }
         Cmd::Reproduce {
             out,

@@ -321,7 +321,17 @@ fn history_is_the_same_on_one_and_two_threads_and_post_processes() {
     );
     let s = biaxial::summarize(&setup, &p, &Options::default());
     eprintln!("{s:#?}");
-    assert!(s.sigma3_error < 0.01, "{s:?}");
+    // σ₃ is held as in the full example below: the rows are single states
+    // (every 200 steps), 98 % of the lateral walls' stresses within 1 % of
+    // σ₃ and no bias (the servo's control), single rows within 3 % (a
+    // rearrangement of the packing unloads a wall for a moment, before the
+    // servo catches up: measured 0.88 % and 1.21 % on two realizations
+    // that differ only in the order of the force sums, 99.5–100 % of the
+    // rows within 1 %). A servo aiming at another stress (a factor of two)
+    // has a bias of tens of per cent; one of the wrong sign runs away.
+    assert!(s.sigma3_error < 0.03, "{s:?}");
+    assert!(s.sigma3_within_1pc > 0.98, "{s:?}");
+    assert!(s.sigma3_bias.abs() < 1e-3, "{s:?}");
     assert!(s.love_weber_error.unwrap() < 0.02, "{s:?}");
     assert_eq!(s.love_weber_rows, p.len());
     assert!(s.phi_peak > 15.0 && s.phi_peak < 40.0, "{s:?}");

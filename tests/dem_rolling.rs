@@ -156,10 +156,16 @@ fn coupled_hash(src: &str) -> u64 {
 /// forms the contact solve's `S = Φ G Φᵀ` column by column instead of entry
 /// by entry: another summation order, the same forces to round-off
 /// (`tests/coupling_scale.rs` compares them with the direct solves); the
-/// rolling-resistance pin below still reproduces that code bitwise.
+/// rolling-resistance pin below still reproduces that code bitwise. The
+/// two packings were pinned again when the renumbering of the discs began
+/// to order a neighbour grid cell's discs by id instead of by their
+/// previous slot: the forces are summed in another order. With the cell
+/// order switched back to the previous slot's (a one-line change of
+/// `strip_order`), this code still gives the old hashes
+/// (0xd72d4e5bb189b4c9, 0x91e0b02f06fa44ed): the order is the only change.
 const GOLDEN: [(&str, u64); 4] = [
-    ("packing, dashpots", 0xd72d4e5bb189b4c9),
-    ("packing, local damping", 0x91e0b02f06fa44ed),
+    ("packing, dashpots", 0xcc1218a967bdc7d2),
+    ("packing, local damping", 0x907486789dd4bd99),
     ("nine discs rigid, test 1", 0xb9c022c14b04f4f1),
     ("nine discs EFG, test 1", 0x50b25af8a6a50ca7),
 ];
@@ -182,8 +188,10 @@ fn rolling_friction_zero_is_bitwise_the_old_code() {
             PIN,
         )),
     ];
-    for ((name, want), got) in GOLDEN.iter().zip(got) {
+    for ((name, _), got) in GOLDEN.iter().zip(got) {
         println!("(\"{name}\", {got:#018x}),");
+    }
+    for ((name, want), got) in GOLDEN.iter().zip(got) {
         assert_eq!(got, *want, "{name}: not bitwise the old result");
     }
     // the pin matters: with dashpots the default (total) cap is another run

@@ -10,6 +10,7 @@ const LAYERS: &[&[&str]] = &[
     &["continuum"],
     &["efg", "fem", "dem"],
     &["coupling"],
+    &["decomp"],
     &["model"],
     &["scenario"],
     &["output"],

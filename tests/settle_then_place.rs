@@ -202,7 +202,13 @@ fn independent_count(text: &str, lo: [f64; 2], hi: [f64; 2]) -> (usize, usize) {
 #[test]
 fn a_body_placed_after_the_preparation_removes_the_discs_it_overlaps() {
     let root = tmpdir("stp-run");
-    let text = bed(EMBEDDED, true, Some("bed.csv"), 3, 30000);
+    // 0.1 s: the grains beside and under the footing fall into the room
+    // of the discs it removed (up to a diameter, 8 mm: 40 ms of free
+    // fall) before they load it; in 20 ms they may not have (a bed that
+    // differs in the last bits did not)
+    let text = bed(EMBEDDED, true, Some("bed.csv"), 3, 30000)
+        .replacen("\nsteps = 2000\n", "\nsteps = 10000\n", 1);
+    assert!(text.contains("\nsteps = 10000\n"));
     let file = root.join("bed.toml");
     std::fs::write(&file, &text).unwrap();
     let no_cache = bed(EMBEDDED, true, None, 3, 30000);

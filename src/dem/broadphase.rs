@@ -14,7 +14,7 @@
 
 use super::clumps::NO_CLUMP;
 use super::contact::{ContactForce, effective_mass};
-use super::particles::Particles;
+use super::particles::{GHOST, Particles};
 use super::walls::Wall;
 use crate::geom::Vec2;
 use rayon::prelude::*;
@@ -150,7 +150,7 @@ impl ContactList {
 
     /// After `first`, `j` and the histories are set: `√m_eff` when needed
     /// and the cross index.
-    fn finish(&mut self, p: &Particles) {
+    pub(crate) fn finish(&mut self, p: &Particles) {
         self.sqrt_m_eff = Vec::new();
         if self.needs_mass {
             let mut sm = vec![0.0; self.j.len()];
@@ -251,47 +251,92 @@ impl ContactList {
     /// wall pairs follow. `√m_eff` and the cross index are left stale (a
     /// rebuild follows).
     fn renumber(&mut self, new_of_old: &[u32]) {
-        let n = new_of_old.len();
-        if self.first.len() != n + 1 {
+        self.remap(new_of_old, new_of_old.len(), &[], &[], |_, _| true);
+    }
+
+    /// Move the list onto a new set of `n` discs: the disc in old slot `s`
+    /// is now in slot `new_of_old[s]`, or gone when that is `u32::MAX` (its
+    /// pairs are dropped); `extra` pairs `(a, b, shear, rolling moment on
+    /// a)` and `extra_walls` (in new slots) are added, e.g. the histories
+    /// a disc brings along when it joins the set; old pairs `(i, j)` (old
+    /// slots) for which `keep(i, j)` is false are dropped. The pairs are ordered
+    /// `i < j` again (a rolling history flips sign when its pair's order
+    /// flips) and sorted; the wall pairs likewise. `√m_eff` and the cross
+    /// index are left stale (a rebuild follows).
+    pub fn remap(
+        &mut self,
+        new_of_old: &[u32],
+        n: usize,
+        extra: &[(u32, u32, f64, f64)],
+        extra_walls: &[WallPair],
+        keep: impl Fn(u32, u32) -> bool,
+    ) {
+        const GONE: u32 = u32::MAX;
+        if self.first.len() != new_of_old.len() + 1 {
             // never built (or built for other discs): nothing to carry over
-            self.empty_rows(n);
+            self.empty_rows(new_of_old.len());
             self.j.clear();
             self.shear.clear();
             self.roll.clear();
             self.walls.clear();
-            return;
         }
         let m = self.j.len();
         let rolling = self.rolling && self.roll.len() == m;
+        // (first, second, flipped) of old pair k of disc i, None when dropped
         let key = |i: usize, k: usize| {
             let (a, b) = (new_of_old[i], new_of_old[self.j[k] as usize]);
-            (a.min(b), a.max(b), a > b)
+            (a != GONE && b != GONE && keep(i as u32, self.j[k])).then_some((
+                a.min(b),
+                a.max(b),
+                a > b,
+            ))
         };
+        let old_rows = new_of_old.len();
         // counting sort by the new first disc
         let mut first = vec![0u32; n + 1];
-        for i in 0..n {
+        for i in 0..old_rows {
             for k in self.first[i] as usize..self.first[i + 1] as usize {
-                first[key(i, k).0 as usize + 1] += 1;
+                if let Some((a, _, _)) = key(i, k) {
+                    first[a as usize + 1] += 1;
+                }
             }
+        }
+        for &(a, b, _, _) in extra {
+            first[a.min(b) as usize + 1] += 1;
         }
         for d in 0..n {
             first[d + 1] += first[d];
         }
+        let total = first[n] as usize;
         let mut fill = first.clone();
-        let mut j = vec![0u32; m];
-        let mut shear = vec![0.0; m];
-        let mut roll = vec![0.0; if rolling { m } else { 0 }];
-        for i in 0..n {
+        let mut j = vec![0u32; total];
+        let mut shear = vec![0.0; total];
+        let mut roll = vec![0.0; if self.rolling { total } else { 0 }];
+        let mut put = |a: u32, b: u32, fs: f64, mr: f64| {
+            let at = fill[a as usize] as usize;
+            fill[a as usize] += 1;
+            j[at] = b;
+            shear[at] = fs;
+            if !roll.is_empty() {
+                roll[at] = mr;
+            }
+        };
+        for i in 0..old_rows {
             for k in self.first[i] as usize..self.first[i + 1] as usize {
-                let (a, b, flip) = key(i, k);
-                let at = fill[a as usize] as usize;
-                fill[a as usize] += 1;
-                j[at] = b;
-                shear[at] = self.shear[k];
-                if rolling {
-                    roll[at] = if flip { -self.roll[k] } else { self.roll[k] };
+                if let Some((a, b, flip)) = key(i, k) {
+                    let mr = if !rolling {
+                        0.0
+                    } else if flip {
+                        -self.roll[k]
+                    } else {
+                        self.roll[k]
+                    };
+                    put(a, b, self.shear[k], mr);
                 }
             }
+        }
+        for &(a, b, fs, mr) in extra {
+            put(a.min(b), a.max(b), fs, if a > b { -mr } else { mr });
         }
         drop(fill);
         // sort each row by j (rows are short: insertion sort)
@@ -302,20 +347,19 @@ impl ContactList {
                 while b > lo && j[b - 1] > j[b] {
                     j.swap(b - 1, b);
                     shear.swap(b - 1, b);
-                    if rolling {
+                    if !roll.is_empty() {
                         roll.swap(b - 1, b);
                     }
                     b -= 1;
                 }
             }
         }
-        (self.first, self.j, self.shear) = (first, j, shear);
-        if rolling {
-            self.roll = roll;
-        }
-        for w in &mut self.walls {
+        (self.first, self.j, self.shear, self.roll) = (first, j, shear, roll);
+        self.walls.retain_mut(|w| {
             w.disc = new_of_old[w.disc as usize];
-        }
+            w.disc != GONE
+        });
+        self.walls.extend_from_slice(extra_walls);
         self.walls.sort_unstable_by_key(|w| (w.disc, w.wall));
     }
 }
@@ -347,6 +391,116 @@ pub struct NeighbourGrid {
 const CHUNK: usize = 4096;
 /// Width in cells of the strips of the disc ordering.
 const STRIP: usize = 16;
+
+/// The box `(lo, hi)` of the finite centres in `pos` (`lo > hi` when there
+/// is none); min and max are exact, so the box is the same on any number
+/// of threads, and boxes of parts combine by min and max.
+pub fn centre_bounds(pos: &[Vec2]) -> (Vec2, Vec2) {
+    let none = (
+        Vec2::new(f64::INFINITY, f64::INFINITY),
+        Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+    );
+    let join = |(a, b): (Vec2, Vec2), (c, d): (Vec2, Vec2)| {
+        (
+            Vec2::new(a.x.min(c.x), a.y.min(c.y)),
+            Vec2::new(b.x.max(d.x), b.y.max(d.y)),
+        )
+    };
+    pos.par_iter()
+        .with_min_len(CHUNK)
+        .filter(|q| q.x.is_finite() && q.y.is_finite())
+        .map(|&q| (q, q))
+        .reduce(|| none, join)
+}
+
+/// A uniform cell grid over a box of disc centres: its origin, cell size
+/// and number of cells. The contact search bins the discs on it, and the
+/// renumbering orders them by [`key`](Self::key) on it.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GridSpec {
+    /// Lower-left corner.
+    pub origin: Vec2,
+    /// Cell size.
+    pub h: f64,
+    /// Cells along x.
+    pub nx: usize,
+    /// Cells along y.
+    pub ny: usize,
+}
+
+impl GridSpec {
+    /// The grid for `n` discs whose finite centres span `(lo, hi)`
+    /// ([`centre_bounds`]), radii up to `max_radius`, Verlet skin `skin`:
+    /// cells of the largest diameter plus the skin. However far apart the
+    /// discs are (after an instability: 1e19 and more, up to an extent that
+    /// overflows to infinity), the cell count stays at most ~4 per disc:
+    /// the cell grows by doubling until the grid fits, and a grid that
+    /// cannot fit (infinite extent) is a single cell. A disc with a
+    /// non-finite centre goes to the first cell.
+    pub fn new(lo: Vec2, hi: Vec2, max_radius: f64, skin: f64, n: usize) -> GridSpec {
+        let (lo, hi) = if lo.x <= hi.x && lo.y <= hi.y {
+            (lo, hi)
+        } else {
+            // no disc, or none with a finite centre
+            (Vec2::ZERO, Vec2::ZERO)
+        };
+        let mut h = (2.0 * max_radius + skin).max(1e-300);
+        if !h.is_finite() {
+            h = f64::MAX;
+        }
+        let ext = hi - lo; // may overflow to +∞ for centres near ±f64::MAX
+        // Cap the number of cells at ~4 per disc (a disc flying far away
+        // must not blow up the grid). Counted in floating point: an extent
+        // of 1e19 cells must not wrap around in `usize`.
+        let max_cells = (4 * n + 16) as f64;
+        let cells = |e: f64, h: f64| (e / h).floor() + 1.0;
+        loop {
+            let (fx, fy) = (cells(ext.x, h), cells(ext.y, h));
+            if fx.is_finite() && fy.is_finite() && fx * fy <= max_cells {
+                return GridSpec {
+                    origin: lo,
+                    h,
+                    nx: fx as usize,
+                    ny: fy as usize,
+                };
+            }
+            if h >= f64::MAX / 2.0 {
+                // an infinite extent: one cell (every pair is tested)
+                return GridSpec {
+                    origin: lo,
+                    h,
+                    nx: 1,
+                    ny: 1,
+                };
+            }
+            h *= 2.0;
+        }
+    }
+
+    /// The cell of centre `q` (row-major).
+    #[inline]
+    pub fn cell(&self, q: Vec2) -> u32 {
+        let cx = (((q.x - self.origin.x) / self.h) as usize).min(self.nx - 1);
+        let cy = (((q.y - self.origin.y) / self.h) as usize).min(self.ny - 1);
+        (cy * self.nx + cx) as u32
+    }
+
+    /// Rank of cell `c` in the disc ordering: vertical strips of
+    /// `STRIP` cells, row by row inside a strip.
+    pub fn strip_rank(&self, c: u32) -> u64 {
+        let (cx, cy) = (c as usize % self.nx, c as usize / self.nx);
+        let x0 = cx / STRIP * STRIP;
+        let w = STRIP.min(self.nx - x0);
+        (x0 * self.ny + cy * w + (cx - x0)) as u64
+    }
+
+    /// The renumbering's order of the disc with id `id` at `q`: by cell in
+    /// strip order, then by id. It depends on the disc alone, so the
+    /// parts of a decomposed assembly order their discs as the whole.
+    pub fn key(&self, q: Vec2, id: u32) -> u64 {
+        self.strip_rank(self.cell(q)) << 32 | id as u64
+    }
+}
 
 impl NeighbourGrid {
     /// An empty grid with Verlet skin `skin` (stale: built at the first step).
@@ -389,75 +543,17 @@ impl NeighbourGrid {
         2.0 * max_disp > self.skin || max_disp + wmax > self.skin
     }
 
-    /// Bin the discs (counting sort, stable in slot order).
-    ///
-    /// The grid spans the finite disc centres; a disc with a non-finite
-    /// centre (an instability) goes to the first cell. However far apart
-    /// the discs are (after an instability: 1e19 and more, up to an extent
-    /// that overflows to infinity), the cell count stays at most ~4 per disc:
-    /// the cell grows by doubling until the grid fits, and a grid that
-    /// cannot fit (infinite extent) is a single cell.
+    /// Bin the discs (counting sort, stable in slot order) on the grid
+    /// [`GridSpec::new`] makes for their finite centres.
     fn bin(&mut self, p: &Particles) {
         let n = p.len();
-        let none = (
-            Vec2::new(f64::INFINITY, f64::INFINITY),
-            Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
-        );
-        let join = |(a, b): (Vec2, Vec2), (c, d): (Vec2, Vec2)| {
-            (
-                Vec2::new(a.x.min(c.x), a.y.min(c.y)),
-                Vec2::new(b.x.max(d.x), b.y.max(d.y)),
-            )
-        };
-        // min and max are exact: the same box on any thread count
-        let (mut lo, mut hi) = p
-            .pos
-            .par_iter()
-            .with_min_len(CHUNK)
-            .filter(|q| q.x.is_finite() && q.y.is_finite())
-            .map(|&q| (q, q))
-            .reduce(|| none, join);
-        if !(lo.x <= hi.x && lo.y <= hi.y) {
-            // no disc, or none with a finite centre
-            lo = Vec2::ZERO;
-            hi = Vec2::ZERO;
-        }
-        let mut h = (2.0 * p.max_radius() + self.skin).max(1e-300);
-        if !h.is_finite() {
-            h = f64::MAX;
-        }
-        let ext = hi - lo; // may overflow to +∞ for centres near ±f64::MAX
-        // Cap the number of cells at ~4 per disc (a disc flying far away
-        // must not blow up the grid). Counted in floating point: an extent
-        // of 1e19 cells must not wrap around in `usize`.
-        let max_cells = (4 * n + 16) as f64;
-        let cells = |e: f64, h: f64| (e / h).floor() + 1.0;
-        loop {
-            let (fx, fy) = (cells(ext.x, h), cells(ext.y, h));
-            if fx.is_finite() && fy.is_finite() && fx * fy <= max_cells {
-                self.nx = fx as usize;
-                self.ny = fy as usize;
-                break;
-            }
-            if h >= f64::MAX / 2.0 {
-                // an infinite extent: one cell (every pair is tested)
-                self.nx = 1;
-                self.ny = 1;
-                break;
-            }
-            h *= 2.0;
-        }
-        self.h = h;
-        self.origin = lo;
+        let (lo, hi) = centre_bounds(&p.pos);
+        let spec = GridSpec::new(lo, hi, p.max_radius(), self.skin, n);
+        (self.origin, self.h, self.nx, self.ny) = (spec.origin, spec.h, spec.nx, spec.ny);
         let ncell = self.nx * self.ny;
-        let (nx, ny) = (self.nx, self.ny);
         self.cell_of.clear();
         self.cell_of
-            .par_extend(p.pos.par_iter().with_min_len(CHUNK).map(|q| {
-                let cx = (((q.x - lo.x) / h) as usize).min(nx - 1);
-                let cy = (((q.y - lo.y) / h) as usize).min(ny - 1);
-                (cy * nx + cx) as u32
-            }));
+            .par_extend(p.pos.par_iter().with_min_len(CHUNK).map(|&q| spec.cell(q)));
         self.cell_start.clear();
         self.cell_start.resize(ncell + 1, 0);
         for &c in &self.cell_of {
@@ -479,14 +575,28 @@ impl NeighbourGrid {
     /// row inside a strip): a disc's neighbours in the cell rows above and
     /// below are then a few dozen slots away instead of a whole grid row,
     /// which keeps the contact kernel's reads of disc j in L1/L2.
-    fn strip_order(&self) -> Vec<u32> {
+    ///
+    /// Inside a cell the discs go by id: the order is that of
+    /// [`GridSpec::key`], which depends on each disc alone (not on the
+    /// order before), so the parts of a decomposed assembly agree on it.
+    fn strip_order(&self, id: &[u32]) -> Vec<u32> {
         let mut order = Vec::with_capacity(self.cell_items.len());
         for x0 in (0..self.nx).step_by(STRIP) {
             for cy in 0..self.ny {
                 for cx in x0..(x0 + STRIP).min(self.nx) {
                     let c = cy * self.nx + cx;
                     let (a, b) = (self.cell_start[c] as usize, self.cell_start[c + 1] as usize);
+                    let at = order.len();
                     order.extend_from_slice(&self.cell_items[a..b]);
+                    // a few discs per cell: insertion sort by id
+                    let cell = &mut order[at..];
+                    for x in 1..cell.len() {
+                        let mut y = x;
+                        while y > 0 && id[cell[y - 1] as usize] > id[cell[y] as usize] {
+                            cell.swap(y - 1, y);
+                            y -= 1;
+                        }
+                    }
                 }
             }
         }
@@ -505,7 +615,7 @@ impl NeighbourGrid {
         list.cross_roll = Vec::new();
         self.bin(p);
         if self.reorder_every > 0 && self.rebuilds.is_multiple_of(self.reorder_every) {
-            let order = self.strip_order();
+            let order = self.strip_order(&p.id);
             let new_of_old = p.permute(&order);
             drop(order);
             list.renumber(&new_of_old);
@@ -542,6 +652,7 @@ impl NeighbourGrid {
                     let pi = p.pos[i];
                     let ri = p.radius[i];
                     let ci = p.clump[i];
+                    let ghost = p.fixity[i] & GHOST != 0;
                     let cell = self.cell_of[i] as isize;
                     let (cx, cy) = (cell % nx, cell / nx);
                     for yy in (cy - 1).max(0)..=(cy + 1).min(ny - 1) {
@@ -549,9 +660,10 @@ impl NeighbourGrid {
                             let cc = (yy * nx + xx) as usize;
                             let (a, b) = (self.cell_start[cc], self.cell_start[cc + 1]);
                             for &j in &self.cell_items[a as usize..b as usize] {
-                                // no contacts within a clump
+                                // no contacts within a clump, none between ghosts
                                 if (j as usize) <= i
                                     || (ci != NO_CLUMP && p.clump[j as usize] == ci)
+                                    || ghost && p.fixity[j as usize] & GHOST != 0
                                 {
                                     continue;
                                 }
@@ -668,6 +780,9 @@ impl NeighbourGrid {
                 let mut o = old.partition_point(|q| (q.disc as usize) < lo);
                 let mut out = Vec::new();
                 for d in lo..hi {
+                    if p.fixity[d] & GHOST != 0 {
+                        continue;
+                    }
                     let (q, r) = (p.pos[d], p.radius[d]);
                     for (w, wall) in walls.iter().enumerate() {
                         let (blo, bhi) = boxes[w];

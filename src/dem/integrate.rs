@@ -3,7 +3,7 @@
 //! `ü = ΣF/m + g`, `θ̈ = ΣM/I` (no Δt factor).
 
 use super::BodyDamping;
-use super::particles::{FIX_ROT, FIX_X, FIX_Y, Particles};
+use super::particles::{FIX_ROT, FIX_X, FIX_Y, GHOST, Particles};
 use crate::geom::Vec2;
 use rayon::prelude::*;
 
@@ -110,6 +110,9 @@ pub fn central_difference(
         .map(|(c, (pos, vel, th, om, f, tq, im, ii, fx))| {
             let mut m2 = 0.0f64;
             for k in 0..pos.len() {
+                if fx[k] & GHOST != 0 {
+                    continue;
+                }
                 advance(
                     &mut pos[k],
                     &mut vel[k],

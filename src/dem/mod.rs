@@ -101,6 +101,25 @@ pub struct WallContact {
     pub total: f64,
 }
 
+/// What one disc–wall pair adds to its wall's totals
+/// ([`Granular::wall_terms`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct WallTerm {
+    /// Slot of the disc.
+    pub disc: u32,
+    /// Index of the wall.
+    pub wall: u32,
+    /// Contact force on the disc (the wall gets its opposite).
+    pub f: Vec2,
+    /// The disc touches a wall that follows the state (servo, strain
+    /// rate): it counts in the wall's contacts, stiffness and damping.
+    pub counted: bool,
+    /// The pair's `k_n` (when counted).
+    pub kn: f64,
+    /// The pair's normal dashpot `c_n` (when counted).
+    pub cn: f64,
+}
+
 /// The disc check done inside [`Granular::step`] (no extra pass over the
 /// discs): at which step, with which bound, and whether every disc passed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -272,6 +291,49 @@ impl Granular {
         Ok(c)
     }
 
+    /// An assembly with the same materials, laws, walls, damping, clock,
+    /// Verlet skin and rebuild count, holding `particles` instead (one part
+    /// of a decomposed assembly): its contact list is built at its first
+    /// step; it keeps no displacement reference
+    /// ([`displacement`](Self::displacement) is not available).
+    pub fn with_discs(&self, particles: Particles) -> Granular {
+        Granular {
+            particles,
+            // bonded and clumped assemblies are not decomposed
+            bonds: Bonds::default(),
+            clumps: Default::default(),
+            walls: self.walls.clone(),
+            materials: self.materials.clone(),
+            laws: self.laws.clone(),
+            wall_laws: self.wall_laws.clone(),
+            dash: self.dash.clone(),
+            damping: self.damping,
+            gravity: self.gravity,
+            thickness: self.thickness,
+            dt: self.dt,
+            step: self.step,
+            time: self.time,
+            contacts: ContactList {
+                rolling: self.contacts.rolling,
+                needs_mass: self.contacts.needs_mass,
+                ..Default::default()
+            },
+            grid: {
+                let mut grid = NeighbourGrid::new(self.grid.skin);
+                grid.reorder_every = self.grid.reorder_every;
+                grid.rebuilds = self.grid.rebuilds;
+                grid.wall_ref = self.grid.wall_ref.clone();
+                grid
+            },
+            max_disp: self.max_disp,
+            store_forces: self.store_forces,
+            external: Vec::new(),
+            check_radii: self.check_radii,
+            last_check: None,
+            start: Vec::new(),
+        }
+    }
+
     /// Displacement of the disc in `slot` since the assembly was made (for a
     /// scenario: since t = 0, after any preparation).
     pub fn displacement(&self, slot: usize) -> Vec2 {
@@ -439,16 +501,35 @@ impl Granular {
             self.last_check = None;
             return;
         }
+        let bad = self.advance_discs();
+        self.wall_totals();
+        self.finish_step(!bad);
+    }
+
+    /// The discs' part of [`step`](Self::step): the contact list prepared,
+    /// every contact evaluated and every disc advanced in one sweep
+    /// (`max_disp` set). Returns whether some disc failed the step check
+    /// ([`step_check`](Self::step_check)). The walls' totals and motion
+    /// follow: [`wall_totals`](Self::wall_totals) (or
+    /// [`set_wall_totals`](Self::set_wall_totals)), then
+    /// [`finish_step`](Self::finish_step).
+    pub fn advance_discs(&mut self) -> bool {
         self.prepare_contacts();
         let (max_disp, bad) = self.sweep::<true>();
         self.max_disp = max_disp;
         self.external.clear();
-        self.wall_totals();
+        bad
+    }
+
+    /// The end of [`step`](Self::step): the walls move, the clock
+    /// advances, and the step check is recorded (`clean`: every disc
+    /// passed it).
+    pub fn finish_step(&mut self, clean: bool) {
         self.move_walls();
         self.last_check = Some(StepCheck {
             step: self.step,
             radii_per_step: self.check_radii,
-            clean: !bad,
+            clean,
         });
     }
 
@@ -552,24 +633,58 @@ impl Granular {
     /// the fixed order of the wall-pair list; for servo and strain-rate
     /// walls also the number of discs touching it, their `Σ k_n` and
     /// `Σ c_n` (the servo's stiffness and damping).
-    fn wall_totals(&mut self) {
+    pub fn wall_totals(&mut self) {
+        let terms: Vec<WallTerm> = self.wall_terms().collect();
+        self.set_wall_totals(&terms);
+    }
+
+    /// What each disc–wall pair of the present step adds to its wall's
+    /// totals, in list order (by disc slot, then wall).
+    pub fn wall_terms(&self) -> impl Iterator<Item = WallTerm> + '_ {
+        let nm = self.materials.len();
+        let p = &self.particles;
+        self.contacts
+            .walls
+            .iter()
+            .zip(&self.contacts.wall_buf)
+            .map(move |(q, cf)| {
+                let (wi, d) = (q.wall as usize, q.disc as usize);
+                let counted = cf.f != Vec2::ZERO && self.walls[wi].motion.follows_state();
+                let (kn, cn) = if counted {
+                    let law = &self.wall_laws[wi * nm + p.material[d] as usize];
+                    (law.kn, law.dashpots(effective_mass(p.inv_mass[d], 0.0)).0)
+                } else {
+                    (0.0, 0.0)
+                };
+                WallTerm {
+                    disc: q.disc,
+                    wall: q.wall,
+                    f: cf.f,
+                    counted,
+                    kn,
+                    cn,
+                }
+            })
+    }
+
+    /// Set each wall's totals from `terms` `(wall, term)`, summed in the
+    /// order given ([`wall_totals`](Self::wall_totals) gives them in list
+    /// order; the parts of a decomposed assembly merge theirs into the
+    /// same order).
+    pub fn set_wall_totals<'a>(&mut self, terms: impl IntoIterator<Item = &'a WallTerm>) {
         for w in &mut self.walls {
             w.force = Vec2::ZERO;
             w.contacts = 0;
             w.stiffness = 0.0;
             w.damping = 0.0;
         }
-        let nm = self.materials.len();
-        let p = &self.particles;
-        for (q, cf) in self.contacts.walls.iter().zip(&self.contacts.wall_buf) {
-            let (wi, d) = (q.wall as usize, q.disc as usize);
-            let w = &mut self.walls[wi];
-            w.force -= cf.f;
-            if cf.f != Vec2::ZERO && w.motion.follows_state() {
-                let law = &self.wall_laws[wi * nm + p.material[d] as usize];
+        for t in terms {
+            let w = &mut self.walls[t.wall as usize];
+            w.force -= t.f;
+            if t.counted {
                 w.contacts += 1;
-                w.stiffness += law.kn;
-                w.damping += law.dashpots(effective_mass(p.inv_mass[d], 0.0)).0;
+                w.stiffness += t.kn;
+                w.damping += t.cn;
             }
         }
     }

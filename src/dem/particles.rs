@@ -15,6 +15,12 @@ pub const FIX_X: u8 = 1;
 pub const FIX_Y: u8 = 2;
 /// Fixity flag: the spin is prescribed (rotation locked when it is zero).
 pub const FIX_ROT: u8 = 4;
+/// Flag: the slot holds a *ghost*, a copy of a disc that another part of
+/// a decomposed assembly advances. Its contacts with the other discs are
+/// evaluated (for their sake) but it is not advanced, takes no part in
+/// the displacement and stability checks, has no wall contacts, and two
+/// ghosts are never paired.
+pub const GHOST: u8 = 8;
 
 /// The discs of a granular assembly.
 #[derive(Debug, Clone, Default)]

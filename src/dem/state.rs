@@ -46,6 +46,18 @@ pub struct WallState {
     pub integral: f64,
 }
 
+impl From<&super::walls::Wall> for WallState {
+    fn from(w: &super::walls::Wall) -> WallState {
+        WallState {
+            a: w.a,
+            b: w.b,
+            vel: w.vel,
+            force: w.force,
+            integral: w.integral,
+        }
+    }
+}
+
 /// A disc–wall pair with its histories (as [`WallPair`]).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WallPairState {
@@ -146,17 +158,7 @@ impl Granular {
             omega: p.omega.clone(),
             force: p.force.clone(),
             torque: p.torque.clone(),
-            walls: self
-                .walls
-                .iter()
-                .map(|w| WallState {
-                    a: w.a,
-                    b: w.b,
-                    vel: w.vel,
-                    force: w.force,
-                    integral: w.integral,
-                })
-                .collect(),
+            walls: self.walls.iter().map(WallState::from).collect(),
             pairs: c.pairs().map(|(i, j)| [i as u32, j as u32]).collect(),
             shear: c.shear.clone(),
             rolling: c.rolling,

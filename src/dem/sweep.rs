@@ -25,7 +25,7 @@ use super::bonds::BondForce;
 use super::broadphase::{ContactList, WallPair};
 use super::contact::{self, ContactForce, ContactLaw, Side, effective_mass};
 use super::integrate;
-use super::particles::Particles;
+use super::particles::{GHOST, Particles};
 use super::walls::Wall;
 use super::{BodyDamping, Granular};
 use crate::geom::Vec2;
@@ -761,7 +761,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             force[d] = sf;
             torque[d] = tq;
         }
-        if ADVANCE {
+        if ADVANCE && fixity[d] & GHOST == 0 {
             integrate::advance(
                 &mut pos[d],
                 &mut vel[d],

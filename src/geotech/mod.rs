@@ -31,22 +31,76 @@ pub struct Options {
     pub bins: usize,
     /// Measurement bands of the grains (floor to surface).
     pub bands: usize,
+    /// Average only states at rest ([`Rest`]); `None`: every state from
+    /// `average_from` to the end.
+    pub rest: Option<Rest>,
 }
 
-/// Run `model` to `end_time` and call `sample(model, grains, coupling)` on
-/// every `opts.every`-th step from `opts.average_from` on; `progress(t)`
-/// every 1000 steps. Stops at the first error of `sample`. Returns the
-/// number of states sampled.
+/// A window of states at rest. A granular fill re-settles now and then (a
+/// grain toppling off the surface, an arch in a silo giving way, a slip of
+/// the backfill): averages meant for a fill at rest (Janssen, Jaky, the
+/// weight balance) take a window of `window` seconds in which the grains'
+/// momentum stays within `|Σ m v| ≤ balance · W · window / 2` (`W` their
+/// weight) at every state sampled; a state beyond it restarts the window.
+/// Over such a window the grains' momentum changes by at most
+/// `balance · W · window`, so the averaged forces on the grains balance
+/// their weight to `balance` (Newton's second law), whatever moved before.
+/// The run ends with the window (or fails at `end_time` without one).
+#[derive(Debug, Clone, Copy)]
+pub struct Rest {
+    /// Length of the window (s).
+    pub window: f64,
+    /// The momentum bound as a fraction of the weight's impulse over the
+    /// window (see above).
+    pub balance: f64,
+}
+
+/// The states a driver averaged: how many, from and to which time.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Window {
+    /// States averaged.
+    pub samples: usize,
+    /// Time of the first (s).
+    pub from: f64,
+    /// Time of the last (s).
+    pub to: f64,
+}
+
+/// Is the grains' momentum within `rest`'s bound?
+fn at_rest(g: &Granular, rest: &Rest) -> bool {
+    let p = &g.particles;
+    let (mut px, mut py, mut mass) = (0.0, 0.0, 0.0);
+    for (m, v) in p.mass.iter().zip(&p.vel) {
+        px += m * v.x;
+        py += m * v.y;
+        mass += m;
+    }
+    let weight = mass * g.gravity.norm();
+    px.hypot(py) <= 0.5 * rest.balance * weight * rest.window
+}
+
+/// Run `model` to `end_time` and call `sample(model, grains, coupling,
+/// fresh)` on every `opts.every`-th step from `opts.average_from` on
+/// (with `opts.rest`: on the states of a window at rest, `fresh` at the
+/// first state of each window tried: the caller starts its averages
+/// again); `progress(t)` every 1000 steps. Stops at the first error of
+/// `sample`. Returns the window averaged.
 pub fn sample_until(
     model: &mut Model,
     end_time: f64,
     opts: &Options,
     mut progress: impl FnMut(f64),
-    mut sample: impl FnMut(&Model, &Granular, &CoupledModel) -> Result<(), String>,
-) -> Result<usize, String> {
+    mut sample: impl FnMut(&Model, &Granular, &CoupledModel, bool) -> Result<(), String>,
+) -> Result<Window, String> {
     let every = opts.every.max(1);
-    let (mut step, mut n) = (0usize, 0usize);
+    let mut step = 0usize;
+    let mut win = Window {
+        samples: 0,
+        from: f64::NAN,
+        to: f64::NAN,
+    };
     let mut err = None;
+    let mut full = false;
     model
         .run_until(end_time, |m| {
             step += 1;
@@ -56,25 +110,42 @@ pub fn sample_until(
             if m.time() < opts.average_from || !step.is_multiple_of(every) {
                 return ControlFlow::Continue(());
             }
-            let result = match (m.granular(), m.coupled()) {
-                (Some(g), Some(c)) => sample(m, g, c),
-                _ => Err("not a coupled run with grains".to_string()),
+            let (Some(g), Some(c)) = (m.granular(), m.coupled()) else {
+                err = Some("not a coupled run with grains".to_string());
+                return ControlFlow::Break(());
             };
-            match result {
-                Ok(()) => {
-                    n += 1;
-                    ControlFlow::Continue(())
-                }
-                Err(e) => {
-                    err = Some(e);
-                    ControlFlow::Break(())
-                }
+            if opts.rest.is_some_and(|r| !at_rest(g, &r)) {
+                // the grains move: the window starts again
+                win.samples = 0;
+                return ControlFlow::Continue(());
+            }
+            let fresh = win.samples == 0;
+            if fresh {
+                win.from = m.time();
+            }
+            if let Err(e) = sample(m, g, c, fresh) {
+                err = Some(e);
+                return ControlFlow::Break(());
+            }
+            win.samples += 1;
+            win.to = m.time();
+            full = opts.rest.is_some_and(|r| win.to - win.from >= r.window);
+            if full {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
             }
         })
         .map_err(|e| e.to_string())?;
-    match err {
-        Some(e) => Err(e),
-        None => Ok(n),
+    if let Some(e) = err {
+        return Err(e);
+    }
+    match opts.rest {
+        Some(r) if !full => Err(format!(
+            "the grains were not at rest for {} s before t = {end_time} s (their momentum within {} of their weight's impulse)",
+            r.window, r.balance
+        )),
+        _ => Ok(win),
     }
 }
 

@@ -8,7 +8,8 @@
 //! against its right edge) and grains to its right.
 //!
 //! **What is measured** ([`run`]), averaged over the states every
-//! `every` steps from `average_from` to the end:
+//! `every` steps from `average_from` to the end (or, with
+//! [`Options::rest`], over a window of states at rest):
 //! - the earth pressure σ_h and shear τ per height bin on the wall's right
 //!   face ([`EdgeTraction`]), the thrust `P = Σ σ_h Δy t` and its height;
 //! - the wall's deflection at the top of its centre line relative to
@@ -31,7 +32,7 @@
 //! `κGA = 5/6 G h` (plane strain: `E' = E/(1 − ν²)`).
 
 pub use super::Options;
-use super::{BandMean, Bands, grain_density, sample_until, surface};
+use super::{BandMean, Bands, Window, grain_density, sample_until, surface};
 use crate::continuum::cantilever::{LoadBin, tip_deflection};
 use crate::continuum::{Edge, Plane};
 use crate::geom::Vec2;
@@ -156,8 +157,8 @@ pub struct WallResult {
     pub surface: f64,
     /// Backfill height H (surface − base).
     pub height: f64,
-    /// States averaged.
-    pub samples: usize,
+    /// The states averaged.
+    pub window: Window,
     /// Mean kinetic energy of the grains over the window (J).
     pub kinetic: f64,
     /// The face's profile (bottom to top).
@@ -193,6 +194,11 @@ pub struct WallResult {
     /// Largest |u_x(top)| change over the window relative to its mean
     /// (quasi-static check).
     pub deflection_spread: f64,
+    /// Change of the mean `u_x(top)` from the first to the second half of
+    /// the window relative to its mean: a wall still moving (its load
+    /// still changing) drifts, one at rest only fluctuates about its mean
+    /// (a grain's impact moves single states, not the halves' means).
+    pub deflection_drift: f64,
 }
 
 /// Run the scenario `sc` to its end time, averaging as `opts` says;
@@ -210,7 +216,14 @@ pub fn run(sc: &Scenario, opts: &Options, progress: impl FnMut(f64)) -> Result<W
     let mut ux = vec![];
     let mut ux_base = 0.0;
     let height = w.y.1 - w.y.0;
-    let n = sample_until(&mut model, w.end_time, opts, progress, |m, g, c| {
+    let win = sample_until(&mut model, w.end_time, opts, progress, |m, g, c, fresh| {
+        if fresh {
+            // a window (again): everything averaged from here
+            face.reset();
+            bands = None;
+            (kin, ux_base) = (0.0, 0.0);
+            ux.clear();
+        }
         let b = bands.get_or_insert_with(|| {
             // the backfill away from the wall: from one wall height
             // beside it (or its middle third if it is narrower)
@@ -262,12 +275,15 @@ pub fn run(sc: &Scenario, opts: &Options, progress: impl FnMut(f64)) -> Result<W
     let (bend, shear) = tip_deflection(height, &loads, w.ei, w.kga);
     let mean_ux = ux.iter().sum::<f64>() / ux.len() as f64;
     let spread = ux.iter().fold(0.0f64, |a, u| a.max((u - mean_ux).abs())) / mean_ux.abs();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let (first, second) = ux.split_at(ux.len() / 2);
+    let drift = (mean(second) - mean(first)).abs() / mean_ux.abs();
     let beam = [-bend, -shear];
     Ok(WallResult {
         surface: surf,
         height: h,
-        samples: n,
-        kinetic: kin / n as f64,
+        window: win,
+        kinetic: kin / win.samples as f64,
         bands: means.clone(),
         porosity,
         rho_b,
@@ -277,10 +293,11 @@ pub fn run(sc: &Scenario, opts: &Options, progress: impl FnMut(f64)) -> Result<W
         k_wall: thrust / (0.5 * rho_b * w.g * h * h * w.thickness),
         k_bands,
         deflection: mean_ux,
-        base_displacement: ux_base / n as f64,
+        base_displacement: ux_base / win.samples as f64,
         beam,
         beam_error: mean_ux / (beam[0] + beam[1]) - 1.0,
         deflection_spread: spread,
+        deflection_drift: drift,
         profile,
     })
 }

@@ -8,7 +8,8 @@
 //! silo width `W = x1 − x0`.
 //!
 //! **What is measured** ([`run`]), averaged over the states every
-//! `every` steps from `average_from` to the end:
+//! `every` steps from `average_from` to the end (or, with
+//! [`Options::rest`], over a window of states at rest):
 //! - the wall tractions `σ_h` (normal) and `τ` (shear, +y) per depth bin
 //!   on both inner faces ([`EdgeTraction`]);
 //! - the mobilised wall friction `μ_w = −Σ τ / Σ σ_h` over both walls
@@ -39,7 +40,7 @@
 //! error and the scatter between fills) with Janssen's curve.
 
 pub use super::Options;
-use super::{BandMean, Bands, grain_density, sample_until, surface, weight};
+use super::{BandMean, Bands, Window, grain_density, sample_until, surface, weight};
 use crate::continuum::Edge;
 use crate::model::probe::{global_quantity, wall_quantity};
 use crate::model::traction::{EdgeTraction, TractionBin};
@@ -151,8 +152,8 @@ pub struct SiloResult {
     pub surface: f64,
     /// Fill height (surface − floor) over W.
     pub height_over_width: f64,
-    /// States averaged.
-    pub samples: usize,
+    /// The states averaged.
+    pub window: Window,
     /// Mean kinetic energy of the grains over the window (J).
     pub kinetic: f64,
     /// Left wall's profile (bottom to top).
@@ -227,22 +228,35 @@ pub fn run(sc: &Scenario, opts: &Options, progress: impl FnMut(f64)) -> Result<S
     let mut surf = f64::NAN;
     let (mut floor, mut kin) = (0.0, 0.0);
     let t_disc = sc.granular.as_ref().map_or(1.0, |g| g.thickness);
-    let n = sample_until(&mut model, silo.end_time, opts, progress, |m, g, c| {
-        let b = bands.get_or_insert_with(|| {
-            surf = surface(g, silo.x0, silo.x1, 8);
-            Bands::new(silo.x0, silo.x1, y0, surf, opts.bands)
-        });
-        b.add(m);
-        left.add(&c.contacts);
-        right.add(&c.contacts);
-        floor += -wall_quantity(&g.walls[silo.floor], "wall_fy", t_disc);
-        kin += global_quantity(g, "kinetic");
-        Ok(())
-    })?;
+    let win = sample_until(
+        &mut model,
+        silo.end_time,
+        opts,
+        progress,
+        |m, g, c, fresh| {
+            if fresh {
+                // a window (again): everything averaged from here
+                left.reset();
+                right.reset();
+                bands = None;
+                (floor, kin) = (0.0, 0.0);
+            }
+            let b = bands.get_or_insert_with(|| {
+                surf = surface(g, silo.x0, silo.x1, 8);
+                Bands::new(silo.x0, silo.x1, y0, surf, opts.bands)
+            });
+            b.add(m);
+            left.add(&c.contacts);
+            right.add(&c.contacts);
+            floor += -wall_quantity(&g.walls[silo.floor], "wall_fy", t_disc);
+            kin += global_quantity(g, "kinetic");
+            Ok(())
+        },
+    )?;
     let bands = bands.ok_or("no state in the averaging window")?;
     let g = model.granular().ok_or("no grains")?;
     let weight = weight(g, sc.simulation.gravity);
-    let per = 1.0 / n as f64;
+    let per = 1.0 / win.samples as f64;
     let means = bands.means();
     let bulk = &means[..means.len().saturating_sub(1).max(1)];
     let porosity = bulk.iter().map(|b| b.porosity).sum::<f64>() / bulk.len() as f64;
@@ -290,7 +304,7 @@ pub fn run(sc: &Scenario, opts: &Options, progress: impl FnMut(f64)) -> Result<S
         width: w,
         surface: surf,
         height_over_width: (surf - y0) / w,
-        samples: n,
+        window: win,
         kinetic: kin * per,
         left: pl,
         right: pr,
@@ -695,7 +709,11 @@ mod tests {
             width: 0.04,
             surface,
             height_over_width: surface / 0.04,
-            samples: 10,
+            window: Window {
+                samples: 10,
+                from: 0.0,
+                to: 0.0,
+            },
             kinetic: 0.0,
             left: bins(0),
             right: bins(1),

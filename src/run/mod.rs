@@ -7,9 +7,11 @@ mod coupled;
 mod granular;
 pub mod memory;
 pub mod progress;
+mod ranks;
 pub mod recap;
 mod session;
 
+use crate::decomp::{Comm, Solo};
 use crate::model::{Model, ModelError, System};
 use crate::scenario::prepare::{Bed, PrepareError, prepare};
 use crate::scenario::{Scenario, ScenarioError, build};
@@ -127,6 +129,16 @@ pub enum RunError {
         /// Steps of the whole preparation.
         steps: usize,
     },
+    /// The scenario cannot run on several ranks (exit code 2).
+    #[error("{0}")]
+    Ranks(String),
+    /// On a rank other than 0 of a run on several ranks: rank 0 failed
+    /// (and said why) with this exit code.
+    #[error("rank 0 failed (exit code {code})")]
+    OnRank0 {
+        /// Rank 0's exit code.
+        code: u8,
+    },
     /// A checkpoint cannot be used to restart this scenario (exit code 2).
     #[error("cannot restart from {}: {message}", path.display())]
     Restart {
@@ -154,6 +166,7 @@ impl RunError {
             | RunError::NotEmpty(_)
             | RunError::Busy { .. }
             | RunError::Restart { .. }
+            | RunError::Ranks(_)
             | RunError::Model(ModelError::State(_) | ModelError::Static | ModelError::Usage(_)) => {
                 2
             }
@@ -161,6 +174,7 @@ impl RunError {
             RunError::Model(_) => 3,
             RunError::Interrupted { signal, .. }
             | RunError::InterruptedPreparing { signal, .. } => 128 + (*signal as u8 & 0x7f),
+            RunError::OnRank0 { code } => *code,
         }
     }
 }
@@ -207,10 +221,28 @@ pub fn worker_threads(requested: usize) -> (usize, Option<String>) {
 /// packing's preparation (deposit, growth) is shown with its step count
 /// and ETA, and stopped by a stop request.
 pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
-    let _held = session::prepare_out_dir(opts)?;
+    run_on(sc, opts, Arc::new(Solo))
+}
+
+/// [`run`] on the ranks of `comm`: every rank calls it with the same
+/// scenario and options. On one rank it is [`run`]; on several, a granular
+/// scenario is divided over them ([`crate::decomp`]) with outputs bitwise
+/// those of one rank, written by rank 0 (which returns the summary; the
+/// others return `Null`, or [`RunError::OnRank0`] when rank 0 failed).
+/// Continuum and coupled scenarios are refused on several ranks.
+pub fn run_on(
+    sc: &Scenario,
+    opts: &RunOptions,
+    comm: Arc<dyn Comm>,
+) -> Result<serde_json::Value, RunError> {
+    let (root, ranks) = (comm.rank() == 0, comm.size());
+    // rank 0 writes the files: it holds the output directory
+    let prepared = root.then(|| session::prepare_out_dir(opts)).transpose();
+    let _held = ranks::agree(&*comm, prepared)?;
     let t0 = Instant::now();
-    let bed = prepare_packing(sc, opts)?;
-    let spin = progress::spinner("building the model", opts.quiet);
+    // every rank prepares the same packing (it is deterministic)
+    let bed = prepare_packing(sc, opts, opts.quiet || !root)?;
+    let spin = progress::spinner("building the model", opts.quiet || !root);
     let mut model = match &bed {
         Some(b) => sc.build_prepared(&b.rows)?,
         None => sc.build()?,
@@ -242,6 +274,13 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
         removed,
     };
     let result = match model.system {
+        System::Granular(ref g) if ranks > 1 && g.bonds.active() => Err(RunError::Ranks(
+            "bonded discs ([bonds]) do not run on several ranks yet: run this scenario with one process".into(),
+        )),
+        System::Granular(_) if ranks > 1 => ranks::run(run, model, comm),
+        _ if ranks > 1 => Err(RunError::Ranks(format!(
+            "only granular scenarios (discs and walls) run on several ranks; this one has continuum bodies: run it with one process (not under mpirun -np {ranks})"
+        ))),
         System::Continuum { .. } => continuum::run(run, model),
         System::Granular(_) => granular::run(run, model),
         System::Coupled(_) => coupled::run(run, model),
@@ -262,7 +301,7 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
 /// The scenario's packing preparation, if any: read from its cache, or
 /// stepped with a progress bar (steps, ETA) that a stop request ends
 /// within a step — `summary.json` then records the interruption.
-fn prepare_packing(sc: &Scenario, opts: &RunOptions) -> Result<Option<Bed>, RunError> {
+fn prepare_packing(sc: &Scenario, opts: &RunOptions, quiet: bool) -> Result<Option<Bed>, RunError> {
     let Some(prep) = build::preparation(sc) else {
         return Ok(None);
     };
@@ -277,10 +316,8 @@ fn prepare_packing(sc: &Scenario, opts: &RunOptions) -> Result<Option<Bed>, RunE
     let stop = opts.stop.clone();
     let signal = || stop.as_ref().map_or(0, |s| s.load(Ordering::Relaxed));
     let result = prepare(sc, &mut |step| {
-        bar.get_or_insert_with(|| {
-            progress::Progress::labelled(prep.what(), prep.steps, opts.quiet)
-        })
-        .update(step, f64::NAN);
+        bar.get_or_insert_with(|| progress::Progress::labelled(prep.what(), prep.steps, quiet))
+            .update(step, f64::NAN);
         signal() == 0
     });
     if let Some(b) = &bar {
@@ -294,7 +331,7 @@ fn prepare_packing(sc: &Scenario, opts: &RunOptions) -> Result<Option<Bed>, RunE
                 );
             }
             if let Some(b) = &bed
-                && !opts.quiet
+                && !quiet
             {
                 let n = b.rows.len();
                 match (&b.read_from, &b.written_to) {

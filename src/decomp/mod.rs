@@ -1,0 +1,893 @@
+//! Domain decomposition of a granular assembly over ranks (processes that
+//! talk through a [`Comm`], e.g. MPI), with results bitwise equal to the
+//! undivided assembly on any number of ranks.
+//!
+//! Each rank holds a [`Decomposed`]: a plain [`Granular`] (its *part*)
+//! with the discs whose centres lie in its region ([`regions`]) and the
+//! *ghosts*, copies of the discs of other ranks within reach of its region
+//! ([`GHOST`]). The physics runs unchanged on the part; this layer keeps
+//! the parts consistent:
+//!
+//! - **Ghosts** carry what the contact law needs (position, velocity,
+//!   spin, radius, masses, material) and are refreshed every step from
+//!   their owners (position, velocity, spin).
+//! - **The same sums as the whole.** The undivided sweep evaluates a pair
+//!   with its lower slot first and sums each disc's contacts by ascending
+//!   slot of the other disc. A part keeps its discs (ghosts included) in
+//!   the order of a global *key* — the slot order of the whole — so that a
+//!   pair crossing two regions is evaluated on both ranks with the same
+//!   operands in the same orientation, and each disc sums the same terms
+//!   in the same order. Keys are the renumbering's order
+//!   ([`GridSpec::key`]: cell in strip order, then id), which each owner
+//!   computes alone from a grid agreed by all ranks.
+//! - **Global decisions globally.** The rebuild of the contact list (the
+//!   largest displacement, a maximum: exact in any order), the step check,
+//!   and the totals of the walls that follow the state (servo, strain
+//!   rate), whose terms are merged from all ranks in key order and summed
+//!   as the whole sums them.
+//! - **Migration.** At each rebuild the discs that left a region move to
+//!   their new owner with everything they carry: their state, the shear
+//!   and rolling histories of their disc–disc pairs (keyed by disc ids)
+//!   and of their wall pairs. The regions are cut again when the disc
+//!   counts drift apart by more than [`Decomposed::balance_threshold`].
+//! - **One state.** [`Decomposed::gather`] assembles on rank 0 the
+//!   [`GranularState`] the undivided assembly would have (discs in slot
+//!   order, sorted pair list, histories, walls): outputs and checkpoints
+//!   are made from it, and a checkpoint restarts on any number of ranks
+//!   ([`Decomposed::new`] splits a whole assembly).
+
+pub mod comm;
+#[cfg(feature = "mpi")]
+pub mod mpi;
+pub mod regions;
+
+use crate::dem::Granular;
+use crate::dem::broadphase::{GridSpec, WallPair, centre_bounds};
+use crate::dem::particles::{GHOST, Particles};
+use crate::dem::state::{GranularState, WallPairState, WallState};
+use crate::geom::Vec2;
+pub use comm::{Comm, Solo, Threads, Traffic};
+use comm::{Pack, Unpack};
+use regions::Subdomains;
+use std::sync::Arc;
+
+const GONE: u32 = u32::MAX;
+/// Centres per rank sent to cut the regions (a sample when there are more).
+const SAMPLE: usize = 50_000;
+
+/// One rank's share of a decomposed granular assembly ([module docs](self)).
+pub struct Decomposed {
+    /// This rank's discs and ghosts, in key order (see the module docs).
+    pub part: Granular,
+    comm: Arc<dyn Comm>,
+    /// Key of the disc in each slot of `part`.
+    key: Vec<u64>,
+    regions: Subdomains,
+    /// Discs of the whole assembly.
+    n_total: usize,
+    /// Largest radius of the whole assembly.
+    max_radius: f64,
+    /// The whole assembly's renumbering period (the part never renumbers
+    /// by itself).
+    reorder_every: usize,
+    /// Recut the regions at a rebuild when the largest disc count exceeds
+    /// the mean by more than this fraction (default 0.1).
+    pub balance_threshold: f64,
+    /// Largest disc count over the mean, minus one, at the last rebuild
+    /// (after any recut).
+    pub imbalance: f64,
+    /// Times the regions were cut again.
+    pub recuts: usize,
+    /// Slots of this rank's discs whose ghosts each rank holds.
+    halo_send: Vec<(usize, Vec<u32>)>,
+    /// Slots of the ghosts each rank refreshes.
+    halo_recv: Vec<(usize, Vec<u32>)>,
+    /// Walls whose motion follows the state (their totals are global sums
+    /// every step).
+    follows: Vec<bool>,
+}
+
+/// Where a disc of a new part comes from.
+#[derive(Clone, Copy)]
+enum Src {
+    /// A slot of the present part.
+    Old(u32),
+    /// Record `k` received.
+    Got(u32),
+}
+
+/// A disc received from another rank.
+struct Record {
+    id: u32,
+    key: u64,
+    owned: bool,
+    pos: Vec2,
+    vel: Vec2,
+    theta: f64,
+    omega: f64,
+    radius: f64,
+    mass: f64,
+    inertia: f64,
+    inv_mass: f64,
+    inv_inertia: f64,
+    force: Vec2,
+    torque: f64,
+    fixity: u8,
+    material: u16,
+}
+
+impl Decomposed {
+    /// This rank's share of `whole` (an assembly every rank built the
+    /// same, fresh or restored from a state): regions cut from its discs,
+    /// the discs of this rank's region and their ghosts, the contact list
+    /// and histories of those discs.
+    pub fn new(whole: &Granular, comm: Arc<dyn Comm>) -> Decomposed {
+        let p = &whole.particles;
+        let n = p.len();
+        let regions = Subdomains::bisect(&sample(&p.pos, n), comm.size());
+        let me = comm.rank();
+        // since the last rebuild the discs moved by up to half the skin
+        // each: partners listed then are within reach + skin now
+        let width = reach(p.max_radius(), whole.grid.skin) + whole.grid.skin;
+        let owner: Vec<usize> = p.pos.iter().map(|&q| regions.owner(q)).collect();
+        let local: Vec<u32> = (0..n as u32)
+            .filter(|&s| {
+                owner[s as usize] == me || regions.regions[me].distance(p.pos[s as usize]) <= width
+            })
+            .collect();
+        let mut new_of_old = vec![GONE; n];
+        for (k, &s) in local.iter().enumerate() {
+            new_of_old[s as usize] = k as u32;
+        }
+        let sources: Vec<Src> = local.iter().map(|&s| Src::Old(s)).collect();
+        let mut particles = take_discs(p, &sources, &[], n);
+        for (k, &s) in local.iter().enumerate() {
+            if owner[s as usize] != me {
+                particles.fixity[k] |= GHOST;
+            }
+        }
+        let mut part = whole.with_discs(particles);
+        part.grid.reorder_every = 0;
+        part.grid.stale = whole.grid.stale;
+        part.max_disp = whole.max_disp;
+        if whole.grid.ref_pos.len() == n {
+            part.grid.ref_pos = local
+                .iter()
+                .map(|&s| whole.grid.ref_pos[s as usize])
+                .collect();
+        }
+        if whole.contacts.first.len() == n + 1 {
+            let mut list = whole.contacts.clone();
+            let mine = |s: u32| owner[s as usize] == me;
+            list.remap(&new_of_old, local.len(), &[], &[], |i, j| {
+                mine(i) || mine(j)
+            });
+            list.walls
+                .retain(|w| part.particles.fixity[w.disc as usize] & GHOST == 0);
+            list.wall_buf = vec![Default::default(); list.walls.len()];
+            list.finish(&part.particles);
+            part.contacts = list;
+        }
+        let follows = whole
+            .walls
+            .iter()
+            .map(|w| w.motion.follows_state())
+            .collect();
+        let mut d = Decomposed {
+            part,
+            comm,
+            key: local.iter().map(|&s| s as u64).collect(),
+            regions,
+            n_total: n,
+            max_radius: p.max_radius(),
+            reorder_every: whole.grid.reorder_every,
+            balance_threshold: 0.1,
+            imbalance: 0.0,
+            recuts: 0,
+            halo_send: Vec::new(),
+            halo_recv: Vec::new(),
+            follows,
+        };
+        d.index_halo(width);
+        d.imbalance = d.measure_imbalance(&d.owned_counts());
+        d
+    }
+
+    /// The communicator.
+    pub fn comm(&self) -> &dyn Comm {
+        &*self.comm
+    }
+
+    /// Discs of the whole assembly.
+    pub fn total(&self) -> usize {
+        self.n_total
+    }
+
+    /// Discs this rank owns (ghosts not counted).
+    pub fn owned(&self) -> usize {
+        self.part
+            .particles
+            .fixity
+            .iter()
+            .filter(|&&f| f & GHOST == 0)
+            .count()
+    }
+
+    /// Ghosts this rank holds.
+    pub fn ghosts(&self) -> usize {
+        self.part.particles.len() - self.owned()
+    }
+
+    /// Rebuild the contact list now if the whole assembly would
+    /// (collective): before the first record of a run.
+    pub fn prepare(&mut self) {
+        if self
+            .part
+            .grid
+            .needs_rebuild(self.part.max_disp, &self.part.walls)
+        {
+            self.rebuild();
+        }
+    }
+
+    /// One time step of the whole assembly (collective): ghosts refreshed
+    /// (or the list rebuilt with migration when the whole would rebuild
+    /// it), the part stepped, the global values agreed. `flag` is any
+    /// per-rank condition to be or-ed over the ranks (e.g. a stop
+    /// request). Returns whether every disc passed the step check, and the
+    /// flag of any rank.
+    pub fn step(&mut self, flag: bool) -> (bool, bool) {
+        if self
+            .part
+            .grid
+            .needs_rebuild(self.part.max_disp, &self.part.walls)
+        {
+            self.rebuild();
+        } else {
+            self.refresh_ghosts();
+        }
+        let bad = self.part.advance_discs();
+        let mut out = Pack::default();
+        // a rank without discs has no displacement (the sweep's infinity
+        // means "no reference")
+        out.f64(if self.part.particles.is_empty() {
+            0.0
+        } else {
+            self.part.max_disp
+        });
+        out.u8(bad as u8 | (flag as u8) << 1);
+        let terms: Vec<_> = self.part.wall_terms().collect();
+        for t in terms.iter().filter(|t| self.follows[t.wall as usize]) {
+            pack_term(&mut out, self.key[t.disc as usize], t);
+        }
+        let all = self.comm.all_gather(&out.0);
+        let (mut max_disp, mut bad, mut any) = (0.0f64, false, false);
+        let mut merged = Vec::new();
+        for b in &all {
+            let mut u = Unpack(b);
+            let m = u.f64();
+            // as the undivided sweep: a NaN displacement never wins
+            max_disp = max_disp.max(m);
+            let f = u.u8();
+            bad |= f & 1 != 0;
+            any |= f & 2 != 0;
+            while !u.is_empty() {
+                merged.push(unpack_term(&mut u));
+            }
+        }
+        self.part.max_disp = max_disp;
+        merged.sort_by_key(|(k, t)| (*k, t.wall));
+        let follows = &self.follows;
+        let others = terms.iter().filter(|t| !follows[t.wall as usize]);
+        self.part
+            .set_wall_totals(merged.iter().map(|(_, t)| t).chain(others));
+        self.part.finish_step(!bad);
+        (!bad, any)
+    }
+
+    /// Refresh every ghost from its owner: position, velocity, spin.
+    fn refresh_ghosts(&mut self) {
+        const B: usize = 40;
+        let p = &self.part.particles;
+        let sends: Vec<(usize, Vec<u8>)> = self
+            .halo_send
+            .iter()
+            .map(|(r, slots)| {
+                let mut b = Pack(Vec::with_capacity(slots.len() * B));
+                for &s in slots {
+                    let s = s as usize;
+                    b.vec2(p.pos[s]);
+                    b.vec2(p.vel[s]);
+                    b.f64(p.omega[s]);
+                }
+                (*r, b.0)
+            })
+            .collect();
+        let mut bufs: Vec<(usize, Vec<u8>)> = self
+            .halo_recv
+            .iter()
+            .map(|(r, slots)| (*r, vec![0u8; slots.len() * B]))
+            .collect();
+        {
+            let send: Vec<(usize, &[u8])> = sends.iter().map(|(r, b)| (*r, &b[..])).collect();
+            let mut recv: Vec<(usize, &mut [u8])> =
+                bufs.iter_mut().map(|(r, b)| (*r, &mut b[..])).collect();
+            self.comm.exchange(&send, &mut recv);
+        }
+        let p = &mut self.part.particles;
+        for ((_, slots), (_, b)) in self.halo_recv.iter().zip(&bufs) {
+            let mut u = Unpack(b);
+            for &s in slots {
+                let s = s as usize;
+                p.pos[s] = u.vec2();
+                p.vel[s] = u.vec2();
+                p.omega[s] = u.f64();
+            }
+        }
+    }
+
+    /// The halo lists from the present part: each owned disc (in slot
+    /// order) goes to the ranks whose region is within `width`, each ghost
+    /// comes from the owner of its position's region.
+    fn index_halo(&mut self, width: f64) {
+        let size = self.comm.size();
+        let me = self.comm.rank();
+        let mut send = vec![Vec::new(); size];
+        let mut recv = vec![Vec::new(); size];
+        let mut near = Vec::new();
+        let p = &self.part.particles;
+        for s in 0..p.len() {
+            if p.fixity[s] & GHOST != 0 {
+                recv[self.regions.owner(p.pos[s])].push(s as u32);
+            } else {
+                self.regions.near(p.pos[s], me, width, &mut near);
+                for &r in &near {
+                    send[r].push(s as u32);
+                }
+            }
+        }
+        let keep = |v: Vec<Vec<u32>>| {
+            v.into_iter()
+                .enumerate()
+                .filter(|(r, l)| *r != me && !l.is_empty())
+                .collect()
+        };
+        self.halo_send = keep(send);
+        self.halo_recv = keep(recv);
+    }
+
+    /// Owned discs of every rank (collective).
+    fn owned_counts(&self) -> Vec<u64> {
+        let mine = (self.owned() as u64).to_le_bytes();
+        self.comm
+            .all_gather(&mine)
+            .iter()
+            .map(|b| Unpack(b).u64())
+            .collect()
+    }
+
+    fn measure_imbalance(&self, counts: &[u64]) -> f64 {
+        let mean = self.n_total as f64 / counts.len() as f64;
+        let max = counts.iter().copied().max().unwrap_or(0) as f64;
+        if mean > 0.0 { max / mean - 1.0 } else { 0.0 }
+    }
+
+    /// The collective rebuild: regions recut if unbalanced, keys renewed
+    /// when the whole would renumber, discs migrated to their owners with
+    /// their histories, ghosts sent, the part's list rebuilt.
+    fn rebuild(&mut self) {
+        let size = self.comm.size();
+        let skin = self.part.grid.skin;
+        let width = reach(self.max_radius, skin);
+        // counts and the box of the owned centres, from every rank
+        let (lo, hi) = {
+            let p = &self.part.particles;
+            let owned: Vec<Vec2> = (0..p.len())
+                .filter(|&s| p.fixity[s] & GHOST == 0)
+                .map(|s| p.pos[s])
+                .collect();
+            centre_bounds(&owned)
+        };
+        // and how many discs each region would own now
+        let mut mine = vec![0u64; size];
+        let p = &self.part.particles;
+        for s in (0..p.len()).filter(|&s| p.fixity[s] & GHOST == 0) {
+            mine[self.regions.owner(p.pos[s])] += 1;
+        }
+        let mut b = Pack::default();
+        mine.iter().for_each(|&c| b.u64(c));
+        b.vec2(lo);
+        b.vec2(hi);
+        let all = self.comm.all_gather(&b.0);
+        let (mut glo, mut ghi) = (lo, hi);
+        let mut counts = vec![0u64; size];
+        for b in &all {
+            let mut u = Unpack(b);
+            counts.iter_mut().for_each(|c| *c += u.u64());
+            let (l, h) = (u.vec2(), u.vec2());
+            glo = Vec2::new(glo.x.min(l.x), glo.y.min(l.y));
+            ghi = Vec2::new(ghi.x.max(h.x), ghi.y.max(h.y));
+        }
+        if self.measure_imbalance(&counts) > self.balance_threshold {
+            self.recut();
+        }
+        if self.reorder_every > 0 && self.part.grid.rebuilds.is_multiple_of(self.reorder_every) {
+            let spec = GridSpec::new(glo, ghi, self.max_radius, skin, self.n_total);
+            let p = &self.part.particles;
+            for s in 0..p.len() {
+                if p.fixity[s] & GHOST == 0 {
+                    self.key[s] = spec.key(p.pos[s], p.id[s]);
+                }
+            }
+        }
+        self.migrate(width);
+        self.part.grid.stale = true;
+        self.part.prepare_contacts();
+        self.index_halo(width);
+        self.imbalance = self.measure_imbalance(&self.owned_counts());
+    }
+
+    /// Cut the regions again from a sample of every rank's centres.
+    fn recut(&mut self) {
+        let p = &self.part.particles;
+        let owned: Vec<Vec2> = (0..p.len())
+            .filter(|&s| p.fixity[s] & GHOST == 0)
+            .map(|s| p.pos[s])
+            .collect();
+        let stride = self.n_total.div_ceil(SAMPLE * self.comm.size()).max(1);
+        let mut b = Pack::default();
+        for q in owned.iter().step_by(stride) {
+            b.vec2(*q);
+        }
+        let mut pts = Vec::new();
+        for b in self.comm.all_gather(&b.0) {
+            let mut u = Unpack(&b);
+            while !u.is_empty() {
+                pts.push(u.vec2());
+            }
+        }
+        let new = Subdomains::bisect(&pts, self.comm.size());
+        if new != self.regions {
+            self.regions = new;
+            self.recuts += 1;
+        }
+    }
+
+    /// Send each owned disc to its owner (with its pair and wall
+    /// histories) and to the ranks that need it as a ghost; rebuild the
+    /// part's discs in key order from what stays and what arrives, with
+    /// the contact list moved onto them.
+    fn migrate(&mut self, width: f64) {
+        let me = self.comm.rank();
+        let size = self.comm.size();
+        let p = &self.part.particles;
+        let n = p.len();
+        let mut discs: Vec<Pack> = (0..size).map(|_| Pack::default()).collect();
+        let mut counts = vec![0u32; size];
+        // per old slot: the new owner (owned discs), else GONE
+        let mut dest = vec![GONE; n];
+        let mut keep: Vec<(u64, Src, bool)> = Vec::new();
+        let mut near = Vec::new();
+        for (s, dest) in dest.iter_mut().enumerate() {
+            if p.fixity[s] & GHOST != 0 {
+                continue;
+            }
+            let o = self.regions.owner(p.pos[s]);
+            *dest = o as u32;
+            self.regions.near(p.pos[s], o, width, &mut near);
+            if o == me {
+                keep.push((self.key[s], Src::Old(s as u32), true));
+            } else {
+                pack_disc(&mut discs[o], p, s, self.key[s], true);
+                counts[o] += 1;
+            }
+            for &r in &near {
+                if r == me {
+                    keep.push((self.key[s], Src::Old(s as u32), false));
+                } else {
+                    pack_disc(&mut discs[r], p, s, self.key[s], false);
+                    counts[r] += 1;
+                }
+            }
+        }
+        // the histories of the discs that move: every pair and wall pair
+        // of theirs, to their new owner
+        let mut pairs: Vec<Pack> = (0..size).map(|_| Pack::default()).collect();
+        let mut npairs = vec![0u32; size];
+        let c = &self.part.contacts;
+        let rolling = c.rolling && c.roll.len() == c.len();
+        for (k, (i, j)) in c.pairs().enumerate() {
+            let (oi, oj) = (dest[i], dest[j]);
+            let mut put = |o: u32| {
+                let b = &mut pairs[o as usize];
+                b.u32(p.id[i]);
+                b.u32(p.id[j]);
+                b.f64(c.shear[k]);
+                b.f64(if rolling { c.roll[k] } else { 0.0 });
+                npairs[o as usize] += 1;
+            };
+            if oi != GONE && oi as usize != me {
+                put(oi);
+            }
+            if oj != GONE && oj as usize != me && oj != oi {
+                put(oj);
+            }
+        }
+        let mut walls: Vec<Pack> = (0..size).map(|_| Pack::default()).collect();
+        let mut nwalls = vec![0u32; size];
+        for w in &c.walls {
+            let o = dest[w.disc as usize];
+            if o != GONE && o as usize != me {
+                let b = &mut walls[o as usize];
+                b.u32(p.id[w.disc as usize]);
+                b.u32(w.wall);
+                b.f64(w.fs);
+                b.f64(w.mr);
+                nwalls[o as usize] += 1;
+            }
+        }
+        let send: Vec<Vec<u8>> = (0..size)
+            .map(|r| {
+                if r == me {
+                    return Vec::new();
+                }
+                let mut b = Pack::default();
+                b.u32(counts[r]);
+                b.0.extend_from_slice(&discs[r].0);
+                b.u32(npairs[r]);
+                b.0.extend_from_slice(&pairs[r].0);
+                b.u32(nwalls[r]);
+                b.0.extend_from_slice(&walls[r].0);
+                b.0
+            })
+            .collect();
+        drop((discs, pairs, walls));
+        let got = self.comm.all_to_all(send);
+        // what arrived
+        let mut records = Vec::new();
+        let mut pair_recs: Vec<(u32, u32, f64, f64)> = Vec::new();
+        let mut wall_recs: Vec<(u32, u32, f64, f64)> = Vec::new();
+        for (r, b) in got.iter().enumerate() {
+            if r == me || b.is_empty() {
+                continue;
+            }
+            let mut u = Unpack(b);
+            for _ in 0..u.u32() {
+                records.push(unpack_disc(&mut u));
+            }
+            for _ in 0..u.u32() {
+                let (a, bb) = (u.u32(), u.u32());
+                pair_recs.push((a, bb, u.f64(), u.f64()));
+            }
+            for _ in 0..u.u32() {
+                let (d, w) = (u.u32(), u.u32());
+                wall_recs.push((d, w, u.f64(), u.f64()));
+            }
+        }
+        for (k, r) in records.iter().enumerate() {
+            keep.push((r.key, Src::Got(k as u32), r.owned));
+        }
+        keep.sort_unstable_by_key(|e| e.0);
+        // old slot → new slot, also for a disc that arrives again
+        let old_slot = |id: u32| p.slot.get(id as usize).copied().unwrap_or(GONE);
+        let mut new_of_old = vec![GONE; n];
+        for (k, &(_, src, _)) in keep.iter().enumerate() {
+            let old = match src {
+                Src::Old(s) => s,
+                Src::Got(g) => old_slot(records[g as usize].id),
+            };
+            if old != GONE {
+                new_of_old[old as usize] = k as u32;
+            }
+        }
+        let sources: Vec<Src> = keep.iter().map(|e| e.1).collect();
+        let mut np = take_discs(p, &sources, &records, self.n_total);
+        for (k, e) in keep.iter().enumerate() {
+            np.fixity[k] = (np.fixity[k] & !GHOST) | if e.2 { 0 } else { GHOST };
+        }
+        // the histories: the old list (pairs with a disc owned here) and
+        // what the arriving discs bring (unless this rank had the pair)
+        let was_owned = |s: u32| s != GONE && p.fixity[s as usize] & GHOST == 0;
+        let slot_now = |id: u32| np.slot.get(id as usize).copied().unwrap_or(GONE);
+        let mut extra: Vec<(u32, u32, f64, f64)> = pair_recs
+            .iter()
+            .filter(|(a, b, _, _)| !was_owned(old_slot(*a)) && !was_owned(old_slot(*b)))
+            .filter_map(|&(a, b, fs, mr)| {
+                let (sa, sb) = (slot_now(a), slot_now(b));
+                (sa != GONE && sb != GONE).then_some((sa, sb, fs, mr))
+            })
+            .collect();
+        extra.sort_unstable_by_key(|e| (e.0.min(e.1), e.0.max(e.1)));
+        extra.dedup_by_key(|e| (e.0.min(e.1), e.0.max(e.1)));
+        let extra_walls: Vec<WallPair> = wall_recs
+            .iter()
+            .filter_map(|&(d, wall, fs, mr)| {
+                let s = slot_now(d);
+                (s != GONE).then_some(WallPair {
+                    disc: s,
+                    wall,
+                    fs,
+                    mr,
+                })
+            })
+            .collect();
+        let ghost_old = |s: u32| p.fixity[s as usize] & GHOST != 0;
+        let mut list = std::mem::take(&mut self.part.contacts);
+        list.remap(&new_of_old, np.len(), &extra, &extra_walls, |i, j| {
+            !(ghost_old(i) && ghost_old(j))
+        });
+        self.key = keep.iter().map(|e| e.0).collect();
+        self.part.particles = np;
+        self.part.contacts = list;
+    }
+
+    /// The state the undivided assembly would have now, assembled on rank
+    /// 0 (`None` on the other ranks); collective. Discs in slot (key)
+    /// order, the pair list sorted, walls with their global totals.
+    pub fn gather(&self) -> Option<GranularState> {
+        let me = self.comm.rank();
+        let g = &self.part;
+        let p = &g.particles;
+        let c = &g.contacts;
+        let n = p.len();
+        let has_ref = g.grid.ref_pos.len() == n;
+        let rolling = c.rolling;
+        let mut b = Pack::default();
+        let owned: Vec<usize> = (0..n).filter(|&s| p.fixity[s] & GHOST == 0).collect();
+        b.u32(owned.len() as u32);
+        for &s in &owned {
+            b.u64(self.key[s]);
+            b.u32(p.id[s]);
+            b.vec2(p.pos[s]);
+            b.vec2(p.vel[s]);
+            b.f64(p.theta[s]);
+            b.f64(p.omega[s]);
+            b.vec2(p.force[s]);
+            b.f64(p.torque[s]);
+            b.vec2(if has_ref {
+                g.grid.ref_pos[s]
+            } else {
+                Vec2::ZERO
+            });
+        }
+        let mine = |&(_, (i, _)): &(usize, (usize, usize))| p.fixity[i] & GHOST == 0;
+        b.u32(c.pairs().enumerate().filter(mine).count() as u32);
+        for (k, (i, j)) in c.pairs().enumerate().filter(mine) {
+            b.u64(self.key[i]);
+            b.u64(self.key[j]);
+            b.f64(c.shear[k]);
+            b.f64(if rolling && c.roll.len() == c.len() {
+                c.roll[k]
+            } else {
+                0.0
+            });
+        }
+        b.u32(c.walls.len() as u32);
+        for w in &c.walls {
+            b.u64(self.key[w.disc as usize]);
+            b.u32(w.wall);
+            b.f64(w.fs);
+            b.f64(w.mr);
+        }
+        let terms: Vec<_> = g.wall_terms().collect();
+        b.u32(terms.len() as u32);
+        for t in &terms {
+            pack_term(&mut b, self.key[t.disc as usize], t);
+        }
+        let mut send = vec![Vec::new(); self.comm.size()];
+        send[0] = b.0;
+        let got = self.comm.all_to_all(send);
+        (me == 0).then(|| self.assemble(&got, has_ref))
+    }
+
+    /// [`gather`](Self::gather) on rank 0: every rank's records merged.
+    fn assemble(&self, got: &[Vec<u8>], has_ref: bool) -> GranularState {
+        let g = &self.part;
+        let rolling = g.contacts.rolling;
+        type Disc = (u64, u32, [Vec2; 2], f64, f64, Vec2, f64, Vec2);
+        let mut discs: Vec<Disc> = Vec::with_capacity(self.n_total);
+        let mut pairs: Vec<(u64, u64, f64, f64)> = Vec::new();
+        let mut wall_pairs: Vec<(u64, u32, f64, f64)> = Vec::new();
+        let mut terms = Vec::new();
+        for b in got {
+            let mut u = Unpack(b);
+            for _ in 0..u.u32() {
+                let (key, id) = (u.u64(), u.u32());
+                let (pos, vel) = (u.vec2(), u.vec2());
+                let (theta, omega) = (u.f64(), u.f64());
+                let (force, torque) = (u.vec2(), u.f64());
+                discs.push((key, id, [pos, vel], theta, omega, force, torque, u.vec2()));
+            }
+            for _ in 0..u.u32() {
+                pairs.push((u.u64(), u.u64(), u.f64(), u.f64()));
+            }
+            for _ in 0..u.u32() {
+                wall_pairs.push((u.u64(), u.u32(), u.f64(), u.f64()));
+            }
+            for _ in 0..u.u32() {
+                terms.push(unpack_term(&mut u));
+            }
+        }
+        discs.sort_unstable_by_key(|d| d.0);
+        let keys: Vec<u64> = discs.iter().map(|d| d.0).collect();
+        let slot = |k: u64| keys.partition_point(|&x| x < k) as u32;
+        let mut pk: Vec<([u32; 2], f64, f64)> = pairs
+            .iter()
+            .map(|&(a, b, fs, mr)| ([slot(a), slot(b)], fs, mr))
+            .collect();
+        pk.sort_unstable_by_key(|e| e.0);
+        let mut wp: Vec<WallPairState> = wall_pairs
+            .iter()
+            .map(|&(k, wall, fs, mr)| WallPairState {
+                disc: slot(k),
+                wall,
+                fs,
+                mr,
+            })
+            .collect();
+        wp.sort_unstable_by_key(|w| (w.disc, w.wall));
+        terms.sort_by_key(|(k, t)| (*k, t.wall));
+        let mut walls = g.walls.clone();
+        {
+            // the totals as the whole sums them
+            let mut tmp = g.with_discs(Particles::default());
+            tmp.walls = std::mem::take(&mut walls);
+            tmp.set_wall_totals(terms.iter().map(|(_, t)| t));
+            walls = tmp.walls;
+        }
+        GranularState {
+            // bonded assemblies are not decomposed
+            bonds: Default::default(),
+            step: g.step,
+            time: g.time,
+            max_disp: g.max_disp,
+            id: discs.iter().map(|d| d.1).collect(),
+            pos: discs.iter().map(|d| d.2[0]).collect(),
+            vel: discs.iter().map(|d| d.2[1]).collect(),
+            theta: discs.iter().map(|d| d.3).collect(),
+            omega: discs.iter().map(|d| d.4).collect(),
+            force: discs.iter().map(|d| d.5).collect(),
+            torque: discs.iter().map(|d| d.6).collect(),
+            walls: walls.iter().map(WallState::from).collect(),
+            pairs: pk.iter().map(|e| e.0).collect(),
+            shear: pk.iter().map(|e| e.1).collect(),
+            rolling,
+            roll: if rolling {
+                pk.iter().map(|e| e.2).collect()
+            } else {
+                Vec::new()
+            },
+            wall_pairs: wp,
+            ref_pos: if has_ref {
+                discs.iter().map(|d| d.7).collect()
+            } else {
+                Vec::new()
+            },
+            wall_ref: g.grid.wall_ref.clone(),
+            rebuilds: g.grid.rebuilds,
+            stale: g.grid.stale,
+        }
+    }
+}
+
+/// Reach of a disc: the largest centre distance of a listed pair.
+fn reach(max_radius: f64, skin: f64) -> f64 {
+    2.0 * max_radius + skin
+}
+
+/// At most [`SAMPLE`] of the centres, evenly strided.
+fn sample(pos: &[Vec2], n: usize) -> Vec<Vec2> {
+    pos.iter()
+        .step_by(n.div_ceil(SAMPLE).max(1))
+        .copied()
+        .collect()
+}
+
+/// Discs for a new part: each from a slot of `p` or a received record;
+/// `slot` sized for the `n_total` ids of the whole assembly.
+fn take_discs(p: &Particles, sources: &[Src], got: &[Record], n_total: usize) -> Particles {
+    fn col<T: Copy>(
+        sources: &[Src],
+        old: &[T],
+        got: &[Record],
+        f: impl Fn(&Record) -> T,
+    ) -> Vec<T> {
+        sources
+            .iter()
+            .map(|s| match *s {
+                Src::Old(k) => old[k as usize],
+                Src::Got(k) => f(&got[k as usize]),
+            })
+            .collect()
+    }
+    let id = col(sources, &p.id, got, |r| r.id);
+    let mut slot = vec![GONE; n_total];
+    for (k, &i) in id.iter().enumerate() {
+        slot[i as usize] = k as u32;
+    }
+    Particles {
+        pos: col(sources, &p.pos, got, |r| r.pos),
+        vel: col(sources, &p.vel, got, |r| r.vel),
+        theta: col(sources, &p.theta, got, |r| r.theta),
+        omega: col(sources, &p.omega, got, |r| r.omega),
+        radius: col(sources, &p.radius, got, |r| r.radius),
+        mass: col(sources, &p.mass, got, |r| r.mass),
+        inertia: col(sources, &p.inertia, got, |r| r.inertia),
+        inv_mass: col(sources, &p.inv_mass, got, |r| r.inv_mass),
+        inv_inertia: col(sources, &p.inv_inertia, got, |r| r.inv_inertia),
+        force: col(sources, &p.force, got, |r| r.force),
+        torque: col(sources, &p.torque, got, |r| r.torque),
+        fixity: col(sources, &p.fixity, got, |r| r.fixity),
+        material: col(sources, &p.material, got, |r| r.material),
+        id,
+        slot,
+    }
+}
+
+fn pack_disc(b: &mut Pack, p: &Particles, s: usize, key: u64, owned: bool) {
+    b.u32(p.id[s]);
+    b.u64(key);
+    b.u8(owned as u8);
+    b.vec2(p.pos[s]);
+    b.vec2(p.vel[s]);
+    b.f64(p.theta[s]);
+    b.f64(p.omega[s]);
+    b.f64(p.radius[s]);
+    b.f64(p.mass[s]);
+    b.f64(p.inertia[s]);
+    b.f64(p.inv_mass[s]);
+    b.f64(p.inv_inertia[s]);
+    b.vec2(p.force[s]);
+    b.f64(p.torque[s]);
+    b.u8(p.fixity[s] & !GHOST);
+    b.u16(p.material[s]);
+}
+
+fn unpack_disc(u: &mut Unpack) -> Record {
+    Record {
+        id: u.u32(),
+        key: u.u64(),
+        owned: u.u8() != 0,
+        pos: u.vec2(),
+        vel: u.vec2(),
+        theta: u.f64(),
+        omega: u.f64(),
+        radius: u.f64(),
+        mass: u.f64(),
+        inertia: u.f64(),
+        inv_mass: u.f64(),
+        inv_inertia: u.f64(),
+        force: u.vec2(),
+        torque: u.f64(),
+        fixity: u.u8(),
+        material: u.u16(),
+    }
+}
+
+fn pack_term(b: &mut Pack, key: u64, t: &crate::dem::WallTerm) {
+    b.u64(key);
+    b.u32(t.wall);
+    b.vec2(t.f);
+    b.u8(t.counted as u8);
+    b.f64(t.kn);
+    b.f64(t.cn);
+}
+
+fn unpack_term(u: &mut Unpack) -> (u64, crate::dem::WallTerm) {
+    let key = u.u64();
+    let wall = u.u32();
+    let f = u.vec2();
+    let counted = u.u8() != 0;
+    let (kn, cn) = (u.f64(), u.f64());
+    (
+        key,
+        crate::dem::WallTerm {
+            disc: 0,
+            wall,
+            f,
+            counted,
+            kn,
+            cn,
+        },
+    )
+}

@@ -1,0 +1,456 @@
+//! A granular assembly divided over 2, 3 and 4 ranks (threads of this
+//! process talking through `decomp::Threads`, the same code paths as MPI)
+//! steps bitwise as the undivided one: the state gathered on rank 0 equals
+//! the whole's saved state, byte for byte, at every check — discs, the
+//! pair list and its shear and rolling histories, walls (a servo among
+//! them), the Verlet bookkeeping.
+
+use efgdem::decomp::{Comm, Decomposed, Threads};
+use efgdem::dem::Granular;
+use efgdem::dem::state::GranularState;
+use efgdem::scenario;
+use std::sync::Arc;
+
+fn build(src: &str) -> Granular {
+    scenario::parse(src, "t.toml")
+        .unwrap_or_else(|e| panic!("{e}"))
+        .build()
+        .unwrap_or_else(|e| panic!("{e}"))
+        .into_granular()
+        .expect("granular")
+}
+
+/// Discs falling into a box whose lid is a servo wall; rolling resistance.
+fn settling(n: usize, extra: &str) -> String {
+    format!(
+        r#"
+[simulation]
+steps = 1
+gravity = [0.0, -9.81]
+
+[[material]]
+name = "sand"
+density = 2650.0
+kn = 1.0e6
+ks = 5.0e5
+friction = 0.5
+rolling_friction = 0.1
+
+[granular]
+material = "sand"
+discs = {{ generate = "random", box = [[0.0, 0.0], [0.2, 0.3]], count = {n}, radius = [0.002, 0.003], seed = 5 }}
+damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+{extra}
+
+[[wall]]
+name = "floor"
+from = [-0.01, 0.0]
+to = [0.21, 0.0]
+
+[[wall]]
+name = "left"
+from = [0.0, -0.01]
+to = [0.0, 0.4]
+
+[[wall]]
+name = "right"
+from = [0.2, -0.01]
+to = [0.2, 0.4]
+
+[[wall]]
+name = "lid"
+from = [-0.01, 0.3]
+to = [0.21, 0.3]
+servo = {{ stress = 2.0e3, max_velocity = 0.5 }}
+"#
+    )
+}
+
+fn bytes(s: &GranularState) -> Vec<u8> {
+    postcard::to_stdvec(s).unwrap()
+}
+
+/// The fields in which two states differ (for the failure message).
+fn differ(a: &[u8], b: &[u8]) -> String {
+    let a: GranularState = postcard::from_bytes(a).unwrap();
+    let b: GranularState = postcard::from_bytes(b).unwrap();
+    let mut out = Vec::new();
+    macro_rules! field {
+        ($($f:ident),*) => {$(
+            let (x, y) = (postcard::to_stdvec(&a.$f).unwrap(), postcard::to_stdvec(&b.$f).unwrap());
+            if x != y {
+                out.push(stringify!($f));
+            }
+        )*};
+    }
+    field!(
+        step, time, max_disp, id, pos, vel, theta, omega, force, torque, walls, pairs, shear,
+        rolling, roll, wall_pairs, ref_pos, wall_ref, rebuilds, stale
+    );
+    if let Some(k) =
+        (0..a.pos.len().min(b.pos.len())).find(|&k| a.pos[k] != b.pos[k] || a.vel[k] != b.vel[k])
+    {
+        out.push("first disc:");
+        println!(
+            "slot {k}: id {} vs {}, pos {:?} vs {:?}",
+            a.id[k], b.id[k], a.pos[k], b.pos[k]
+        );
+    }
+    if a.pairs.len() != b.pairs.len() {
+        println!("pairs {} vs {}", a.pairs.len(), b.pairs.len());
+    }
+    out.join(", ")
+}
+
+/// Step the whole and `ranks` parts `steps` steps, comparing every
+/// `every` steps; returns the parts' largest imbalance and the number of
+/// discs that changed rank.
+fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> f64 {
+    let mut single = whole.clone();
+    single.prepare_contacts();
+    let mut want = Vec::new();
+    for s in 1..=steps {
+        single.step();
+        if s % every == 0 {
+            want.push(bytes(&single.save_state()));
+        }
+    }
+    let comms = Threads::group(ranks);
+    let got: Vec<(Vec<Vec<u8>>, f64)> = std::thread::scope(|sc| {
+        let hs: Vec<_> = comms
+            .into_iter()
+            .map(|c| {
+                let whole = whole.clone();
+                sc.spawn(move || {
+                    let comm: Arc<dyn Comm> = Arc::new(c);
+                    let mut d = Decomposed::new(&whole, comm);
+                    drop(whole);
+                    d.prepare();
+                    let mut out = Vec::new();
+                    let mut worst = 0.0f64;
+                    for s in 1..=steps {
+                        d.step(false);
+                        worst = worst.max(d.imbalance);
+                        // gather is collective: every rank calls it
+                        if s % every == 0
+                            && let Some(st) = d.gather()
+                        {
+                            out.push(bytes(&st));
+                        }
+                    }
+                    (out, worst)
+                })
+            })
+            .collect();
+        hs.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let (dd, dw) = single.touching();
+    println!(
+        "{} discs, {} rebuilds, {dd} disc–disc and {dw} disc–wall contacts, lid at {:.4}",
+        single.particles.len(),
+        single.grid.rebuilds,
+        single.walls[3].a.y
+    );
+    let (root, worst) = &got[0];
+    assert_eq!(root.len(), want.len());
+    for (k, (a, b)) in root.iter().zip(&want).enumerate() {
+        assert!(
+            a == b,
+            "{ranks} ranks: state after {} steps differs from the whole: {}",
+            (k + 1) * every,
+            differ(a, b)
+        );
+    }
+    *worst
+}
+
+/// 1500 discs fall 0.3 m and settle under a servo lid (4000 steps: about
+/// 2400 disc–disc contacts, discs crossing the region boundaries while
+/// they fall, histories migrating with them); 1–4 ranks.
+#[test]
+fn parts_step_bitwise_as_the_whole() {
+    let whole = build(&settling(1500, ""));
+    for ranks in [1, 2, 3, 4] {
+        let worst = compare(&whole, ranks, 4000, 500);
+        println!("{ranks} ranks: worst imbalance {worst:.3}");
+        // recut whenever the counts drift past the threshold (0.1)
+        assert!(worst <= 0.1, "{ranks} ranks: imbalance {worst}");
+    }
+}
+
+/// Fewer discs than ranks: some ranks own nothing and still take part.
+#[test]
+fn ranks_without_discs_take_part() {
+    let whole = build(&settling(3, ""));
+    compare(&whole, 4, 200, 50);
+}
+
+/// `efgdem run` of a granular scenario on 3 ranks (threads) writes the
+/// files of the run on one rank, byte for byte: history (wall forces of
+/// the servo lid, energies, a disc's position), final discs.
+#[test]
+fn run_on_ranks_writes_the_outputs_of_one_rank_and_restarts_on_others() {
+    let probes = r#"
+[output]
+every = 250
+[[probe]]
+name = "lid_fy"
+wall = "lid"
+quantity = "wall_fy"
+[[probe]]
+name = "ek"
+quantity = "kinetic"
+[[probe]]
+name = "spring"
+quantity = "spring"
+[[probe]]
+name = "contacts"
+quantity = "contacts"
+[[probe]]
+name = "y7"
+disc = 7
+quantity = "y"
+"#;
+    let src = settling(600, "").replace("steps = 1\n", "steps = 4000\n") + probes;
+    let sc = scenario::parse(&src, "t.toml").unwrap_or_else(|e| panic!("{e}"));
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-run-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut opts = efgdem::run::RunOptions::new(dir.join("one"));
+    opts.quiet = true;
+    efgdem::run::run(&sc, &opts).unwrap();
+    let read = |d: &str, f: &str| std::fs::read(dir.join(d).join(f)).unwrap();
+    let hist = String::from_utf8(read("one", "history.csv")).unwrap();
+    println!("{}", hist.lines().last().unwrap());
+    let on = |ranks: usize, opts: &efgdem::run::RunOptions| {
+        std::thread::scope(|s| {
+            for c in Threads::group(ranks) {
+                let sc = &sc;
+                s.spawn(move || efgdem::run::run_on(sc, opts, Arc::new(c)).unwrap());
+            }
+        })
+    };
+    for ranks in [2, 3] {
+        let name = format!("ranks{ranks}");
+        let opts = efgdem::run::RunOptions {
+            out_dir: dir.join(&name),
+            ..opts.clone()
+        };
+        on(ranks, &opts);
+        for f in ["history.csv", "discs_final.csv"] {
+            assert!(
+                read("one", f) == read(&name, f),
+                "{ranks} ranks: {f} differs"
+            );
+        }
+        let s: serde_json::Value = serde_json::from_slice(&read(&name, "summary.json")).unwrap();
+        assert_eq!(s["ranks"]["count"], ranks);
+        assert_eq!(s["status"], "completed");
+    }
+    // a checkpoint written on 3 ranks continues on 2 (and on 1) as if
+    // the run had never stopped
+    let opts3 = efgdem::run::RunOptions {
+        out_dir: dir.join("ck"),
+        checkpoint_every: 2000,
+        ..opts.clone()
+    };
+    on(3, &opts3);
+    let ck = dir.join("ck").join("checkpoint.bin");
+    let saved = std::fs::read(&ck).unwrap();
+    for ranks in [2, 1] {
+        std::fs::write(&ck, &saved).unwrap();
+        let restart = efgdem::run::RunOptions {
+            restart: Some(ck.clone()),
+            checkpoint_every: 0,
+            ..opts3.clone()
+        };
+        on(ranks, &restart);
+        for f in ["history.csv", "discs_final.csv"] {
+            assert!(
+                read("one", f) == read("ck", f),
+                "restart on {ranks}: {f} differs"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A build without the `mpi` feature started as one of several MPI ranks
+/// (as mpirun sets its environment) refuses to run and says how to build
+/// with MPI, instead of N copies each running the whole scenario.
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn a_build_without_mpi_refuses_mpirun() {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
+        .args(["run", "no-such.toml", "-q"])
+        .env("OMPI_COMM_WORLD_SIZE", "2")
+        .env("OMPI_COMM_WORLD_RANK", "0")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--features mpi"), "{err}");
+}
+
+/// A bonded scenario on several ranks is refused before any step (exit
+/// code 2, a message that says to run it in one process) on every rank,
+/// instead of a run whose bonds would be lost at the division.
+#[test]
+fn bonded_discs_are_refused_on_ranks() {
+    let sc = scenario::parse(include_str!("common/bonded_block.toml"), "b.toml")
+        .unwrap_or_else(|e| panic!("{e}"));
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-bonds-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut opts = efgdem::run::RunOptions::new(dir.clone());
+    opts.quiet = true;
+    let errs: Vec<_> = std::thread::scope(|s| {
+        let runs: Vec<_> = Threads::group(2)
+            .into_iter()
+            .map(|c| {
+                let (sc, opts) = (&sc, &opts);
+                s.spawn(move || efgdem::run::run_on(sc, opts, Arc::new(c)).unwrap_err())
+            })
+            .collect();
+        runs.into_iter().map(|r| r.join().unwrap()).collect()
+    });
+    for e in errs {
+        assert_eq!(e.exit_code(), 2, "{e}");
+        assert!(e.to_string().contains("one process"), "{e}");
+    }
+    assert!(!dir.join("history.csv").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Run `sc` on one process into `dir/one`, then on each of `ranks` thread
+/// ranks into `dir/ranksN`, and compare `history.csv` and
+/// `discs_final.csv` byte for byte.
+fn same_on_ranks(sc: &scenario::Scenario, dir: &std::path::Path, ranks: &[usize]) {
+    let _ = std::fs::remove_dir_all(dir);
+    let mut opts = efgdem::run::RunOptions::new(dir.join("one"));
+    opts.quiet = true;
+    efgdem::run::run(sc, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let read = |d: &str, f: &str| std::fs::read(dir.join(d).join(f)).unwrap();
+    for &n in ranks {
+        let name = format!("ranks{n}");
+        let opts = efgdem::run::RunOptions {
+            out_dir: dir.join(&name),
+            ..opts.clone()
+        };
+        std::thread::scope(|s| {
+            for c in Threads::group(n) {
+                let opts = &opts;
+                s.spawn(move || efgdem::run::run_on(sc, opts, Arc::new(c)).unwrap());
+            }
+        });
+        for f in ["history.csv", "discs_final.csv"] {
+            assert!(read("one", f) == read(&name, f), "{n} ranks: {f} differs");
+        }
+    }
+}
+
+/// Walls whose motion changes (`phases`: proportional servos to
+/// consolidate, then a strain rate on the platens and integral servos on
+/// the sides, a small biaxial test) around a packing grown by the
+/// preparation, a `[[measure]]` region and wall probes: the files of one
+/// process on 2 and 3 ranks. Then the settled discs as a CSV disc source
+/// (its radii and ids as written) under a servo lid: the same.
+#[test]
+fn phased_walls_and_disc_sources_on_ranks() {
+    let servo = "servo = { stress = 1.0e5, max_velocity = 0.1, relaxation = 1.0 }";
+    let pi = "servo = { stress = 1.0e5, max_velocity = 0.1, relaxation = 1.0, integral = 0.1 }";
+    let wall = |name: &str, from: [f64; 2], to: [f64; 2], phases: &str| {
+        format!(
+            "[[wall]]\nname = \"{name}\"\nfrom = {from:?}\nto = {to:?}\nphases = [{phases}]\n\n"
+        )
+    };
+    let axial = format!("{{ until_step = 1500, {servo} }}, {{ strain_rate = 2.0 }}");
+    let lateral = format!("{{ until_step = 1500, {servo} }}, {{ {pi} }}");
+    let src = format!(
+        r#"[simulation]
+dt = 1.4e-6
+steps = 3000
+
+[output]
+every = 100
+
+[[material]]
+name = "grain"
+density = 2650.0
+kn = 1.0e8
+ks = 5.0e7
+friction = 0.5
+rolling_friction = 0.1
+
+[granular]
+material = "grain"
+discs = {{ generate = "random", method = "grow", box = [[0.0, 0.0], [0.024, 0.048]], radius = [0.0005, 0.001], count = 400, seed = 3, settle_steps = 3000 }}
+damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+
+{}{}{}{}[[measure]]
+name = "all"
+rectangle = [[-0.01, -0.01], [0.034, 0.058]]
+quantities = ["sxx_cpos", "syy_cpos", "porosity"]
+
+[[probe]]
+name = "sl"
+wall = "left"
+quantity = "wall_stress"
+
+[[probe]]
+name = "yt"
+wall = "top"
+quantity = "wall_y"
+"#,
+        wall("bottom", [0.0, 0.0], [0.024, 0.0], &axial),
+        wall("top", [0.0, 0.048], [0.024, 0.048], &axial),
+        wall("left", [0.0, 0.0], [0.0, 0.048], &lateral),
+        wall("right", [0.024, 0.0], [0.024, 0.048], &lateral),
+    );
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-phases-{}", std::process::id()));
+    let sc = scenario::parse(&src, "phases.toml").unwrap_or_else(|e| panic!("{e}"));
+    same_on_ranks(&sc, &dir.join("phases"), &[2, 3]);
+    // the sheared sample as a CSV disc source
+    let csv = dir.join("bed.csv");
+    std::fs::copy(dir.join("phases/one/discs_final.csv"), &csv).unwrap();
+    let src = format!(
+        r#"[simulation]
+steps = 1500
+gravity = [0.0, -9.81]
+
+[output]
+every = 100
+
+[[material]]
+name = "grain"
+density = 2650.0
+kn = 1.0e8
+ks = 5.0e7
+friction = 0.5
+rolling_friction = 0.1
+
+[granular]
+material = "grain"
+discs = {{ csv = {:?} }}
+damping = {{ kind = "critical-ratio", zeta = 0.2 }}
+
+[[wall]]
+name = "floor"
+from = [-0.01, -0.002]
+to = [0.04, -0.002]
+
+[[wall]]
+name = "lid"
+from = [-0.01, 0.06]
+to = [0.04, 0.06]
+servo = {{ stress = 5.0e4, max_velocity = 0.1 }}
+
+[[probe]]
+name = "lid_fy"
+wall = "lid"
+quantity = "wall_fy"
+"#,
+        csv.display().to_string()
+    );
+    let sc = scenario::parse(&src, "csv.toml").unwrap_or_else(|e| panic!("{e}"));
+    same_on_ranks(&sc, &dir.join("csv"), &[2, 3]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
