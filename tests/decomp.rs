@@ -296,9 +296,20 @@ fn a_build_without_mpi_refuses_mpirun() {
 /// instead of a run whose bonds would be lost at the division.
 #[test]
 fn bonded_discs_are_refused_on_ranks() {
-    let sc = scenario::parse(include_str!("common/bonded_block.toml"), "b.toml")
-        .unwrap_or_else(|e| panic!("{e}"));
-    let dir = std::env::temp_dir().join(format!("efgdem-decomp-bonds-{}", std::process::id()));
+    refused_on_ranks(include_str!("common/bonded_block.toml"), "bonds");
+}
+
+/// Clumps are not decomposed either: refused the same way.
+#[test]
+fn clumps_are_refused_on_ranks() {
+    refused_on_ranks(include_str!("common/clump_pile.toml"), "clumps");
+}
+
+/// `src` run on 2 thread ranks: every rank refuses it with exit code 2,
+/// saying to run it with one process, before writing anything.
+fn refused_on_ranks(src: &str, what: &str) {
+    let sc = scenario::parse(src, "b.toml").unwrap_or_else(|e| panic!("{e}"));
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-{what}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let mut opts = efgdem::run::RunOptions::new(dir.clone());
     opts.quiet = true;
@@ -315,6 +326,7 @@ fn bonded_discs_are_refused_on_ranks() {
     for e in errs {
         assert_eq!(e.exit_code(), 2, "{e}");
         assert!(e.to_string().contains("one process"), "{e}");
+        assert!(e.to_string().contains(&format!("[{what}]")), "{e}");
     }
     assert!(!dir.join("history.csv").exists());
     let _ = std::fs::remove_dir_all(&dir);

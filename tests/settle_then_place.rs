@@ -206,8 +206,11 @@ fn a_body_placed_after_the_preparation_removes_the_discs_it_overlaps() {
     // of the discs it removed (up to a diameter, 8 mm: 40 ms of free
     // fall) before they load it; in 20 ms they may not have (a bed that
     // differs in the last bits did not)
-    let text = bed(EMBEDDED, true, Some("bed.csv"), 3, 30000)
-        .replacen("\nsteps = 2000\n", "\nsteps = 10000\n", 1);
+    let text = bed(EMBEDDED, true, Some("bed.csv"), 3, 30000).replacen(
+        "\nsteps = 2000\n",
+        "\nsteps = 10000\n",
+        1,
+    );
     assert!(text.contains("\nsteps = 10000\n"));
     let file = root.join("bed.toml");
     std::fs::write(&file, &text).unwrap();

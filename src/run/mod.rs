@@ -277,6 +277,9 @@ pub fn run_on(
         System::Granular(ref g) if ranks > 1 && g.bonds.active() => Err(RunError::Ranks(
             "bonded discs ([bonds]) do not run on several ranks yet: run this scenario with one process".into(),
         )),
+        System::Granular(ref g) if ranks > 1 && !g.clumps.is_empty() => Err(RunError::Ranks(
+            "clumps ([clumps]) do not run on several ranks yet: run this scenario with one process".into(),
+        )),
         System::Granular(_) if ranks > 1 => ranks::run(run, model, comm),
         _ if ranks > 1 => Err(RunError::Ranks(format!(
             "only granular scenarios (discs and walls) run on several ranks; this one has continuum bodies: run it with one process (not under mpirun -np {ranks})"
