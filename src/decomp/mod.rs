@@ -736,8 +736,9 @@ impl Decomposed {
             walls = tmp.walls;
         }
         GranularState {
-            // bonded assemblies are not decomposed
+            // bonded and clumped assemblies are not decomposed
             bonds: Default::default(),
+            clumps: Default::default(),
             step: g.step,
             time: g.time,
             max_disp: g.max_disp,
@@ -819,6 +820,8 @@ fn take_discs(p: &Particles, sources: &[Src], got: &[Record], n_total: usize) ->
         torque: col(sources, &p.torque, got, |r| r.torque),
         fixity: col(sources, &p.fixity, got, |r| r.fixity),
         material: col(sources, &p.material, got, |r| r.material),
+        // clumped assemblies are not decomposed
+        clump: vec![crate::dem::clumps::NO_CLUMP; id.len()],
         id,
         slot,
     }
