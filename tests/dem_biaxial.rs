@@ -378,12 +378,17 @@ fn full_biaxial_example() {
 /// sample of [`small`] with μ_r = 0, sheared to 9.6 % axial strain, once
 /// as round discs and once with each disc replaced by a rigid clump of two
 /// discs (radius 0.8 r, 0.4 r apart: elongation 1.25, inside the disc's
-/// circle). The clumps' peak friction angle is higher by more than 3°:
-/// measured 24.3° against 17.8°; the curves of a 500-grain sample
-/// fluctuate by about ±1.4° (the spread of φ over the last third, printed),
-/// so 3° is twice the noise and half the measured gap. The clumps'
-/// whole-sample Love–Weber stress (branch vectors from the clumps'
-/// centres) equals the walls' within 2 %, as for discs.
+/// circle). Grain shape raises the friction angle at the critical state
+/// (the mean over the last third of the shear) by more than 2°, and the
+/// peak is higher too. The peak of a 500-grain sample is a single
+/// rearrangement and moves with round-off: two realizations that differ
+/// only in the order of the force sums gave 24.3° against 17.8° and 22.4°
+/// against 20.5°, so only its order is asserted. The critical-state angle
+/// is an average (spread about ±0.45° each, printed): 21.8° against 18.2°
+/// in the second realization; 2° is more than three times the spread of
+/// the difference and about half the gap. The clumps' whole-sample
+/// Love–Weber stress (branch vectors from the clumps' centres) equals the
+/// walls' within 2 %, as for discs.
 #[test]
 fn clumps_give_a_higher_peak_friction_angle_than_round_discs() {
     const SHEAR: usize = 36_000;
@@ -428,8 +433,10 @@ fn clumps_give_a_higher_peak_friction_angle_than_round_discs() {
             s.love_weber_error
         );
         assert!(s.love_weber_error.unwrap() < 0.02, "{tag}: {s:?}");
-        phi.push(s.phi_peak);
+        phi.push((s.phi_peak, s.phi_cs));
         std::fs::remove_dir_all(dir).unwrap();
     }
-    assert!(phi[1] > phi[0] + 3.0, "{phi:?}");
+    let ((peak_round, cs_round), (peak_clumps, cs_clumps)) = (phi[0], phi[1]);
+    assert!(peak_clumps > peak_round, "{phi:?}");
+    assert!(cs_clumps > cs_round + 2.0, "{phi:?}");
 }
