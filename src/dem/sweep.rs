@@ -1517,6 +1517,43 @@ pub(super) mod lanes4 {
 mod tests {
     use super::*;
 
+    /// `n` discs in a 2.5 × 2.5 square with random velocities, spins and
+    /// radii, and a random contact law (friction, cohesion, shear dashpot,
+    /// the no-tension clamp and the slip normal varied with `case`): the
+    /// cases of the lane tests.
+    #[allow(dead_code)] // on processors without the lane kernels
+    fn random_case(
+        u: &mut impl FnMut(f64, f64) -> f64,
+        n: usize,
+        case: usize,
+    ) -> (Vec<Vec2>, Vec<Vec2>, Vec<f64>, Vec<f64>, ContactLaw) {
+        let pos: Vec<Vec2> = (0..n)
+            .map(|_| Vec2::new(u(0.0, 2.5), u(0.0, 2.5)))
+            .collect();
+        let vel: Vec<Vec2> = (0..n)
+            .map(|_| Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)))
+            .collect();
+        let omega: Vec<f64> = (0..n).map(|_| u(-5.0, 5.0)).collect();
+        let radius: Vec<f64> = (0..n).map(|_| u(0.8, 1.2)).collect();
+        let law = ContactLaw {
+            kn: 1.0e4,
+            ks: u(0.5e4, 1.0e4),
+            mu: if case % 5 == 0 { 0.0 } else { u(0.1, 0.8) },
+            cohesion: if case % 3 == 0 { u(0.0, 50.0) } else { 0.0 },
+            beta_n: u(0.0, 1e-3),
+            zeta_n: u(0.0, 0.3),
+            zeta_s: if case % 2 == 0 { u(0.0, 0.2) } else { 0.0 },
+            no_tension: case % 4 == 1,
+            slip_normal: if case % 7 < 4 {
+                contact::SlipNormal::Total
+            } else {
+                contact::SlipNormal::Elastic
+            },
+            ..Default::default()
+        };
+        (pos, vel, omega, radius, law)
+    }
+
     /// The two-lane kernel gives bitwise the scalar kernel's forces and
     /// shear histories: touching and separated pairs, sticking and sliding,
     /// with and without cohesion, dashpots and the no-tension clamp, with
@@ -1529,35 +1566,12 @@ mod tests {
         let mut cases = 0;
         for case in 0..4000 {
             let n = 4;
-            let pos: Vec<Vec2> = (0..n)
-                .map(|_| Vec2::new(u(0.0, 2.5), u(0.0, 2.5)))
-                .collect();
-            let vel: Vec<Vec2> = (0..n)
-                .map(|_| Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)))
-                .collect();
-            let omega: Vec<f64> = (0..n).map(|_| u(-5.0, 5.0)).collect();
-            let radius: Vec<f64> = (0..n).map(|_| u(0.8, 1.2)).collect();
+            let (pos, vel, omega, radius, law) = random_case(&mut u, n, case);
             let kin = Kin {
                 pos: &pos,
                 vel: &vel,
                 omega: &omega,
                 radius: &radius,
-            };
-            let law = ContactLaw {
-                kn: 1.0e4,
-                ks: u(0.5e4, 1.0e4),
-                mu: if case % 5 == 0 { 0.0 } else { u(0.1, 0.8) },
-                cohesion: if case % 3 == 0 { u(0.0, 50.0) } else { 0.0 },
-                beta_n: u(0.0, 1e-3),
-                zeta_n: u(0.0, 0.3),
-                zeta_s: if case % 2 == 0 { u(0.0, 0.2) } else { 0.0 },
-                no_tension: case % 4 == 1,
-                slip_normal: if case % 7 < 4 {
-                    contact::SlipNormal::Total
-                } else {
-                    contact::SlipNormal::Elastic
-                },
-                ..Default::default()
             };
             let dash = law.dashpot_terms();
             let q = [0.7, 0.7];
@@ -1593,35 +1607,12 @@ mod tests {
         let mut touching = 0;
         for case in 0..2000 {
             let n = 8;
-            let pos: Vec<Vec2> = (0..n)
-                .map(|_| Vec2::new(u(0.0, 2.5), u(0.0, 2.5)))
-                .collect();
-            let vel: Vec<Vec2> = (0..n)
-                .map(|_| Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)))
-                .collect();
-            let omega: Vec<f64> = (0..n).map(|_| u(-5.0, 5.0)).collect();
-            let radius: Vec<f64> = (0..n).map(|_| u(0.8, 1.2)).collect();
+            let (pos, vel, omega, radius, law) = random_case(&mut u, n, case);
             let kin = Kin {
                 pos: &pos,
                 vel: &vel,
                 omega: &omega,
                 radius: &radius,
-            };
-            let law = ContactLaw {
-                kn: 1.0e4,
-                ks: u(0.5e4, 1.0e4),
-                mu: if case % 5 == 0 { 0.0 } else { u(0.1, 0.8) },
-                cohesion: if case % 3 == 0 { u(0.0, 50.0) } else { 0.0 },
-                beta_n: u(0.0, 1e-3),
-                zeta_n: u(0.0, 0.3),
-                zeta_s: if case % 2 == 0 { u(0.0, 0.2) } else { 0.0 },
-                no_tension: case % 4 == 1,
-                slip_normal: if case % 7 < 4 {
-                    contact::SlipNormal::Total
-                } else {
-                    contact::SlipNormal::Elastic
-                },
-                ..Default::default()
             };
             let dash = law.dashpot_terms();
             let q = [0.7, 0.5, 0.9, 0.6];
