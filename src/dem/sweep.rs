@@ -1538,11 +1538,23 @@ mod tests {
         let law = ContactLaw {
             kn: 1.0e4,
             ks: u(0.5e4, 1.0e4),
-            mu: if case % 5 == 0 { 0.0 } else { u(0.1, 0.8) },
-            cohesion: if case % 3 == 0 { u(0.0, 50.0) } else { 0.0 },
+            mu: if case.is_multiple_of(5) {
+                0.0
+            } else {
+                u(0.1, 0.8)
+            },
+            cohesion: if case.is_multiple_of(3) {
+                u(0.0, 50.0)
+            } else {
+                0.0
+            },
             beta_n: u(0.0, 1e-3),
             zeta_n: u(0.0, 0.3),
-            zeta_s: if case % 2 == 0 { u(0.0, 0.2) } else { 0.0 },
+            zeta_s: if case.is_multiple_of(2) {
+                u(0.0, 0.2)
+            } else {
+                0.0
+            },
             no_tension: case % 4 == 1,
             slip_normal: if case % 7 < 4 {
                 contact::SlipNormal::Total
