@@ -25,8 +25,8 @@
 //!   (the square box's UCS).
 //!
 //! Measured (σ_t, direct tension, UCS of the square box, breaks near the
-//! diameter / in tension): the fast test's 40 mm disc (335 discs cut from
-//! a 42 mm box of 460, the example's grains and bonds) 3.57, 3.97,
+//! diameter / in tension): the fast test's 40 mm disc (cut from a 42 mm box of
+//! 460 discs, the example's grains and bonds) 3.57, 3.97,
 //! 15.4 MPa, 90/90/90 breaks; the example itself (50 mm, 499 discs,
 //! behind `--ignored`) 3.05, 3.70, 18.4 MPa, 75/75/74. The example's
 //! slender UCS specimen (`examples/bonded_ucs.toml`, 2:1) gives
