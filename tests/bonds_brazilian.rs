@@ -305,3 +305,46 @@ fn full_brazilian_example() {
     let b = brazilian(&src, "full");
     check(&b, direct_tension(&src), ucs(&src));
 }
+
+/// Bad `keep` input: `file:line: field: message`, exit code 2.
+#[test]
+fn bad_keep_reports_file_line_field_and_exits_2() {
+    let dir = out_dir("bad");
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, keep, says) in [
+        (
+            "radius.toml",
+            "keep = { centre = [0.026, 0.026], radius = -0.025 }",
+            "granular.keep.radius",
+        ),
+        (
+            "outside.toml",
+            "keep = { centre = [1.0, 1.0], radius = 0.025 }",
+            "granular.keep: none of the 705 discs lies inside the circle",
+        ),
+        (
+            "key.toml",
+            "keep = { centre = [0.026, 0.026], r = 0.025 }",
+            "unknown field `r`",
+        ),
+    ] {
+        let file = dir.join(name);
+        let src = swap(
+            &example(),
+            "keep = { centre = [0.026, 0.026], radius = 0.025 }",
+            keep,
+        );
+        std::fs::write(&file, src).unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_efgdem"))
+            .args(["check", file.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{name}: {err}");
+        assert!(
+            err.contains(&format!("{name}:")) && err.contains(says),
+            "{name}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
