@@ -36,6 +36,10 @@ use efgdem::dem::Granular;
 use efgdem::dem::particles::{FIX_ROT, FIX_X, FIX_Y};
 use efgdem::geom::Vec2;
 use efgdem::model::System;
+#[allow(dead_code)]
+mod common;
+
+use common::{column, csv};
 use efgdem::run::RunOptions;
 use efgdem::scenario::{self, Scenario};
 use std::path::{Path, PathBuf};
@@ -99,23 +103,6 @@ fn run(sc: &Scenario, dir: &Path) {
         ..RunOptions::new(dir)
     };
     efgdem::run::run(sc, &opts).unwrap();
-}
-
-/// `(header, rows)` of a CSV file of numbers and words.
-fn csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let head = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| l.split(',').map(String::from).collect())
-        .collect();
-    (head, rows)
-}
-
-/// The column `name` of `csv` as numbers.
-fn column(csv: &(Vec<String>, Vec<Vec<String>>), name: &str) -> Vec<f64> {
-    let k = csv.0.iter().position(|h| h == name).unwrap();
-    csv.1.iter().map(|r| r[k].parse().unwrap()).collect()
 }
 
 struct Brazilian {

@@ -18,6 +18,10 @@
 //!   hold 25 % of uniformly spread breaks; measured 46 of 64), and at
 //!   least 80 % broke in tension (measured all).
 
+#[allow(dead_code)]
+mod common;
+
+use common::{Csv, column, csv};
 use efgdem::run::RunOptions;
 use efgdem::scenario;
 use std::path::{Path, PathBuf};
@@ -46,22 +50,6 @@ fn run(src: &str, dir: &Path) {
         ..RunOptions::new(dir.join("out"))
     };
     efgdem::run::run(&sc, &opts).unwrap();
-}
-
-/// `(header, rows)` of a CSV file.
-fn csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
-    let head = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| l.split(',').map(String::from).collect())
-        .collect();
-    (head, rows)
-}
-
-fn column(csv: &(Vec<String>, Vec<Vec<String>>), name: &str) -> Vec<f64> {
-    let k = csv.0.iter().position(|h| h == name).unwrap();
-    csv.1.iter().map(|r| r[k].parse().unwrap()).collect()
 }
 
 #[test]
@@ -135,7 +123,7 @@ fn a_cemented_layer_carries_the_footing_and_cracks_under_its_edges() {
     let h2 = csv(&dir2.join("out/history.csv"));
     // the reaction when the footing's drive first reaches a settlement (the
     // runs' time steps differ: the bonds shorten the critical step)
-    let at = |h: &(Vec<String>, Vec<Vec<String>>), settlement: f64| {
+    let at = |h: &Csv, settlement: f64| {
         let s = column(h, "settlement");
         let i = s.iter().position(|&s| s <= settlement).unwrap();
         (column(h, "reaction")[i], s[i])
