@@ -471,7 +471,7 @@ fn shape_against_rolling(runs: [(&str, Scenario); 3]) {
 /// μ_r = 0.1). Asserted as in the fast test: the clumps' critical-state
 /// angle above the round discs' by more than 2° and their peak higher,
 /// rolling resistance's critical-state angle above by more than 3°.
-/// About 15 minutes on 2 cores.
+/// 20–40 minutes on 2 cores (38 min measured on a shared, loaded machine).
 #[test]
 #[ignore]
 fn full_clumps_against_round_discs_with_and_without_rolling_resistance() {
