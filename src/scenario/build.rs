@@ -285,6 +285,23 @@ pub(super) fn loose_rows(sc: &Scenario, t: &DiscsTable) -> Result<Vec<DiscRow>, 
         .map_err(|e| bad("granular.discs", e))
 }
 
+/// The discs of `rows` inside `[granular] keep` (all without it), in
+/// their order; an error if none is.
+fn kept(sc: &Scenario, rows: Vec<DiscRow>) -> Result<Vec<DiscRow>, Invalid> {
+    let Some(k) = spec(sc)?.keep else {
+        return Ok(rows);
+    };
+    let n = rows.len();
+    let rows: Vec<DiscRow> = rows.into_iter().filter(|d| k.holds(d.pos, d.r)).collect();
+    if rows.is_empty() && n > 0 {
+        return Err(bad(
+            "granular.keep",
+            format!("none of the {n} discs lies inside the circle"),
+        ));
+    }
+    Ok(rows)
+}
+
 /// The disc–body contact laws of the scenario's bodies: a body's
 /// `contact_material`, or else each disc material's own law (as for walls).
 pub fn body_laws(sc: &Scenario, mats: &[ContactLaw]) -> Vec<ContactLaw> {
@@ -310,7 +327,7 @@ pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
 
 fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> {
     let g = spec(sc)?;
-    let mut rows = disc_rows(sc, purpose)?;
+    let mut rows = kept(sc, disc_rows(sc, purpose)?)?;
     // `check` does not prepare a packing: its discs are not where the
     // bodies will find them
     let unprepared = purpose == BuildFor::Check && preparation(sc).is_some();
@@ -1262,7 +1279,7 @@ pub fn removed_discs(sc: &Scenario, purpose: BuildFor) -> Result<Vec<(String, us
     if sc.granular.is_none() {
         return Ok(Vec::new());
     }
-    let rows = disc_rows(sc, purpose)?;
+    let rows = kept(sc, disc_rows(sc, purpose)?)?;
     Ok(overlapped(sc, &rows)
         .into_iter()
         .map(|(bi, r)| (sc.body[bi].name.clone(), r.len()))

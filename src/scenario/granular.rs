@@ -67,6 +67,28 @@ pub struct GranularSpec {
     /// see the bodies).
     #[serde(default)]
     pub allow_overlap: bool,
+    /// Keep only the discs lying wholly inside this circle, once the
+    /// packing is made (generated, prepared or read): a round specimen
+    /// cut from a packing grown in a box. Default: every disc.
+    pub keep: Option<KeepCircle>,
+}
+
+/// `keep = { centre = [x, y], radius = R }`: a circle of the discs to keep.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeepCircle {
+    /// Its centre (`center` is the same field).
+    #[serde(alias = "center")]
+    pub centre: [f64; 2],
+    /// Its radius.
+    pub radius: f64,
+}
+
+impl KeepCircle {
+    /// Whether the disc of centre `pos` and radius `r` lies inside.
+    pub fn holds(&self, pos: Vec2, r: f64) -> bool {
+        (pos - Vec2::from(self.centre)).norm() + r <= self.radius
+    }
 }
 
 /// The discs: inline `[x, y, r]` rows or a table (CSV file or generator).
@@ -726,6 +748,14 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
         }
     }
     p.positive(g.thickness, "granular.thickness");
+    if let Some(k) = &g.keep {
+        p.check(
+            k.centre.iter().all(|v| v.is_finite()),
+            "granular.keep.centre",
+            "must be two finite numbers",
+        );
+        p.positive(k.radius, "granular.keep.radius");
+    }
     if let Some(s) = g.skin {
         p.positive(s, "granular.skin");
     }

@@ -42,3 +42,26 @@ pub fn run(file: &Path, out: &Path) {
 pub fn summary(out: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
 }
+
+/// A CSV file as `(header, rows)` of strings, `#` lines skipped.
+#[allow(dead_code)]
+pub type Csv = (Vec<String>, Vec<Vec<String>>);
+
+/// Read a CSV file ([`Csv`]).
+#[allow(dead_code)]
+pub fn csv(path: &Path) -> Csv {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let head = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    (head, rows)
+}
+
+/// The column `name` of a [`Csv`] as numbers.
+#[allow(dead_code)]
+pub fn column(csv: &Csv, name: &str) -> Vec<f64> {
+    let k = csv.0.iter().position(|h| h == name).unwrap();
+    csv.1.iter().map(|r| r[k].parse().unwrap()).collect()
+}
