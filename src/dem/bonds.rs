@@ -51,13 +51,16 @@
 //! ([`BondList`]): the pair `(a, b)`, `a < b`, its radius, its two
 //! strengths and its three forces, in arrays indexed by the bond, sorted
 //! by `(a, b)`. So a bond can be sent with its discs to another rank
-//! and merged into that rank's list. Everything derived — the slots of the
-//! two discs, the per-bond force of the step, the per-disc index of bonds —
-//! is rebuilt from the list ([`Bonds::refresh`]). Each step evaluates every
-//! bond independently (in parallel, from the state before the step) into
-//! a per-bond buffer; each disc then adds the forces of its bonds in the
-//! order of the partner's id (inside the contact sweep), so the result does
-//! not depend on the number of threads or on where the bonds are stored.
+//! and merged into that rank's list. What a step works on is derived from
+//! the list ([`Bonds::refresh`], after the discs are renumbered or the
+//! list changes): the bonds *held* in the slot order of their discs, in
+//! rows over the smaller slot like the contact list, with their forces in
+//! that orientation. The contact sweep steps them block by block (a
+//! block's bonds just before its discs, from the state before the step; a
+//! bond whose second disc lies in a later block ahead of the sweep, as the
+//! contacts do) and writes each bond's new forces back into the list.
+//! Every disc sums its bonds in that fixed order, so the result does not
+//! depend on the number of threads or on where the bonds are stored.
 
 use super::broadphase::CrossIndex;
 use super::contact::Side;
@@ -268,15 +271,15 @@ impl BondList {
     }
 }
 
-/// What one bond does in a step: the force on disc a (b gets its
-/// opposite) and the moments on a and b.
+/// What one bond does in a step: the force on its first disc (the
+/// second gets its opposite) and the moments on the two.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct BondForce {
-    /// Force on disc a.
+    /// Force on the first disc.
     pub f: Vec2,
-    /// Moment on disc a.
+    /// Moment on the first disc.
     pub ma: f64,
-    /// Moment on disc b.
+    /// Moment on the second disc.
     pub mb: f64,
 }
 
@@ -648,7 +651,13 @@ impl Bonds {
             .with_min_len(256)
             .filter_map(|(&(i, w), out)| {
                 let mut h = held[w as usize];
-                let (bf, brk) = h.step(&side(p, i as usize), &side(p, h.j as usize), law, thickness, dt);
+                let (bf, brk) = h.step(
+                    &side(p, i as usize),
+                    &side(p, h.j as usize),
+                    law,
+                    thickness,
+                    dt,
+                );
                 *out = (bf, h.f);
                 brk
             })

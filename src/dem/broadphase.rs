@@ -362,9 +362,7 @@ impl CrossIndex {
                 for i in b * bs..hi {
                     let (p0, p1) = (first[i] as usize, first[i + 1] as usize);
                     // j ascending: the cross pairs end the row
-                    let c0 = (p0..p1)
-                        .find(|&k| j(k) as usize >= hi)
-                        .unwrap_or(p1);
+                    let c0 = (p0..p1).find(|&k| j(k) as usize >= hi).unwrap_or(p1);
                     out.extend((c0..p1).map(|k| (i as u32, k as u32)));
                 }
                 out
