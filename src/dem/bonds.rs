@@ -51,17 +51,23 @@
 //! ([`BondList`]): the pair `(a, b)`, `a < b`, its radius, its two
 //! strengths and its three forces, in arrays indexed by the bond, sorted
 //! by `(a, b)`. So a bond can be sent with its discs to another rank
-//! and merged into that rank's list. Everything derived — the slots of the
-//! two discs, the per-bond force of the step, the per-disc index of bonds —
-//! is rebuilt from the list ([`Bonds::refresh`]). Each step evaluates every
-//! bond independently (in parallel, from the state before the step) into
-//! a per-bond buffer; each disc then adds the forces of its bonds in the
-//! order of the partner's id (inside the contact sweep), so the result does
-//! not depend on the number of threads or on where the bonds are stored.
+//! and merged into that rank's list. What a step works on is derived from
+//! the list ([`Bonds::refresh`], after the discs are renumbered or the
+//! list changes): the bonds *held* in the slot order of their discs, in
+//! rows over the smaller slot like the contact list, with their forces in
+//! that orientation. The contact sweep steps them block by block (a
+//! block's bonds just before its discs, from the state before the step; a
+//! bond whose second disc lies in a later block ahead of the sweep, as the
+//! contacts do) and writes each bond's new forces back into the list.
+//! Every disc sums its bonds in that fixed order, so the result does not
+//! depend on the number of threads or on where the bonds are stored.
 
+use super::broadphase::CrossIndex;
+use super::contact::Side;
 use super::particles::Particles;
 use crate::geom::Vec2;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Shear strength of a bond.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -265,15 +271,15 @@ impl BondList {
     }
 }
 
-/// What one bond does in a step: the force on disc a (b gets its
-/// opposite) and the moments on a and b.
+/// What one bond does in a step: the force on its first disc (the
+/// second gets its opposite) and the moments on the two.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct BondForce {
-    /// Force on disc a.
+    /// Force on the first disc.
     pub f: Vec2,
-    /// Moment on disc a.
+    /// Moment on the first disc.
     pub ma: f64,
-    /// Moment on disc b.
+    /// Moment on the second disc.
     pub mb: f64,
 }
 
@@ -390,6 +396,154 @@ pub fn strengths(law: &BondLaw, a: u32, b: u32) -> (f64, f64) {
     (law.tensile * f(z1), shear * f(z2))
 }
 
+/// A bond as the contact sweep holds it: in the row of the smaller of its
+/// two slots `i < j` (rows by `i`, `j` ascending, as the contact list),
+/// with its forces in that orientation — normal from i to j, the moment on
+/// i (minus the listed one when i is the bond's b; `F_n` and `F_s` are the
+/// same either way).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Held {
+    /// Slot of the second disc.
+    pub j: u32,
+    /// Index of the bond in the list.
+    pub k: u32,
+    /// Disc i is the bond's b.
+    pub flip: bool,
+    /// Bond radius R̄.
+    pub radius: f64,
+    /// Tensile strength σ_c.
+    pub tensile: f64,
+    /// Shear strength τ_c (or cohesion c).
+    pub shear: f64,
+    /// `(F_n, F_s, M on i)`.
+    pub f: (f64, f64, f64),
+    /// The lever arms over the distance, `r_i/(r_i + r_j)` and
+    /// `r_j/(r_i + r_j)`.
+    arms: (f64, f64),
+    /// `1/A` and `R̄/I`: the stresses as products ([`Held::intact`]).
+    inv_a: f64,
+    r_over_i: f64,
+}
+
+/// A bond that broke in the sweep: its index in the list, mode, energy
+/// released, centre and normal from its a to its b (state before the
+/// step).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Break {
+    k: u32,
+    mode: BreakMode,
+    energy: f64,
+    pos: Vec2,
+    normal: Vec2,
+}
+
+impl Held {
+    /// One step of the bond between discs `si` (slot i) and `sj`, from the
+    /// state before the step: its forces updated ([`bond_step`]) and what
+    /// it does to the two discs — nothing, with the [`Break`], when the
+    /// updated forces reach its strength ([`breaks`]).
+    #[inline(always)]
+    pub(super) fn step(
+        &mut self,
+        si: &Side,
+        sj: &Side,
+        law: &BondLaw,
+        thickness: f64,
+        dt: f64,
+    ) -> (BondForce, Option<Break>) {
+        let sec = section(self.radius, thickness);
+        let old = self.f;
+        let (bf, n, la) = bond_step(si, sj, law, sec, self.arms, dt, &mut self.f);
+        if self.intact(law) {
+            return (bf, None);
+        }
+        let Some(mode) = breaks(law, self.f, self.radius, sec, self.tensile, self.shear) else {
+            return (bf, None);
+        };
+        let brk = Break {
+            k: self.k,
+            mode,
+            energy: released(law, old, self.f, sec),
+            pos: si.pos + n * la,
+            normal: if self.flip { -n } else { n },
+        };
+        (BondForce::default(), Some(brk))
+    }
+
+    /// Are the bond's stresses clearly below its strengths? The stresses
+    /// of [`breaks`] taken as products by `1/A` and `R̄/I` are within a
+    /// few ulps of its quotients, so with a margin of `16ε` of the terms
+    /// `true` means that [`breaks`] finds the bond intact — without its
+    /// divisions, which would cost more than the rest of the bond's step.
+    #[inline(always)]
+    fn intact(&self, law: &BondLaw) -> bool {
+        const TOL: f64 = 16.0 * f64::EPSILON;
+        let (fn_, fs, m) = self.f;
+        let (sn, sm) = (-fn_ * self.inv_a, m.abs() * self.r_over_i);
+        let tau = fs.abs() * self.inv_a;
+        let friction = match law.shear {
+            ShearStrength::Fixed(_) => 0.0,
+            ShearStrength::Coulomb { tan_phi, .. } => fn_ * self.inv_a * tan_phi,
+        };
+        // τ_c rounded once more: the relative margin on it (an infinite
+        // strength stays infinite)
+        let tau_c = self.shear + friction;
+        sn + sm + TOL * (sn.abs() + sm) < self.tensile
+            && tau + TOL * (tau + friction.abs()) < tau_c * (1.0 - TOL)
+    }
+}
+
+/// The force arrays of the bond list, written by the sweep's threads at
+/// the bonds' list indices: each bond is held once and stepped by one
+/// thread, so the writes never meet; relaxed atomic stores are plain
+/// stores on the machine.
+pub(super) struct ListForces<'a> {
+    fn_: &'a [AtomicU64],
+    fs: &'a [AtomicU64],
+    moment: &'a [AtomicU64],
+}
+
+/// `v` viewed as atomics (the list's arrays, for [`ListForces`]).
+fn atomic(v: &mut [f64]) -> &[AtomicU64] {
+    // SAFETY: AtomicU64 has the size and alignment of u64 and f64 (checked
+    // below), and the exclusive borrow keeps every other access out while
+    // the view lives.
+    const { assert!(std::mem::align_of::<AtomicU64>() == std::mem::align_of::<f64>()) };
+    unsafe { &*(v as *mut [f64] as *const [AtomicU64]) }
+}
+
+impl<'a> ListForces<'a> {
+    /// The force arrays of `l`.
+    pub(super) fn of(l: &'a mut BondList) -> Self {
+        ListForces {
+            fn_: atomic(&mut l.fn_),
+            fs: atomic(&mut l.fs),
+            moment: atomic(&mut l.moment),
+        }
+    }
+
+    /// The list takes the held bond's forces.
+    #[inline(always)]
+    pub(super) fn put(&self, h: &Held) {
+        let k = h.k as usize;
+        let m = if h.flip { -h.f.2 } else { h.f.2 };
+        self.fn_[k].store(h.f.0.to_bits(), Ordering::Relaxed);
+        self.fs[k].store(h.f.1.to_bits(), Ordering::Relaxed);
+        self.moment[k].store(m.to_bits(), Ordering::Relaxed);
+    }
+}
+
+/// The disc in slot `s` as a side of a bond.
+#[inline(always)]
+fn side(p: &Particles, s: usize) -> Side {
+    Side {
+        pos: p.pos[s],
+        vel: p.vel[s],
+        omega: p.omega[s],
+        radius: p.radius[s],
+    }
+}
+
 /// The parallel bonds of an assembly: law, creation rule, the bond list
 /// and what each step derives from it.
 #[derive(Debug, Clone, Default)]
@@ -400,17 +554,18 @@ pub struct Bonds {
     pub rule: Option<BondRule>,
     /// The bonds and their history (saved by a checkpoint).
     pub list: BondList,
-    /// Slots of the two discs of each bond.
-    slots: Vec<[u32; 2]>,
-    /// What each bond does in the present step.
-    pub(super) buf: Vec<BondForce>,
-    /// Bonds of the disc in slot `s`: `list[first[s]..first[s + 1]]` (empty
-    /// without bonds).
-    pub(super) first: Vec<u32>,
-    /// Per disc, `2k` (the disc is bond k's a) or `2k + 1` (its b), in the
-    /// order of the partner's id.
-    pub(super) per_disc: Vec<u32>,
-    /// The slots or the list changed since the index was built.
+    /// Bonds of the disc in slot `i` as the smaller slot:
+    /// `held[row[i]..row[i + 1]]` (`n + 1` offsets; empty without bonds).
+    pub(super) row: Vec<u32>,
+    /// The bonds in slot order, as the sweep evaluates them.
+    pub(super) held: Vec<Held>,
+    /// The bonds whose second disc lies in a later sweep block.
+    pub(super) cross: CrossIndex,
+    /// What each cross bond does in this step and its new forces.
+    pub(super) cross_buf: Vec<(BondForce, (f64, f64, f64))>,
+    /// The disc thickness `held` was built for.
+    thickness: f64,
+    /// The slots or the list changed since `held` was built.
     stale: bool,
 }
 
@@ -426,46 +581,118 @@ impl Bonds {
         self.stale = true;
     }
 
-    /// Rebuild the slots of each bond and the per-disc index from the
-    /// list (if stale).
-    pub fn refresh(&mut self, p: &Particles) {
-        if !self.stale && self.first.len() == p.len() + 1 {
+    /// Hold the listed bonds in slot order, in rows of `n + 1` offsets,
+    /// and index the cross bonds of sweep blocks of `block` discs (if
+    /// stale); `thickness`: of the discs.
+    pub(super) fn refresh(&mut self, p: &Particles, block: usize, thickness: f64) {
+        let n = p.len();
+        if !self.stale
+            && self.row.len() == n + 1
+            && self.cross.block == block
+            && self.thickness == thickness
+        {
             return;
         }
         self.stale = false;
+        self.thickness = thickness;
         let l = &self.list;
-        self.slots.clear();
-        self.slots.extend(
-            l.a.iter()
-                .zip(&l.b)
-                .map(|(&a, &b)| [p.slot[a as usize], p.slot[b as usize]]),
-        );
-        let n = p.len();
-        self.first.clear();
-        self.first.resize(n + 1, 0);
-        if l.is_empty() {
-            self.per_disc.clear();
-            return;
-        }
-        for s in &self.slots {
-            self.first[s[0] as usize + 1] += 1;
-            self.first[s[1] as usize + 1] += 1;
+        let ends = |k: usize| {
+            let (sa, sb) = (p.slot[l.a[k] as usize], p.slot[l.b[k] as usize]);
+            (sa.min(sb), sa.max(sb), sa > sb)
+        };
+        self.row.clear();
+        self.row.resize(n + 1, 0);
+        for k in 0..l.len() {
+            self.row[ends(k).0 as usize + 1] += 1;
         }
         for d in 0..n {
-            self.first[d + 1] += self.first[d];
+            self.row[d + 1] += self.row[d];
         }
-        let mut fill = self.first.clone();
-        self.per_disc.clear();
-        self.per_disc.resize(2 * l.len(), 0);
-        // bonds in (a, b) order: each disc meets its partners in id order
-        for (k, s) in self.slots.iter().enumerate() {
-            for (side, &slot) in s.iter().enumerate() {
-                let f = &mut fill[slot as usize];
-                self.per_disc[*f as usize] = (2 * k + side) as u32;
-                *f += 1;
-            }
+        let mut fill = self.row.clone();
+        self.held.clear();
+        self.held.resize(l.len(), Held::default());
+        for k in 0..l.len() {
+            let (i, j, flip) = ends(k);
+            let m = if flip { -l.moment[k] } else { l.moment[k] };
+            let (ri, rj) = (p.radius[i as usize], p.radius[j as usize]);
+            let (a, inertia) = section(l.radius[k], thickness);
+            self.held[fill[i as usize] as usize] = Held {
+                j,
+                k: k as u32,
+                flip,
+                radius: l.radius[k],
+                tensile: l.tensile[k],
+                shear: l.shear[k],
+                f: (l.fn_[k], l.fs[k], m),
+                arms: (ri / (ri + rj), rj / (ri + rj)),
+                inv_a: 1.0 / a,
+                r_over_i: l.radius[k] / inertia,
+            };
+            fill[i as usize] += 1;
         }
-        self.buf.resize(l.len(), BondForce::default());
+        for r in self.row.windows(2) {
+            self.held[r[0] as usize..r[1] as usize].sort_unstable_by_key(|h| h.j);
+        }
+        let held = &self.held;
+        self.cross = CrossIndex::build(n, block, &self.row, |w| held[w].j);
+        self.cross_buf.clear();
+        self.cross_buf
+            .resize(self.cross.pairs.len(), Default::default());
+    }
+
+    /// Step the cross bonds (second disc in a later block) from the state
+    /// before the step into `cross_buf`; returns those that broke.
+    pub(super) fn step_cross(&mut self, p: &Particles, thickness: f64, dt: f64) -> Vec<Break> {
+        let (held, law) = (&self.held, &self.law);
+        self.cross
+            .pairs
+            .par_iter()
+            .zip(self.cross_buf.par_iter_mut())
+            .with_min_len(256)
+            .filter_map(|(&(i, w), out)| {
+                let mut h = held[w as usize];
+                let (bf, brk) = h.step(
+                    &side(p, i as usize),
+                    &side(p, h.j as usize),
+                    law,
+                    thickness,
+                    dt,
+                );
+                *out = (bf, h.f);
+                brk
+            })
+            .collect()
+    }
+
+    /// After the sweep (which wrote each bond's new forces into the list
+    /// through [`ListForces`]): the bonds that broke (`broken`, in any
+    /// order) are removed and recorded in [`BondList::broken`] with `step`
+    /// and `time`, in list order.
+    pub(super) fn finish_step(&mut self, mut broken: Vec<Break>, step: usize, time: f64) {
+        if broken.is_empty() {
+            return;
+        }
+        let l = &mut self.list;
+        broken.sort_unstable_by_key(|b| b.k);
+        let mut keep = vec![true; l.len()];
+        for b in &broken {
+            let k = b.k as usize;
+            keep[k] = false;
+            l.released += b.energy;
+            l.broken.push(BrokenBond {
+                step,
+                time,
+                a: l.a[k],
+                b: l.b[k],
+                pos: b.pos,
+                normal: b.normal,
+                radius: l.radius[k],
+                mode: b.mode,
+                energy: b.energy,
+            });
+        }
+        l.retain(&keep);
+        self.stale = true;
     }
 
     /// Apply the rule: bond every pair `(i, j)` of `pairs` (slots) that it
@@ -513,84 +740,6 @@ impl Bonds {
             l.moment.push(0.0);
         }
         self.stale = true;
-    }
-
-    /// Evaluate every bond from the state before the step (positions at t,
-    /// velocities at t − Δt/2) into the per-bond forces, updating the
-    /// bonds' forces; break and remove the bonds whose stresses reach their
-    /// strength (recorded in [`BondList::broken`] with `step` and `time`).
-    /// Bonds made in this step start from zero force (the increment of the
-    /// step that brought the discs here is not theirs).
-    pub fn evaluate(&mut self, p: &Particles, thickness: f64, dt: f64, step: usize, time: f64) {
-        self.refresh(p);
-        let l = &mut self.list;
-        let law = self.law;
-        let dt = if std::mem::take(&mut l.fresh) {
-            0.0
-        } else {
-            dt
-        };
-        let (radius, tensile, shear) = (&l.radius, &l.tensile, &l.shear);
-        let slots = &self.slots;
-        let broken: Vec<(usize, BreakMode, f64)> = self
-            .buf
-            .par_iter_mut()
-            .zip(l.fn_.par_iter_mut())
-            .zip(l.fs.par_iter_mut())
-            .zip(l.moment.par_iter_mut())
-            .enumerate()
-            .with_min_len(1024)
-            .filter_map(|(k, (((out, fn_), fs), m))| {
-                let [i, j] = slots[k].map(|s| s as usize);
-                let r = radius[k];
-                let sec = section(r, thickness);
-                let old = (*fn_, *fs, *m);
-                *out = bond_step(p, i, j, &law, sec, dt, (fn_, fs, m));
-                // the stresses of the updated forces; a broken bond acts no more
-                let new = (*fn_, *fs, *m);
-                let mode = breaks(&law, new, r, sec, tensile[k], shear[k])?;
-                *out = BondForce::default();
-                Some((k, mode, released(&law, old, new, sec)))
-            })
-            .collect();
-        if !broken.is_empty() {
-            self.remove_broken(p, &broken, step, time);
-        }
-    }
-
-    /// Remove the bonds `broken` (index, mode, energy released; ascending),
-    /// recording each.
-    fn remove_broken(
-        &mut self,
-        p: &Particles,
-        broken: &[(usize, BreakMode, f64)],
-        step: usize,
-        time: f64,
-    ) {
-        let l = &mut self.list;
-        let mut keep = vec![true; l.len()];
-        for &(k, mode, energy) in broken {
-            keep[k] = false;
-            let [i, j] = self.slots[k].map(|s| s as usize);
-            let (n, d) = super::contact::normal_between(p.pos[i], p.pos[j]);
-            let la = d * p.radius[i] / (p.radius[i] + p.radius[j]);
-            l.released += energy;
-            l.broken.push(BrokenBond {
-                step,
-                time,
-                a: l.a[k],
-                b: l.b[k],
-                pos: p.pos[i] + n * la,
-                normal: n,
-                radius: l.radius[k],
-                mode,
-                energy,
-            });
-        }
-        l.retain(&keep);
-        keep_only(&mut self.buf, &keep);
-        self.stale = true;
-        self.refresh(p);
     }
 
     /// Energy stored in the intact bonds.
@@ -657,42 +806,44 @@ impl Bonds {
                 + l.moment.capacity())
                 * 8
             + l.broken.capacity() * std::mem::size_of::<BrokenBond>()
-            + self.slots.capacity() * 8
-            + self.buf.capacity() * std::mem::size_of::<BondForce>()
-            + (self.first.capacity() + self.per_disc.capacity()) * 4
+            + self.held.capacity() * std::mem::size_of::<Held>()
+            + self.row.capacity() * 4
+            + self.cross.heap_bytes()
+            + self.cross_buf.capacity() * std::mem::size_of::<(BondForce, (f64, f64, f64))>()
     }
 }
 
-/// One bond between the discs in slots i (its a) and j (its b): update its
-/// forces `(F_n, F_s, M)` by the increments of the step (module docs) and
-/// return what it does to the two discs.
+/// One bond between discs `si` and `sj`, in that orientation (normal n
+/// from i to j, `M` the moment on i), `(c_i, c_j)` the arms over the
+/// distance: update its forces `(F_n, F_s, M)` by the increments of the
+/// step (module docs). Returns what it does to the two discs, n and the
+/// lever arm `l_i`.
 #[inline(always)]
 fn bond_step(
-    p: &Particles,
-    i: usize,
-    j: usize,
+    si: &Side,
+    sj: &Side,
     law: &BondLaw,
     (area, inertia): (f64, f64),
+    (ci, cj): (f64, f64),
     dt: f64,
-    (fn_, fs, m): (&mut f64, &mut f64, &mut f64),
-) -> BondForce {
-    let (n, d) = super::contact::normal_between(p.pos[i], p.pos[j]);
+    (fn_, fs, m): &mut (f64, f64, f64),
+) -> (BondForce, Vec2, f64) {
+    let (n, d) = super::contact::normal_between(si.pos, sj.pos);
     let t = n.perp();
-    let (ri, rj) = (p.radius[i], p.radius[j]);
-    let la = d * ri / (ri + rj);
-    let lb = d * rj / (ri + rj);
-    let dv = p.vel[i] - p.vel[j];
-    let (wi, wj) = (p.omega[i], p.omega[j]);
+    let (la, lb) = (d * ci, d * cj);
+    let dv = si.vel - sj.vel;
+    let (wi, wj) = (si.omega, sj.omega);
     let vn = dv.dot(n);
     let vt = dv.dot(t) + wi * la + wj * lb;
     *fn_ += law.kn * area * vn * dt;
     *fs -= law.ks * area * vt * dt;
     *m -= law.kn * inertia * (wi - wj) * dt;
-    BondForce {
+    let bf = BondForce {
         f: n * -*fn_ + t * *fs,
         ma: la * *fs + *m,
         mb: lb * *fs - *m,
-    }
+    };
+    (bf, n, la)
 }
 
 #[cfg(test)]

@@ -176,45 +176,10 @@ impl ContactList {
     pub(crate) fn index_cross(&mut self, n: usize) {
         let bs = block_size(n);
         self.block = bs;
-        let nb = n.div_ceil(bs);
-        let per_block: Vec<Vec<(u32, u32)>> = (0..nb)
-            .into_par_iter()
-            .map(|b| {
-                let hi = ((b + 1) * bs).min(n);
-                let mut out = Vec::new();
-                for i in b * bs..hi {
-                    let (p0, p1) = (self.first[i] as usize, self.first[i + 1] as usize);
-                    // j ascending: the cross pairs end the row
-                    let c0 = p0 + self.j[p0..p1].partition_point(|&j| (j as usize) < hi);
-                    out.extend((c0..p1).map(|k| (i as u32, k as u32)));
-                }
-                out
-            })
-            .collect();
-        self.cross.clear();
-        self.cross_first.clear();
-        self.cross_first.push(0);
-        self.cross_in_start.clear();
-        self.cross_in_start.resize(nb + 1, 0);
-        for c in &per_block {
-            self.cross.extend_from_slice(c);
-            self.cross_first.push(self.cross.len() as u32);
-            for &(_, k) in c {
-                self.cross_in_start[self.j[k as usize] as usize / bs + 1] += 1;
-            }
-        }
-        for b in 0..nb {
-            self.cross_in_start[b + 1] += self.cross_in_start[b];
-        }
-        self.cross_in.clear();
-        self.cross_in.resize(self.cross.len(), (0, 0));
-        let mut fill: Vec<u32> = self.cross_in_start[..nb].to_vec();
-        for (c, &(_, k)) in self.cross.iter().enumerate() {
-            let j = self.j[k as usize];
-            let f = &mut fill[j as usize / bs];
-            self.cross_in[*f as usize] = (j, c as u32);
-            *f += 1;
-        }
+        let j = &self.j;
+        let c = CrossIndex::build(n, bs, &self.first, |k| j[k]);
+        (self.cross, self.cross_first) = (c.pairs, c.first);
+        (self.cross_in_start, self.cross_in) = (c.in_start, c.incoming);
         self.cross_buf.clear();
         self.cross_buf
             .resize(self.cross.len(), (ContactForce::default(), 0.0));
@@ -361,6 +326,79 @@ impl ContactList {
         });
         self.walls.extend_from_slice(extra_walls);
         self.walls.sort_unstable_by_key(|w| (w.disc, w.wall));
+    }
+}
+
+/// The "cross" pairs of a list of pairs in rows over their first disc
+/// (`i < j`, j ascending within a row: the contact list, the held bonds):
+/// those whose second disc lies in a later sweep block than the first,
+/// evaluated ahead of the sweep ([`sweep`](super::sweep)).
+#[derive(Debug, Clone, Default)]
+pub struct CrossIndex {
+    /// Discs per sweep block.
+    pub block: usize,
+    /// The cross pairs `(i, k)`: first disc and pair index, ascending.
+    pub pairs: Vec<(u32, u32)>,
+    /// Cross pairs whose first disc is in block `b`: `first[b]..first[b + 1]`.
+    pub first: Vec<u32>,
+    /// Cross pairs whose second disc is in block `b`:
+    /// `incoming[in_start[b]..in_start[b + 1]]`.
+    pub in_start: Vec<u32>,
+    /// (second disc, index into `pairs`) of each cross pair, grouped by the
+    /// block of the second disc, in list order.
+    pub incoming: Vec<(u32, u32)>,
+}
+
+impl CrossIndex {
+    /// The cross pairs of the rows `first` (`n + 1` offsets; `j(k)` the
+    /// second disc of pair k) for blocks of `bs` discs.
+    pub fn build(n: usize, bs: usize, first: &[u32], j: impl Fn(usize) -> u32 + Sync) -> Self {
+        let nb = n.div_ceil(bs);
+        let per_block: Vec<Vec<(u32, u32)>> = (0..nb)
+            .into_par_iter()
+            .map(|b| {
+                let hi = ((b + 1) * bs).min(n);
+                let mut out = Vec::new();
+                for i in b * bs..hi {
+                    let (p0, p1) = (first[i] as usize, first[i + 1] as usize);
+                    // j ascending: the cross pairs end the row
+                    let c0 = (p0..p1).find(|&k| j(k) as usize >= hi).unwrap_or(p1);
+                    out.extend((c0..p1).map(|k| (i as u32, k as u32)));
+                }
+                out
+            })
+            .collect();
+        let mut c = CrossIndex {
+            block: bs,
+            first: vec![0],
+            in_start: vec![0; nb + 1],
+            ..Default::default()
+        };
+        for p in &per_block {
+            c.pairs.extend_from_slice(p);
+            c.first.push(c.pairs.len() as u32);
+            for &(_, k) in p {
+                c.in_start[j(k as usize) as usize / bs + 1] += 1;
+            }
+        }
+        for b in 0..nb {
+            c.in_start[b + 1] += c.in_start[b];
+        }
+        c.incoming.resize(c.pairs.len(), (0, 0));
+        let mut fill: Vec<u32> = c.in_start[..nb].to_vec();
+        for (x, &(_, k)) in c.pairs.iter().enumerate() {
+            let jj = j(k as usize);
+            let f = &mut fill[jj as usize / bs];
+            c.incoming[*f as usize] = (jj, x as u32);
+            *f += 1;
+        }
+        c
+    }
+
+    /// Bytes held (capacity).
+    pub fn heap_bytes(&self) -> usize {
+        (self.pairs.capacity() + self.incoming.capacity()) * 8
+            + (self.first.capacity() + self.in_start.capacity()) * 4
     }
 }
 

@@ -21,8 +21,8 @@
 //! order, then walls), so the result is bitwise the same on any number of
 //! threads.
 
-use super::bonds::BondForce;
-use super::broadphase::{ContactList, WallPair};
+use super::bonds::{BondForce, BondLaw, Break, Held, ListForces};
+use super::broadphase::{ContactList, CrossIndex, WallPair};
 use super::contact::{self, ContactForce, ContactLaw, Side, effective_mass};
 use super::integrate;
 use super::particles::{GHOST, Particles};
@@ -40,6 +40,29 @@ thread_local! {
     /// Per-thread accumulators of the rolling moments (rolling resistance
     /// only), kept as `ACC`.
     static ACC_ROLL: std::cell::RefCell<(Vec<f64>, bool)> = const { std::cell::RefCell::new((Vec::new(), false)) };
+    /// Per-thread accumulators of the bond moments on second discs (bonds
+    /// only), kept as `ACC`.
+    static ACC_BOND: std::cell::RefCell<(Vec<f64>, bool)> = const { std::cell::RefCell::new((Vec::new(), false)) };
+}
+
+type Acc<T> = std::thread::LocalKey<std::cell::RefCell<(Vec<T>, bool)>>;
+
+/// Call `f` with the first `n` entries of the zeroed accumulator `acc`
+/// ([`zeroed`]), or with none when not `needed`.
+fn with_zeroed<T: Copy + Default + 'static, R>(
+    acc: &'static Acc<T>,
+    needed: bool,
+    n: usize,
+    f: impl FnOnce(&mut [T]) -> R,
+) -> R {
+    if !needed {
+        return f(&mut []);
+    }
+    acc.with_borrow_mut(|cell| {
+        let r = f(zeroed(cell, n));
+        cell.1 = false;
+        r
+    })
 }
 
 /// The first `n` entries of a zeroed per-thread accumulator, marked in use.
@@ -79,12 +102,18 @@ struct Ctx<'a> {
     /// `(check_radii/Δt)²`: a disc is flagged when `v·v > max_v2 r²` or
     /// its state is not finite.
     max_v2: f64,
-    /// Bonds of the disc in slot s: `bond_list[bond_first[s]..bond_first[s
-    /// + 1]]` (`2k` or `2k + 1`: side a or b of bond k; empty without bonds).
-    bond_first: &'a [u32],
-    bond_list: &'a [u32],
-    /// What each bond does in this step.
-    bond_buf: &'a [BondForce],
+    /// The held bonds of the disc in slot i (as first disc):
+    /// `bond_row[i]..bond_row[i + 1]` (empty without bonds).
+    bond_row: &'a [u32],
+    bond_law: BondLaw,
+    /// Step of the bonds (0 in the step they are made).
+    bond_dt: f64,
+    thickness: f64,
+    bond_cross: &'a CrossIndex,
+    /// What each cross bond does and its new forces.
+    bond_cross_buf: &'a [(BondForce, (f64, f64, f64))],
+    /// Where the bonds' new forces go.
+    bond_out: ListForces<'a>,
     /// Evaluate inner pairs four at a time ([`lanes4`]).
     four_lanes: bool,
 }
@@ -115,12 +144,16 @@ struct Block<'a> {
     roll: &'a mut [f64],
     walls: &'a mut [WallPair],
     wall_buf: &'a mut [ContactForce],
+    /// The held bonds of the block's discs (empty without bonds).
+    held: &'a mut [Held],
 }
 
 impl<'a> Block<'a> {
     /// Split before disc slot `at` (absolute).
-    fn split(self, at: usize, first: &[u32], pair_lo: usize) -> (Block<'a>, Block<'a>) {
+    fn split(self, at: usize, ctx: &Ctx) -> (Block<'a>, Block<'a>) {
         let k = at - self.lo;
+        let first = ctx.first;
+        let pair_lo = first[self.lo] as usize;
         let (pos, pos2) = self.pos.split_at_mut(k);
         let (vel, vel2) = self.vel.split_at_mut(k);
         let (theta, theta2) = self.theta.split_at_mut(k);
@@ -153,6 +186,12 @@ impl<'a> Block<'a> {
         let w = self.walls.partition_point(|q| (q.disc as usize) < at);
         let (walls, walls2) = self.walls.split_at_mut(w);
         let (wall_buf, wall_buf2) = self.wall_buf.split_at_mut(w);
+        let (held, held2) = if self.held.is_empty() {
+            (self.held, &mut [][..])
+        } else {
+            let r = ctx.bond_row;
+            self.held.split_at_mut((r[at] - r[self.lo]) as usize)
+        };
         (
             Block {
                 lo: self.lo,
@@ -174,6 +213,7 @@ impl<'a> Block<'a> {
                 roll,
                 walls,
                 wall_buf,
+                held,
             },
             Block {
                 lo: at,
@@ -195,6 +235,7 @@ impl<'a> Block<'a> {
                 roll: roll2,
                 walls: walls2,
                 wall_buf: wall_buf2,
+                held: held2,
             },
         )
     }
@@ -215,28 +256,38 @@ impl Granular {
             self.grid.stale = true;
             self.prepare_contacts();
         }
-        // the bonds, from the state before the step (each disc adds its
-        // bonds' forces in the sweep)
-        if !self.bonds.list.is_empty() {
-            self.bonds.evaluate(
-                &self.particles,
-                self.thickness,
-                self.dt,
-                self.step,
-                self.time,
-            );
+        // the bonds, held in slot order and evaluated in the sweep with
+        // the contacts; those reaching into a later block ahead of it
+        let bonded = !self.bonds.list.is_empty();
+        let mut broken = vec![];
+        let fresh = std::mem::take(&mut self.bonds.list.fresh);
+        let dt = if fresh { 0.0 } else { self.dt };
+        if bonded {
+            self.bonds
+                .refresh(&self.particles, self.contacts.block, self.thickness);
+            broken = self.bonds.step_cross(&self.particles, self.thickness, dt);
         }
-        if self.contacts.rolling {
-            self.sweep_with::<ADVANCE, true>()
+        let (max_disp, bad, brk) = if self.contacts.rolling {
+            self.sweep_with::<ADVANCE, true>(dt)
         } else {
-            self.sweep_with::<ADVANCE, false>()
+            self.sweep_with::<ADVANCE, false>(dt)
+        };
+        if bonded {
+            broken.extend(brk);
+            self.bonds.finish_step(broken, self.step, self.time);
         }
+        (max_disp, bad)
     }
 
     /// [`sweep`](Self::sweep) with (`ROLL`) or without rolling resistance:
     /// without, the kernels are those before rolling resistance existed
-    /// (bitwise the same results, nothing more read or written).
-    fn sweep_with<const ADVANCE: bool, const ROLL: bool>(&mut self) -> (f64, bool) {
+    /// (bitwise the same results, nothing more read or written). `bond_dt`:
+    /// the bonds' step (0 in the step they are made); returns also the
+    /// bonds that broke.
+    fn sweep_with<const ADVANCE: bool, const ROLL: bool>(
+        &mut self,
+        bond_dt: f64,
+    ) -> (f64, bool, Vec<Break>) {
         let n = self.particles.len();
         let ContactList {
             j: pairs,
@@ -256,6 +307,7 @@ impl Granular {
             ..
         } = &mut self.contacts;
         let nm = self.materials.len();
+        let bonded = !self.bonds.list.is_empty();
         if ROLL {
             // lists built before rolling was switched on start from zero
             roll.resize(pairs.len(), 0.0);
@@ -307,13 +359,13 @@ impl Granular {
             store: !ADVANCE || self.store_forces,
             external: &self.external,
             max_v2: self.check_radii * self.check_radii / (self.dt * self.dt),
-            bond_first: if self.bonds.list.is_empty() {
-                &[]
-            } else {
-                &self.bonds.first
-            },
-            bond_list: &self.bonds.per_disc,
-            bond_buf: &self.bonds.buf,
+            bond_row: if bonded { &self.bonds.row } else { &[] },
+            bond_law: self.bonds.law,
+            bond_dt,
+            thickness: self.thickness,
+            bond_cross: &self.bonds.cross,
+            bond_cross_buf: &self.bonds.cross_buf,
+            bond_out: ListForces::of(&mut self.bonds.list),
             #[cfg(target_arch = "x86_64")]
             four_lanes: lanes4::available(),
             #[cfg(not(target_arch = "x86_64"))]
@@ -345,10 +397,16 @@ impl Granular {
             roll: if ROLL { roll } else { &mut [] },
             walls: wall_pairs,
             wall_buf,
+            held: if ctx.bond_row.is_empty() {
+                &mut []
+            } else {
+                &mut self.bonds.held
+            },
         };
         let has_ref = !ref_pos.is_empty();
-        let (max2, bad) = sweep_blocks::<ADVANCE, ROLL>(0..n.div_ceil(*block), all, &ctx);
-        (if has_ref { max2.sqrt() } else { f64::INFINITY }, bad)
+        let (max2, bad, broken) = sweep_blocks::<ADVANCE, ROLL>(0..n.div_ceil(*block), all, &ctx);
+        let max_disp = if has_ref { max2.sqrt() } else { f64::INFINITY };
+        (max_disp, bad, broken)
     }
 }
 
@@ -424,51 +482,46 @@ fn cross_pairs_roll(
 }
 
 /// Split the block range in halves and sweep them in parallel; returns the
-/// largest squared displacement (an exact max: thread-count independent)
-/// and whether a disc failed the step check.
+/// largest squared displacement (an exact max: thread-count independent),
+/// whether a disc failed the step check and the bonds that broke (in block
+/// order).
 fn sweep_blocks<const ADVANCE: bool, const ROLL: bool>(
     blocks: std::ops::Range<usize>,
     all: Block,
     ctx: &Ctx,
-) -> (f64, bool) {
+) -> (f64, bool, Vec<Break>) {
     if blocks.len() <= 1 {
         return if blocks.is_empty() {
-            (0.0, false)
+            (0.0, false, vec![])
         } else {
             sweep_block::<ADVANCE, ROLL>(blocks.start, all, ctx)
         };
     }
     let mid = blocks.start + blocks.len() / 2;
-    let pair_lo = ctx.first[all.lo] as usize;
-    let (a, b) = all.split(mid * ctx.block, ctx.first, pair_lo);
-    let (x, y) = rayon::join(
+    let (a, b) = all.split(mid * ctx.block, ctx);
+    let (mut x, y) = rayon::join(
         || sweep_blocks::<ADVANCE, ROLL>(blocks.start..mid, a, ctx),
         || sweep_blocks::<ADVANCE, ROLL>(mid..blocks.end, b, ctx),
     );
-    (x.0.max(y.0), x.1 || y.1)
+    x.2.extend(y.2);
+    (x.0.max(y.0), x.1 || y.1, x.2)
 }
 
-/// Sweep one block: its discs in slot order, each one's contacts, then (with
-/// `ADVANCE`) the disc's step.
+/// Sweep one block: its discs in slot order, each one's contacts and
+/// bonds, then (with `ADVANCE`) the disc's step.
 fn sweep_block<const ADVANCE: bool, const ROLL: bool>(
     blk: usize,
     b: Block,
     ctx: &Ctx,
-) -> (f64, bool) {
+) -> (f64, bool, Vec<Break>) {
     let n = b.pos.len();
-    ACC.with_borrow_mut(|acc_cell| {
-        let acc = zeroed(acc_cell, n);
-        let r = if ROLL {
-            ACC_ROLL.with_borrow_mut(|roll_cell| {
-                let r = sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, zeroed(roll_cell, n), ctx);
-                roll_cell.1 = false;
-                r
+    let bonded = !ctx.bond_row.is_empty();
+    with_zeroed(&ACC, true, n, |acc| {
+        with_zeroed(&ACC_ROLL, ROLL, n, |acc_r| {
+            with_zeroed(&ACC_BOND, bonded, n, |acc_b| {
+                sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, acc_r, acc_b, ctx)
             })
-        } else {
-            sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, &mut [], ctx)
-        };
-        acc_cell.1 = false;
-        r
+        })
     })
 }
 
@@ -478,8 +531,9 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
     b: Block,
     acc: &mut [(Vec2, f64)],
     acc_r: &mut [f64],
+    acc_b: &mut [f64],
     ctx: &Ctx,
-) -> (f64, bool) {
+) -> (f64, bool, Vec<Break>) {
     let Block {
         lo,
         pos,
@@ -500,6 +554,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         roll,
         walls,
         wall_buf,
+        held,
     } = b;
     let n = pos.len();
     let hi = lo + n;
@@ -537,6 +592,19 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             acc_r[j as usize - lo] -= ctx.cross_roll[k as usize].0;
         }
     }
+    // the bonds, before any disc advances
+    let bonded = !ctx.bond_row.is_empty();
+    let broken = if bonded {
+        let kin = Kin {
+            pos,
+            vel,
+            omega,
+            radius,
+        };
+        bond_block(blk, lo, kin, held, acc, acc_b, ctx)
+    } else {
+        vec![]
+    };
     let mut ck = ctx.cross_first[blk] as usize;
     let pair_lo = ctx.first[lo] as usize;
     let mut pk = 0usize;
@@ -738,19 +806,8 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         if ROLL {
             tq += sr;
         }
-        if !ctx.bond_first.is_empty() {
-            let s = lo + d;
-            let (b0, b1) = (ctx.bond_first[s] as usize, ctx.bond_first[s + 1] as usize);
-            for &e in &ctx.bond_list[b0..b1] {
-                let bf = &ctx.bond_buf[e as usize >> 1];
-                if e & 1 == 0 {
-                    sf += bf.f;
-                    tq += bf.ma;
-                } else {
-                    sf -= bf.f;
-                    tq += bf.mb;
-                }
-            }
+        if bonded {
+            tq += std::mem::take(&mut acc_b[d]);
         }
         while ek < ctx.external.len() && ctx.external[ek].0 as usize == lo + d {
             sf += ctx.external[ek].1;
@@ -785,7 +842,61 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             bad |= !(v.dot(v) <= ctx.max_v2 * r * r && (x.x + x.y + omega[d]).is_finite());
         }
     }
-    (m2, bad)
+    (m2, bad, broken)
+}
+
+/// The bonds of block `blk` (discs `lo..`, their data in `kin`, their held
+/// bonds `held`), from the state before the step, in a pass of their own
+/// before the block's discs are swept: the forces and moments on the
+/// block's discs into `acc` and `acc_b` (bond by bond in slot order, each
+/// bond's cross part from the cross buffer), the held forces updated.
+/// Returns the bonds that broke.
+#[inline(never)]
+fn bond_block(
+    blk: usize,
+    lo: usize,
+    kin: Kin,
+    held: &mut [Held],
+    acc: &mut [(Vec2, f64)],
+    acc_b: &mut [f64],
+    ctx: &Ctx,
+) -> Vec<Break> {
+    let n = kin.pos.len();
+    let (acc, acc_b) = (&mut acc[..n], &mut acc_b[..n]);
+    let bx = ctx.bond_cross;
+    // cross bonds whose second disc is here
+    let (a, e) = (bx.in_start[blk] as usize, bx.in_start[blk + 1] as usize);
+    for &(j, c) in &bx.incoming[a..e] {
+        let bf = &ctx.bond_cross_buf[c as usize].0;
+        acc[j as usize - lo].0 -= bf.f;
+        acc_b[j as usize - lo] += bf.mb;
+    }
+    let mut ck = bx.first[blk] as usize;
+    let row = &ctx.bond_row[lo..=lo + n];
+    let mut broken = vec![];
+    for d in 0..n {
+        let (b0, b1) = ((row[d] - row[0]) as usize, (row[d + 1] - row[0]) as usize);
+        for h in &mut held[b0..b1] {
+            let j = h.j as usize - lo;
+            let bf = if j >= n {
+                let (bf, f) = ctx.bond_cross_buf[ck];
+                ck += 1;
+                h.f = f;
+                bf
+            } else {
+                let (si, sj) = sides(kin, d, j);
+                let (bf, brk) = h.step(&si, &sj, &ctx.bond_law, ctx.thickness, ctx.bond_dt);
+                broken.extend(brk);
+                acc[j].0 -= bf.f;
+                acc_b[j] += bf.mb;
+                bf
+            };
+            ctx.bond_out.put(h);
+            acc[d].0 += bf.f;
+            acc_b[d] += bf.ma;
+        }
+    }
+    broken
 }
 
 /// Where a block's pairs and discs are, for [`lanes4`]'s batches.
