@@ -1,0 +1,227 @@
+//! Discs inside open cracks: the crack faces are on the body's contact
+//! chains, and a disc that meets a face rebounds from it as from a rigid
+//! wall of the same geometry — the analytic rebound of a linear spring.
+
+use efgdem::Vec2;
+use efgdem::model::{ContactKind, Model};
+use efgdem::scenario;
+
+const KN: f64 = 1.0e5;
+/// The body's Young modulus: 10⁵ × the contact stiffness (thickness 1).
+const E: f64 = 1.0e10;
+const R: f64 = 0.01;
+const DT: f64 = 5.0e-5;
+
+/// A unit square ([`E`], plane strain) on rollers (left `ux = 0`,
+/// bottom `uy = 0`), pulled by `strain × E` on its right side, with `crack`
+/// (TOML points), started from its static equilibrium (the crack open);
+/// one frictionless, undamped disc of radius [`R`] at `at` moving at `v`,
+/// no gravity.
+fn scenario(crack: &str, strain: f64, at: Vec2, v: Vec2) -> Model {
+    let sigma = strain * E;
+    let src = format!(
+        r#"
+[simulation]
+dt = {DT}
+steps = 1
+gravity = [0.0, 0.0]
+
+[[material]]
+name = "m"
+density = 1000.0
+kn = {KN}
+ks = {KN}
+friction = 0.0
+
+[granular]
+material = "m"
+discs = [[{}, {}, {R}]]
+velocity = [{}, {}]
+
+[[body]]
+name = "plate"
+method = "efg"
+rectangle = {{ origin = [0.0, 0.0], size = [1.0, 1.0] }}
+nodes = [11, 11]
+elastic = {{ E = {E}, nu = 0.2, density = 2000.0, plane = "strain" }}
+initial = {{ static_under = [] }}
+
+[[body.crack]]
+points = {crack}
+spacing = 0.025
+
+[[body.bc]]
+edge = "left"
+ux = 0.0
+[[body.bc]]
+edge = "bottom"
+uy = 0.0
+[[body.bc]]
+edge = "right"
+traction = [{sigma}, 0.0]
+"#,
+        at.x, at.y, v.x, v.y
+    );
+    scenario::parse(&src, "crack_discs.toml")
+        .unwrap()
+        .build()
+        .unwrap()
+}
+
+/// One contact of the disc with the body.
+struct Bounce {
+    /// Disc position and velocity at the last step without the contact.
+    x0: Vec2,
+    v0: Vec2,
+    /// The body's contact chains then (current positions).
+    chains: Vec<Vec<Vec2>>,
+    /// Disc velocity at the first step without it after.
+    after: Vec2,
+    /// Steps in contact, and the largest overlap.
+    steps: usize,
+    overlap: f64,
+    /// Contact normal (towards the body) at the first step of contact.
+    normal: Vec2,
+}
+
+fn disc(m: &Model) -> (Vec2, Vec2) {
+    let p = &m.coupled().unwrap().granular.particles;
+    (p.pos[0], p.vel[0])
+}
+
+fn chains(m: &Model) -> Vec<Vec<Vec2>> {
+    m.coupled().unwrap().bodies[0]
+        .contact_boundary()
+        .iter()
+        .map(|c| c.current.clone())
+        .collect()
+}
+
+/// Step until the disc is above `y_out` moving up (at most `max` steps):
+/// its bounces off the body, and the steps it took.
+fn bounces(m: &mut Model, y_out: f64, max: usize) -> (Vec<Bounce>, usize) {
+    let mut out: Vec<Bounce> = Vec::new();
+    let mut open = false;
+    let (mut x, mut v) = disc(m);
+    let mut before = chains(m);
+    for k in 0..max {
+        m.step().unwrap();
+        let (x1, v1) = disc(m);
+        let touch = m
+            .contacts()
+            .into_iter()
+            .filter(|c| c.kind == ContactKind::DiscBody)
+            .collect::<Vec<_>>();
+        assert!(touch.len() <= 1, "one face at a time");
+        match (touch.first(), open) {
+            (Some(t), false) => out.push(Bounce {
+                x0: x,
+                v0: v,
+                chains: std::mem::take(&mut before),
+                after: v1,
+                steps: 1,
+                overlap: t.overlap,
+                normal: t.normal,
+            }),
+            (Some(t), true) => {
+                let b = out.last_mut().unwrap();
+                b.steps += 1;
+                b.overlap = b.overlap.max(t.overlap);
+            }
+            (None, true) => out.last_mut().unwrap().after = v1,
+            (None, false) => {}
+        }
+        open = !touch.is_empty();
+        if !open {
+            before = chains(m);
+        }
+        (x, v) = (x1, v1);
+        if x.y > y_out && v.y > 0.0 && !open {
+            return (out, k + 1);
+        }
+    }
+    panic!("the disc is still in the crack after {max} steps at {x:?}");
+}
+
+/// The same disc against the chains held rigid: the closest point `H` of
+/// the chains, the linear spring `k_n (r − |x − H|)` along `(x − H)/|x − H|`,
+/// the DEM's central differences. From `x0`, `v0` to the first step without
+/// contact: the velocity then and the steps in contact.
+fn rigid(chains: &[Vec<Vec2>], x0: Vec2, v0: Vec2, mass: f64) -> (Vec2, usize) {
+    let (mut x, mut v, mut steps) = (x0, v0, 0);
+    loop {
+        let mut h = (f64::MAX, Vec2::ZERO);
+        for w in chains.iter().flat_map(|c| c.windows(2)) {
+            let t = w[1] - w[0];
+            let q = w[0] + t * ((x - w[0]).dot(t) / t.norm2()).clamp(0.0, 1.0);
+            if (x - q).norm() < h.0 {
+                h = ((x - q).norm(), q);
+            }
+        }
+        let f = if h.0 < R {
+            (x - h.1) * (KN * (R - h.0) / h.0)
+        } else {
+            Vec2::ZERO
+        };
+        v += f * (DT / mass);
+        x += v * DT;
+        if f == Vec2::ZERO && steps > 0 {
+            return (v, steps - 1);
+        }
+        steps += 1;
+    }
+}
+
+/// A disc thrown into the open mouth of an edge crack bounces from face to
+/// face and out again. Each bounce is the rigid wall's: the velocity after
+/// it is that of the same disc against the faces held rigid (the same
+/// geometry, the same linear spring, the DEM's central differences) within
+/// 1e-4 of its speed (the body is 10⁴ times stiffer than the contact
+/// spring: its faces give way by ~1e-4 of the overlap), the contact lasts
+/// the linear spring's half period `π √(m/k_n)` to a step, and its largest
+/// overlap is `|v_n| √(m/k_n)` within 0.5 %.
+#[test]
+fn a_disc_in_an_open_edge_crack_is_pushed_out_as_by_a_rigid_wall() {
+    let mut m = scenario(
+        "[[0.5, 1.0], [0.5, 0.5]]",
+        0.02,
+        Vec2::new(0.51, 1.03),
+        Vec2::new(1.0, -1.0),
+    );
+    let (b, n) = bounces(&mut m, 1.05, 40000);
+    let mass = m.coupled().unwrap().granular.particles.mass[0];
+    let w = (KN / mass).sqrt();
+    let half_period = std::f64::consts::PI / w / DT;
+    eprintln!("{} bounces, out after {n} steps at {:?}", b.len(), disc(&m));
+    assert!(b.len() >= 8, "{} bounces", b.len());
+    for (k, b) in b.iter().enumerate() {
+        let (v_rigid, steps_rigid) = rigid(&b.chains, b.x0, b.v0, mass);
+        let err = (b.after - v_rigid).norm() / b.v0.norm();
+        let vn = b.v0.dot(b.normal);
+        eprintln!(
+            "bounce {k} at {:?}: normal {:?}, v {:?} -> {:?} (rigid: {err:.2e} off), {} steps (rigid {steps_rigid}, π√(m/k)/Δt {half_period:.1}), overlap {:.5e} (|v_n|√(m/k) {:.5e})",
+            b.x0,
+            b.normal,
+            b.v0,
+            b.after,
+            b.steps,
+            b.overlap,
+            vn / w
+        );
+        // inside the crack, on the right face first, then face to face
+        assert!(b.x0.y < 1.0, "inside the crack");
+        assert_eq!(b.normal.x > 0.0, k % 2 == 0, "faces in turn");
+        assert!(err < 2e-5, "bounce {k}: {err:.2e} off the rigid wall");
+        assert_eq!(b.steps, steps_rigid, "bounce {k}");
+        assert!((b.steps as f64 - half_period).abs() < 1.0, "bounce {k}");
+        // the peak is sampled at steps: (ωΔt)²/8 = 1e-4 at most below it
+        assert!(
+            (b.overlap / (vn / w) - 1.0).abs() < 5e-4,
+            "bounce {k}: overlap"
+        );
+    }
+    // out of the mouth, moving away, touching nothing
+    let (x, v) = disc(&m);
+    assert!(x.y > 1.05 && v.y > 0.5, "{x:?} {v:?}");
+    assert!(m.contacts().is_empty());
+}
