@@ -50,6 +50,7 @@
 
 pub mod candidates;
 pub mod energy;
+mod growth;
 pub mod implicit;
 pub mod interface;
 pub mod scheme;
@@ -421,7 +422,7 @@ impl CoupledModel {
             self.set_contact_forces();
             let r = self.implicit_contacts(true);
             self.timing.transfer += t2.elapsed().as_secs_f64();
-            return r;
+            return r.and_then(|()| self.grow_bodies());
         }
         let path = self.path_scheme();
         if path {

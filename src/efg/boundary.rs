@@ -212,6 +212,18 @@ impl ContactBody for EfgBody {
             _ => crate::continuum::contact_chains(self.origin, self.size, self.grid, edges, refine),
         }
     }
+    /// A polygon body: [`EfgBody::polygon_chains`] along `names`.
+    fn named_chains(
+        &self,
+        names: Option<&[crate::continuum::EdgeName]>,
+        edges: &[Edge],
+        refine: usize,
+    ) -> Result<Vec<Vec<Vec2>>, EfgError> {
+        match self.polygon_chains(names, refine) {
+            Some(c) => c,
+            None => Ok(self.chains(edges, refine)),
+        }
+    }
     /// The MLS shape functions `φ_J(x)` (E7).
     fn row(&self, x: Vec2) -> Result<Row, EfgError> {
         let mut r = ShapeRow::new();
@@ -247,6 +259,10 @@ impl ContactBody for EfgBody {
     }
     fn commit(&mut self) -> Result<(), EfgError> {
         EfgBody::commit(self)
+    }
+    /// [`EfgBody::grow_if_due`].
+    fn grow(&mut self) -> Result<bool, EfgError> {
+        Ok(!self.grow_if_due()?.is_empty())
     }
     fn save_state(&self) -> BodyState {
         EfgBody::save_state(self)
