@@ -277,3 +277,30 @@ fn a_disc_in_an_open_internal_crack_bounces_between_its_faces() {
     // the disc stayed in the crack: it touched its chain only
     assert!(m.contacts.iter().all(|c| c.chain == 1));
 }
+
+/// `examples/cracking_beam.toml` for its first 0.08 s: the bed falls on
+/// the beam and bends it, and the notch in the middle of the tension face
+/// (the bottom) grows upwards, towards the compression side, at least
+/// three increments of 10 mm, every piece within 30° of the vertical.
+#[test]
+fn the_beam_example_cracks_from_its_tension_face_upwards() {
+    let src = std::fs::read_to_string("examples/cracking_beam.toml").unwrap();
+    let mut m = scenario::parse(&src, "examples/cracking_beam.toml")
+        .unwrap()
+        .build()
+        .unwrap();
+    for _ in 0..4000 {
+        m.step().unwrap();
+    }
+    let pts = match m.body(0) {
+        efgdem::model::body::BodyRef::Efg(b) => b.cracks()[0].crack.points.clone(),
+        _ => panic!("an EFG beam"),
+    };
+    eprintln!("crack: {pts:?}");
+    assert_eq!(pts[0], Vec2::new(0.5, 0.0), "the mouth on the bottom");
+    assert!(pts.len() >= 5, "{} increments", pts.len() - 2);
+    for w in pts.windows(2) {
+        let d = w[1] - w[0];
+        assert!(d.y > d.x.abs() * 3f64.sqrt(), "upwards: {d:?}");
+    }
+}
