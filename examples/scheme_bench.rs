@@ -178,6 +178,8 @@ fn main() {
         let (mut ratios, mut cms, mut dms) = (Vec::new(), Vec::new(), Vec::new());
         let before = cm.coupled().expect("coupled").timing;
         let p0 = cm.coupled().expect("coupled").compliance_products;
+        let rebuilds = |m: &Model| m.granular().map_or(0, |g| g.grid.rebuilds);
+        let (rc0, rd0) = (rebuilds(&cm), rebuilds(&dm));
         let (mut contacts, mut react) = (0usize, 0.0);
         pool.install(|| {
             for _ in 0..a.blocks {
@@ -206,8 +208,10 @@ fn main() {
             .fold((f64::MAX, f64::MIN), |(l, h), &r| (l.min(r), h.max(r)));
         let (created, exchanged) = c.subcycling_energy();
         eprintln!(
-            "  {nt} threads: products S x per step {:.1}",
-            (c.compliance_products - p0) as f64 / n
+            "  {nt} threads: products S x per step {:.1}; neighbour rebuilds coupled {} / DEM-only {}",
+            (c.compliance_products - p0) as f64 / n,
+            rebuilds(&cm) - rc0,
+            rebuilds(&dm) - rd0
         );
         println!(
             "| {nt} | {:.3} | {:.3} | {:.2} ({lo:.2}–{hi:.2}) | {:.3} / {:.3} / {:.3} / {:.3} | {:.0} | {:.1} | {} |",

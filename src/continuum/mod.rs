@@ -223,6 +223,14 @@ pub trait Continuum: Send {
         base: &mut Vec<Vec2>,
         free: &mut Vec<Vec2>,
     ) -> Result<(), SolveError>;
+    /// Solve the next step under the present loads ahead of
+    /// [`begin_step`](Self::begin_step), which then takes this prediction
+    /// instead of solving again (the same numbers): the exact step
+    /// predicts while the discs take their step on another thread. The
+    /// loads must not change in between.
+    fn predict_step(&mut self) -> Result<(), SolveError> {
+        Ok(())
+    }
     /// The compliance `S = Φ A⁻¹ Φᵀ` of the unknowns of
     /// [`begin_step`](Self::begin_step).
     fn compliance(&mut self) -> Compliance<'_>;
@@ -543,6 +551,8 @@ pub struct WithBoundary<B> {
     rows: Vec<Vec<Row>>,
     /// Rows of the points of the current implicit step.
     point_rows: Vec<Row>,
+    /// The step is predicted ([`Continuum::predict_step`]).
+    predicted: bool,
     /// The step's functionals: per point its `x` and `y` rows, then per
     /// stiffness term its two functionals (`[(DOF, coefficient)]`).
     functionals: Vec<Vec<(usize, f64)>>,
@@ -671,6 +681,7 @@ impl<B: ContactBody> WithBoundary<B> {
             chains: Vec::new(),
             rows: Vec::new(),
             point_rows: Vec::new(),
+            predicted: false,
             functionals: Vec::new(),
             mode: ComplianceMode::default(),
             green: None,
@@ -1023,18 +1034,27 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             self.ensure_green()?;
         }
         let direct = self.mode == ComplianceMode::Direct;
+        if !std::mem::take(&mut self.predicted) {
+            self.predict_step()?;
+            self.predicted = false;
+        }
         let (fs, dense) = (&self.functionals, &mut self.dense);
-        let res = self.body.predict().map(|nm| {
+        if let Some(nm) = self.body.newmark_mut() {
             if direct {
                 nm.point_compliance(fs, free, dense);
             } else {
                 pair_values(fs, nm.solution(), free);
             }
-        });
-        res.map_err(|e| self.solve_error(e))?;
+        }
         if let (false, Some(g)) = (direct, &self.green) {
             self.mapped.set(&self.functionals, g);
         }
+        Ok(())
+    }
+    fn predict_step(&mut self) -> Result<(), SolveError> {
+        let r = self.body.predict().map(|_| ());
+        r.map_err(|e| self.solve_error(e))?;
+        self.predicted = true;
         Ok(())
     }
     fn compliance(&mut self) -> Compliance<'_> {
@@ -1437,6 +1457,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         s
     }
     fn restore_state(&mut self, s: &BodyState) -> Result<(), StateError> {
+        self.predicted = false;
         let name = self.body.name().to_string();
         let Some(b) = &s.boundary else {
             return Err(StateError::new(format!(

@@ -56,6 +56,7 @@ pub mod interface;
 pub mod scheme;
 pub mod segments;
 pub mod state;
+pub mod workers;
 
 use crate::continuum::{BoundaryChain, Continuum};
 use crate::dem::Granular;
@@ -394,39 +395,88 @@ impl CoupledModel {
         Ok(())
     }
 
-    /// One DEM step, and a body step every `substeps` of them.
+    /// One DEM step, and a body step every `substeps` of them. The work
+    /// outside the DEM's parallel sweep runs with the other workers kept
+    /// awake ([`workers::awake`]).
     pub fn step(&mut self) -> Result<(), CouplingError> {
         if self.compliant {
             return self.step_compliant();
         }
-        let t = Instant::now();
-        let implicit = self.substeps == 1 && !self.staggered;
-        // the DEM's neighbour list (part of its step)
-        self.granular.prepare_contacts();
+        if self.substeps == 1 && !self.staggered {
+            return self.step_exact();
+        }
+        let path = self.path_scheme();
+        workers::awake(|| self.begin_substep(path))?;
         let t0 = Instant::now();
-        self.timing.dem += (t0 - t).as_secs_f64();
-        if implicit {
-            // the disc–body forces of the present state are known: they go
-            // into the DEM's fused step as external forces
+        self.granular.compute_contact_forces();
+        let t1 = Instant::now();
+        workers::awake(|| self.body_contact_forces(path));
+        let t2 = Instant::now();
+        self.granular.integrate();
+        let t3 = Instant::now();
+        self.timing.dem += (t1 - t0).as_secs_f64() + (t3 - t2).as_secs_f64();
+        self.timing.transfer += (t2 - t1).as_secs_f64();
+        let r = workers::awake(|| self.end_substep(path));
+        self.timing.body += t3.elapsed().as_secs_f64();
+        r
+    }
+
+    /// The exact step: the disc–body forces of the present state go into
+    /// the DEM's fused step as external forces — while the discs take it,
+    /// the bodies solve their step under their present loads on another
+    /// thread ([`Continuum::predict_step`]) — then the contacts and the
+    /// bodies are solved implicitly over the step. In the timing split the
+    /// prediction counts as `body` and `dem` is the rest of that time
+    /// (with several threads the two overlap).
+    fn step_exact(&mut self) -> Result<(), CouplingError> {
+        workers::awake(|| {
+            let t = Instant::now();
+            // the DEM's neighbour list (part of its step)
+            self.granular.prepare_contacts();
+            let t0 = Instant::now();
+            self.timing.dem += (t0 - t).as_secs_f64();
             if !self.primed {
                 self.implicit_contacts(false)?;
                 self.primed = true;
             }
             self.contacts_on_discs();
-            let t1 = Instant::now();
-            self.granular.step();
-            let t2 = Instant::now();
-            self.timing.transfer += (t1 - t0).as_secs_f64();
-            self.timing.dem += (t2 - t1).as_secs_f64();
-            self.check_finite()?;
+            // what a servo drive measures (the present contacts)
             self.set_contact_forces();
+            self.timing.transfer += t0.elapsed().as_secs_f64();
+            Ok::<_, CouplingError>(())
+        })?;
+        let t1 = Instant::now();
+        let (granular, bodies) = (&mut self.granular, &mut self.bodies);
+        let ((), predicted) = rayon::join(
+            || granular.step(),
+            || {
+                let t = Instant::now();
+                let r = bodies.iter_mut().try_for_each(|b| b.predict_step());
+                (r, t.elapsed().as_secs_f64())
+            },
+        );
+        let (predicted, tp) = predicted;
+        self.timing.body += tp;
+        self.timing.dem += (t1.elapsed().as_secs_f64() - tp).max(0.0);
+        predicted?;
+        workers::awake(|| {
+            let t2 = Instant::now();
+            self.check_finite()?;
             let r = self.implicit_contacts(true);
             self.timing.transfer += t2.elapsed().as_secs_f64();
-            return r.and_then(|()| self.grow_bodies());
-        }
-        let path = self.path_scheme();
+            r.and_then(|()| self.grow_bodies())
+        })
+    }
+
+    /// Before a DEM step of the predicted or staggered scheme: the DEM's
+    /// neighbour list, and the bodies' paths (predicted at the start of a
+    /// body step).
+    fn begin_substep(&mut self, path: bool) -> Result<(), CouplingError> {
+        let t = Instant::now();
+        self.granular.prepare_contacts();
+        let tb = Instant::now();
+        self.timing.dem += (tb - t).as_secs_f64();
         if path {
-            let tb = Instant::now();
             if self.sub == 0 {
                 let h = self.granular.dt * self.substeps as f64;
                 for b in &mut self.bodies {
@@ -437,17 +487,14 @@ impl CoupledModel {
             for b in &mut self.bodies {
                 b.set_path(s);
             }
-            self.timing.body += tb.elapsed().as_secs_f64();
         }
-        let t0 = Instant::now();
-        self.granular.compute_contact_forces();
-        let t1 = Instant::now();
-        self.body_contact_forces(path);
-        let t2 = Instant::now();
-        self.granular.integrate();
-        let t3 = Instant::now();
-        self.timing.dem += (t1 - t0).as_secs_f64() + (t3 - t2).as_secs_f64();
-        self.timing.transfer += (t2 - t1).as_secs_f64();
+        self.timing.body += tb.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// After a DEM step of the predicted or staggered scheme: the body
+    /// step once every `substeps` DEM steps.
+    fn end_substep(&mut self, path: bool) -> Result<(), CouplingError> {
         self.check_finite()?;
         self.sub += 1;
         if self.sub == self.substeps {
@@ -464,7 +511,6 @@ impl CoupledModel {
                 self.guard()?;
             }
         }
-        self.timing.body += t3.elapsed().as_secs_f64();
         Ok(())
     }
 
@@ -615,47 +661,52 @@ impl CoupledModel {
     /// DEM step; with n = 1 it is the exact step with the contact forces
     /// shared by the segment ends.
     fn step_compliant(&mut self) -> Result<(), CouplingError> {
-        let t = Instant::now();
-        self.granular.prepare_contacts();
-        let t0 = Instant::now();
-        self.timing.dem += (t0 - t).as_secs_f64();
-        if self.sub == 0 {
-            let h = self.granular.dt * self.substeps as f64;
-            for b in &mut self.bodies {
-                b.begin_path(h)?;
+        workers::awake(|| {
+            let t = Instant::now();
+            self.granular.prepare_contacts();
+            let t0 = Instant::now();
+            self.timing.dem += (t0 - t).as_secs_f64();
+            if self.sub == 0 {
+                let h = self.granular.dt * self.substeps as f64;
+                for b in &mut self.bodies {
+                    b.begin_path(h)?;
+                }
             }
-        }
-        let t1 = Instant::now();
-        self.timing.body += (t1 - t0).as_secs_f64();
-        if !self.primed {
-            self.compliant_contacts(false)?;
-            self.primed = true;
-        }
-        self.contacts_on_discs();
+            let t1 = Instant::now();
+            self.timing.body += (t1 - t0).as_secs_f64();
+            if !self.primed {
+                self.compliant_contacts(false)?;
+                self.primed = true;
+            }
+            self.contacts_on_discs();
+            self.timing.transfer += t1.elapsed().as_secs_f64();
+            Ok::<_, CouplingError>(())
+        })?;
         let t2 = Instant::now();
         self.granular.step();
-        let t3 = Instant::now();
-        self.timing.transfer += (t2 - t1).as_secs_f64();
-        self.timing.dem += (t3 - t2).as_secs_f64();
-        self.check_finite()?;
-        self.sub += 1;
-        let s = self.sub as f64 / self.substeps as f64;
-        for b in &mut self.bodies {
-            b.set_path(s);
-        }
-        self.compliant_contacts(true)?;
-        self.timing.transfer += t3.elapsed().as_secs_f64();
-        if self.sub == self.substeps {
-            let tb = Instant::now();
-            self.sub = 0;
-            self.set_contact_forces();
+        self.timing.dem += t2.elapsed().as_secs_f64();
+        workers::awake(|| {
+            let t3 = Instant::now();
+            self.check_finite()?;
+            self.sub += 1;
+            let s = self.sub as f64 / self.substeps as f64;
             for b in &mut self.bodies {
-                b.end_path()?;
+                b.set_path(s);
             }
-            self.timing.body += tb.elapsed().as_secs_f64();
-            self.guard()?;
-        }
-        Ok(())
+            self.compliant_contacts(true)?;
+            self.timing.transfer += t3.elapsed().as_secs_f64();
+            if self.sub == self.substeps {
+                let tb = Instant::now();
+                self.sub = 0;
+                self.set_contact_forces();
+                for b in &mut self.bodies {
+                    b.end_path()?;
+                }
+                self.timing.body += tb.elapsed().as_secs_f64();
+                self.guard()?;
+            }
+            Ok(())
+        })
     }
 
     /// The compliant scheme's contacts at the present fraction of the body
