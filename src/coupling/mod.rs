@@ -749,29 +749,10 @@ impl CoupledModel {
                     p,
                     CANDIDATE_MARGIN,
                 ) {
-                    let r = p.radius[d];
-                    let (fs_old, _) = history(&self.contacts, (p.id[d], b as u16, c as u16));
-                    let law = self.body_laws[b * nm + p.material[d] as usize];
-                    let (cn, cs) = law.dashpots(effective_mass(p.inv_mass[d], 0.0));
-                    let n = -t.normal; // from the disc towards the body
-                    let (vn0, vt0) = if advance {
-                        let v = p.vel[d] - body.path_velocity(c, t.seg, t.s);
-                        (v.dot(n), v.dot(n.perp()) + p.omega[d] * r)
-                    } else {
-                        (0.0, 0.0)
-                    };
-                    w.lin.push(implicit::Linear {
-                        law,
-                        cn,
-                        cs,
-                        n,
-                        delta0: t.overlap - CANDIDATE_MARGIN * r,
-                        vn0,
-                        vt0,
-                        fs_old: if advance { fs_old } else { 0.0 },
-                        dt,
-                        spring: None,
-                    });
+                    let along = advance.then(|| body.path_velocity(c, t.seg, t.s));
+                    let laws = (&self.body_laws[..], nm);
+                    w.lin
+                        .push(linearised(p, &self.contacts, laws, (b, c), d, &t, along, dt));
                     w.base.push(t.point);
                     w.pts.push((c, t.seg, t.s));
                     w.meta.push((d, b, c, t.point, t.feature));
@@ -909,34 +890,17 @@ impl CoupledModel {
                     p,
                     CANDIDATE_MARGIN,
                 ) {
-                    let r = p.radius[d];
-                    let (fs_old, _) = history(&self.contacts, (p.id[d], b as u16, c as u16));
-                    let law = self.body_laws[b * nm + p.material[d] as usize];
-                    let (cn, cs) = law.dashpots(effective_mass(p.inv_mass[d], 0.0));
-                    let n = -t.normal; // from the disc towards the body
-                    let (vn0, vt0) = if advance {
-                        let v = p.vel[d];
-                        (v.dot(n), v.dot(n.perp()) + p.omega[d] * r)
-                    } else {
-                        (0.0, 0.0)
-                    };
-                    w.lin.push(implicit::Linear {
-                        law,
-                        cn,
-                        cs,
-                        n,
-                        delta0: t.overlap - CANDIDATE_MARGIN * r,
-                        vn0,
-                        vt0,
-                        fs_old: if advance { fs_old } else { 0.0 },
-                        dt,
-                        spring: None,
-                    });
+                    // the body's own motion over the step is among the unknowns
+                    let along = advance.then_some(Vec2::ZERO);
+                    let laws = (&self.body_laws[..], nm);
+                    let lin = linearised(p, &self.contacts, laws, (b, c), d, &t, along, dt);
+                    let law = lin.law;
+                    w.lin.push(lin);
                     w.points.push((c, t.material));
                     w.meta.push((d, b, c, t.point, t.feature));
                     // the turn of the normal with the boundary, implicit too
                     if self.geometric_stiffness {
-                        let fn0 = law.kn * (t.overlap - CANDIDATE_MARGIN * r);
+                        let fn0 = law.kn * (t.overlap - CANDIDATE_MARGIN * p.radius[d]);
                         w.stiffness
                             .extend(t.geometric_stiffness(chain, c, p.pos[d], fn0));
                     }
@@ -1274,6 +1238,48 @@ fn touching<'a>(
         interface::detect_near(chain, x, rm, grid.near(x).iter().map(|&i| i as usize))
             .map(|t| (d, t))
     })
+}
+
+/// The contact of the disc in `slot` with chain `bc = (body, chain)` at
+/// `t`, linearised for the implicit contact solve ([`implicit::Linear`]):
+/// the candidate's gap less the margin, its shear history, and its
+/// velocity relative to the boundary moving at `along` (`None` before the
+/// first step: the discs at rest relative to the body and no history).
+#[allow(clippy::too_many_arguments)]
+fn linearised(
+    p: &Particles,
+    contacts: &[BodyContact],
+    (laws, nm): (&[ContactLaw], usize),
+    (b, c): (usize, usize),
+    d: usize,
+    t: &interface::Touch,
+    along: Option<Vec2>,
+    dt: f64,
+) -> implicit::Linear {
+    let r = p.radius[d];
+    let law = laws[b * nm + p.material[d] as usize];
+    let (cn, cs) = law.dashpots(effective_mass(p.inv_mass[d], 0.0));
+    let n = -t.normal; // from the disc towards the body
+    let (vn0, vt0, fs_old) = match along {
+        Some(vb) => {
+            let v = p.vel[d] - vb;
+            let (fs, _) = history(contacts, (p.id[d], b as u16, c as u16));
+            (v.dot(n), v.dot(n.perp()) + p.omega[d] * r, fs)
+        }
+        None => (0.0, 0.0, 0.0),
+    };
+    implicit::Linear {
+        law,
+        cn,
+        cs,
+        n,
+        delta0: t.overlap - CANDIDATE_MARGIN * r,
+        vn0,
+        vt0,
+        fs_old,
+        dt,
+        spring: None,
+    }
 }
 
 /// Shear force and rolling-spring histories of the contact `key`, 0 for
