@@ -301,3 +301,29 @@ fn edge_crack_faces_join_the_contact_chain() {
     assert_eq!((on_crack(-1.0), on_crack(1.0)), (23, 23));
     assert!(ch.contains(&Vec2::new(0.5, 0.7)), "through the tip");
 }
+
+/// A crack with two tips is a closed chain of its own (after the outline):
+/// from one tip along the left face to the other, back along the right
+/// face; it encloses no area (less the sliver between the faces), runs
+/// clockwise round it (the body on its left, as round a hole) and has the
+/// face nodes of both faces and the two tips.
+#[test]
+fn internal_crack_faces_are_a_closed_chain_of_their_own() {
+    let b = EfgBody::new(&square(-1.0, 0.0, Some(crack(0.2, 0.0, 0.0))), [0.0, 0.0]).unwrap();
+    let chains = b.polygon_chains(None, 1).unwrap().unwrap();
+    assert_eq!(chains.len(), 2);
+    let area = |ch: &[Vec2]| -> f64 { ch.windows(2).map(|w| 0.5 * w[0].cross(w[1])).sum() };
+    assert!((area(&chains[0]) - 1.0).abs() < 1e-12, "the outline");
+    let ch = &chains[1];
+    assert_eq!(ch.first(), ch.last(), "closed");
+    assert_eq!(ch[0], Vec2::new(0.3, 0.5), "from the first tip");
+    assert!(ch.contains(&Vec2::new(0.7, 0.5)), "through the other");
+    // 0.4 / 0.0125 = 32 pieces: 31 face nodes on each face, 1e-6 of the
+    // spacing off the crack: a clockwise sliver of −2 × 1.25e-8 × 0.4
+    let a = area(ch);
+    assert!(a < 0.0 && a > -1.1e-8, "area {a}");
+    let side = |s: f64| ch.iter().filter(|p| (p.y - 0.5) * s > 0.0).count();
+    assert_eq!((side(1.0), side(-1.0), ch.len()), (31, 31, 31 + 31 + 3));
+    // the left (upper) face first, left to right
+    assert!(ch[1].y > 0.5 && ch[1].x < ch[2].x);
+}

@@ -311,6 +311,12 @@ pub trait Continuum: Send {
             message: "this body cannot take the compliant sub-cycled scheme".to_string(),
         })
     }
+    /// After a body step: grow its cracks if due, and rebuild the contact
+    /// chains along the longer faces. Whether it grew (a body without
+    /// crack growth never does).
+    fn grow(&mut self) -> Result<bool, SolveError> {
+        Ok(false)
+    }
     /// Compliant scheme, at the fraction `s` of the body step: for the
     /// contact points `pts[k] = (chain, segment, σ)` (parameter σ on the
     /// segment), their positions with the held loads only (`free`) and the
@@ -407,6 +413,17 @@ pub trait ContactBody: Send + Sync + 'static {
         let (origin, size, grid) = self.grid();
         contact_chains(origin, size, grid, edges, refine)
     }
+    /// [`chains`](Self::chains), or for a polygon body those along its
+    /// edges named `names` (all loops if `None`); unknown names are an
+    /// error.
+    fn named_chains(
+        &self,
+        _names: Option<&[EdgeName]>,
+        edges: &[Edge],
+        refine: usize,
+    ) -> Result<Vec<Vec<Vec2>>, Self::Error> {
+        Ok(self.chains(edges, refine))
+    }
     /// The row `[(node, φ_J(x))]` at the material point `x`.
     fn row(&self, x: Vec2) -> Result<Row, Self::Error>;
     /// Start (or, before the first step, start again) the time stepping
@@ -448,6 +465,11 @@ pub trait ContactBody: Send + Sync + 'static {
     fn set_contact_force(&mut self, _f: Vec2) {}
     /// Accept the step, clear the point loads.
     fn commit(&mut self) -> Result<(), Self::Error>;
+    /// Grow the body's cracks if due (after a committed step); whether it
+    /// grew. Its contact chains ([`chains`](Self::chains)) then change.
+    fn grow(&mut self) -> Result<bool, Self::Error> {
+        Ok(false)
+    }
     /// Kinetic, strain and penalty energy and load work of the present
     /// state.
     fn energies(&self) -> BodyEnergies;
@@ -559,6 +581,23 @@ pub struct WithBoundary<B> {
     chain_s: ChainCompliance,
     /// Compliant scheme, per chain point: the response to the held loads.
     held_resp: Vec<Vec2>,
+    /// The edge names, edges and points per spacing the chains were made
+    /// of ([`named`](Self::named)); `None` for chains given as points.
+    source: Option<ChainSource>,
+}
+
+/// How a body's contact chains were made ([`WithBoundary::named`]).
+#[derive(Debug, Clone)]
+struct ChainSource {
+    names: Option<Vec<EdgeName>>,
+    edges: Vec<Edge>,
+    refine: usize,
+}
+
+impl ChainSource {
+    fn points<B: ContactBody>(&self, body: &B) -> Result<Vec<Vec<Vec2>>, B::Error> {
+        body.named_chains(self.names.as_deref(), &self.edges, self.refine)
+    }
 }
 
 /// The sub-cycled scheme's boundary path over one body step: the chain
@@ -612,23 +651,35 @@ impl<B: ContactBody> WithBoundary<B> {
     /// Wrap `body` with contact chains along `edges` ([`contact_chains`]),
     /// `refine` points per node spacing (for FE: per element edge).
     pub fn new(body: B, edges: &[Edge], refine: usize) -> Result<Self, B::Error> {
-        let chains = body.chains(edges, refine.max(1));
-        Self::with_chains(body, chains)
+        Self::named(body, None, edges, refine)
+    }
+
+    /// Wrap `body` with the chains of [`ContactBody::named_chains`]; they
+    /// are made again the same way when the body's cracks grow.
+    pub fn named(
+        body: B,
+        names: Option<&[EdgeName]>,
+        edges: &[Edge],
+        refine: usize,
+    ) -> Result<Self, B::Error> {
+        let source = ChainSource {
+            names: names.map(<[EdgeName]>::to_vec),
+            edges: edges.to_vec(),
+            refine: refine.max(1),
+        };
+        let chains = source.points(&body)?;
+        let mut c = Self::with_chains(body, chains)?;
+        c.source = Some(source);
+        Ok(c)
     }
 
     /// Wrap `body` with the given contact chains (reference points, body
     /// on the left), e.g. a polygon body's named edges.
     pub fn with_chains(body: B, points: Vec<Vec<Vec2>>) -> Result<Self, B::Error> {
-        let mut chains = Vec::new();
-        let mut rows = Vec::new();
-        for pts in points {
-            rows.push(pts.iter().map(|&x| body.row(x)).collect::<Result<_, _>>()?);
-            chains.push(BoundaryChain::new(pts));
-        }
         let mut c = WithBoundary {
             body,
-            chains,
-            rows,
+            chains: Vec::new(),
+            rows: Vec::new(),
             point_rows: Vec::new(),
             predicted: false,
             functionals: Vec::new(),
@@ -643,7 +694,26 @@ impl<B: ContactBody> WithBoundary<B> {
             offsets: Vec::new(),
             chain_s: ChainCompliance::default(),
             held_resp: Vec::new(),
+            source: None,
         };
+        c.set_chains(points)?;
+        Ok(c)
+    }
+
+    /// Make the contact chains of `points` (reference points, body on the
+    /// left): their rows, and the boundary's compliance and path at zero.
+    fn set_chains(&mut self, points: Vec<Vec<Vec2>>) -> Result<(), B::Error> {
+        let c = self;
+        c.rows = points
+            .iter()
+            .map(|pts| pts.iter().map(|&x| c.body.row(x)).collect())
+            .collect::<Result<_, _>>()?;
+        c.chains = points.into_iter().map(BoundaryChain::new).collect();
+        c.green = None;
+        c.mapped = PointRows::default();
+        c.dense.clear();
+        c.offsets.clear();
+        c.pre = None;
         let mut total = 0;
         for ch in &c.chains {
             c.offsets.push(total);
@@ -661,7 +731,25 @@ impl<B: ContactBody> WithBoundary<B> {
         c.path.corr.clone_from(&zeros);
         c.path.acc = zeros;
         c.refresh();
-        Ok(c)
+        Ok(())
+    }
+
+    /// The chains made again from the body (after its cracks grew); `false`
+    /// for chains given as points, or when they are the same.
+    fn remake_chains(&mut self) -> Result<bool, B::Error> {
+        let Some(source) = &self.source else {
+            return Ok(false);
+        };
+        let points = source.points(&self.body)?;
+        let same = points.len() == self.chains.len()
+            && points
+                .iter()
+                .zip(&self.chains)
+                .all(|(p, c)| *p == c.reference);
+        if !same {
+            self.set_chains(points)?;
+        }
+        Ok(!same)
     }
 
     /// Current chain positions `X + Σ φ_J(X) u_J` (true displacement, E7).
@@ -1022,6 +1110,13 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         }
         Ok(())
     }
+    fn grow(&mut self) -> Result<bool, SolveError> {
+        if !self.body.grow().map_err(|e| self.solve_error(e))? {
+            return Ok(false);
+        }
+        self.remake_chains().map_err(|e| self.solve_error(e))?;
+        Ok(true)
+    }
     fn set_step(&mut self, h: f64) -> Result<(), SolveError> {
         self.body
             .start_dynamic(h)
@@ -1369,6 +1464,10 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
                 "body `{name}`: the saved state has no contact boundary (a continuum-only model's)"
             )));
         };
+        self.body.restore_state(s)?;
+        // a state saved after a growth: the chains along the longer cracks
+        self.remake_chains()
+            .map_err(|e| StateError::new(e.to_string()))?;
         let shape = |v: &[Vec<Vec2>]| {
             v.len() == self.chains.len()
                 && v.iter()
@@ -1376,7 +1475,6 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
                     .all(|(p, c)| p.len() == c.reference.len())
         };
         let p = &b.path;
-        self.body.restore_state(s)?;
         if !shape(&p.held)
             || !shape(&p.acc)
             || !shape(&p.last_end)

@@ -50,6 +50,7 @@
 
 pub mod candidates;
 pub mod energy;
+mod growth;
 pub mod implicit;
 pub mod interface;
 pub mod scheme;
@@ -463,7 +464,7 @@ impl CoupledModel {
             self.check_finite()?;
             let r = self.implicit_contacts(true);
             self.timing.transfer += t2.elapsed().as_secs_f64();
-            r
+            r.and_then(|()| self.grow_bodies())
         })
     }
 

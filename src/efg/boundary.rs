@@ -21,7 +21,10 @@ impl EfgBody {
     /// the named edges `names` (all loops if `None`), through the boundary
     /// points (nodes and vertices) with `refine` points per piece between them, body on the left
     /// (holes run clockwise). Consecutive segments of a loop join into one
-    /// chain; a whole loop is one closed chain. Unknown names are an error.
+    /// chain; a whole loop is one closed chain. An edge crack's faces are on
+    /// the chain of its mouth's loop; a crack with two tips is a closed
+    /// chain of its own ([`crack_loop`]), whatever `names`. Unknown names
+    /// are an error.
     pub fn polygon_chains(
         &self,
         names: Option<&[crate::continuum::EdgeName]>,
@@ -114,8 +117,37 @@ impl EfgBody {
                 chains.push(cur);
             }
         }
+        for c in &m.cracks {
+            if let Some(way) = crack_loop(m, c) {
+                let mut cur = Vec::new();
+                for w in way.windows(2) {
+                    piece(&mut cur, w[0], w[1]);
+                }
+                cur.push(way[0]);
+                chains.push(cur);
+            }
+        }
         Some(Ok(chains))
     }
+}
+
+/// The way round a crack with two tips (none for an edge crack), body on
+/// the left: from the first tip along the left face's nodes to the other
+/// tip, back along the right face's to the first (first point = last).
+/// It encloses no area; its outward normals point from each face into the
+/// crack, where discs can only be when the crack is open.
+fn crack_loop(
+    m: &super::polygon::PolygonMesh,
+    c: &super::polygon::CrackNodes,
+) -> Option<Vec<Vec2>> {
+    use crate::geom::crack::End;
+    if c.ends.iter().any(|e| *e != End::Tip) {
+        return None;
+    }
+    let last = c.nodes.len() - 1;
+    let left = (0..=last).map(|k| c.nodes[k][0]);
+    let right = (0..last).rev().map(|k| c.nodes[k][1]);
+    Some(left.chain(right).map(|i| m.nodes[i]).collect())
 }
 
 /// The way round each crack mouth of a polygon mesh, keyed by the face
@@ -180,6 +212,18 @@ impl ContactBody for EfgBody {
             _ => crate::continuum::contact_chains(self.origin, self.size, self.grid, edges, refine),
         }
     }
+    /// A polygon body: [`EfgBody::polygon_chains`] along `names`.
+    fn named_chains(
+        &self,
+        names: Option<&[crate::continuum::EdgeName]>,
+        edges: &[Edge],
+        refine: usize,
+    ) -> Result<Vec<Vec<Vec2>>, EfgError> {
+        match self.polygon_chains(names, refine) {
+            Some(c) => c,
+            None => Ok(self.chains(edges, refine)),
+        }
+    }
     /// The MLS shape functions `φ_J(x)` (E7).
     fn row(&self, x: Vec2) -> Result<Row, EfgError> {
         let mut r = ShapeRow::new();
@@ -215,6 +259,10 @@ impl ContactBody for EfgBody {
     }
     fn commit(&mut self) -> Result<(), EfgError> {
         EfgBody::commit(self)
+    }
+    /// [`EfgBody::grow_if_due`].
+    fn grow(&mut self) -> Result<bool, EfgError> {
+        Ok(!self.grow_if_due()?.is_empty())
     }
     fn save_state(&self) -> BodyState {
         EfgBody::save_state(self)

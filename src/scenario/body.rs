@@ -953,7 +953,7 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 None
             }
         };
-        super::crack::validate(i, b, domain.as_ref(), sc.granular.is_some(), p);
+        super::crack::validate(i, b, domain.as_ref(), p);
         if b.is_polygon() {
             validate_polygon(sc, i, b, domain.as_ref(), p);
         } else {

@@ -524,14 +524,8 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
                 body.start_dynamic(body_dt).map_err(|e| bad(&at, e))?;
                 let named =
                     (!spec.default_contact_edges()).then_some(spec.contact_edges.as_slice());
-                let mut c = match body.polygon_chains(named, refine) {
-                    Some(chains) => {
-                        let chains = chains.map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
-                        EfgContinuum::with_chains(body, chains)
-                    }
-                    None => EfgContinuum::new(body, edges, refine),
-                }
-                .map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
+                let mut c = EfgContinuum::named(body, named, edges, refine)
+                    .map_err(|e| bad(&format!("{at}.contact_edges"), e))?;
                 c.mode = mode;
                 Box::new(c)
             }
@@ -560,7 +554,8 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
         scheme: match sc.simulation.coupling {
             // a drive's `until_step` counts body steps: the automatic
             // choice must not sub-cycle it (that would move its phases)
-            CouplingScheme::Auto if step_counted_drive(sc) => Some(Scheme::Exact),
+            // a body whose cracks grow is rebuilt between two exact steps
+            CouplingScheme::Auto if step_counted_drive(sc) || grows(sc) => Some(Scheme::Exact),
             CouplingScheme::Auto => None,
             CouplingScheme::Exact => Some(Scheme::Exact),
             CouplingScheme::Predicted => Some(Scheme::Predicted),
@@ -573,6 +568,12 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
         },
         substeps: sc.simulation.substeps.fixed(),
     };
+    if grows(sc) && request.scheme != Some(Scheme::Exact) {
+        return Err(bad(
+            "simulation.coupling",
+            "crack growth (`[body.fracture]`) in a coupled run takes the exact step: leave `coupling` out or set `coupling = \"exact\"`",
+        ));
+    }
     let choice = scheme::choose(&mut m, request)
         .map_err(|e| bad("body.0", e))?
         .map_err(|why| {
@@ -594,6 +595,11 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
 /// Whether a body has a prescribed motion whose phases or end are counted
 /// in body steps (`until_step`): a sub-cycled scheme would take them
 /// `substeps` times later, so the automatic choice keeps the exact step.
+/// Does a body's crack grow (`[body.fracture]`)?
+fn grows(sc: &Scenario) -> bool {
+    sc.body.iter().any(|b| b.fracture.is_some())
+}
+
 fn step_counted_drive(sc: &Scenario) -> bool {
     use crate::continuum::conditions::Prescribed;
     let counted = |p: &Option<Prescribed>| match p {

@@ -107,7 +107,7 @@ fn body_domain(b: &BodySpec, polygon: Option<&Domain>) -> Option<(Domain, f64)> 
 }
 
 /// Checks of body `i`'s cracks and growth.
-pub fn validate(i: usize, b: &BodySpec, polygon: Option<&Domain>, coupled: bool, p: &mut Problems) {
+pub fn validate(i: usize, b: &BodySpec, polygon: Option<&Domain>, p: &mut Problems) {
     let at = |f: &str| format!("body.{i}.{f}");
     if b.crack.is_empty() {
         p.check(
@@ -123,12 +123,6 @@ pub fn validate(i: usize, b: &BodySpec, polygon: Option<&Domain>, coupled: bool,
             "cracks are for EFG bodies (the meshfree shape functions follow them); use `method = \"efg\"`",
         );
         return;
-    }
-    if coupled && b.fracture.is_some() {
-        p.push(
-            at("fracture"),
-            "crack growth is available in continuum runs (static or dynamic); in a coupled run the cracks stay as given (leave out `[body.fracture]`)",
-        );
     }
     let Some((domain, h)) = body_domain(b, polygon) else {
         return;
