@@ -751,8 +751,16 @@ impl CoupledModel {
                 ) {
                     let along = advance.then(|| body.path_velocity(c, t.seg, t.s));
                     let laws = (&self.body_laws[..], nm);
-                    w.lin
-                        .push(linearised(p, &self.contacts, laws, (b, c), d, &t, along, dt));
+                    w.lin.push(linearised(
+                        p,
+                        &self.contacts,
+                        laws,
+                        (b, c),
+                        d,
+                        &t,
+                        along,
+                        dt,
+                    ));
                     w.base.push(t.point);
                     w.pts.push((c, t.seg, t.s));
                     w.meta.push((d, b, c, t.point, t.feature));

@@ -86,7 +86,7 @@ impl EfgBody {
     /// (the present displacement; plane stress or strain as the body).
     pub fn stress_intensity(&self, tip: Tip, ring: Ring) -> Result<[f64; 2], EfgError> {
         let (p, dir) = self.tip_frame(tip);
-        let points = self.ring_points(p, ring);
+        let points = self.ring_points(p, ring)?;
         let mut row = ShapeRow::new();
         let mut err = None;
         let sample = |x: Vec2| -> Option<TipSample> {
@@ -137,9 +137,15 @@ impl EfgBody {
 
     /// Quadrature points `(x, w)` of the triangles that meet the ring
     /// around `p`, split into pieces of about `(outer − inner)/RING_PIECES`.
-    fn ring_points(&self, p: Vec2, ring: Ring) -> Vec<(Vec2, f64)> {
+    /// A ring so small against the triangles it meets that a triangle
+    /// would need more than `MAX_PIECES` pieces a side is refused: its tip
+    /// is too close to the boundary, another crack or its crack's other
+    /// end for the integral to mean anything (and the points would not fit
+    /// in memory).
+    fn ring_points(&self, p: Vec2, ring: Ring) -> Result<Vec<(Vec2, f64)>, EfgError> {
+        const MAX_PIECES: f64 = 64.0;
         let Some(mesh) = &self.mesh else {
-            return Vec::new();
+            return Ok(Vec::new());
         };
         let piece = (ring.outer - ring.inner) / RING_PIECES;
         let mut out: Vec<QuadPoint> = Vec::new();
@@ -163,9 +169,18 @@ impl EfgBody {
             let longest = (0..3)
                 .map(|k| (tri[(k + 1) % 3] - tri[k]).norm())
                 .fold(0.0, f64::max);
-            let sub = (longest / piece).ceil().max(1.0) as usize;
-            triangle_points(std::slice::from_ref(&tri), sub, &mut out);
+            let sub = (longest / piece).ceil().max(1.0);
+            if !(sub <= MAX_PIECES) {
+                return Err(EfgError::Invalid(format!(
+                    "body `{}`: crack tip at ({:.6}, {:.6}): the ring of its interaction integral \
+                     (outer radius {:.3e} m) is too small against the triangles it meets ({longest:.3e} m \
+                     a side): the tip is too close to the body's boundary, another crack \
+                     or the crack's other end",
+                    self.name, p.x, p.y, ring.outer
+                )));
+            }
+            triangle_points(std::slice::from_ref(&tri), sub as usize, &mut out);
         }
-        out.into_iter().map(|q| (q.x, q.w)).collect()
+        Ok(out.into_iter().map(|q| (q.x, q.w)).collect())
     }
 }
