@@ -52,7 +52,7 @@
 //! strengths and its three forces, in arrays indexed by the bond, sorted
 //! by `(a, b)`. So a bond can be sent with its discs to another rank
 //! and merged into that rank's list. What a step works on is derived from
-//! the list ([`Bonds::refresh`], after the discs are renumbered or the
+//! the list (`Bonds::refresh`, after the discs are renumbered or the
 //! list changes): the bonds *held* in the slot order of their discs, in
 //! rows over the smaller slot like the contact list, with their forces in
 //! that orientation. The contact sweep steps them block by block (a

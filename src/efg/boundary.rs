@@ -23,7 +23,7 @@ impl EfgBody {
     /// (holes run clockwise). Consecutive segments of a loop join into one
     /// chain; a whole loop is one closed chain. An edge crack's faces are on
     /// the chain of its mouth's loop; a crack with two tips is a closed
-    /// chain of its own ([`crack_loop`]), whatever `names`. Unknown names
+    /// chain of its own (`crack_loop`), whatever `names`. Unknown names
     /// are an error.
     pub fn polygon_chains(
         &self,

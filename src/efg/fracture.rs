@@ -170,7 +170,7 @@ impl EfgBody {
                 .map(|k| (tri[(k + 1) % 3] - tri[k]).norm())
                 .fold(0.0, f64::max);
             let sub = (longest / piece).ceil().max(1.0);
-            if !(sub <= MAX_PIECES) {
+            if sub.is_nan() || sub > MAX_PIECES {
                 return Err(EfgError::Invalid(format!(
                     "body `{}`: crack tip at ({:.6}, {:.6}): the ring of its interaction integral \
                      (outer radius {:.3e} m) is too small against the triangles it meets ({longest:.3e} m \
