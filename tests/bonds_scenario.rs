@@ -6,20 +6,16 @@
 //! input is reported with file, line and field, exit code 2.
 
 use std::path::PathBuf;
-use std::process::Command;
+
+#[allow(dead_code)]
+mod common;
 
 fn efgdem(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_efgdem"))
-        .args(args)
-        .output()
-        .expect("runs")
+    common::bin().args(args).output().expect("runs")
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("efgdem-bonds-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::tmpdir(&format!("bonds-{name}"))
 }
 
 /// The bonded block of `tests/common/bonded_block.toml`, with outputs.

@@ -5,20 +5,16 @@
 //! with file, line and field, exit code 2.
 
 use std::path::PathBuf;
-use std::process::Command;
+
+#[allow(dead_code)]
+mod common;
 
 fn efgdem(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_efgdem"))
-        .args(args)
-        .output()
-        .expect("runs")
+    common::bin().args(args).output().expect("runs")
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("efgdem-clumps-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::tmpdir(&format!("clumps-{name}"))
 }
 
 const PILE: &str = include_str!("common/clump_pile.toml");
