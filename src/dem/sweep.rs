@@ -1632,20 +1632,31 @@ mod tests {
     /// radii, and a random contact law (friction, cohesion, shear dashpot,
     /// the no-tension clamp and the slip normal varied with `case`): the
     /// cases of the lane tests.
+    /// `n` random discs (positions, velocities, spins, radii, drawn in
+    /// that order) for the lane kernel tests.
+    #[allow(dead_code)] // on processors without the lane kernels
+    fn random_discs(
+        u: &mut impl FnMut(f64, f64) -> f64,
+        n: usize,
+    ) -> (Vec<Vec2>, Vec<Vec2>, Vec<f64>, Vec<f64>) {
+        let pos = (0..n)
+            .map(|_| Vec2::new(u(0.0, 2.5), u(0.0, 2.5)))
+            .collect();
+        let vel = (0..n)
+            .map(|_| Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)))
+            .collect();
+        let omega = (0..n).map(|_| u(-5.0, 5.0)).collect();
+        let radius = (0..n).map(|_| u(0.8, 1.2)).collect();
+        (pos, vel, omega, radius)
+    }
+
     #[allow(dead_code)] // on processors without the lane kernels
     fn random_case(
         u: &mut impl FnMut(f64, f64) -> f64,
         n: usize,
         case: usize,
     ) -> (Vec<Vec2>, Vec<Vec2>, Vec<f64>, Vec<f64>, ContactLaw) {
-        let pos: Vec<Vec2> = (0..n)
-            .map(|_| Vec2::new(u(0.0, 2.5), u(0.0, 2.5)))
-            .collect();
-        let vel: Vec<Vec2> = (0..n)
-            .map(|_| Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)))
-            .collect();
-        let omega: Vec<f64> = (0..n).map(|_| u(-5.0, 5.0)).collect();
-        let radius: Vec<f64> = (0..n).map(|_| u(0.8, 1.2)).collect();
+        let (pos, vel, omega, radius) = random_discs(u, n);
         let law = ContactLaw {
             kn: 1.0e4,
             ks: u(0.5e4, 1.0e4),
@@ -1826,14 +1837,7 @@ mod tests {
         let (mut touching, mut moment) = (0, 0);
         for case in 0..4000 {
             let n = 4;
-            let pos: Vec<Vec2> = (0..n)
-                .map(|_| Vec2::new(u(0.0, 2.5), u(0.0, 2.5)))
-                .collect();
-            let vel: Vec<Vec2> = (0..n)
-                .map(|_| Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)))
-                .collect();
-            let omega: Vec<f64> = (0..n).map(|_| u(-5.0, 5.0)).collect();
-            let radius: Vec<f64> = (0..n).map(|_| u(0.8, 1.2)).collect();
+            let (pos, vel, omega, radius) = random_discs(&mut u, n);
             // some discs fixed (inverse mass and inertia 0)
             let inv_mass: Vec<f64> = (0..n)
                 .map(|k| {
