@@ -782,6 +782,12 @@ impl<B: ContactBody> WithBoundary<B> {
         Ok(())
     }
 
+    /// The body's step under its present loads (pending in the integrator).
+    fn solve_free_step(&mut self) -> Result<(), SolveError> {
+        let r = self.body.predict().map(|_| ());
+        r.map_err(|e| self.solve_error(e))
+    }
+
     fn solve_error(&self, e: impl std::fmt::Display) -> SolveError {
         SolveError {
             body: self.body.name().to_string(),
@@ -1035,8 +1041,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         }
         let direct = self.mode == ComplianceMode::Direct;
         if !std::mem::take(&mut self.predicted) {
-            self.predict_step()?;
-            self.predicted = false;
+            self.solve_free_step()?;
         }
         let (fs, dense) = (&self.functionals, &mut self.dense);
         if let Some(nm) = self.body.newmark_mut() {
@@ -1052,8 +1057,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         Ok(())
     }
     fn predict_step(&mut self) -> Result<(), SolveError> {
-        let r = self.body.predict().map(|_| ());
-        r.map_err(|e| self.solve_error(e))?;
+        self.solve_free_step()?;
         self.predicted = true;
         Ok(())
     }
