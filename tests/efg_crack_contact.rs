@@ -327,3 +327,76 @@ fn internal_crack_faces_are_a_closed_chain_of_their_own() {
     // the left (upper) face first, left to right
     assert!(ch[1].y > 0.5 && ch[1].x < ch[2].x);
 }
+
+/// The energy `½U̇ᵀMU̇ + ½UᵀKU` + the penalty springs' and the faces'.
+fn energy(b: &EfgBody) -> f64 {
+    b.kinetic_energy() + b.elastic_energy() + b.penalty_energy()
+}
+
+/// The [`square`] unloaded, density 1, with a horizontal crack of length
+/// 0.8 (friction `mu`) whose upper half is thrown down at 0.01 (its nodal
+/// parameters: the field is that velocity away from the crack's ends)
+/// onto the lower one, held by the bottom's rollers: the faces slam shut,
+/// the compression wave bounces them open again, and so on. Δt = 0.002.
+fn slammed(mu: f64) -> EfgBody {
+    let mut body = EfgBody::new(&square(0.0, 1.0, Some(crack(0.4, 0.0, mu))), [0.0, 0.0]).unwrap();
+    body.start_dynamic(0.002).unwrap();
+    for i in 0..body.support.len() {
+        if body.node(i).y > 0.5 {
+            body.state.v[2 * i + 1] = -0.01;
+        }
+    }
+    body
+}
+
+/// Runs `steps` steps of [`slammed`]: the largest `E(t)/E(0) − 1` and
+/// least, the largest rise of `E` in one step over `E(0)`, and the number
+/// of times a face point closed.
+fn slam(mu: f64, steps: usize) -> (f64, f64, f64, usize) {
+    let mut b = slammed(mu);
+    let e0 = energy(&b);
+    let (mut hi, mut lo, mut closings) = (f64::NEG_INFINITY, f64::INFINITY, 0);
+    let (mut rise, mut last) = (f64::NEG_INFINITY, 0.0);
+    let mut was = vec![false; b.faces.points.len()];
+    for i in 0..steps {
+        b.advance().unwrap_or_else(|e| panic!("step {i}: {e}"));
+        let rel = energy(&b) / e0 - 1.0;
+        (hi, lo, rise, last) = (hi.max(rel), lo.min(rel), rise.max(rel - last), rel);
+        for (w, g) in was.iter_mut().zip(gaps(&b)) {
+            closings += usize::from(!*w && g < 0.0);
+            *w = g < 0.0;
+        }
+    }
+    eprintln!("μ = {mu}: E/E0 - 1 in {lo:e} .. {hi:e}, rise {rise:e}, {closings} closings");
+    (hi, lo, rise, closings)
+}
+
+/// Faces that slam shut and bounce open again many times conserve the
+/// energy without friction: the Newmark step carries the faces' mean
+/// force over the step (the discrete gradient of their penalty energy),
+/// so a point that closes or opens within a step does exactly the work
+/// its spring stores or gives back, and the average-acceleration step
+/// conserves `½U̇ᵀMU̇ + ½UᵀKU + V_faces` as it does for a linear body.
+/// Measured: within ±5·10⁻¹³ of E(0) over 600 steps and 6 377 closings;
+/// the bound 10⁻¹¹ is round-off (the Newton solve stops at 10⁻¹³ of the
+/// jumps). The end forces' trapezoid, which the step used before, gives
+/// back `½ k |g₀| g₁` too much at every opening: +29 % of E(0) in the same
+/// 600 steps, and a plate cut 80 % through hit by discs blew up. With
+/// μ = 0.5 the faces dissipate (−13 %): the energy never rises above its
+/// start. (Single steps can give back up to 2·10⁻³ of E(0) that earlier
+/// steps stored: the mean shear of a sliding point is not the exact
+/// gradient of a dissipation.)
+#[test]
+fn slamming_faces_conserve_energy() {
+    let (hi, lo, _, closings) = slam(0.0, 600);
+    assert!(closings >= 1000, "only {closings} closings");
+    assert!(
+        hi < 1e-11 && lo > -1e-11,
+        "energy drifts by {lo:e} .. {hi:e} of E(0) ({closings} closings)"
+    );
+    let (hi, lo, rise, closings) = slam(0.5, 600);
+    assert!(closings >= 1000, "only {closings} closings with friction");
+    assert!(hi < 1e-11, "friction creates {hi:e} of E(0)");
+    assert!(lo < -0.05, "friction dissipates only {lo:e} of E(0)");
+    assert!(rise < 5e-3, "one step gives back {rise:e} of E(0)");
+}

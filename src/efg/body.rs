@@ -5,7 +5,7 @@
 
 use super::EfgError;
 use super::assemble::{self, Operators, PointRole, PointShapes};
-use super::face_contact::FaceContact;
+use super::face_contact::{FaceContact, Law};
 use super::penalty::{MovingEdge, When};
 use super::polygon::PolygonMesh;
 use super::shape::{ShapeRow, shape_functions};
@@ -466,7 +466,7 @@ impl EfgBody {
         self.faces.shear.iter_mut().for_each(|s| *s = 0.0);
         let zero = vec![0.0; f.len()];
         self.faces
-            .solve(&mut |x| ch.solve_in_place(x), &zero, &mut f)
+            .solve(&mut |x| ch.solve_in_place(x), &zero, &mut f, Law::End, 1.0)
             .map_err(|e| self.face_error(e))?;
         self.state.u = f;
         self.state.v.iter_mut().for_each(|x| *x = 0.0);
@@ -667,13 +667,18 @@ impl EfgBody {
             }
             self.refine_pending = false;
         }
-        // the crack faces in contact at the end of the step, with all
-        // other forces of the step in U₊
+        // the crack faces in contact over the step, with all other forces
+        // of the step in U₊: their mean force as an impulse
+        let x = 1.0 / self.params.gamma;
         if !self.faces.is_empty() {
             let mut u1 = nm.solution().to_vec();
-            let r = self
-                .faces
-                .solve(&mut |x| nm.solve_in_place(x), &self.state.u, &mut u1);
+            let r = self.faces.solve(
+                &mut |x| nm.solve_in_place(x),
+                &self.state.u,
+                &mut u1,
+                Law::Mean,
+                x,
+            );
             nm.solution_mut().copy_from_slice(&u1);
             if let Err(e) = r {
                 return Err(self.face_error(e));
@@ -685,6 +690,12 @@ impl EfgBody {
         let mut work = pen.half_step_work(&self.state.u, When::Now);
         let loads0 = TimedLoad::half_sum(&self.timed, &self.state.u, t0, t1);
         nm.commit(&mut self.state);
+        if self.faces.needs_mass() {
+            let mut mf = Cholesky::factor(&nm.mass)?;
+            self.faces
+                .mass_columns(&mut |x| mf.solve_in_place(x), self.state.a.len());
+        }
+        self.faces.impulse_acceleration(&mut self.state.a);
         work += pen.half_step_work(&self.state.u, When::Next);
         self.motion_work += work;
         if !self.timed.is_empty() {
@@ -741,6 +752,9 @@ impl EfgBody {
         s.check(&self.name, self.n_dofs(), 0)?;
         s.check_drives(&self.name, Some(self.ops.penalty.moving.len()))?;
         self.state.clone_from(&s.state);
+        if let Some(c) = &s.cracks {
+            self.faces.restore(&self.state.u, &c.face_shear);
+        }
         for (e, d) in self.ops.penalty.moving.iter_mut().zip(&s.drives) {
             e.drive.state = *d;
         }
@@ -787,7 +801,6 @@ impl EfgBody {
         }
         self.increments.clone_from(&c.increments);
         self.fracture_energy = c.fracture_energy;
-        self.faces.shear.clone_from(&c.face_shear);
         Ok(())
     }
 

@@ -31,9 +31,11 @@
 //! jumps are `Δ = Δ_free + S f(Δ)`, `S = Ψ A⁻¹ Ψᵀ` with `A` the factored
 //! matrix (`K̄`, or `α₁M + α₄C + K̄`). `A⁻¹Ψᵀ` is computed once per factor
 //! (two solves per face point, only once some face closes). That small
-//! piecewise-affine system is solved by semi-smooth Newton, each step over
-//! the closed points only, exact once the points' regimes settle; then
-//! `U₊ += A⁻¹Ψᵀ f`.
+//! system is solved by semi-smooth Newton, each step over the active
+//! points only, exact once the points' regimes settle; then
+//! `U₊ += A⁻¹Ψᵀ f`. In a Newmark step `f` is the faces' mean force over
+//! the step, so that the step conserves energy with them
+//! ([`FaceContact::solve`]).
 
 use super::polygon::CrackNodes;
 use super::shape::{CoverageError, ShapeRow, shape_functions};
@@ -75,13 +77,29 @@ pub struct FacePoint {
     pub span: [f64; 2],
 }
 
-/// What one point does at a jump `Δ`: its force on the left face, the
-/// Jacobian `∂f/∂Δ` (row-major) and its regime (0 open, 1 stick, 2 slip).
+/// What one point does over a step ending at the jump `Δ`: the force it
+/// puts on the left face (`f`, with its Jacobian `∂f/∂Δ`, row-major), the
+/// force it holds at the end (`end`), its regime (0 inactive, 1 stick,
+/// 2 slip, 3 released: closed at the start, open at the end) and whether
+/// `f` is affine in `Δ` near this `Δ` (a Newton step is then exact).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Eval {
     f: Vec2,
     jac: [f64; 4],
+    end: Vec2,
     regime: u8,
+    affine: bool,
+}
+
+/// How the force a point puts on the faces over a step follows from the
+/// jumps: at the end of the step (a static solve), or the step's mean
+/// (a Newmark step, [`FacePoint::mean_normal`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Law {
+    /// The force of the jump at the end of the solve.
+    End,
+    /// The mean force over a Newmark step from the jump at its start.
+    Mean,
 }
 
 impl FacePoint {
@@ -89,38 +107,100 @@ impl FacePoint {
     fn t(&self) -> Vec2 {
         -self.n.perp()
     }
-    /// The law at jump `d` with the slip `s_old` and shear `shear_old` of
-    /// the start of the step.
-    fn eval(&self, d: Vec2, s_old: f64, shear_old: f64) -> Eval {
+
+    /// The normal force over a step from the gap `g0` to `g1` that does
+    /// exactly the work the penalty's energy `V(g) = ½ k min(g, 0)²`
+    /// releases, `f̄ = −(V(g₁) − V(g₀))/(g₁ − g₀)` (the discrete gradient),
+    /// and `∂f̄/∂g₁`. Closed at both ends it is the trapezoid
+    /// `−k (g₀ + g₁)/2` (the average-acceleration step's own mean); when
+    /// the point closes or opens within the step it is what the spring
+    /// takes or gives back, where the trapezoid of the end forces
+    /// (`½ f(g₁)`, `½ f(g₀)`) would book `½ k |g₁ g₀|` too much or too
+    /// little. `f̄` is C¹ in `g₁` and decreasing.
+    fn mean_normal(&self, g0: f64, g1: f64) -> (f64, f64) {
+        let k = self.k;
+        match (g0 < 0.0, g1 < 0.0) {
+            (true, true) => (-0.5 * k * (g0 + g1), -0.5 * k),
+            (true, false) => {
+                let d = g1 - g0;
+                (0.5 * k * g0 * g0 / d, -0.5 * k * g0 * g0 / (d * d))
+            }
+            (false, true) => {
+                let d = g1 - g0;
+                (
+                    -0.5 * k * g1 * g1 / d,
+                    -0.5 * k * g1 * (g1 - 2.0 * g0) / (d * d),
+                )
+            }
+            (false, false) => (0.0, 0.0),
+        }
+    }
+
+    /// The law over a step from the jump `d0` (shear `shear_old`) to the
+    /// jump `d`. At the end, a closed point (`g < 0`) holds `f_n = −k g`
+    /// and the elastic–Coulomb shear `f_t = f_t,old − k (s − s_old)`
+    /// capped at `μ f_n`; an open one nothing (its shear is forgotten).
+    /// [`Law::End`] puts that end force on the faces; [`Law::Mean`] the
+    /// step's mean: the normal [`mean_normal`](Self::mean_normal) `f̄_n`,
+    /// the shear `½ (f_t,old + f_t)` while the point ends closed (exact for
+    /// a sticking spring, within `μ f̄_n`); a point that opens in the step
+    /// carries `½ f_t,old |g₀|/(g − g₀)`, continuous in `Δ` and within
+    /// `μ f̄_n` as well.
+    fn eval(&self, d: Vec2, d0: Vec2, shear_old: f64, law: Law) -> Eval {
         let (n, t, k) = (self.n, self.t(), self.k);
-        let g = n.dot(d);
-        if g >= 0.0 {
+        let (g, g0) = (n.dot(d), n.dot(d0));
+        let (mut end, mut ft, mut dft, mut regime) = (Vec2::ZERO, 0.0, Vec2::ZERO, 0);
+        let fnorm = -k * g.min(0.0);
+        if g < 0.0 {
+            let trial = shear_old - k * (t.dot(d) - t.dot(d0));
+            let cap = self.mu * fnorm;
+            // ∂f_t/∂Δ = −k t (stick) or σ μ (−k n) (slip)
+            (ft, dft, regime) = if trial.abs() <= cap {
+                (trial, t * -k, 1)
+            } else {
+                let sg = trial.signum();
+                (sg * cap, n * (-k * self.mu * sg), 2)
+            };
+            end = n * fnorm + t * ft;
+        }
+        let (f, dfn, affine) = match law {
+            Law::End => (end, n * -k, true),
+            Law::Mean => {
+                let (fbar, dfbar) = self.mean_normal(g0, g);
+                if g0 < 0.0 && g >= 0.0 {
+                    regime = 3;
+                }
+                if g < 0.0 {
+                    (ft, dft) = (0.5 * (shear_old + ft), dft * 0.5);
+                } else if g0 < 0.0 {
+                    // opening: the start's half shear fading as the mean
+                    // normal force does (continuous at g = 0, within μ f̄_n)
+                    let c = -g0 / (g - g0);
+                    (ft, dft) = (0.5 * shear_old * c, n * (-0.5 * shear_old * c / (g - g0)));
+                }
+                (n * fbar + t * ft, n * dfbar, (g0 < 0.0) == (g < 0.0))
+            }
+        };
+        if regime == 0 {
             return Eval {
                 f: Vec2::ZERO,
                 jac: [0.0; 4],
-                regime: 0,
+                end,
+                regime,
+                affine: true,
             };
         }
-        let fnorm = -k * g;
-        let trial = shear_old - k * (t.dot(d) - s_old);
-        let cap = self.mu * fnorm;
-        // ∂f_n/∂Δ = −k n, ∂f_t/∂Δ = −k t (stick) or σ μ (−k n) (slip)
-        let (ft, dft, regime) = if trial.abs() <= cap {
-            (trial, t * -k, 1)
-        } else {
-            let sg = trial.signum();
-            (sg * cap, n * (-k * self.mu * sg), 2)
-        };
-        let dfn = n * -k;
         Eval {
-            f: n * fnorm + t * ft,
+            f,
             jac: [
                 n.x * dfn.x + t.x * dft.x,
                 n.x * dfn.y + t.x * dft.y,
                 n.y * dfn.x + t.y * dft.x,
                 n.y * dfn.y + t.y * dft.y,
             ],
+            end,
             regime,
+            affine,
         }
     }
 }
@@ -141,6 +221,12 @@ pub struct FaceContact {
     pub shear: Vec<f64>,
     /// Per point the force on its left face at the present state.
     pub force: Vec<Vec2>,
+    /// Per point the force the last solve put on the faces (the end force
+    /// of a static solve; `1/γ` × the mean of a Newmark step).
+    applied: Vec<Vec2>,
+    /// `M⁻¹Ψᵀ`, column after column (empty until a dynamic step first
+    /// needs it; the mass matrix does not change with Δt).
+    w: Vec<f64>,
 }
 
 /// The contact problem could not be solved.
@@ -270,33 +356,52 @@ impl FaceContact {
     }
 
     /// Contact with the faces at the solution `u1` of a step solved with
-    /// `factor` (static: from `u0 = 0`; dynamic: from the state `u0`):
-    /// `u1 += A⁻¹Ψᵀ f` with the contact forces `f`, which with the new
-    /// shear are kept. Returns the Newton iterations (0: no face closed).
+    /// `factor`, from the state `u0`: `u1 += A⁻¹Ψᵀ (x f)` with the forces
+    /// `f` of `law` ([`Law::End`]: a static solve, from `u0 = 0`, `x = 1`;
+    /// [`Law::Mean`]: a Newmark step, `x = 1/γ`). The end forces and shear
+    /// are kept. Returns the Newton iterations (0: no face in contact).
+    ///
+    /// **Why the mean in a Newmark step.** The average-acceleration step
+    /// conserves `½U̇ᵀMU̇ + ½UᵀKU` up to the work of the trapezoid of the
+    /// loads at its two ends, `½(f₀ + f₁)·ΔΔ`. For the face springs that
+    /// trapezoid is their energy change only while a point stays closed: a
+    /// point that opens within a step gives back `½ k |g₀| g₁` more than
+    /// it held. Faces that slap open and shut, with a penalty stiff against
+    /// the step (`Δt √(k/m) ≫ 1`: the closed step rings at the Nyquist
+    /// frequency), pump energy into the body at every opening until it
+    /// blows up. So the step carries the faces' mean force `f̄` over the
+    /// step, the discrete gradient of their energy, as an impulse:
+    /// `U̇₊ = U̇ + Δt/2 (Ü + Ü₊) + Δt M⁻¹Ψᵀf̄`, `U₊ = U + Δt U̇ + Δt²/4
+    /// (Ü + Ü₊) + Δt²/2 M⁻¹Ψᵀf̄` with `Ü` the acceleration of the other
+    /// loads: the solve adds `2f̄` as an end load and
+    /// [`impulse_acceleration`](Self::impulse_acceleration) takes its
+    /// acceleration back out of `Ü₊`. The faces then do exactly the work
+    /// `f̄·ΔΔ = −ΔV`: the step conserves energy with the faces' as with
+    /// any spring (for γ ≠ ½ the velocity still receives `Δt M⁻¹Ψᵀf̄`).
     pub fn solve(
         &mut self,
         solve: &mut dyn FnMut(&mut [f64]),
         u0: &[f64],
         u1: &mut [f64],
+        law: Law,
+        x: f64,
     ) -> Result<usize, Unsettled> {
         let m = self.points.len();
         let free = self.jumps(u1);
         let old = self.jumps(u0);
-        let closes = free
-            .iter()
-            .zip(&self.points)
-            .any(|(d, p)| p.n.dot(*d) < 0.0);
-        if !closes {
+        let closed = |d: &[Vec2]| d.iter().zip(&self.points).any(|(d, p)| p.n.dot(*d) < 0.0);
+        if !closed(&free) && (law == Law::End || !closed(&old)) {
             self.force.iter_mut().for_each(|f| *f = Vec2::ZERO);
             self.shear.iter_mut().for_each(|f| *f = 0.0);
+            self.applied.clear();
             return Ok(0);
         }
         if self.z.is_empty() {
             self.compliance(solve, u1.len());
         }
-        let s_old: Vec<f64> = (0..m).map(|k| self.points[k].t().dot(old[k])).collect();
-        let (iters, f) = self.newton(&free, &s_old)?;
+        let (iters, e) = self.newton(&free, &old, law, x)?;
         let n = u1.len();
+        let f: Vec<Vec2> = e.iter().map(|e| e.f).collect();
         for (c, col) in self.z.chunks_exact(n).enumerate() {
             let fc = if c % 2 == 0 { f[c / 2].x } else { f[c / 2].y };
             if fc != 0.0 {
@@ -306,23 +411,78 @@ impl FaceContact {
             }
         }
         for (k, p) in self.points.iter().enumerate() {
-            self.shear[k] = f[k].dot(p.t());
+            self.shear[k] = e[k].end.dot(p.t());
+            self.force[k] = e[k].end;
         }
-        self.force = f;
+        self.applied = f;
+        debug_assert!(self.force.len() == m);
         Ok(iters)
     }
 
-    /// `A⁻¹Ψᵀ` and `S` for the factor (2m solves).
-    fn compliance(&mut self, solve: &mut dyn FnMut(&mut [f64]), n: usize) {
-        let m2 = self.rows.len();
-        self.z.clear();
-        self.z.resize(m2 * n, 0.0);
-        for (col, row) in self.z.chunks_exact_mut(n).zip(&self.rows) {
+    /// Whether [`mass_columns`](Self::mass_columns) must be called before
+    /// [`impulse_acceleration`](Self::impulse_acceleration).
+    pub fn needs_mass(&self) -> bool {
+        !self.applied.is_empty() && self.w.is_empty()
+    }
+
+    /// `M⁻¹Ψᵀ` with `solve_mass` solving with `M` (2 solves per point),
+    /// once per body: the mass matrix does not change with Δt.
+    pub fn mass_columns(&mut self, solve_mass: &mut dyn FnMut(&mut [f64]), n: usize) {
+        self.w = self.columns(solve_mass, n);
+    }
+
+    /// Subtract from `a` the acceleration `M⁻¹Ψᵀ f` of the forces `f` the
+    /// last [`Law::Mean`] solve put on the faces: their impulse is in the
+    /// velocity, not in the acceleration the next step starts from
+    /// ([`solve`](Self::solve)).
+    pub fn impulse_acceleration(&self, a: &mut [f64]) {
+        if self.applied.is_empty() {
+            return;
+        }
+        let n = a.len();
+        for (c, col) in self.w.chunks_exact(n).enumerate() {
+            let f = self.applied[c / 2];
+            let fc = if c % 2 == 0 { f.x } else { f.y };
+            if fc != 0.0 {
+                for (ai, wi) in a.iter_mut().zip(col) {
+                    *ai -= fc * wi;
+                }
+            }
+        }
+    }
+
+    /// The end forces and shear of the state `u` after a restart (the
+    /// shear restored): what [`energy`](Self::energy) and the interaction
+    /// integral read.
+    pub fn restore(&mut self, u: &[f64], shear: &[f64]) {
+        self.shear.clone_from_slice(shear);
+        let d = self.jumps(u);
+        for (k, p) in self.points.iter().enumerate() {
+            let g = p.n.dot(d[k]);
+            self.force[k] = if g < 0.0 {
+                p.n * (-p.k * g) + p.t() * shear[k]
+            } else {
+                Vec2::ZERO
+            };
+        }
+    }
+
+    /// `B⁻¹Ψᵀ` column after column for the solve `solve` with `B`.
+    fn columns(&self, solve: &mut dyn FnMut(&mut [f64]), n: usize) -> Vec<f64> {
+        let mut z = vec![0.0; self.rows.len() * n];
+        for (col, row) in z.chunks_exact_mut(n).zip(&self.rows) {
             for &(i, c) in row {
                 col[i] += c;
             }
             solve(col);
         }
+        z
+    }
+
+    /// `A⁻¹Ψᵀ` and `S` for the factor (2m solves).
+    fn compliance(&mut self, solve: &mut dyn FnMut(&mut [f64]), n: usize) {
+        let m2 = self.rows.len();
+        self.z = self.columns(solve, n);
         self.s.clear();
         self.s.resize(m2 * m2, 0.0);
         for (c, col) in self.z.chunks_exact(n).enumerate() {
@@ -351,18 +511,32 @@ impl FaceContact {
             .collect()
     }
 
-    /// Semi-smooth Newton on `R(Δ) = Δ − Δ_free − S f(Δ) = 0`; each step
-    /// solves `(I − S J) d = −R` over the closed points `C` (an open
-    /// point's jump follows: `d_O = −R_O + S_OC J_C d_C`) and is halved
-    /// until `|R|` falls (Armijo): sticking and sliding can otherwise swap
-    /// back and forth. Exact once a whole step keeps every point's regime.
-    /// Returns the iterations and the forces.
-    fn newton(&self, free: &[Vec2], s_old: &[f64]) -> Result<(usize, Vec<Vec2>), Unsettled> {
+    /// Semi-smooth Newton on `R(Δ) = Δ − Δ_free − x S f(Δ) = 0`; each
+    /// step solves `(I − x S J) d = −R` over the active points `C` (an
+    /// inactive point's jump follows: `d_O = −R_O + x S_OC J_C d_C`) and is
+    /// halved until `|R|` falls (Armijo): sticking and sliding can
+    /// otherwise swap back and forth. Exact once a whole step keeps every
+    /// point's regime where the law is affine (a point closed, or open, at
+    /// both ends of a Newmark step); a point that closes or opens within
+    /// the step has a smooth mean force and converges quadratically.
+    /// Returns the iterations and the law at the solution (forces × x).
+    fn newton(
+        &self,
+        free: &[Vec2],
+        old: &[Vec2],
+        law: Law,
+        x: f64,
+    ) -> Result<(usize, Vec<Eval>), Unsettled> {
         let m = free.len();
         let m2 = 2 * m;
         let eval = |d: &[Vec2]| -> Vec<Eval> {
             (0..m)
-                .map(|k| self.points[k].eval(d[k], s_old[k], self.shear_old(k)))
+                .map(|k| {
+                    let mut e = self.points[k].eval(d[k], old[k], self.shear[k], law);
+                    e.f = e.f * x;
+                    e.jac.iter_mut().for_each(|j| *j *= x);
+                    e
+                })
                 .collect()
         };
         let residual = |d: &[Vec2], e: &[Eval]| -> (Vec<Vec2>, f64) {
@@ -372,7 +546,7 @@ impl FaceContact {
             let phi = r.iter().map(|x| x.dot(*x)).sum::<f64>();
             (r, phi)
         };
-        let scale = free.iter().map(|x| x.dot(*x)).sum::<f64>();
+        let scale = free.iter().chain(old).map(|x| x.dot(*x)).sum::<f64>();
         let mut d = free.to_vec();
         let mut e = eval(&d);
         let (mut r, mut phi) = residual(&d, &e);
@@ -413,8 +587,9 @@ impl FaceContact {
                 if pt <= (1.0 - 1e-4 * t) * phi || t < 1.0 / 64.0 {
                     let same = et.iter().zip(&e).all(|(a, b)| a.regime == b.regime);
                     (d, e, r, phi) = (trial, et, rt, pt);
-                    if (t == 1.0 && same) || phi <= TOL * TOL * scale {
-                        return Ok((iter, e.iter().map(|x| x.f).collect()));
+                    let exact = t == 1.0 && same && e.iter().all(|x| x.affine);
+                    if exact || phi <= TOL * TOL * scale {
+                        return Ok((iter, e));
                     }
                     break;
                 }
@@ -422,17 +597,12 @@ impl FaceContact {
             }
         }
         if phi <= ACCEPT * ACCEPT * scale {
-            return Ok((MAX_ITER, e.iter().map(|x| x.f).collect()));
+            return Ok((MAX_ITER, e));
         }
         Err(Unsettled {
             residual: phi.sqrt(),
             scale: scale.sqrt(),
         })
-    }
-
-    /// Shear of point `k` at the start of the step.
-    fn shear_old(&self, k: usize) -> f64 {
-        self.shear[k]
     }
 
     /// The forces of the faces in contact as loads per thickness `t` on
