@@ -229,6 +229,19 @@ pub struct FaceContact {
     w: Vec<f64>,
 }
 
+/// `x += c Σ_k (f_k.x B⁻¹ψ_2k + f_k.y B⁻¹ψ_2k+1)` with the columns
+/// `cols` of `B⁻¹Ψᵀ`.
+fn add_columns(cols: &[f64], f: &[Vec2], c: f64, x: &mut [f64]) {
+    for (j, col) in cols.chunks_exact(x.len()).enumerate() {
+        let fj = c * if j % 2 == 0 { f[j / 2].x } else { f[j / 2].y };
+        if fj != 0.0 {
+            for (xi, zi) in x.iter_mut().zip(col) {
+                *xi += fj * zi;
+            }
+        }
+    }
+}
+
 /// The contact problem could not be solved.
 #[derive(Debug, Clone, thiserror::Error)]
 #[error(
@@ -386,7 +399,6 @@ impl FaceContact {
         law: Law,
         x: f64,
     ) -> Result<usize, Unsettled> {
-        let m = self.points.len();
         let free = self.jumps(u1);
         let old = self.jumps(u0);
         let closed = |d: &[Vec2]| d.iter().zip(&self.points).any(|(d, p)| p.n.dot(*d) < 0.0);
@@ -400,22 +412,13 @@ impl FaceContact {
             self.compliance(solve, u1.len());
         }
         let (iters, e) = self.newton(&free, &old, law, x)?;
-        let n = u1.len();
         let f: Vec<Vec2> = e.iter().map(|e| e.f).collect();
-        for (c, col) in self.z.chunks_exact(n).enumerate() {
-            let fc = if c % 2 == 0 { f[c / 2].x } else { f[c / 2].y };
-            if fc != 0.0 {
-                for (u, z) in u1.iter_mut().zip(col) {
-                    *u += fc * z;
-                }
-            }
-        }
+        add_columns(&self.z, &f, 1.0, u1);
         for (k, p) in self.points.iter().enumerate() {
             self.shear[k] = e[k].end.dot(p.t());
             self.force[k] = e[k].end;
         }
         self.applied = f;
-        debug_assert!(self.force.len() == m);
         Ok(iters)
     }
 
@@ -439,16 +442,7 @@ impl FaceContact {
         if self.applied.is_empty() {
             return;
         }
-        let n = a.len();
-        for (c, col) in self.w.chunks_exact(n).enumerate() {
-            let f = self.applied[c / 2];
-            let fc = if c % 2 == 0 { f.x } else { f.y };
-            if fc != 0.0 {
-                for (ai, wi) in a.iter_mut().zip(col) {
-                    *ai -= fc * wi;
-                }
-            }
-        }
+        add_columns(&self.w, &self.applied, -1.0, a);
     }
 
     /// The end forces and shear of the state `u` after a restart (the
