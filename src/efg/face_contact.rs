@@ -93,7 +93,7 @@ struct Eval {
 
 /// How the force a point puts on the faces over a step follows from the
 /// jumps: at the end of the step (a static solve), or the step's mean
-/// (a Newmark step, [`FacePoint::mean_normal`]).
+/// (a Newmark step, [`FaceContact::solve`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Law {
     /// The force of the jump at the end of the solve.
