@@ -396,7 +396,7 @@ impl Granular {
         let crit = self.critical_step(bodies);
         (self.dt > DT_WARN * crit.dt).then(|| {
             format!(
-                "dt = {:e} is {:.3} × the critical step {:e} (of {}); above {DT_WARN} × it a dense packing, a packing of unequal discs or a contact whose overlap changes fast may not stay stable (a run that goes unstable stops with exit code 3); the default is {DT_SAFETY} ×",
+                "dt = {:e} is {:.3} × the critical step {:.4e} (of {}); above {DT_WARN} × it a dense packing, a packing of unequal discs or a contact whose overlap changes fast may not stay stable (a run that goes unstable stops with exit code 3); the default is {DT_SAFETY} ×",
                 self.dt,
                 self.dt / crit.dt,
                 crit.dt,
