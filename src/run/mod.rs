@@ -281,12 +281,12 @@ pub fn run_on(
             "clumps ([clumps]) do not run on several ranks yet: run this scenario with one process".into(),
         )),
         System::Granular(_) if ranks > 1 => ranks::run(run, model, comm),
-        _ if ranks > 1 => Err(RunError::Ranks(format!(
-            "only granular scenarios (discs and walls) run on several ranks; this one has continuum bodies: run it with one process (not under mpirun -np {ranks})"
+        System::Continuum { .. } if ranks > 1 => Err(RunError::Ranks(format!(
+            "a continuum scenario (bodies without discs) does not run on several ranks: run it with one process (not under mpirun -np {ranks})"
         ))),
         System::Continuum { .. } => continuum::run(run, model),
         System::Granular(_) => granular::run(run, model),
-        System::Coupled(_) => coupled::run(run, model),
+        System::Coupled(_) => coupled::run(run, model, comm),
     };
     if let Err(e @ (RunError::Io(_) | RunError::OutDir { .. })) = &result {
         // say so in summary.json if the disk still takes it; the files
