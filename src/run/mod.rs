@@ -228,8 +228,11 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
 /// scenario and options. On one rank it is [`run`]; on several, a granular
 /// scenario is divided over them ([`crate::decomp`]) with outputs bitwise
 /// those of one rank, written by rank 0 (which returns the summary; the
-/// others return `Null`, or [`RunError::OnRank0`] when rank 0 failed).
-/// Continuum and coupled scenarios are refused on several ranks.
+/// others return `Null`, or [`RunError::OnRank0`] when rank 0 failed); so
+/// is a coupled one, its bodies on every rank
+/// ([`crate::decomp::near_bodies`]). Continuum scenarios, and the coupled
+/// schemes that step the discs in phases (predicted, staggered), are
+/// refused on several ranks.
 pub fn run_on(
     sc: &Scenario,
     opts: &RunOptions,
