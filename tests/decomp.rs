@@ -546,32 +546,38 @@ fn coupled_bitwise(coupling: &str, ranks: usize, steps: usize, every: usize) {
         let hs: Vec<_> = comms
             .into_iter()
             .map(|c| {
+                // each rank its own worker pool, as each MPI process has:
+                // a collective inside the exact step's join must not wait
+                // for a rank whose closure queues behind it in a shared pool
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
                 sc.spawn(move || {
-                    let comm: Arc<dyn Comm> = Arc::new(c);
-                    let mut model = coupled_model(coupling);
-                    let m = model.coupled_mut().unwrap();
-                    let d = Decomposed::new(&m.granular, comm);
-                    let (mut nb, mut whole) = NearBodies::new(d, m);
-                    let mut out = Vec::new();
-                    for s in 1..=steps {
+                    pool.unwrap().install(|| {
+                        let comm: Arc<dyn Comm> = Arc::new(c);
+                        let mut model = coupled_model(coupling);
                         let m = model.coupled_mut().unwrap();
-                        nb.set_zone(&m.bodies);
-                        m.step_with(&mut nb).unwrap();
-                        model.step += 1;
-                        assert!(nb.outcome.0);
-                        if s % every == 0
-                            && let Some(st) = nb.d.gather()
-                        {
-                            whole.restore_state(&st).unwrap();
+                        let d = Decomposed::new(&m.granular, comm);
+                        let (mut nb, mut whole) = NearBodies::new(d, m);
+                        let mut out = Vec::new();
+                        for s in 1..=steps {
                             let m = model.coupled_mut().unwrap();
-                            std::mem::swap(&mut m.granular, &mut whole);
-                            out.push(postcard::to_stdvec(&model.save_state()).unwrap());
-                            let m = model.coupled_mut().unwrap();
-                            std::mem::swap(&mut m.granular, &mut whole);
+                            nb.set_zone(&m.bodies);
+                            m.step_with(&mut nb).unwrap();
+                            model.step += 1;
+                            assert!(nb.outcome.0);
+                            if s % every == 0
+                                && let Some(st) = nb.d.gather()
+                            {
+                                whole.restore_state(&st).unwrap();
+                                let m = model.coupled_mut().unwrap();
+                                std::mem::swap(&mut m.granular, &mut whole);
+                                out.push(postcard::to_stdvec(&model.save_state()).unwrap());
+                                let m = model.coupled_mut().unwrap();
+                                std::mem::swap(&mut m.granular, &mut whole);
+                            }
                         }
-                    }
-                    let contacts = postcard::to_stdvec(&model.coupled().unwrap().contacts);
-                    (out, contacts.unwrap())
+                        let contacts = postcard::to_stdvec(&model.coupled().unwrap().contacts);
+                        (out, contacts.unwrap())
+                    })
                 })
             })
             .collect();

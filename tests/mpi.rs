@@ -322,7 +322,11 @@ fn mpirun_of_coupled_scenarios_writes_the_outputs_of_one_process() {
         efgdem_with(&dir, "ck", 3, 1, &["--checkpoint-every", "1000"]);
         let ck = dir.join("ck").join("checkpoint.bin");
         efgdem_with(&dir, "ck", 2, 1, &["--restart", ck.to_str().unwrap()]);
-        same_files(&dir.join("ck"), &want, &format!("{name}: 3 ranks, restarted on 2"));
+        same_files(
+            &dir.join("ck"),
+            &want,
+            &format!("{name}: 3 ranks, restarted on 2"),
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
@@ -347,7 +351,10 @@ fn mpirun_of_the_predicted_scheme_is_refused() {
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("predicted coupled scheme does not run on several ranks"), "{err}");
+    assert!(
+        err.contains("predicted coupled scheme does not run on several ranks"),
+        "{err}"
+    );
     assert!(err.contains("compliant"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -212,7 +212,14 @@ pub fn set_contacts_on_discs(g: &mut Granular, contacts: &[BodyContact]) {
         .filter_map(|q| {
             let slot = *p.slot.get(q.disc as usize)? as usize;
             // the torque arm r n; the rolling moment acts on the disc only
-            (slot < p.len()).then(|| (slot, q.force, p.pos[slot] + q.normal * p.radius[slot], q.moment))
+            (slot < p.len()).then(|| {
+                (
+                    slot,
+                    q.force,
+                    p.pos[slot] + q.normal * p.radius[slot],
+                    q.moment,
+                )
+            })
         })
         .collect();
     g.set_external_with_moments(ext);
@@ -1109,7 +1116,9 @@ impl CoupledModel {
         let r_max = match self.r_max {
             Some((n, r)) if n == g.grid.rebuilds => r,
             _ => {
-                let r = self.radius_bound.unwrap_or_else(|| g.particles.max_radius());
+                let r = self
+                    .radius_bound
+                    .unwrap_or_else(|| g.particles.max_radius());
                 // a larger disc needs a longer reach
                 regrid |= self.r_max.is_none_or(|(_, r0)| r > r0);
                 self.r_max = Some((g.grid.rebuilds, r));

@@ -37,9 +37,9 @@
 //!   ([`Decomposed::new`] splits a whole assembly).
 
 pub mod comm;
-pub mod near_bodies;
 #[cfg(feature = "mpi")]
 pub mod mpi;
+pub mod near_bodies;
 pub mod regions;
 
 use crate::dem::Granular;

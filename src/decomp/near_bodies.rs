@@ -77,13 +77,20 @@ impl NearBodies {
         self.zone.clear();
         for b in bodies {
             let pad = base + 2.0 * (b.path_extent() + b.path_correction());
-            for c in b.contact_boundary().iter().filter(|c| !c.current.is_empty()) {
-                let (lo, hi) = c.current.iter().fold((c.current[0], c.current[0]), |(l, h), q| {
-                    (
-                        Vec2::new(l.x.min(q.x), l.y.min(q.y)),
-                        Vec2::new(h.x.max(q.x), h.y.max(q.y)),
-                    )
-                });
+            for c in b
+                .contact_boundary()
+                .iter()
+                .filter(|c| !c.current.is_empty())
+            {
+                let (lo, hi) = c
+                    .current
+                    .iter()
+                    .fold((c.current[0], c.current[0]), |(l, h), q| {
+                        (
+                            Vec2::new(l.x.min(q.x), l.y.min(q.y)),
+                            Vec2::new(h.x.max(q.x), h.y.max(q.y)),
+                        )
+                    });
                 let e = Vec2::new(pad, pad);
                 self.zone.push((lo - e, hi + e));
             }

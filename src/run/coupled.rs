@@ -5,6 +5,7 @@ use super::{Run, RunError};
 use crate::continuum::Edge;
 use crate::coupling::energy::WorkMeter;
 use crate::coupling::{CoupledModel, GUARD_STEPS, MAX_CREATED};
+use crate::decomp::Comm;
 use crate::geom::Vec2;
 use crate::model::body::At;
 use crate::model::body::BodyRef;
@@ -12,12 +13,11 @@ use crate::model::{Model, System, coupled_body as body};
 use crate::output::csv::{BOND_COLUMNS, bond_row, write_bond_breaks};
 use crate::output::write_json;
 use crate::scenario::Scenario;
+use on_ranks::OnRanks;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use std::sync::Arc;
 use std::time::Instant;
-use crate::decomp::Comm;
-use on_ranks::OnRanks;
 
 mod on_ranks;
 
@@ -496,7 +496,15 @@ pub(super) fn run(run: Run, mut model: Model, comm: Arc<dyn Comm>) -> Result<Val
     };
     let t_total = t_loop.elapsed().as_secs_f64();
     let res = match out.as_mut() {
-        Some(out) => finish(&run, &model, ended, out, &r, ranks.as_ref(), (t_total, body_dt)),
+        Some(out) => finish(
+            &run,
+            &model,
+            ended,
+            out,
+            &r,
+            ranks.as_ref(),
+            (t_total, body_dt),
+        ),
         None => Ok(Value::Null),
     };
     super::ranks::agree(&*comm, res)
@@ -580,9 +588,11 @@ fn on_ranks_refusal(m: &CoupledModel) -> Result<(), RunError> {
             m.scheme().name()
         )
     } else if m.granular.bonds.active() {
-        "bonded discs ([bonds]) do not run on several ranks yet: run this scenario with one process".into()
+        "bonded discs ([bonds]) do not run on several ranks yet: run this scenario with one process"
+            .into()
     } else if !m.granular.clumps.is_empty() {
-        "clumps ([clumps]) do not run on several ranks yet: run this scenario with one process".into()
+        "clumps ([clumps]) do not run on several ranks yet: run this scenario with one process"
+            .into()
     } else {
         return Ok(());
     };
