@@ -62,6 +62,7 @@ fn main() {
         rayon::current_num_threads()
     );
     let mut ratios = vec![vec![]; runs.len()];
+    let mut plain_us = vec![];
     for _ in 0..rounds {
         let times: Vec<f64> = runs
             .iter_mut()
@@ -73,10 +74,18 @@ fn main() {
                 t.elapsed().as_secs_f64() / STEPS as f64
             })
             .collect();
+        plain_us.push(times[0] * 1e6);
         for (r, t) in ratios.iter_mut().zip(&times) {
             r.push(t / times[0]);
         }
     }
+    plain_us.sort_by(f64::total_cmp);
+    println!(
+        "plain step: {:.0} µs (median; range {:.0}–{:.0})",
+        plain_us[plain_us.len() / 2],
+        plain_us[0],
+        plain_us[plain_us.len() - 1]
+    );
     for ((name, g), r) in runs.iter().zip(&mut ratios) {
         r.sort_by(f64::total_cmp);
         println!(

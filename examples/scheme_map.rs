@@ -18,56 +18,17 @@ use efgdem::coupling::scheme::{self, Choice, Scheme};
 use efgdem::model::Model;
 use efgdem::scenario::parse;
 
-const FOOTING: &str = r#"
-[simulation]
-dt = 1.0e-5
-end_time = 0.05
-gravity = [0.0, -9.81]
-coupling = "exact"
-
-[[material]]
-name = "grain"
-density = 2650.0
-kn = 1.0e7
-ks = 1.0e7
-friction = 0.0
-
-[granular]
-material = "grain"
-discs = { generate = "hex", box = [[0.0, 0.0], [0.5, 0.085]], radius = 0.005 }
-
-[[wall]]
-name = "floor"
-from = [0.0, 0.0]
-to = [0.5, 0.0]
-
-[[wall]]
-name = "left"
-from = [0.0, 0.0]
-to = [0.0, 0.3]
-
-[[wall]]
-name = "right"
-from = [0.5, 0.0]
-to = [0.5, 0.3]
-
-[[body]]
-name = "footing"
-rectangle = { origin = [0.15, 0.0798], size = [0.2, 0.04] }
-nodes = [41, 9]
-elastic = { E = MODULUS, nu = 0.2, density = 2400.0, thickness = 1.0, plane = "strain" }
-newmark = { gamma = 0.5, beta = 0.25 }
-self_weight = false
-[[body.bc]]
-edge = "top"
-ux = 0.0
-uy = { velocity = -0.05 }
-"#;
+/// `examples/hex_footing.toml`, with the exact step named (each run
+/// forces its scheme after the build).
+const FOOTING: &str = include_str!("hex_footing.toml");
 
 /// One run: (|E_diss|/W at body steps, created/exchanged, mean reaction,
 /// Γ, ω_c h), or the error that stopped it.
 fn run(e: f64, scheme: Scheme, n: usize) -> Result<(f64, f64, f64, f64, f64), String> {
-    let src = FOOTING.replace("MODULUS", &format!("{e:e}"));
+    let src = FOOTING.replace("E = 2.0e9", &format!("E = {e:e}")).replace(
+        "end_time = 0.05\n",
+        "end_time = 0.05\ncoupling = \"exact\"\n",
+    );
     let mut m: Model = parse(&src, "map.toml")
         .map_err(|e| e.to_string())?
         .build()

@@ -4,7 +4,7 @@
 
 #[allow(dead_code)]
 mod common;
-use common::{bin, summary, tmpdir};
+use common::{run_with, summary, tmpdir};
 
 /// A disc (r = 0.05, m = 7.85, k_n = 1e6) thrown at 2 m/s against the left
 /// edge of a block 1 × 0.5 (bottom fixed, no gravity); `edges` is the
@@ -62,16 +62,7 @@ fn run(tag: &str, edges: &str) -> (String, Vec<String>, Vec<Vec<f64>>) {
     let file = root.join("s.toml");
     std::fs::write(&file, scenario(edges)).unwrap();
     let dir = root.join("out");
-    let out = bin()
-        .args([
-            "run",
-            file.to_str().unwrap(),
-            "-q",
-            "-o",
-            dir.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let out = run_with(&file, &dir, &[]);
     let stderr = String::from_utf8_lossy(&out.stderr).to_string();
     assert!(out.status.success(), "{stderr}");
     let (cols, rows) = efgdem::output::csv::read(&dir.join("history.csv")).unwrap();
@@ -175,16 +166,7 @@ fn polygon_body_reports_discs_entering_through_non_contact_edges() {
         );
         std::fs::write(&file, text).unwrap();
         let dir = root.join("out");
-        let out = bin()
-            .args([
-                "run",
-                file.to_str().unwrap(),
-                "-q",
-                "-o",
-                dir.to_str().unwrap(),
-            ])
-            .output()
-            .unwrap();
+        let out = run_with(&file, &dir, &[]);
         let stderr = String::from_utf8_lossy(&out.stderr).to_string();
         assert!(out.status.success(), "{stderr}");
         let entered = summary(&dir)["discs_entered_through_non_contact_edges"]

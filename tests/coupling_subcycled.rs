@@ -12,57 +12,13 @@ use efgdem::model::Model;
 use efgdem::model::ModelError;
 use efgdem::scenario::parse;
 
-/// A hexagonal bed of 446 discs (r = 5 mm, k_n = 10⁷ N/m, no damping, no
-/// friction) under gravity, and an EFG footing 0.2 × 0.04 m (41 × 9 nodes,
-/// γ = ½, β = ¼, all edges in contact) 0.5 mm above it whose top edge is
+/// `examples/hex_footing.toml`: a hexagonal bed of 446 discs (r = 5 mm,
+/// k_n = 10⁷ N/m, no damping, no friction) under gravity, and an EFG
+/// footing 0.2 × 0.04 m (41 × 9 nodes, γ = ½, β = ¼, all edges in
+/// contact) 0.5 mm above it whose top edge is
 /// driven down at 5 cm/s: it meets the bed at 0.01 s and pushes ~25 discs
 /// into it (peak ≈ 28 kN/m at 0.04 s), then the bed throws them off.
-const FOOTING: &str = r#"
-[simulation]
-dt = 1.0e-5
-end_time = END
-gravity = [0.0, -9.81]
-substeps = SUBSTEPS
-COUPLING
-
-[[material]]
-name = "grain"
-density = 2650.0
-kn = 1.0e7
-ks = 1.0e7
-friction = 0.0
-
-[granular]
-material = "grain"
-discs = { generate = "hex", box = [[0.0, 0.0], [0.5, 0.085]], radius = 0.005 }
-
-[[wall]]
-name = "floor"
-from = [0.0, 0.0]
-to = [0.5, 0.0]
-
-[[wall]]
-name = "left"
-from = [0.0, 0.0]
-to = [0.0, 0.3]
-
-[[wall]]
-name = "right"
-from = [0.5, 0.0]
-to = [0.5, 0.3]
-
-[[body]]
-name = "footing"
-rectangle = { origin = [0.15, 0.0798], size = [0.2, 0.04] }
-nodes = [41, 9]
-elastic = { E = MODULUS, nu = 0.2, density = 2400.0, thickness = 1.0, plane = "strain" }
-newmark = { gamma = 0.5, beta = 0.25 }
-self_weight = false
-[[body.bc]]
-edge = "top"
-ux = 0.0
-uy = { velocity = -0.05 }
-"#;
+const FOOTING: &str = include_str!("../examples/hex_footing.toml");
 
 /// [`scenario`] with the predicted scheme named (`coupling = "predicted"`).
 fn predicted(substeps: usize, modulus: &str, end: f64) -> String {
@@ -73,11 +29,14 @@ fn predicted(substeps: usize, modulus: &str, end: f64) -> String {
 }
 
 fn scenario(substeps: usize, modulus: &str, end: f64) -> String {
-    FOOTING
-        .replace("COUPLING", "")
-        .replace("SUBSTEPS", &substeps.to_string())
-        .replace("MODULUS", modulus)
-        .replace("END", &end.to_string())
+    let src = FOOTING
+        .replace(
+            "end_time = 0.05\n",
+            &format!("end_time = {end}\nsubsteps = {substeps}\n"),
+        )
+        .replace("E = 2.0e9", &format!("E = {modulus}"));
+    assert!(src.contains(&format!("substeps = {substeps}\n")) && src.contains(modulus));
+    src
 }
 
 /// Largest |E_diss| and largest W_ext over the run, sampled at the body

@@ -6,7 +6,7 @@
 
 #[allow(dead_code)]
 mod common;
-use common::{bin, summary, tmpdir};
+use common::{bin, run_with, summary, tmpdir};
 use efgdem::output::csv::read;
 
 /// The number after `key` in `line` (up to a space, `,`, `;` or `)`).
@@ -152,16 +152,7 @@ fn a_granular_run_ends_with_the_discs_energies() {
     let file = root.join("discs.toml");
     std::fs::write(&file, DISCS).unwrap();
     let out = root.join("out");
-    let o = bin()
-        .args([
-            "run",
-            file.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let o = run_with(&file, &out, &[]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = summary(&out);
@@ -274,16 +265,7 @@ quantities = ["syy_cpos", "porosity"]
     )
     .unwrap();
     let out = root.join("out");
-    let o = bin()
-        .args([
-            "run",
-            file.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let o = run_with(&file, &out, &[]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let p = &summary(&out)["probes"];

@@ -529,52 +529,11 @@ def test_rectangle_forms_and_centre_spellings_build_the_same_model():
 # A soft EFG footing (E = 2 GPa) pushed into a hexagonal bed of 446 discs,
 # with the predicted sub-cycled scheme named at 10 substeps against the
 # build's warning: the scheme creates energy and the model's guard stops it.
-SOFT_FOOTING = """
-[simulation]
-dt = 1.0e-5
-end_time = 0.08
-gravity = [0.0, -9.81]
-substeps = 10
-coupling = "predicted"
-
-[[material]]
-name = "grain"
-density = 2650.0
-kn = 1.0e7
-ks = 1.0e7
-friction = 0.0
-
-[granular]
-material = "grain"
-discs = { generate = "hex", box = [[0.0, 0.0], [0.5, 0.085]], radius = 0.005 }
-
-[[wall]]
-name = "floor"
-from = [0.0, 0.0]
-to = [0.5, 0.0]
-
-[[wall]]
-name = "left"
-from = [0.0, 0.0]
-to = [0.0, 0.3]
-
-[[wall]]
-name = "right"
-from = [0.5, 0.0]
-to = [0.5, 0.3]
-
-[[body]]
-name = "footing"
-rectangle = { origin = [0.15, 0.0798], size = [0.2, 0.04] }
-nodes = [41, 9]
-elastic = { E = 2.0e9, nu = 0.2, density = 2400.0, thickness = 1.0, plane = "strain" }
-newmark = { gamma = 0.5, beta = 0.25 }
-self_weight = false
-[[body.bc]]
-edge = "top"
-ux = 0.0
-uy = { velocity = -0.05 }
-"""
+SOFT_FOOTING = (
+    (ROOT / "examples" / "hex_footing.toml")
+    .read_text()
+    .replace("end_time = 0.05\n", 'end_time = 0.08\nsubsteps = 10\ncoupling = "predicted"\n')
+)
 
 
 def test_a_subcycled_body_past_its_limit_raises_model_error(tmp_path):

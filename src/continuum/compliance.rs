@@ -44,10 +44,11 @@ pub struct BoundaryGreen {
     g: Vec<f64>,
     /// DOFs never put in `B` (imposed DOFs take no load and do not move).
     excluded: Vec<bool>,
-    /// Per column `b`, the rows `a` with `|G_ab| > ε √(G_aa G_bb)`
-    /// ([`SIGNIFICANT`]), ascending: `sig[sig_start[b]..sig_start[b + 1]]`.
-    sig_start: Vec<u32>,
-    sig: Vec<u32>,
+    /// `√|G_aa|` of every DOF of `B`: entry `G_ab` is significant when
+    /// `|G_ab| > ε √|G_aa| √|G_bb|` ([`SIGNIFICANT`]).
+    root_diag: Vec<f64>,
+    /// Number of significant entries of `G`.
+    significant: usize,
     /// End in `dofs` of each batch of [`extend`](Self::extend) so far.
     batch_end: Vec<u32>,
 }
@@ -70,8 +71,8 @@ impl BoundaryGreen {
             index: vec![NONE; n],
             g: Vec::new(),
             excluded,
-            sig_start: Vec::new(),
-            sig: Vec::new(),
+            root_diag: Vec::new(),
+            significant: 0,
             batch_end: Vec::new(),
         }
     }
@@ -223,28 +224,27 @@ impl BoundaryGreen {
         Ok(())
     }
 
-    /// The significant entries of every column ([`SIGNIFICANT`]).
+    /// The diagonal's roots and the count of significant entries
+    /// ([`SIGNIFICANT`]).
     fn find_significant(&mut self) {
         let nb = self.dofs.len();
-        let diag: Vec<f64> = (0..nb).map(|a| self.g[a * nb + a].abs()).collect();
-        self.sig_start.clear();
-        self.sig.clear();
-        self.sig_start.push(0);
-        for b in 0..nb {
-            let col = &self.g[b * nb..(b + 1) * nb];
-            let tol = SIGNIFICANT * diag[b].sqrt();
-            self.sig.extend(
-                (0..nb)
-                    .filter(|&a| col[a].abs() > tol * diag[a].sqrt())
-                    .map(|a| a as u32),
-            );
-            self.sig_start.push(self.sig.len() as u32);
-        }
+        self.root_diag = (0..nb).map(|a| self.g[a * nb + a].abs().sqrt()).collect();
+        self.significant = (0..nb)
+            .map(|b| {
+                let col = &self.g[b * nb..(b + 1) * nb];
+                (0..nb).filter(|&a| self.is_significant(col, a, b)).count()
+            })
+            .sum();
+    }
+
+    /// Is `G_ab` (`col` = column `b`) significant ([`SIGNIFICANT`])?
+    fn is_significant(&self, col: &[f64], a: usize, b: usize) -> bool {
+        col[a].abs() > SIGNIFICANT * self.root_diag[b] * self.root_diag[a]
     }
 
     /// Fraction of `G`'s entries that the products use.
     pub fn significant_fraction(&self) -> f64 {
-        self.sig.len() as f64 / (self.dofs.len() as f64).powi(2).max(1.0)
+        self.significant as f64 / (self.dofs.len() as f64).powi(2).max(1.0)
     }
 }
 
@@ -488,15 +488,10 @@ impl PointRows {
         self.ga_start.push(0);
         let nb = green.len();
         for &b in &self.act {
-            let (s, e) = (
-                green.sig_start[b as usize] as usize,
-                green.sig_start[b as usize + 1] as usize,
-            );
             let col = &green.g[b as usize * nb..(b as usize + 1) * nb];
-            for &a in &green.sig[s..e] {
-                let l = self.map[a as usize];
-                if l != NONE {
-                    self.ga_col.push(l);
+            for (l, &a) in self.act.iter().enumerate() {
+                if green.is_significant(col, a as usize, b as usize) {
+                    self.ga_col.push(l as u32);
                     self.ga_val.push(col[a as usize]);
                 }
             }
@@ -535,11 +530,7 @@ impl PointRows {
         let (st, col, val, q) = (&self.ga_start, &self.ga_col, &self.ga_val, &self.q);
         let row = |a: usize| -> f64 {
             let (s, e) = (st[a] as usize, st[a + 1] as usize);
-            let mut acc = 0.0;
-            for (c, v) in col[s..e].iter().zip(&val[s..e]) {
-                acc += v * q[*c as usize];
-            }
-            acc
+            sparse_dot(&col[s..e], &val[s..e], q)
         };
         if val.len() >= 1 << 16 {
             self.z
@@ -608,6 +599,25 @@ impl Compliance<'_> {
             Compliance::Boundary(g, rows) => rows.mul(g, x, y),
         }
     }
+}
+
+/// `Σ vals[i] q[cols[i]]` in four interleaved partial sums (a fixed order:
+/// the same for any thread count), so that the additions do not wait on
+/// one another.
+fn sparse_dot(cols: &[u32], vals: &[f64], q: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (cc, vc) = (cols.chunks_exact(4), vals.chunks_exact(4));
+    let (cr, vr) = (cc.remainder(), vc.remainder());
+    for (c, v) in cc.zip(vc) {
+        for i in 0..4 {
+            acc[i] += v[i] * q[c[i] as usize];
+        }
+    }
+    let mut t = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    for (c, v) in cr.iter().zip(vr) {
+        t += v * q[*c as usize];
+    }
+    t
 }
 
 /// The 2 × 2 block `S_kl` (row-major) of a dense row-major `S` (2m × 2m).
@@ -680,7 +690,7 @@ mod tests {
             h.g.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
             g.g.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
         );
-        assert_eq!((&h.sig_start, &h.sig), (&g.sig_start, &g.sig));
+        assert_eq!(h.significant, g.significant);
         assert_eq!(h.batches(), batches);
         for bad in [vec![13], vec![5, 4], vec![80], vec![6]] {
             let mut k = BoundaryGreen::new(n, excluded.clone());

@@ -24,6 +24,7 @@ use super::integrate;
 use super::packing::DiscRow;
 use super::particles::Particles;
 use crate::geom::Vec2;
+use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 
 /// [`Particles::clump`] of a disc that belongs to no clump.
@@ -171,6 +172,11 @@ pub struct Clumps {
     pub members: Vec<u32>,
     /// Each member's centre relative to X at θ = 0.
     pub offset: Vec<Vec2>,
+    /// Index in `members` of each disc id (`NO_CLUMP`: in no clump; ids
+    /// past the end are in none).
+    member_of: Vec<u32>,
+    /// `(sin θ, cos θ)` of each clump, from its last advance.
+    rot: Vec<(f64, f64)>,
 }
 
 impl Clumps {
@@ -253,7 +259,11 @@ impl Clumps {
         if self.first.is_empty() {
             self.first.push(0);
         }
+        if self.member_of.len() < p.len() {
+            self.member_of.resize(p.len(), NO_CLUMP);
+        }
         for (&id, &s) in ids.iter().zip(&slots) {
+            self.member_of[id] = self.members.len() as u32;
             self.members.push(id as u32);
             self.offset.push(p.pos[s] - shape.centroid);
             p.clump[s] = c as u32;
@@ -269,23 +279,31 @@ impl Clumps {
         self.inertia.push(inertia);
         self.force.push(Vec2::ZERO);
         self.torque.push(0.0);
+        self.rot.push((0.0, 1.0));
         self.place(c, p);
         Ok(c)
     }
 
     /// Put clump `c`'s members where its rigid motion takes them.
     fn place(&self, c: usize, p: &mut Particles) {
-        let (x, v, th, w) = (self.pos[c], self.vel[c], self.theta[c], self.omega[c]);
-        let (s, co) = th.sin_cos();
         let (a, b) = (self.first[c] as usize, self.first[c + 1] as usize);
         for (&id, &o) in self.members[a..b].iter().zip(&self.offset[a..b]) {
             let k = p.slot[id as usize] as usize;
-            let r = Vec2::new(co * o.x - s * o.y, s * o.x + co * o.y);
-            p.pos[k] = x + r;
-            p.vel[k] = v + r.perp() * w;
-            p.theta[k] = th;
-            p.omega[k] = w;
+            let (x, v) = self.member_motion(c, o);
+            p.pos[k] = x;
+            p.vel[k] = v;
+            p.theta[k] = self.theta[c];
+            p.omega[k] = self.omega[c];
         }
+    }
+
+    /// Centre and velocity of the member of clump `c` at offset `o`:
+    /// `x = X + R(θ) o`, `v = V + ω × (x − X)`.
+    #[inline(always)]
+    fn member_motion(&self, c: usize, o: Vec2) -> (Vec2, Vec2) {
+        let (s, co) = self.rot[c];
+        let r = Vec2::new(co * o.x - s * o.y, s * o.x + co * o.y);
+        (self.pos[c] + r, self.vel[c] + r.perp() * self.omega[c])
     }
 
     /// Sum each clump's members' forces (`particles.force`/`torque`,
@@ -294,39 +312,121 @@ impl Clumps {
     /// discs are advanced.
     pub fn gather(&mut self, p: &Particles) {
         for c in 0..self.len() {
-            let x = self.pos[c];
-            let (mut f, mut t) = (Vec2::ZERO, 0.0);
-            for &id in self.members_of(c) {
-                let k = p.slot[id as usize] as usize;
-                f += p.force[k];
-                t += p.torque[k] + (p.pos[k] - x).cross(p.force[k]);
-            }
-            self.force[c] = f;
-            self.torque[c] = t;
+            (self.force[c], self.torque[c]) = self.gathered(c, p);
         }
+    }
+
+    /// [`gather`](Self::gather) for clump `c`, in member order.
+    #[inline(always)]
+    fn gathered(&self, c: usize, p: &Particles) -> (Vec2, f64) {
+        let x = self.pos[c];
+        let (mut f, mut t) = (Vec2::ZERO, 0.0);
+        for &id in self.members_of(c) {
+            let k = p.slot[id as usize] as usize;
+            f += p.force[k];
+            t += p.torque[k] + (p.pos[k] - x).cross(p.force[k]);
+        }
+        (f, t)
     }
 
     /// Advance every clump by one step under its [`gather`](Self::gather)ed
     /// force with [`integrate::advance`] and place its members (module
     /// docs).
     pub fn advance(&mut self, p: &mut Particles, g: Vec2, damping: BodyDamping, dt: f64) {
-        for c in 0..self.len() {
-            integrate::advance(
-                &mut self.pos[c],
-                &mut self.vel[c],
-                &mut self.theta[c],
-                &mut self.omega[c],
-                self.force[c],
-                self.torque[c],
-                1.0 / self.mass[c],
-                1.0 / self.inertia[c],
-                0,
-                g,
-                damping,
-                dt,
-            );
-            self.place(c, p);
+        self.move_clumps(p, false, (g, damping, dt));
+        self.place_members(p, &[], f64::INFINITY);
+    }
+
+    /// One step of every clump after a contact sweep that left its
+    /// members' forces in `particles.force`/`torque` and did not move
+    /// them: [`gather`](Self::gather) and [`advance`](Self::advance), the
+    /// same values. Returns the members' largest squared displacement
+    /// from `ref_pos` (0 when it is not one per disc) and whether a member
+    /// failed the step check `v·v ≤ max_v2 r²` (or is not finite).
+    pub fn step(
+        &mut self,
+        p: &mut Particles,
+        ref_pos: &[Vec2],
+        motion: (Vec2, BodyDamping, f64),
+        max_v2: f64,
+    ) -> (f64, bool) {
+        self.move_clumps(p, true, motion);
+        self.place_members(p, ref_pos, max_v2)
+    }
+
+    /// Every clump advanced by one step (first its members' forces
+    /// gathered, with `gather`), in parallel over the clumps: each one's
+    /// own state, so the same on any number of threads.
+    fn move_clumps(
+        &mut self,
+        p: &Particles,
+        gather: bool,
+        (g, damping, dt): (Vec2, BodyDamping, f64),
+    ) {
+        let mut force = std::mem::take(&mut self.force);
+        let mut torque = std::mem::take(&mut self.torque);
+        if gather {
+            (&mut force, &mut torque)
+                .into_par_iter()
+                .enumerate()
+                .with_min_len(256)
+                .for_each(|(c, (f, t))| (*f, *t) = self.gathered(c, p));
         }
+        (
+            &mut self.pos,
+            &mut self.vel,
+            &mut self.theta,
+            &mut self.omega,
+            &mut self.rot,
+            (&force, &torque),
+            (&self.mass, &self.inertia),
+        )
+            .into_par_iter()
+            .with_min_len(256)
+            .for_each(|(x, v, th, w, rot, (&f, &t), (&m, &i))| {
+                integrate::advance(x, v, th, w, f, t, 1.0 / m, 1.0 / i, 0, g, damping, dt);
+                *rot = th.sin_cos();
+            });
+        (self.force, self.torque) = (force, torque);
+    }
+
+    /// Every member put where its clump's motion takes it, in parallel
+    /// over the slots; returns the members' largest squared displacement
+    /// from `ref_pos` (0 when it is not one per disc) and whether one
+    /// failed the step check `v·v ≤ max_v2 r²` (or is not finite).
+    fn place_members(&self, p: &mut Particles, ref_pos: &[Vec2], max_v2: f64) -> (f64, bool) {
+        const CHUNK: usize = 1024;
+        let has_ref = ref_pos.len() == p.len();
+        (
+            p.pos.par_chunks_mut(CHUNK),
+            p.vel.par_chunks_mut(CHUNK),
+            p.theta.par_chunks_mut(CHUNK),
+            p.omega.par_chunks_mut(CHUNK),
+            p.clump.par_chunks(CHUNK),
+            p.id.par_chunks(CHUNK),
+            p.radius.par_chunks(CHUNK),
+        )
+            .into_par_iter()
+            .enumerate()
+            .map(|(ch, (pos, vel, theta, omega, clump, id, radius))| {
+                let (mut m2, mut bad) = (0.0f64, false);
+                for k in 0..pos.len() {
+                    let c = clump[k] as usize;
+                    if clump[k] == NO_CLUMP {
+                        continue;
+                    }
+                    let o = self.offset[self.member_of[id[k] as usize] as usize];
+                    let (x, v) = self.member_motion(c, o);
+                    (pos[k], vel[k], theta[k], omega[k]) = (x, v, self.theta[c], self.omega[c]);
+                    if has_ref {
+                        m2 = m2.max((x - ref_pos[ch * CHUNK + k]).norm2());
+                    }
+                    bad |= !(v.dot(v) <= max_v2 * radius[k] * radius[k]
+                        && (x.x + x.y + omega[k]).is_finite());
+                }
+                (m2, bad)
+            })
+            .reduce(|| (0.0, false), |a, b| (a.0.max(b.0), a.1 || b.1))
     }
 
     /// The smallest effective mass of a contact on a clump,
@@ -361,7 +461,8 @@ impl Clumps {
         use std::mem::size_of;
         (self.pos.capacity() * 3 + self.offset.capacity()) * size_of::<Vec2>()
             + self.theta.capacity() * 5 * size_of::<f64>()
-            + (self.first.capacity() + self.members.capacity()) * 4
+            + (self.first.capacity() + self.members.capacity() + self.member_of.capacity()) * 4
+            + self.rot.capacity() * size_of::<(f64, f64)>()
     }
 }
 

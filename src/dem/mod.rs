@@ -396,7 +396,7 @@ impl Granular {
         let crit = self.critical_step(bodies);
         (self.dt > DT_WARN * crit.dt).then(|| {
             format!(
-                "dt = {:e} is {:.3} × the critical step {:e} (of {}); above {DT_WARN} × it a dense packing, a packing of unequal discs or a contact whose overlap changes fast may not stay stable (a run that goes unstable stops with exit code 3); the default is {DT_SAFETY} ×",
+                "dt = {:e} is {:.3} × the critical step {:.4e} (of {}); above {DT_WARN} × it a dense packing, a packing of unequal discs or a contact whose overlap changes fast may not stay stable (a run that goes unstable stops with exit code 3); the default is {DT_SAFETY} ×",
                 self.dt,
                 self.dt / crit.dt,
                 crit.dt,
@@ -490,17 +490,6 @@ impl Granular {
     /// [`compute_contact_forces`](Self::compute_contact_forces) and
     /// [`integrate`](Self::integrate).
     pub fn step(&mut self) {
-        if !self.clumps.is_empty() {
-            // a clump advances once all its members' forces are summed:
-            // the phased path
-            self.prepare_contacts();
-            self.sweep::<false>();
-            self.external.clear();
-            self.wall_totals();
-            self.integrate();
-            self.last_check = None;
-            return;
-        }
         let bad = self.advance_discs();
         self.wall_totals();
         self.finish_step(!bad);
@@ -508,14 +497,28 @@ impl Granular {
 
     /// The discs' part of [`step`](Self::step): the contact list prepared,
     /// every contact evaluated and every disc advanced in one sweep
-    /// (`max_disp` set). Returns whether some disc failed the step check
-    /// ([`step_check`](Self::step_check)). The walls' totals and motion
-    /// follow: [`wall_totals`](Self::wall_totals) (or
-    /// [`set_wall_totals`](Self::set_wall_totals)), then
+    /// (`max_disp` set), then every clump advanced under its members'
+    /// forces and its members placed ([`Clumps::step`]). Returns whether
+    /// some disc failed the step check ([`step_check`](Self::step_check)).
+    /// The walls' totals and motion follow: [`wall_totals`](Self::wall_totals)
+    /// (or [`set_wall_totals`](Self::set_wall_totals)), then
     /// [`finish_step`](Self::finish_step).
     pub fn advance_discs(&mut self) -> bool {
         self.prepare_contacts();
-        let (max_disp, bad) = self.sweep::<true>();
+        let (mut max_disp, mut bad) = self.sweep::<true>();
+        if !self.clumps.is_empty() {
+            let max_v2 = self.check_radii * self.check_radii / (self.dt * self.dt);
+            let (d2, b) = self.clumps.step(
+                &mut self.particles,
+                &self.grid.ref_pos,
+                (self.gravity, self.damping, self.dt),
+                max_v2,
+            );
+            // √ is monotone and correctly rounded: the largest of the two
+            // roots is the root of the largest square
+            max_disp = max_disp.max(d2.sqrt());
+            bad |= b;
+        }
         self.max_disp = max_disp;
         self.external.clear();
         bad

@@ -23,6 +23,7 @@
 
 use super::bonds::{BondForce, BondLaw, Break, Held, ListForces};
 use super::broadphase::{ContactList, CrossIndex, WallPair};
+use super::clumps::NO_CLUMP;
 use super::contact::{self, ContactForce, ContactLaw, Side, effective_mass};
 use super::integrate;
 use super::particles::{GHOST, Particles};
@@ -146,6 +147,9 @@ struct Block<'a> {
     wall_buf: &'a mut [ContactForce],
     /// The held bonds of the block's discs (empty without bonds).
     held: &'a mut [Held],
+    /// Clump of each disc (empty without clumps): a clump's members are
+    /// not advanced here (their clump is, after the sweep).
+    clump: &'a [u32],
 }
 
 impl<'a> Block<'a> {
@@ -186,6 +190,11 @@ impl<'a> Block<'a> {
         let w = self.walls.partition_point(|q| (q.disc as usize) < at);
         let (walls, walls2) = self.walls.split_at_mut(w);
         let (wall_buf, wall_buf2) = self.wall_buf.split_at_mut(w);
+        let (clump, clump2) = if self.clump.is_empty() {
+            (self.clump, self.clump)
+        } else {
+            self.clump.split_at(k)
+        };
         let (held, held2) = if self.held.is_empty() {
             (self.held, &mut [][..])
         } else {
@@ -214,6 +223,7 @@ impl<'a> Block<'a> {
                 walls,
                 wall_buf,
                 held,
+                clump,
             },
             Block {
                 lo: at,
@@ -236,6 +246,7 @@ impl<'a> Block<'a> {
                 walls: walls2,
                 wall_buf: wall_buf2,
                 held: held2,
+                clump: clump2,
             },
         )
     }
@@ -356,7 +367,8 @@ impl Granular {
             gravity: self.gravity,
             damping: self.damping,
             dt: self.dt,
-            store: !ADVANCE || self.store_forces,
+            // a clump sums its members' stored forces after the sweep
+            store: !ADVANCE || self.store_forces || !self.clumps.is_empty(),
             external: &self.external,
             max_v2: self.check_radii * self.check_radii / (self.dt * self.dt),
             bond_row: if bonded { &self.bonds.row } else { &[] },
@@ -401,6 +413,11 @@ impl Granular {
                 &mut []
             } else {
                 &mut self.bonds.held
+            },
+            clump: if self.clumps.is_empty() {
+                &[]
+            } else {
+                &p.clump
             },
         };
         let has_ref = !ref_pos.is_empty();
@@ -555,6 +572,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         walls,
         wall_buf,
         held,
+        clump,
     } = b;
     let n = pos.len();
     let hi = lo + n;
@@ -818,7 +836,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             force[d] = sf;
             torque[d] = tq;
         }
-        if ADVANCE && fixity[d] & GHOST == 0 {
+        if ADVANCE && fixity[d] & GHOST == 0 && (clump.is_empty() || clump[d] == NO_CLUMP) {
             integrate::advance(
                 &mut pos[d],
                 &mut vel[d],

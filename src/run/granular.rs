@@ -192,7 +192,7 @@ pub(super) fn check(sc: &Scenario, model: &Model) -> String {
 /// step of the contacts in use, the mode that sets it, and its basis.
 pub(super) fn time_step_line(dt: f64, crit: &crate::dem::critical::Critical) -> String {
     format!(
-        "time step: dt = {dt:e} is {:.3} × the critical step {:e} of the contacts in use, set by {} (linear modes of the central difference, dashpots included; the default dt is {DT_SAFETY} ×, warn above {DT_WARN} ×; refused above {:e}, the limit of two of the lightest discs meeting)",
+        "time step: dt = {dt:e} is {:.3} × the critical step {:.4e} of the contacts in use, set by {} (linear modes of the central difference, dashpots included; the default dt is {DT_SAFETY} ×, warn above {DT_WARN} ×; refused above {:.4e}, the limit of two of the lightest discs meeting)",
         dt / crit.dt,
         crit.dt,
         crit.mode,
