@@ -111,10 +111,10 @@ impl NearBodies {
         let keys = self.d.keys();
         let mut mine = Pack::default();
         let mut own = Vec::new();
-        for s in 0..p.len() {
+        for (s, &key) in keys.iter().enumerate() {
             if p.fixity[s] & GHOST == 0 && self.in_zone(p.pos[s], p.radius[s]) {
-                pack_disc(&mut mine, p, s, keys[s], true);
-                own.push((keys[s], Src::Old(s as u32)));
+                pack_disc(&mut mine, p, s, key, true);
+                own.push((key, Src::Old(s as u32)));
             }
         }
         let all = self.d.comm().all_gather(&mine.0);
