@@ -12,7 +12,7 @@ use crate::decomp::near_bodies::NearBodies;
 use crate::decomp::{Comm, Decomposed};
 use crate::dem::Granular;
 use crate::model::{Model, ModelError, stability};
-use serde_json::{Value, json};
+use serde_json::Value;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 
@@ -146,40 +146,14 @@ impl OnRanks {
         if !whole_in {
             self.gather_in(model);
         }
-        self.record = self.per_rank();
+        self.record = super::super::ranks::ranks_record(&self.nb.d);
         match failed {
             Some(e) => Err(e),
             None => Ok(ended),
         }
     }
 
-    /// Every rank's discs, ghosts, traffic and memory, for rank 0's summary
-    /// (collective).
-    fn per_rank(&self) -> Value {
-        let d = &self.nb.d;
-        let t = d.comm().traffic();
-        let mine = json!({
-            "owned": d.owned(),
-            "ghosts": d.ghosts(),
-            "bytes_sent": t.bytes,
-            "messages": t.messages,
-            "communication_seconds": t.seconds,
-            "peak_memory_bytes": super::super::memory::peak_resident_bytes(),
-        });
-        let all = d.comm().all_gather(mine.to_string().as_bytes());
-        let per_rank: Vec<Value> = all
-            .iter()
-            .map(|b| serde_json::from_slice(b).unwrap_or_default())
-            .collect();
-        json!({
-            "count": d.comm().size(),
-            "imbalance": d.imbalance,
-            "recuts": d.recuts,
-            "per_rank": per_rank,
-        })
-    }
-
-    /// [`per_rank`](Self::per_rank) as made at the end of the run.
+    /// The `ranks` record of the summary, as made at the end of the run.
     pub fn record(&self) -> Value {
         self.record.clone()
     }
