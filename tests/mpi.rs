@@ -73,6 +73,17 @@ quantity = "contacts"
 "#;
 
 fn efgdem(dir: &Path, out: &str, ranks: usize, threads: usize) -> std::process::Output {
+    efgdem_with(dir, out, ranks, threads, &[])
+}
+
+/// [`efgdem`] with more arguments for `efgdem run`.
+fn efgdem_with(
+    dir: &Path,
+    out: &str,
+    ranks: usize,
+    threads: usize,
+    more: &[&str],
+) -> std::process::Output {
     let bin = env!("CARGO_BIN_EXE_efgdem");
     let mut args: Vec<String> = Vec::new();
     let mut cmd = if ranks == 0 {
@@ -104,6 +115,7 @@ fn efgdem(dir: &Path, out: &str, ranks: usize, threads: usize) -> std::process::
         ]
         .map(String::from),
     );
+    args.extend(more.iter().map(|a| a.to_string()));
     let o = cmd.args(&args).current_dir(dir).output().expect("mpirun");
     assert!(
         o.status.success(),
@@ -210,6 +222,139 @@ fixed = true
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("only granular scenarios"), "{err}");
+    assert!(err.contains("does not run on several ranks"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// An EFG footing (41 × 9 nodes) driven down at 5 cm/s into a bed of 446
+/// discs (friction, rolling resistance), 1500 steps: it touches the bed
+/// from step 1000 on.
+const FOOTING: &str = r#"
+[simulation]
+dt = 1.0e-5
+steps = 1500
+gravity = [0.0, -9.81]
+COUPLING
+
+[output]
+every = 50
+vtk_every = 500
+
+[[material]]
+name = "grain"
+density = 2650.0
+kn = 1.0e7
+ks = 1.0e7
+friction = 0.3
+rolling_friction = 0.05
+
+[granular]
+material = "grain"
+discs = { generate = "hex", box = [[0.0, 0.0], [0.5, 0.085]], radius = 0.005 }
+
+[[wall]]
+name = "floor"
+from = [0.0, 0.0]
+to = [0.5, 0.0]
+
+[[wall]]
+name = "left"
+from = [0.0, 0.0]
+to = [0.0, 0.3]
+
+[[wall]]
+name = "right"
+from = [0.5, 0.0]
+to = [0.5, 0.3]
+
+[[body]]
+name = "footing"
+rectangle = { origin = [0.15, 0.0798], size = [0.2, 0.04] }
+nodes = [41, 9]
+elastic = { E = 3.0e9, nu = 0.2, density = 2400.0, thickness = 1.0, plane = "strain" }
+newmark = { gamma = 0.5, beta = 0.25 }
+self_weight = false
+[[body.bc]]
+edge = "top"
+ux = 0.0
+uy = { velocity = -0.05 }
+"#;
+
+fn same_files(got: &Path, want: &[(PathBuf, Vec<u8>)], what: &str) {
+    let got: Vec<_> = files(got)
+        .into_iter()
+        .filter(|(p, _)| !p.ends_with("checkpoint.bin"))
+        .collect();
+    let names = |v: &[(PathBuf, Vec<u8>)]| v.iter().map(|f| f.0.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&got), names(want), "{what}: files");
+    for ((p, a), (_, b)) in got.iter().zip(want) {
+        assert!(a == b, "{what}: {} differs", p.display());
+    }
+}
+
+/// Coupled runs (the exact and the compliant sub-cycled schemes) under
+/// mpirun write the files of one process, byte for byte, on 2 and 3 ranks;
+/// a checkpoint written on 3 ranks continues on 2 as the uninterrupted
+/// run.
+#[test]
+fn mpirun_of_coupled_scenarios_writes_the_outputs_of_one_process() {
+    for (name, coupling) in [
+        ("exact", ""),
+        ("compliant", "substeps = 10\ncoupling = \"compliant\""),
+    ] {
+        let dir = std::env::temp_dir().join(format!("efgdem-mpi-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("s.toml"), FOOTING.replace("COUPLING", coupling)).unwrap();
+        efgdem(&dir, "one", 0, 1);
+        let want = files(&dir.join("one"));
+        assert!(want.len() >= 4, "{want:?}");
+        let s: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("one/summary.json")).unwrap()).unwrap();
+        assert_eq!(s["coupling"], name);
+        assert!(s["peak_contact_force"].as_f64().unwrap() > 100.0, "{s}");
+        for ranks in [2, 3] {
+            let out = format!("r{ranks}");
+            efgdem(&dir, &out, ranks, 1);
+            same_files(&dir.join(&out), &want, &format!("{name} on {ranks} ranks"));
+        }
+        // written on 3 ranks at step 1000, continued on 2
+        efgdem_with(&dir, "ck", 3, 1, &["--checkpoint-every", "1000"]);
+        let ck = dir.join("ck").join("checkpoint.bin");
+        efgdem_with(&dir, "ck", 2, 1, &["--restart", ck.to_str().unwrap()]);
+        same_files(
+            &dir.join("ck"),
+            &want,
+            &format!("{name}: 3 ranks, restarted on 2"),
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+/// The predicted sub-cycled scheme on several ranks is refused (exit code
+/// 2) and says what runs.
+#[test]
+fn mpirun_of_the_predicted_scheme_is_refused() {
+    let dir = std::env::temp_dir().join(format!("efgdem-mpi-p-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let sc = FOOTING.replace("COUPLING", "substeps = 4\ncoupling = \"predicted\"");
+    std::fs::write(dir.join("s.toml"), sc).unwrap();
+    let o = Command::new("mpirun")
+        .args(["-np", "2", "--oversubscribe"])
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .arg(env!("CARGO_BIN_EXE_efgdem"))
+        .args(["run", "s.toml", "-q", "-o", "out"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("predicted coupled scheme does not run on several ranks"),
+        "{err}"
+    );
+    assert!(err.contains("compliant"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

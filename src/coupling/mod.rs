@@ -171,6 +171,58 @@ pub struct CoupledModel {
     /// Warnings for the user since they were last taken
     /// ([`crate::model::Model::take_notices`]).
     pub notices: Vec<String>,
+    /// The largest disc radius of the whole assembly when `granular` holds
+    /// only the discs near the bodies (a decomposed run, [`DiscStep`]):
+    /// the segment grids are then binned as the whole's are.
+    pub radius_bound: Option<f64>,
+}
+
+/// How the coupling steps the discs. [`Whole`]: the assembly held in
+/// [`CoupledModel::granular`]. A run divided over ranks (`crate::decomp`)
+/// steps its rank's part instead and keeps in `granular` a copy, the same
+/// on every rank, of the discs near the bodies at the present state.
+pub trait DiscStep: Send {
+    /// The neighbour list ready for the next step
+    /// ([`Granular::prepare_contacts`]).
+    fn prepare(&mut self, g: &mut Granular);
+    /// One fused DEM step ([`Granular::step`]) with the disc–body forces
+    /// `contacts` acting on their discs (by id).
+    fn step(&mut self, g: &mut Granular, contacts: &[BodyContact]);
+}
+
+/// The discs in [`CoupledModel::granular`] are the whole assembly.
+pub struct Whole;
+
+impl DiscStep for Whole {
+    fn prepare(&mut self, g: &mut Granular) {
+        g.prepare_contacts();
+    }
+    fn step(&mut self, g: &mut Granular, contacts: &[BodyContact]) {
+        set_contacts_on_discs(g, contacts);
+        g.step();
+    }
+}
+
+/// The disc–body forces `contacts` as external forces of the next (fused)
+/// step of `g`, on those of their discs that `g` holds.
+pub fn set_contacts_on_discs(g: &mut Granular, contacts: &[BodyContact]) {
+    let p = &g.particles;
+    let ext: Vec<_> = contacts
+        .iter()
+        .filter_map(|q| {
+            let slot = *p.slot.get(q.disc as usize)? as usize;
+            // the torque arm r n; the rolling moment acts on the disc only
+            (slot < p.len()).then(|| {
+                (
+                    slot,
+                    q.force,
+                    p.pos[slot] + q.normal * p.radius[slot],
+                    q.moment,
+                )
+            })
+        })
+        .collect();
+    g.set_external_with_moments(ext);
 }
 
 /// An automatically chosen sub-cycled scheme that created energy
@@ -379,6 +431,7 @@ impl CoupledModel {
             factored: substeps.max(1),
             fallback: None,
             notices: Vec::new(),
+            radius_bound: None,
         }
     }
 
@@ -399,11 +452,18 @@ impl CoupledModel {
     /// outside the DEM's parallel sweep runs with the other workers kept
     /// awake ([`workers::awake`]).
     pub fn step(&mut self) -> Result<(), CouplingError> {
+        self.step_with(&mut Whole)
+    }
+
+    /// [`step`](Self::step) with the discs stepped by `discs`. The
+    /// predicted and staggered schemes step the discs in phases and need
+    /// [`Whole`].
+    pub fn step_with(&mut self, discs: &mut dyn DiscStep) -> Result<(), CouplingError> {
         if self.compliant {
-            return self.step_compliant();
+            return self.step_compliant(discs);
         }
         if self.substeps == 1 && !self.staggered {
-            return self.step_exact();
+            return self.step_exact(discs);
         }
         let path = self.path_scheme();
         workers::awake(|| self.begin_substep(path))?;
@@ -428,18 +488,17 @@ impl CoupledModel {
     /// bodies are solved implicitly over the step. In the timing split the
     /// prediction counts as `body` and `dem` is the rest of that time
     /// (with several threads the two overlap).
-    fn step_exact(&mut self) -> Result<(), CouplingError> {
+    fn step_exact(&mut self, discs: &mut dyn DiscStep) -> Result<(), CouplingError> {
         workers::awake(|| {
             let t = Instant::now();
             // the DEM's neighbour list (part of its step)
-            self.granular.prepare_contacts();
+            discs.prepare(&mut self.granular);
             let t0 = Instant::now();
             self.timing.dem += (t0 - t).as_secs_f64();
             if !self.primed {
                 self.implicit_contacts(false)?;
                 self.primed = true;
             }
-            self.contacts_on_discs();
             // what a servo drive measures (the present contacts)
             self.set_contact_forces();
             self.timing.transfer += t0.elapsed().as_secs_f64();
@@ -447,8 +506,9 @@ impl CoupledModel {
         })?;
         let t1 = Instant::now();
         let (granular, bodies) = (&mut self.granular, &mut self.bodies);
+        let contacts = &self.contacts;
         let ((), predicted) = rayon::join(
-            || granular.step(),
+            || discs.step(granular, contacts),
             || {
                 let t = Instant::now();
                 let r = bodies.iter_mut().try_for_each(|b| b.predict_step());
@@ -628,23 +688,6 @@ impl CoupledModel {
         Ok(())
     }
 
-    /// The disc–body forces of the present state as external forces of
-    /// the DEM's next (fused) step.
-    fn contacts_on_discs(&mut self) {
-        let g = &self.granular;
-        let ext: Vec<_> = self
-            .contacts
-            .iter()
-            .map(|q| {
-                let slot = g.slot(q.disc as usize);
-                let arm = g.particles.pos[slot] + q.normal * g.particles.radius[slot];
-                // the rolling moment acts on the disc only
-                (slot, q.force, arm, q.moment)
-            })
-            .collect();
-        self.granular.set_external_with_moments(ext);
-    }
-
     /// One DEM step of the compliant sub-cycled scheme. At the start of a
     /// body step (`h = nΔt`) each body predicts its step under the held
     /// loads (the last body step's end loads); the discs then take one DEM
@@ -660,10 +703,10 @@ impl CoupledModel {
     /// body step and a contact solve over the chain points' compliance per
     /// DEM step; with n = 1 it is the exact step with the contact forces
     /// shared by the segment ends.
-    fn step_compliant(&mut self) -> Result<(), CouplingError> {
+    fn step_compliant(&mut self, discs: &mut dyn DiscStep) -> Result<(), CouplingError> {
         workers::awake(|| {
             let t = Instant::now();
-            self.granular.prepare_contacts();
+            discs.prepare(&mut self.granular);
             let t0 = Instant::now();
             self.timing.dem += (t0 - t).as_secs_f64();
             if self.sub == 0 {
@@ -678,12 +721,11 @@ impl CoupledModel {
                 self.compliant_contacts(false)?;
                 self.primed = true;
             }
-            self.contacts_on_discs();
             self.timing.transfer += t1.elapsed().as_secs_f64();
             Ok::<_, CouplingError>(())
         })?;
         let t2 = Instant::now();
-        self.granular.step();
+        discs.step(&mut self.granular, &self.contacts);
         self.timing.dem += t2.elapsed().as_secs_f64();
         workers::awake(|| {
             let t3 = Instant::now();
@@ -1074,7 +1116,9 @@ impl CoupledModel {
         let r_max = match self.r_max {
             Some((n, r)) if n == g.grid.rebuilds => r,
             _ => {
-                let r = g.particles.max_radius();
+                let r = self
+                    .radius_bound
+                    .unwrap_or_else(|| g.particles.max_radius());
                 // a larger disc needs a longer reach
                 regrid |= self.r_max.is_none_or(|(_, r0)| r > r0);
                 self.r_max = Some((g.grid.rebuilds, r));

@@ -39,6 +39,7 @@
 pub mod comm;
 #[cfg(feature = "mpi")]
 pub mod mpi;
+pub mod near_bodies;
 pub mod regions;
 
 use crate::dem::Granular;
@@ -193,6 +194,23 @@ impl Decomposed {
         d
     }
 
+    /// Sum the totals of every wall over the ranks each step, not only of
+    /// those whose motion follows the state (a coupled run's energy
+    /// account takes the work of every wall each step).
+    pub fn sum_every_wall(&mut self) {
+        self.follows.iter_mut().for_each(|f| *f = true);
+    }
+
+    /// Key of the disc in each slot of the part.
+    pub fn keys(&self) -> &[u64] {
+        &self.key
+    }
+
+    /// Largest radius of the whole assembly.
+    pub fn max_radius(&self) -> f64 {
+        self.max_radius
+    }
+
     /// The communicator.
     pub fn comm(&self) -> &dyn Comm {
         &*self.comm
@@ -237,6 +255,14 @@ impl Decomposed {
     /// request). Returns whether every disc passed the step check, and the
     /// flag of any rank.
     pub fn step(&mut self, flag: bool) -> (bool, bool) {
+        self.begin_step();
+        self.advance(flag)
+    }
+
+    /// The first part of [`step`](Self::step) (collective): the ghosts
+    /// refreshed, or the list rebuilt with migration when the whole would
+    /// rebuild it (the slots may change).
+    pub fn begin_step(&mut self) {
         if self
             .part
             .grid
@@ -246,6 +272,11 @@ impl Decomposed {
         } else {
             self.refresh_ghosts();
         }
+    }
+
+    /// The rest of [`step`](Self::step) after
+    /// [`begin_step`](Self::begin_step) (collective).
+    pub fn advance(&mut self, flag: bool) -> (bool, bool) {
         let bad = self.part.advance_discs();
         let mut out = Pack::default();
         // a rank without discs has no displacement (the sweep's infinity

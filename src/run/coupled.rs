@@ -5,6 +5,7 @@ use super::{Run, RunError};
 use crate::continuum::Edge;
 use crate::coupling::energy::WorkMeter;
 use crate::coupling::{CoupledModel, GUARD_STEPS, MAX_CREATED};
+use crate::decomp::Comm;
 use crate::geom::Vec2;
 use crate::model::body::At;
 use crate::model::body::BodyRef;
@@ -12,9 +13,13 @@ use crate::model::{Model, System, coupled_body as body};
 use crate::output::csv::{BOND_COLUMNS, bond_row, write_bond_breaks};
 use crate::output::write_json;
 use crate::scenario::Scenario;
+use on_ranks::OnRanks;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
+use std::sync::Arc;
 use std::time::Instant;
+
+mod on_ranks;
 
 /// Watches for discs whose centre enters a body through an edge that is
 /// not one of its contact edges: the body does not see such a disc from
@@ -321,12 +326,15 @@ struct Events {
 impl Events {
     /// Look at the contacts of the present state; returns the total
     /// elastic contact force.
-    fn observe(&mut self, m: &CoupledModel, corners: &[Vec<Vec<Vec2>>]) -> f64 {
+    /// `weight`: the disc's weight in a single-disc run, `None` otherwise.
+    fn observe(
+        &mut self,
+        m: &CoupledModel,
+        corners: &[Vec<Vec<Vec2>>],
+        weight: Option<f64>,
+    ) -> f64 {
         let t = m.granular.time;
         let fn_sum: f64 = m.contacts.iter().map(|c| c.fn_elastic).sum();
-        // single-disc runs only
-        let weight = (m.granular.particles.len() == 1)
-            .then(|| m.granular.particles.mass[0] * m.granular.gravity.norm());
         if fn_sum > self.peak.0 {
             self.peak = (fn_sum, t);
             self.below_weight = None;
@@ -370,18 +378,31 @@ struct Running {
     reported: Vec<bool>,
 }
 
-/// Run a coupled scenario.
-pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
-    let (sc, dir, probes) = (run.sc, &run.opts.out_dir, &run.probes);
+/// The disc's weight in a single-disc run.
+fn single_weight(g: &crate::dem::Granular) -> Option<f64> {
+    (g.particles.len() == 1).then(|| g.particles.mass[0] * g.gravity.norm())
+}
+
+/// Run a coupled scenario on the ranks of `comm` (one: the whole model
+/// here; several: the discs divided over them, see [`OnRanks`]). Rank 0
+/// writes the outputs and returns the summary, the others `Null`.
+pub(super) fn run(run: Run, mut model: Model, comm: Arc<dyn Comm>) -> Result<Value, RunError> {
+    let (sc, probes) = (run.sc, &run.probes);
+    let root = comm.rank() == 0;
     let body_names = super::body_names(&model);
     let steps = model.steps;
     let m = coupled(&model);
     let body_dt = m.granular.dt * m.substeps as f64;
-    if let Some(w) = m.granular.dt_warning(&m.body_laws) {
-        eprintln!("warning: {w}");
+    if comm.size() > 1 {
+        on_ranks_refusal(m)?;
     }
-    if let Some(w) = m.choice.as_ref().and_then(|c| c.warning.as_ref()) {
-        eprintln!("warning: {w}");
+    if root {
+        if let Some(w) = m.granular.dt_warning(&m.body_laws) {
+            eprintln!("warning: {w}");
+        }
+        if let Some(w) = m.choice.as_ref().and_then(|c| c.warning.as_ref()) {
+            eprintln!("warning: {w}");
+        }
     }
     let mut cols: Vec<&str> = vec!["step", "t"];
     cols.extend(probes.iter().map(|p| p.0.as_str()));
@@ -399,7 +420,8 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     if bonded {
         cols.extend(BOND_COLUMNS);
     }
-    let mut out = Outputs::open(&run, &model, &cols)?;
+    let opened = root.then(|| Outputs::open(&run, &model, &cols)).transpose();
+    let mut out = super::ranks::agree(&*comm, opened)?;
     let mut r = match &run.restart {
         Some(ck) => ck.driver()?,
         None => Running {
@@ -412,10 +434,17 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     let vtk_every = sc.output.vtk_every;
     let mut row = Vec::with_capacity(cols.len());
     let corners = chain_corners(m);
-    // the outputs of the present step
+    // a decomposed model's granular is the discs near the bodies
+    let fixed_weight = single_weight(&m.granular);
+    let ranks_weight = comm.size() > 1;
+    // the outputs of the present step (rank 0)
     let mut output = |model: &Model, r: &mut Running, out: &mut Outputs| -> Result<(), RunError> {
         let (step, m) = (model.step, coupled(model));
-        let fn_sum = r.events.observe(m, &corners);
+        let weight = match ranks_weight {
+            true => fixed_weight,
+            false => single_weight(&m.granular),
+        };
+        let fn_sum = r.events.observe(m, &corners, weight);
         if due(step, sc.output.every, steps) {
             watch.check(m, &body_names, &mut r.reported);
             let e = r.meter.account(m);
@@ -436,25 +465,67 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
         }
         Ok(())
     };
-    if run.restart.is_none() {
-        output(&model, &mut r, &mut out)?;
+    if run.restart.is_none()
+        && let Some(out) = out.as_mut()
+    {
+        output(&model, &mut r, out)?;
     }
-    let mut session = Session::new(&run, &model);
+    let mut ranks = ranks_weight.then(|| OnRanks::new(&mut model, comm.clone()));
     let t_loop = Instant::now();
-    let ended = loop {
-        if let Some(end) = session.step(&mut model)? {
-            break end;
+    let ended = match ranks.as_mut() {
+        None => {
+            let out = out.as_mut().expect("one rank writes");
+            let mut session = Session::new(&run, &model);
+            let ended = loop {
+                if let Some(end) = session.step(&mut model)? {
+                    break end;
+                }
+                r.meter.after_step(&coupled(&model).granular);
+                output(&model, &mut r, out)?;
+                if let Some(end) = session.after_step(&model, out, &r)? {
+                    break end;
+                }
+            };
+            session.finish();
+            ended
         }
-        r.meter.after_step(&coupled(&model).granular);
-        output(&model, &mut r, &mut out)?;
-        if let Some(end) = session.after_step(&model, &mut out, &r)? {
-            break end;
-        }
+        Some(rk) => match rk.drive(&run, &mut model, &mut r, out.as_mut(), &mut output) {
+            Ok(ended) => ended,
+            Err(e) => return super::ranks::agree(&*comm, Err(e)),
+        },
     };
     let t_total = t_loop.elapsed().as_secs_f64();
-    session.finish();
+    let res = match out.as_mut() {
+        Some(out) => finish(
+            &run,
+            &model,
+            ended,
+            out,
+            &r,
+            ranks.as_ref(),
+            (t_total, body_dt),
+        ),
+        None => Ok(Value::Null),
+    };
+    super::ranks::agree(&*comm, res)
+}
+
+/// Rank 0's end of the run: `bond_breaks.csv`, `summary.json`.
+fn finish(
+    run: &Run,
+    model: &Model,
+    ended: super::session::Ended,
+    out: &mut Outputs,
+    r: &Running,
+    ranks: Option<&OnRanks>,
+    (t_total, body_dt): (f64, f64),
+) -> Result<Value, RunError> {
+    let dir = &run.opts.out_dir;
+    let steps = model.steps;
+    let body_names = super::body_names(model);
+    let bonded = coupled(model).granular.bonds.active();
     out.hist.flush()?;
-    let m = coupled(&model);
+    let m = coupled(model);
     if bonded {
         write_bond_breaks(&m.granular, &dir.join("bond_breaks.csv"))?;
     }
@@ -499,10 +570,33 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
     if m.path_scheme() || m.fallback.is_some() {
         summary["subcycling"] = subcycling(m);
     }
+    if let Some(rk) = ranks {
+        summary["ranks"] = rk.record();
+    }
     run.annotate(&mut summary)?;
-    ended.record(&mut summary, &model);
+    ended.record(&mut summary, model);
     write_json(&dir.join("summary.json"), &summary)?;
-    ended.result(summary, &model, dir)
+    ended.result(summary, model, dir)
+}
+
+/// Why a coupled model cannot run on several ranks, if it cannot.
+fn on_ranks_refusal(m: &CoupledModel) -> Result<(), RunError> {
+    use crate::coupling::scheme::Scheme;
+    let why = if matches!(m.scheme(), Scheme::Predicted | Scheme::Staggered) {
+        format!(
+            "the {} coupled scheme does not run on several ranks: name `coupling = \"exact\"` or `coupling = \"compliant\"` in [simulation], or run this scenario with one process",
+            m.scheme().name()
+        )
+    } else if m.granular.bonds.active() {
+        "bonded discs ([bonds]) do not run on several ranks yet: run this scenario with one process"
+            .into()
+    } else if !m.granular.clumps.is_empty() {
+        "clumps ([clumps]) do not run on several ranks yet: run this scenario with one process"
+            .into()
+    } else {
+        return Ok(());
+    };
+    Err(RunError::Ranks(why))
 }
 
 fn coupled(model: &Model) -> &CoupledModel {

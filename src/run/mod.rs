@@ -228,8 +228,11 @@ pub fn run(sc: &Scenario, opts: &RunOptions) -> Result<Value, RunError> {
 /// scenario and options. On one rank it is [`run`]; on several, a granular
 /// scenario is divided over them ([`crate::decomp`]) with outputs bitwise
 /// those of one rank, written by rank 0 (which returns the summary; the
-/// others return `Null`, or [`RunError::OnRank0`] when rank 0 failed).
-/// Continuum and coupled scenarios are refused on several ranks.
+/// others return `Null`, or [`RunError::OnRank0`] when rank 0 failed); so
+/// is a coupled one, its bodies on every rank
+/// ([`crate::decomp::near_bodies`]). Continuum scenarios, and the coupled
+/// schemes that step the discs in phases (predicted, staggered), are
+/// refused on several ranks.
 pub fn run_on(
     sc: &Scenario,
     opts: &RunOptions,
@@ -281,12 +284,12 @@ pub fn run_on(
             "clumps ([clumps]) do not run on several ranks yet: run this scenario with one process".into(),
         )),
         System::Granular(_) if ranks > 1 => ranks::run(run, model, comm),
-        _ if ranks > 1 => Err(RunError::Ranks(format!(
-            "only granular scenarios (discs and walls) run on several ranks; this one has continuum bodies: run it with one process (not under mpirun -np {ranks})"
+        System::Continuum { .. } if ranks > 1 => Err(RunError::Ranks(format!(
+            "a continuum scenario (bodies without discs) does not run on several ranks: run it with one process (not under mpirun -np {ranks})"
         ))),
         System::Continuum { .. } => continuum::run(run, model),
         System::Granular(_) => granular::run(run, model),
-        System::Coupled(_) => coupled::run(run, model),
+        System::Coupled(_) => coupled::run(run, model, comm),
     };
     if let Err(e @ (RunError::Io(_) | RunError::OutDir { .. })) = &result {
         // say so in summary.json if the disk still takes it; the files

@@ -34,6 +34,32 @@ pub(super) fn agree<T: Default>(comm: &dyn Comm, res: Result<T, RunError>) -> Re
     }
 }
 
+/// Every rank's discs, ghosts, traffic and peak memory, with the count,
+/// imbalance and recuts: the `ranks` record of rank 0's summary
+/// (collective).
+pub(super) fn ranks_record(d: &Decomposed) -> serde_json::Value {
+    let t = d.comm().traffic();
+    let mine = json!({
+        "owned": d.owned(),
+        "ghosts": d.ghosts(),
+        "bytes_sent": t.bytes,
+        "messages": t.messages,
+        "communication_seconds": t.seconds,
+        "peak_memory_bytes": super::memory::peak_resident_bytes(),
+    });
+    let all = d.comm().all_gather(mine.to_string().as_bytes());
+    let per_rank: Vec<serde_json::Value> = all
+        .iter()
+        .map(|b| serde_json::from_slice(b).unwrap_or_default())
+        .collect();
+    json!({
+        "count": d.comm().size(),
+        "imbalance": d.imbalance,
+        "recuts": d.recuts,
+        "per_rank": per_rank,
+    })
+}
+
 /// Rank 0's whole model set to the gathered state (collective).
 fn gather(d: &Decomposed, model: &mut Option<Model>) -> Result<(), RunError> {
     if let (Some(state), Some(model)) = (d.gather(), model.as_mut()) {
@@ -68,27 +94,7 @@ pub(super) fn run(
     let mut d = Decomposed::new(granular(&whole), comm.clone());
     let mut model = root.then_some(whole);
     let res = drive(&run, &mut d, &mut model, steps);
-    // every rank's record, for rank 0's summary (collective)
-    let t = d.comm().traffic();
-    let mine = json!({
-        "owned": d.owned(),
-        "ghosts": d.ghosts(),
-        "bytes_sent": t.bytes,
-        "messages": t.messages,
-        "communication_seconds": t.seconds,
-        "peak_memory_bytes": super::memory::peak_resident_bytes(),
-    });
-    let all = comm.all_gather(mine.to_string().as_bytes());
-    let per_rank: Vec<serde_json::Value> = all
-        .iter()
-        .map(|b| serde_json::from_slice(b).unwrap_or_default())
-        .collect();
-    let ranks = json!({
-        "count": comm.size(),
-        "imbalance": d.imbalance,
-        "recuts": d.recuts,
-        "per_rank": per_rank,
-    });
+    let ranks = ranks_record(&d);
     let res = match (res, model) {
         (Ok((ended, wall_s, start)), Some(model)) => {
             let mut s = summary(&run, &model, warnings, wall_s, model.step - start);
