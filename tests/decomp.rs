@@ -5,6 +5,9 @@
 //! pair list and its shear and rolling histories, walls (a servo among
 //! them), the Verlet bookkeeping.
 
+#[allow(dead_code)]
+mod common;
+
 use efgdem::decomp::{Comm, Decomposed, Threads};
 use efgdem::dem::Granular;
 use efgdem::dem::state::GranularState;
@@ -467,57 +470,10 @@ quantity = "wall_fy"
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The footing of the sub-cycled tests: 446 discs in a box, an EFG
-/// footing 0.2 × 0.04 m driven down at 5 cm/s into them from 0.01 s on.
-const FOOTING: &str = r#"
-[simulation]
-dt = 1.0e-5
-steps = 1
-gravity = [0.0, -9.81]
-COUPLING
-
-[[material]]
-name = "grain"
-density = 2650.0
-kn = 1.0e7
-ks = 1.0e7
-friction = 0.3
-rolling_friction = 0.05
-
-[granular]
-material = "grain"
-discs = { generate = "hex", box = [[0.0, 0.0], [0.5, 0.085]], radius = 0.005 }
-
-[[wall]]
-name = "floor"
-from = [0.0, 0.0]
-to = [0.5, 0.0]
-
-[[wall]]
-name = "left"
-from = [0.0, 0.0]
-to = [0.0, 0.3]
-
-[[wall]]
-name = "right"
-from = [0.5, 0.0]
-to = [0.5, 0.3]
-
-[[body]]
-name = "footing"
-rectangle = { origin = [0.15, 0.0798], size = [0.2, 0.04] }
-nodes = [41, 9]
-elastic = { E = 3.0e9, nu = 0.2, density = 2400.0, thickness = 1.0, plane = "strain" }
-newmark = { gamma = 0.5, beta = 0.25 }
-self_weight = false
-[[body.bc]]
-edge = "top"
-ux = 0.0
-uy = { velocity = -0.05 }
-"#;
-
+/// The footing of `examples/hex_footing.toml` with friction and rolling
+/// resistance ([`common::hex_footing`]), coupled by `coupling`.
 fn coupled_model(coupling: &str) -> efgdem::model::Model {
-    scenario::parse(&FOOTING.replace("COUPLING", coupling), "t.toml")
+    scenario::parse(&common::hex_footing(1, coupling), "t.toml")
         .unwrap_or_else(|e| panic!("{e}"))
         .build()
         .unwrap_or_else(|e| panic!("{e}"))

@@ -5,6 +5,9 @@
 //! `.ci/mpi`: `cargo test --release --features mpi --test mpi`.
 #![cfg(feature = "mpi")]
 
+#[allow(dead_code)]
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -226,60 +229,6 @@ fixed = true
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// An EFG footing (41 × 9 nodes) driven down at 5 cm/s into a bed of 446
-/// discs (friction, rolling resistance), 1500 steps: it touches the bed
-/// from step 1000 on.
-const FOOTING: &str = r#"
-[simulation]
-dt = 1.0e-5
-steps = 1500
-gravity = [0.0, -9.81]
-COUPLING
-
-[output]
-every = 50
-vtk_every = 500
-
-[[material]]
-name = "grain"
-density = 2650.0
-kn = 1.0e7
-ks = 1.0e7
-friction = 0.3
-rolling_friction = 0.05
-
-[granular]
-material = "grain"
-discs = { generate = "hex", box = [[0.0, 0.0], [0.5, 0.085]], radius = 0.005 }
-
-[[wall]]
-name = "floor"
-from = [0.0, 0.0]
-to = [0.5, 0.0]
-
-[[wall]]
-name = "left"
-from = [0.0, 0.0]
-to = [0.0, 0.3]
-
-[[wall]]
-name = "right"
-from = [0.5, 0.0]
-to = [0.5, 0.3]
-
-[[body]]
-name = "footing"
-rectangle = { origin = [0.15, 0.0798], size = [0.2, 0.04] }
-nodes = [41, 9]
-elastic = { E = 3.0e9, nu = 0.2, density = 2400.0, thickness = 1.0, plane = "strain" }
-newmark = { gamma = 0.5, beta = 0.25 }
-self_weight = false
-[[body.bc]]
-edge = "top"
-ux = 0.0
-uy = { velocity = -0.05 }
-"#;
-
 fn same_files(got: &Path, want: &[(PathBuf, Vec<u8>)], what: &str) {
     let got: Vec<_> = files(got)
         .into_iter()
@@ -290,6 +239,17 @@ fn same_files(got: &Path, want: &[(PathBuf, Vec<u8>)], what: &str) {
     for ((p, a), (_, b)) in got.iter().zip(want) {
         assert!(a == b, "{what}: {} differs", p.display());
     }
+}
+
+/// The footing of `examples/hex_footing.toml` (friction and rolling
+/// resistance in the bed; [`common::hex_footing`]) with the coupled scheme
+/// `coupling`, 1500 steps (it touches the bed from step 1000 on), a history
+/// row every 50 steps and frames every 500.
+fn footing(coupling: &str) -> String {
+    common::hex_footing(
+        1500,
+        &format!("{coupling}\n\n[output]\nevery = 50\nvtk_every = 500"),
+    )
 }
 
 /// Coupled runs (the exact and the compliant sub-cycled schemes) under
@@ -305,7 +265,7 @@ fn mpirun_of_coupled_scenarios_writes_the_outputs_of_one_process() {
         let dir = std::env::temp_dir().join(format!("efgdem-mpi-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        std::fs::write(dir.join("s.toml"), FOOTING.replace("COUPLING", coupling)).unwrap();
+        std::fs::write(dir.join("s.toml"), footing(coupling)).unwrap();
         efgdem(&dir, "one", 0, 1);
         let want = files(&dir.join("one"));
         assert!(want.len() >= 4, "{want:?}");
@@ -338,7 +298,7 @@ fn mpirun_of_the_predicted_scheme_is_refused() {
     let dir = std::env::temp_dir().join(format!("efgdem-mpi-p-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let sc = FOOTING.replace("COUPLING", "substeps = 4\ncoupling = \"predicted\"");
+    let sc = footing("substeps = 4\ncoupling = \"predicted\"");
     std::fs::write(dir.join("s.toml"), sc).unwrap();
     let o = Command::new("mpirun")
         .args(["-np", "2", "--oversubscribe"])

@@ -65,3 +65,24 @@ pub fn column(csv: &Csv, name: &str) -> Vec<f64> {
     let k = csv.0.iter().position(|h| h == name).unwrap();
     csv.1.iter().map(|r| r[k].parse().unwrap()).collect()
 }
+
+/// `examples/hex_footing.toml` with friction (0.3) and rolling resistance
+/// (0.05) in the bed, a 3 GPa footing, `steps` steps instead of its end
+/// time, and `extra` appended to `[simulation]` (e.g. the coupled scheme,
+/// or an `[output]` table).
+#[allow(dead_code)]
+pub fn hex_footing(steps: usize, extra: &str) -> String {
+    let src = include_str!("../../examples/hex_footing.toml")
+        .replace("end_time = 0.05\n", &format!("steps = {steps}\n"))
+        .replace(
+            "gravity = [0.0, -9.81]\n",
+            &format!("gravity = [0.0, -9.81]\n{extra}\n"),
+        )
+        .replace(
+            "friction = 0.0\n",
+            "friction = 0.3\nrolling_friction = 0.05\n",
+        )
+        .replace("E = 2.0e9", "E = 3.0e9");
+    assert!(src.contains("rolling_friction") && src.contains("E = 3.0e9"));
+    src
+}
