@@ -272,6 +272,9 @@ struct Figure {
 struct Job {
     out: PathBuf,
     quiet: bool,
+    /// The runs' start-up warnings, each with the number of runs that gave
+    /// it (printed once each at the end).
+    warnings: std::collections::BTreeMap<String, usize>,
     report: String,
     paper: Vec<PaperValue>,
     figures: Vec<Figure>,
@@ -285,6 +288,7 @@ impl Job {
         let opts = RunOptions {
             quiet: true,
             overwrite: true,
+            warn: false,
             ..RunOptions::new(&dir)
         };
         let summary = crate::run::run(sc, &opts).map_err(|source| ReproduceError::Run {
@@ -293,6 +297,10 @@ impl Job {
         })?;
         if !self.quiet {
             eprintln!("  {name:<28} {:>7.3} s", t0.elapsed().as_secs_f64());
+        }
+        for w in summary["warnings"].as_array().into_iter().flatten() {
+            let w = w.as_str().unwrap_or_default().to_string();
+            *self.warnings.entry(w).or_default() += 1;
         }
         let history = History::load(&dir)?;
         Ok(Done {
@@ -441,6 +449,7 @@ pub fn reproduce(out: &Path, quiet: bool) -> Result<PathBuf> {
     let mut job = Job {
         out: out.to_path_buf(),
         quiet,
+        warnings: Default::default(),
         report: String::new(),
         paper: paper_values().map_err(ReproduceError::Data)?,
         figures: Vec::new(),
@@ -464,6 +473,9 @@ pub fn reproduce(out: &Path, quiet: bool) -> Result<PathBuf> {
     }
     example2(&mut job)?;
     figures_section(&mut job);
+    for (w, n) in &job.warnings {
+        eprintln!("warning ({n} of the runs): {w}");
+    }
     let _ = writeln!(
         job.report,
         "\nTotal wall time of `efgdem reproduce`: {:.2} s.",
@@ -1534,6 +1546,7 @@ mod tests {
         let job = Job {
             out: std::env::temp_dir(),
             quiet: true,
+            warnings: Default::default(),
             report: String::new(),
             paper: paper_values().unwrap(),
             figures: Vec::new(),

@@ -396,13 +396,10 @@ pub(super) fn run(run: Run, mut model: Model, comm: Arc<dyn Comm>) -> Result<Val
     if comm.size() > 1 {
         on_ranks_refusal(m)?;
     }
-    if root {
-        if let Some(w) = m.granular.dt_warning(&m.body_laws) {
-            eprintln!("warning: {w}");
-        }
-        if let Some(w) = m.choice.as_ref().and_then(|c| c.warning.as_ref()) {
-            eprintln!("warning: {w}");
-        }
+    if root && run.opts.warn {
+        start_warnings(m)
+            .iter()
+            .for_each(|w| eprintln!("warning: {w}"));
     }
     let mut cols: Vec<&str> = vec!["step", "t"];
     cols.extend(probes.iter().map(|p| p.0.as_str()));
@@ -540,6 +537,7 @@ fn finish(
         "substeps": m.substeps,
         "coupling": m.scheme().name(),
         "scheme": m.choice,
+        "warnings": start_warnings(m),
         "dem_critical_dt": crit.dt,
         "dem_critical_mode": crit.mode,
         "discs": m.granular.particles.len(),
@@ -577,6 +575,14 @@ fn finish(
     ended.record(&mut summary, model);
     write_json(&dir.join("summary.json"), &summary)?;
     ended.result(summary, model, dir)
+}
+
+/// What a coupled run warns of as it starts: the time step against the
+/// critical step, the coupled scheme's choice.
+fn start_warnings(m: &CoupledModel) -> Vec<String> {
+    let dt = m.granular.dt_warning(&m.body_laws);
+    let choice = m.choice.as_ref().and_then(|c| c.warning.clone());
+    dt.into_iter().chain(choice).collect()
 }
 
 /// Why a coupled model cannot run on several ranks, if it cannot.

@@ -21,7 +21,9 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
     let steps = model.steps;
     let mut warnings = Vec::new();
     if let Some(w) = model.granular().and_then(|g| g.dt_warning(&[])) {
-        eprintln!("warning: {w}");
+        if run.opts.warn {
+            eprintln!("warning: {w}");
+        }
         warnings.push(w);
     }
     let cols = columns(&run, model.granular().is_some_and(|g| g.bonds.active()));

@@ -43,6 +43,10 @@ pub struct RunOptions {
     /// Continue the run saved in this checkpoint (written by a run of the
     /// same scenario into `out_dir`), appending to its outputs.
     pub restart: Option<PathBuf>,
+    /// Print the run's start-up warnings (the time step against the
+    /// critical step, the coupled scheme's choice) to standard error; they
+    /// are in `summary.json` (`warnings`) either way.
+    pub warn: bool,
 }
 
 impl RunOptions {
@@ -56,6 +60,7 @@ impl RunOptions {
             stop: None,
             checkpoint_every: 0,
             restart: None,
+            warn: true,
         }
     }
 }

@@ -88,7 +88,7 @@ pub(super) fn run(
     }
     let steps = whole.steps;
     let warnings: Vec<String> = granular(&whole).dt_warning(&[]).into_iter().collect();
-    if root {
+    if root && run.opts.warn {
         warnings.iter().for_each(|w| eprintln!("warning: {w}"));
     }
     let mut d = Decomposed::new(granular(&whole), comm.clone());
