@@ -195,9 +195,6 @@ fn mpirun_writes_the_outputs_of_one_process() {
 /// A continuum scenario on several ranks is refused with exit code 2.
 #[test]
 fn mpirun_of_a_continuum_scenario_is_refused() {
-    let dir = std::env::temp_dir().join(format!("efgdem-mpi-c-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
     let sc = r#"
 [simulation]
 dt = 1.0e-3
@@ -213,6 +210,16 @@ elastic = { E = 1.0e7, nu = 0.3, density = 1000.0 }
 edge = "bottom"
 fixed = true
 "#;
+    let err = refused_on_two_ranks("c", sc);
+    assert!(err.contains("does not run on several ranks"), "{err}");
+}
+
+/// `efgdem run` of the scenario `sc` under `mpirun -np 2`: it must be
+/// refused with exit code 2; its standard error.
+fn refused_on_two_ranks(tag: &str, sc: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("efgdem-mpi-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("s.toml"), sc).unwrap();
     let o = Command::new("mpirun")
         .args(["-np", "2", "--oversubscribe"])
@@ -225,8 +232,8 @@ fixed = true
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("does not run on several ranks"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
+    err.into_owned()
 }
 
 fn same_files(got: &Path, want: &[(PathBuf, Vec<u8>)], what: &str) {
@@ -295,26 +302,10 @@ fn mpirun_of_coupled_scenarios_writes_the_outputs_of_one_process() {
 /// 2) and says what runs.
 #[test]
 fn mpirun_of_the_predicted_scheme_is_refused() {
-    let dir = std::env::temp_dir().join(format!("efgdem-mpi-p-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let sc = footing("substeps = 4\ncoupling = \"predicted\"");
-    std::fs::write(dir.join("s.toml"), sc).unwrap();
-    let o = Command::new("mpirun")
-        .args(["-np", "2", "--oversubscribe"])
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .arg(env!("CARGO_BIN_EXE_efgdem"))
-        .args(["run", "s.toml", "-q", "-o", "out"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = refused_on_two_ranks("p", &footing("substeps = 4\ncoupling = \"predicted\""));
     assert!(
         err.contains("predicted coupled scheme does not run on several ranks"),
         "{err}"
     );
     assert!(err.contains("compliant"), "{err}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
