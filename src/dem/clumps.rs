@@ -284,6 +284,12 @@ impl Clumps {
         Ok(c)
     }
 
+    /// `(sin θ, cos θ)` of every clump from its `theta` (after the clumps'
+    /// state was set from a saved one; a step keeps them itself).
+    pub(super) fn refresh_rotations(&mut self) {
+        self.rot = self.theta.iter().map(|t| t.sin_cos()).collect();
+    }
+
     /// Put clump `c`'s members where its rigid motion takes them.
     fn place(&self, c: usize, p: &mut Particles) {
         let (a, b) = (self.first[c] as usize, self.first[c + 1] as usize);
@@ -421,8 +427,7 @@ impl Clumps {
                     if has_ref {
                         m2 = m2.max((x - ref_pos[ch * CHUNK + k]).norm2());
                     }
-                    bad |= !(v.dot(v) <= max_v2 * radius[k] * radius[k]
-                        && (x.x + x.y + omega[k]).is_finite());
+                    bad |= !integrate::passes_check(x, v, omega[k], radius[k], max_v2);
                 }
                 (m2, bad)
             })

@@ -83,6 +83,15 @@ pub fn advance(
     *theta += w * dt;
 }
 
+/// The per-step check of a disc after its step
+/// ([`Granular::step_check`](super::Granular::step_check)): its state is
+/// finite and it moves at most `√max_v2 · r` per unit time,
+/// `v·v ≤ max_v2 r²` with `max_v2 = (radii_per_step/Δt)²`.
+#[inline(always)]
+pub fn passes_check(x: Vec2, v: Vec2, omega: f64, r: f64, max_v2: f64) -> bool {
+    v.dot(v) <= max_v2 * r * r && (x.x + x.y + omega).is_finite()
+}
+
 /// Advance every disc by one step with [`advance`]. Returns the largest
 /// displacement from `ref_pos` (for the Verlet criterion); the max is
 /// exact, so the result does not depend on the thread count.

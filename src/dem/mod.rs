@@ -507,7 +507,7 @@ impl Granular {
         self.prepare_contacts();
         let (mut max_disp, mut bad) = self.sweep::<true>();
         if !self.clumps.is_empty() {
-            let max_v2 = self.check_radii * self.check_radii / (self.dt * self.dt);
+            let max_v2 = self.check_v2();
             let (d2, b) = self.clumps.step(
                 &mut self.particles,
                 &self.grid.ref_pos,
@@ -522,6 +522,12 @@ impl Granular {
         self.max_disp = max_disp;
         self.external.clear();
         bad
+    }
+
+    /// `(check_radii/Δt)²`, the speed bound of the per-step check
+    /// ([`integrate::passes_check`]).
+    pub(super) fn check_v2(&self) -> f64 {
+        self.check_radii * self.check_radii / (self.dt * self.dt)
     }
 
     /// The end of [`step`](Self::step): the walls move, the clock

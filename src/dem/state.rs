@@ -246,6 +246,7 @@ impl Granular {
         c.omega.clone_from(&s.clumps.omega);
         c.force.clone_from(&s.clumps.force);
         c.torque.clone_from(&s.clumps.torque);
+        c.refresh_rotations();
         Ok(())
     }
 

@@ -300,6 +300,7 @@ impl Granular {
         bond_dt: f64,
     ) -> (f64, bool, Vec<Break>) {
         let n = self.particles.len();
+        let max_v2 = self.check_v2();
         let ContactList {
             j: pairs,
             sqrt_m_eff: sm,
@@ -370,7 +371,7 @@ impl Granular {
             // a clump sums its members' stored forces after the sweep
             store: !ADVANCE || self.store_forces || !self.clumps.is_empty(),
             external: &self.external,
-            max_v2: self.check_radii * self.check_radii / (self.dt * self.dt),
+            max_v2,
             bond_row: if bonded { &self.bonds.row } else { &[] },
             bond_law: self.bonds.law,
             bond_dt,
@@ -856,8 +857,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                 m2 = if d2 > m2 { d2 } else { m2 };
             }
             // the model's per-step check, while the disc is in registers
-            let (x, v, r) = (pos[d], vel[d], radius[d]);
-            bad |= !(v.dot(v) <= ctx.max_v2 * r * r && (x.x + x.y + omega[d]).is_finite());
+            bad |= !integrate::passes_check(pos[d], vel[d], omega[d], radius[d], ctx.max_v2);
         }
     }
     (m2, bad, broken)
