@@ -32,6 +32,7 @@ use super::{Decomposed, Src, pack_disc, take_discs, unpack_disc};
 use crate::continuum::Continuum;
 use crate::coupling::{BodyContact, CoupledModel, DiscStep, set_contacts_on_discs};
 use crate::dem::Granular;
+use crate::dem::broadphase::centre_bounds;
 use crate::dem::particles::GHOST;
 use crate::geom::Vec2;
 
@@ -82,15 +83,7 @@ impl NearBodies {
                 .iter()
                 .filter(|c| !c.current.is_empty())
             {
-                let (lo, hi) = c
-                    .current
-                    .iter()
-                    .fold((c.current[0], c.current[0]), |(l, h), q| {
-                        (
-                            Vec2::new(l.x.min(q.x), l.y.min(q.y)),
-                            Vec2::new(h.x.max(q.x), h.y.max(q.y)),
-                        )
-                    });
+                let (lo, hi) = centre_bounds(&c.current);
                 let e = Vec2::new(pad, pad);
                 self.zone.push((lo - e, hi + e));
             }

@@ -437,9 +437,10 @@ pub(super) fn run(run: Run, mut model: Model, comm: Arc<dyn Comm>) -> Result<Val
     // the outputs of the present step (rank 0)
     let mut output = |model: &Model, r: &mut Running, out: &mut Outputs| -> Result<(), RunError> {
         let (step, m) = (model.step, coupled(model));
-        let weight = match ranks_weight {
-            true => fixed_weight,
-            false => single_weight(&m.granular),
+        let weight = if ranks_weight {
+            fixed_weight
+        } else {
+            single_weight(&m.granular)
         };
         let fn_sum = r.events.observe(m, &corners, weight);
         if due(step, sc.output.every, steps) {
@@ -593,12 +594,8 @@ fn on_ranks_refusal(m: &CoupledModel) -> Result<(), RunError> {
             "the {} coupled scheme does not run on several ranks: name `coupling = \"exact\"` or `coupling = \"compliant\"` in [simulation], or run this scenario with one process",
             m.scheme().name()
         )
-    } else if m.granular.bonds.active() {
-        "bonded discs ([bonds]) do not run on several ranks yet: run this scenario with one process"
-            .into()
-    } else if !m.granular.clumps.is_empty() {
-        "clumps ([clumps]) do not run on several ranks yet: run this scenario with one process"
-            .into()
+    } else if let Some(why) = super::ranks::discs_refusal(&m.granular) {
+        why.into()
     } else {
         return Ok(());
     };

@@ -282,13 +282,10 @@ pub fn run_on(
         removed,
     };
     let result = match model.system {
-        System::Granular(ref g) if ranks > 1 && g.bonds.active() => Err(RunError::Ranks(
-            "bonded discs ([bonds]) do not run on several ranks yet: run this scenario with one process".into(),
-        )),
-        System::Granular(ref g) if ranks > 1 && !g.clumps.is_empty() => Err(RunError::Ranks(
-            "clumps ([clumps]) do not run on several ranks yet: run this scenario with one process".into(),
-        )),
-        System::Granular(_) if ranks > 1 => ranks::run(run, model, comm),
+        System::Granular(ref g) if ranks > 1 => match ranks::discs_refusal(g) {
+            Some(why) => Err(RunError::Ranks(why.into())),
+            None => ranks::run(run, model, comm),
+        },
         System::Continuum { .. } if ranks > 1 => Err(RunError::Ranks(format!(
             "a continuum scenario (bodies without discs) does not run on several ranks: run it with one process (not under mpirun -np {ranks})"
         ))),

@@ -8,7 +8,7 @@
 use super::checkpoint::{self, Checkpoint};
 use super::granular::{columns, granular, record, summary};
 use super::progress::Progress;
-use super::session::{Ended, Outputs, due};
+use super::session::{Ended, Outputs, checkpoint_due, due};
 use super::{Run, RunError};
 use crate::decomp::{Comm, Decomposed};
 use crate::model::{Model, ModelState, System, SystemState, stability};
@@ -18,6 +18,21 @@ use serde_json::json;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
+
+/// Why the discs of `g` cannot be divided over ranks, if they cannot.
+pub(super) fn discs_refusal(g: &crate::dem::Granular) -> Option<&'static str> {
+    if g.bonds.active() {
+        Some(
+            "bonded discs ([bonds]) do not run on several ranks yet: run this scenario with one process",
+        )
+    } else if !g.clumps.is_empty() {
+        Some(
+            "clumps ([clumps]) do not run on several ranks yet: run this scenario with one process",
+        )
+    } else {
+        None
+    }
+}
 
 /// The exit code rank 0 ended with, known to every rank (collective): on
 /// rank 0 `res` itself, on the others `Ok` or [`RunError::OnRank0`].
@@ -182,8 +197,7 @@ fn drive(
             let unstable = model.as_ref().and_then(|m| stability::check(m).err());
             break unstable.map_or(Ended::Completed, |i| Ended::Unstable(Box::new(i)));
         }
-        let ck_every = opts.checkpoint_every;
-        let ck = stop || (ck_every > 0 && step.is_multiple_of(ck_every) && step < steps);
+        let ck = stop || checkpoint_due(step, opts.checkpoint_every, steps);
         let due = (due(step, every, steps), due(step, vtk_every, steps), ck);
         if due.0 || due.1 || due.2 {
             output(d, model, due, &mut failed);

@@ -161,6 +161,12 @@ pub(super) fn due(step: usize, every: usize, steps: usize) -> bool {
     every > 0 && (step.is_multiple_of(every) || step == steps)
 }
 
+/// Is a periodic checkpoint (`checkpoint_every`, 0: none) due after
+/// `step` of `steps`? Not at the last step (the run is then complete).
+pub(super) fn checkpoint_due(step: usize, every: usize, steps: usize) -> bool {
+    every > 0 && step.is_multiple_of(every) && step < steps
+}
+
 /// How a run's step loop ended.
 #[derive(Debug)]
 pub(super) enum Ended {
@@ -299,10 +305,7 @@ impl<'a> Session<'a> {
         self.progress.update(model.step, model.time());
         let opts = self.run.opts;
         let signal = opts.stop.as_ref().map_or(0, |s| s.load(Ordering::Relaxed));
-        let every = opts.checkpoint_every;
-        if signal != 0
-            || (every > 0 && model.step.is_multiple_of(every) && model.step < model.steps)
-        {
+        if signal != 0 || checkpoint_due(model.step, opts.checkpoint_every, model.steps) {
             out.hist.flush()?;
             Checkpoint::new(
                 self.run.sc,

@@ -5,7 +5,7 @@
 
 use super::super::checkpoint::{self, Checkpoint};
 use super::super::progress::Progress;
-use super::super::session::{Ended, Outputs, due};
+use super::super::session::{Ended, Outputs, checkpoint_due, due};
 use super::super::{Run, RunError};
 use super::Running;
 use crate::decomp::near_bodies::NearBodies;
@@ -113,8 +113,7 @@ impl OnRanks {
             }
             r.meter.after_step(&self.nb.d.part);
             let step = model.step;
-            let ck_every = opts.checkpoint_every;
-            let ck = stop || (ck_every > 0 && step.is_multiple_of(ck_every) && step < steps);
+            let ck = stop || checkpoint_due(step, opts.checkpoint_every, steps);
             let need = due(step, every, steps) || due(step, vtk_every, steps) || ck;
             if need {
                 self.gather_in(model);
