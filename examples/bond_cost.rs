@@ -6,7 +6,9 @@
 //! joined two by two into clumps (each disc with a touching neighbour not
 //! yet in a clump) — in interleaved rounds of 50 steps, so that the
 //! machine's load falls on all three alike. Prints the median over the
-//! rounds of each variant's time per step over the plain one's.
+//! rounds of each variant's time per step over the plain one's, in
+//! wall-clock time and in CPU time (the time the process ran: on a
+//! shared machine the steadier of the two).
 //!
 //!     cargo run --release --example bond_cost -- [N (10000)] [rounds (12)]
 //!
@@ -62,21 +64,24 @@ fn main() {
         rayon::current_num_threads()
     );
     let mut ratios = vec![vec![]; runs.len()];
+    let mut cpu_ratios = vec![vec![]; runs.len()];
     let mut plain_us = vec![];
     for _ in 0..rounds {
-        let times: Vec<f64> = runs
+        let times: Vec<(f64, f64)> = runs
             .iter_mut()
             .map(|(_, g)| {
-                let t = Instant::now();
+                let (t, c) = (Instant::now(), cpu_ns());
                 for _ in 0..STEPS {
                     g.step();
                 }
-                t.elapsed().as_secs_f64() / STEPS as f64
+                let wall = t.elapsed().as_secs_f64() / STEPS as f64;
+                (wall, (cpu_ns() - c) as f64)
             })
             .collect();
-        plain_us.push(times[0] * 1e6);
-        for (r, t) in ratios.iter_mut().zip(&times) {
-            r.push(t / times[0]);
+        plain_us.push(times[0].0 * 1e6);
+        for (k, t) in times.iter().enumerate() {
+            ratios[k].push(t.0 / times[0].0);
+            cpu_ratios[k].push(t.1 / times[0].1);
         }
     }
     plain_us.sort_by(f64::total_cmp);
@@ -86,16 +91,35 @@ fn main() {
         plain_us[0],
         plain_us[plain_us.len() - 1]
     );
-    for ((name, g), r) in runs.iter().zip(&mut ratios) {
+    for (((name, g), r), c) in runs.iter().zip(&mut ratios).zip(&mut cpu_ratios) {
         r.sort_by(f64::total_cmp);
+        c.sort_by(f64::total_cmp);
         println!(
-            "{name:>7}: {:.2} × plain per step (median of {rounds} rounds; range {:.2}–{:.2}); {} rebuilds",
+            "{name:>7}: {:.2} × plain per step (median of {rounds} rounds; range {:.2}–{:.2}); \
+             CPU time {:.2} × ({:.2}–{:.2}); {} rebuilds",
             r[r.len() / 2],
             r[0],
             r[r.len() - 1],
+            c[c.len() / 2],
+            c[0],
+            c[c.len() - 1],
             g.grid.rebuilds
         );
     }
+}
+
+/// CPU time of the process's threads so far, in ns (Linux:
+/// `/proc/self/task/*/schedstat`; 0 elsewhere): the time it ran, which a
+/// machine shared with other jobs does not stretch as it stretches the
+/// wall-clock time.
+fn cpu_ns() -> u64 {
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
+        return 0;
+    };
+    tasks
+        .filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+        .sum()
 }
 
 /// Join each disc with a touching neighbour not yet in a clump (in list

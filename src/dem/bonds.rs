@@ -62,12 +62,14 @@
 //! Every disc sums its bonds in that fixed order, so the result does not
 //! depend on the number of threads or on where the bonds are stored.
 
+#[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+pub(super) mod lanes;
+
 use super::broadphase::CrossIndex;
 use super::contact::Side;
 use super::particles::Particles;
 use crate::geom::Vec2;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Shear strength of a bond.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -397,40 +399,38 @@ pub fn strengths(law: &BondLaw, a: u32, b: u32) -> (f64, f64) {
 }
 
 /// A bond as the contact sweep holds it: in the row of the smaller of its
-/// two slots `i < j` (rows by `i`, `j` ascending, as the contact list),
-/// with its forces in that orientation — normal from i to j, the moment on
-/// i (minus the listed one when i is the bond's b; `F_n` and `F_s` are the
-/// same either way).
+/// two slots `i < j` (rows by `i`, `j` ascending, as the contact list).
+/// Only what a step reads: the bond's constants (48 bytes, read and never
+/// written by a step); its forces are held beside it ([`Bonds::held_f`]),
+/// its index in the list apart ([`Bonds::held_key`]). The lever arms
+/// `r_i/(r_i + r_j)`, `r_j/(r_i + r_j)` are taken from the discs' radii
+/// in the step.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Held {
     /// Slot of the second disc.
     pub j: u32,
-    /// Index of the bond in the list.
-    pub k: u32,
-    /// Disc i is the bond's b.
-    pub flip: bool,
     /// Bond radius R̄.
-    pub radius: f64,
+    radius: f64,
     /// Tensile strength σ_c.
-    pub tensile: f64,
+    tensile: f64,
     /// Shear strength τ_c (or cohesion c).
-    pub shear: f64,
-    /// `(F_n, F_s, M on i)`.
-    pub f: (f64, f64, f64),
-    /// The lever arms over the distance, `r_i/(r_i + r_j)` and
-    /// `r_j/(r_i + r_j)`.
-    arms: (f64, f64),
+    shear: f64,
     /// `1/A` and `R̄/I`: the stresses as products ([`Held::intact`]).
     inv_a: f64,
     r_over_i: f64,
 }
 
-/// A bond that broke in the sweep: its index in the list, mode, energy
-/// released, centre and normal from its a to its b (state before the
+/// A held bond's forces in the orientation of its slots — normal from i
+/// to j, the moment on i (minus the listed one when i is the bond's b;
+/// `F_n` and `F_s` are the same either way): `(F_n, F_s, M on i)`.
+pub(super) type HeldForces = (f64, f64, f64);
+
+/// A bond that broke in the sweep: where it is held (`w`), mode, energy
+/// released, centre and normal from slot i to slot j (state before the
 /// step).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Break {
-    k: u32,
+    w: u32,
     mode: BreakMode,
     energy: f64,
     pos: Vec2,
@@ -438,13 +438,17 @@ pub(super) struct Break {
 }
 
 impl Held {
-    /// One step of the bond between discs `si` (slot i) and `sj`, from the
-    /// state before the step: its forces updated ([`bond_step`]) and what
-    /// it does to the two discs — nothing, with the [`Break`], when the
-    /// updated forces reach its strength ([`breaks`]).
+    /// One step of the bond held at `w` between discs `si` (slot i) and
+    /// `sj`, with forces `f`, from the state before the step: its forces
+    /// updated ([`bond_step`]) and what it does to the two discs —
+    /// nothing, with the [`Break`], when the updated forces reach its
+    /// strength ([`breaks`]).
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn step(
-        &mut self,
+        &self,
+        w: usize,
+        f: &mut HeldForces,
         si: &Side,
         sj: &Side,
         law: &BondLaw,
@@ -452,20 +456,22 @@ impl Held {
         dt: f64,
     ) -> (BondForce, Option<Break>) {
         let sec = section(self.radius, thickness);
-        let old = self.f;
-        let (bf, n, la) = bond_step(si, sj, law, sec, self.arms, dt, &mut self.f);
-        if self.intact(law) {
+        let old = *f;
+        let rs = si.radius + sj.radius;
+        let arms = (si.radius / rs, sj.radius / rs);
+        let (bf, n, la) = bond_step(si, sj, law, sec, arms, dt, f);
+        if self.intact(law, *f) {
             return (bf, None);
         }
-        let Some(mode) = breaks(law, self.f, self.radius, sec, self.tensile, self.shear) else {
+        let Some(mode) = breaks(law, *f, self.radius, sec, self.tensile, self.shear) else {
             return (bf, None);
         };
         let brk = Break {
-            k: self.k,
+            w: w as u32,
             mode,
-            energy: released(law, old, self.f, sec),
+            energy: released(law, old, *f, sec),
             pos: si.pos + n * la,
-            normal: if self.flip { -n } else { n },
+            normal: n,
         };
         (BondForce::default(), Some(brk))
     }
@@ -476,9 +482,8 @@ impl Held {
     /// `true` means that [`breaks`] finds the bond intact — without its
     /// divisions, which would cost more than the rest of the bond's step.
     #[inline(always)]
-    fn intact(&self, law: &BondLaw) -> bool {
+    fn intact(&self, law: &BondLaw, (fn_, fs, m): HeldForces) -> bool {
         const TOL: f64 = 16.0 * f64::EPSILON;
-        let (fn_, fs, m) = self.f;
         let (sn, sm) = (-fn_ * self.inv_a, m.abs() * self.r_over_i);
         let tau = fs.abs() * self.inv_a;
         let friction = match law.shear {
@@ -490,46 +495,6 @@ impl Held {
         let tau_c = self.shear + friction;
         sn + sm + TOL * (sn.abs() + sm) < self.tensile
             && tau + TOL * (tau + friction.abs()) < tau_c * (1.0 - TOL)
-    }
-}
-
-/// The force arrays of the bond list, written by the sweep's threads at
-/// the bonds' list indices: each bond is held once and stepped by one
-/// thread, so the writes never meet; relaxed atomic stores are plain
-/// stores on the machine.
-pub(super) struct ListForces<'a> {
-    fn_: &'a [AtomicU64],
-    fs: &'a [AtomicU64],
-    moment: &'a [AtomicU64],
-}
-
-/// `v` viewed as atomics (the list's arrays, for [`ListForces`]).
-fn atomic(v: &mut [f64]) -> &[AtomicU64] {
-    // SAFETY: AtomicU64 has the size and alignment of u64 and f64 (checked
-    // below), and the exclusive borrow keeps every other access out while
-    // the view lives.
-    const { assert!(std::mem::align_of::<AtomicU64>() == std::mem::align_of::<f64>()) };
-    unsafe { &*(v as *mut [f64] as *const [AtomicU64]) }
-}
-
-impl<'a> ListForces<'a> {
-    /// The force arrays of `l`.
-    pub(super) fn of(l: &'a mut BondList) -> Self {
-        ListForces {
-            fn_: atomic(&mut l.fn_),
-            fs: atomic(&mut l.fs),
-            moment: atomic(&mut l.moment),
-        }
-    }
-
-    /// The list takes the held bond's forces.
-    #[inline(always)]
-    pub(super) fn put(&self, h: &Held) {
-        let k = h.k as usize;
-        let m = if h.flip { -h.f.2 } else { h.f.2 };
-        self.fn_[k].store(h.f.0.to_bits(), Ordering::Relaxed);
-        self.fs[k].store(h.f.1.to_bits(), Ordering::Relaxed);
-        self.moment[k].store(m.to_bits(), Ordering::Relaxed);
     }
 }
 
@@ -559,10 +524,17 @@ pub struct Bonds {
     pub(super) row: Vec<u32>,
     /// The bonds in slot order, as the sweep evaluates them.
     pub(super) held: Vec<Held>,
+    /// Their forces (in `held`'s order and orientation).
+    pub(super) held_f: Vec<HeldForces>,
+    /// Index in the list of each held bond, and whether its slot i is the
+    /// bond's b.
+    held_key: Vec<(u32, bool)>,
+    /// Where each listed bond is held, and whether its slot i is its b.
+    at: Vec<(u32, bool)>,
     /// The bonds whose second disc lies in a later sweep block.
     pub(super) cross: CrossIndex,
     /// What each cross bond does in this step and its new forces.
-    pub(super) cross_buf: Vec<(BondForce, (f64, f64, f64))>,
+    pub(super) cross_buf: Vec<(BondForce, HeldForces)>,
     /// The disc thickness `held` was built for.
     thickness: f64,
     /// The slots or the list changed since `held` was built.
@@ -608,30 +580,38 @@ impl Bonds {
         for d in 0..n {
             self.row[d + 1] += self.row[d];
         }
+        // the list's bonds in held order: rows by slot i, j ascending
         let mut fill = self.row.clone();
-        self.held.clear();
-        self.held.resize(l.len(), Held::default());
+        let mut order = vec![0u32; l.len()];
         for k in 0..l.len() {
-            let (i, j, flip) = ends(k);
-            let m = if flip { -l.moment[k] } else { l.moment[k] };
-            let (ri, rj) = (p.radius[i as usize], p.radius[j as usize]);
+            let i = ends(k).0 as usize;
+            order[fill[i] as usize] = k as u32;
+            fill[i] += 1;
+        }
+        for r in self.row.windows(2) {
+            order[r[0] as usize..r[1] as usize].sort_unstable_by_key(|&k| ends(k as usize).1);
+        }
+        self.held.clear();
+        self.held_f.clear();
+        self.held_key.clear();
+        self.at.clear();
+        self.at.resize(l.len(), (0, false));
+        for (w, &k) in order.iter().enumerate() {
+            let k = k as usize;
+            let (_, j, flip) = ends(k);
             let (a, inertia) = section(l.radius[k], thickness);
-            self.held[fill[i as usize] as usize] = Held {
+            self.held.push(Held {
                 j,
-                k: k as u32,
-                flip,
                 radius: l.radius[k],
                 tensile: l.tensile[k],
                 shear: l.shear[k],
-                f: (l.fn_[k], l.fs[k], m),
-                arms: (ri / (ri + rj), rj / (ri + rj)),
                 inv_a: 1.0 / a,
                 r_over_i: l.radius[k] / inertia,
-            };
-            fill[i as usize] += 1;
-        }
-        for r in self.row.windows(2) {
-            self.held[r[0] as usize..r[1] as usize].sort_unstable_by_key(|h| h.j);
+            });
+            let m = if flip { -l.moment[k] } else { l.moment[k] };
+            self.held_f.push((l.fn_[k], l.fs[k], m));
+            self.held_key.push((k as u32, flip));
+            self.at[k] = (w as u32, flip);
         }
         let held = &self.held;
         self.cross = CrossIndex::build(n, block, &self.row, |w| held[w].j);
@@ -643,40 +623,50 @@ impl Bonds {
     /// Step the cross bonds (second disc in a later block) from the state
     /// before the step into `cross_buf`; returns those that broke.
     pub(super) fn step_cross(&mut self, p: &Particles, thickness: f64, dt: f64) -> Vec<Break> {
-        let (held, law) = (&self.held, &self.law);
+        let (held, held_f, law) = (&self.held, &self.held_f, &self.law);
         self.cross
             .pairs
             .par_iter()
             .zip(self.cross_buf.par_iter_mut())
             .with_min_len(256)
             .filter_map(|(&(i, w), out)| {
-                let mut h = held[w as usize];
-                let (bf, brk) = h.step(
-                    &side(p, i as usize),
-                    &side(p, h.j as usize),
-                    law,
-                    thickness,
-                    dt,
-                );
-                *out = (bf, h.f);
+                let (w, mut f) = (w as usize, held_f[w as usize]);
+                let h = &held[w];
+                let (si, sj) = (side(p, i as usize), side(p, h.j as usize));
+                let (bf, brk) = h.step(w, &mut f, &si, &sj, law, thickness, dt);
+                *out = (bf, f);
                 brk
             })
             .collect()
     }
 
-    /// After the sweep (which wrote each bond's new forces into the list
-    /// through [`ListForces`]): the bonds that broke (`broken`, in any
-    /// order) are removed and recorded in [`BondList::broken`] with `step`
-    /// and `time`, in list order.
-    pub(super) fn finish_step(&mut self, mut broken: Vec<Break>, step: usize, time: f64) {
+    /// After the sweep (which left each bond's new forces in `held_f`):
+    /// the list takes the held forces (in list order, in parallel), then
+    /// the bonds that broke (`broken`, in any order) are removed and
+    /// recorded in [`BondList::broken`] with `step` and `time`, in list
+    /// order.
+    pub(super) fn finish_step(&mut self, broken: Vec<Break>, step: usize, time: f64) {
+        let (l, held_f) = (&mut self.list, &self.held_f);
+        (&mut l.fn_, &mut l.fs, &mut l.moment, &self.at)
+            .into_par_iter()
+            .with_min_len(4096)
+            .for_each(|(n, s, m, &(w, flip))| {
+                let f = held_f[w as usize];
+                (*n, *s, *m) = (f.0, f.1, if flip { -f.2 } else { f.2 });
+            });
         if broken.is_empty() {
             return;
         }
-        let l = &mut self.list;
-        broken.sort_unstable_by_key(|b| b.k);
+        let mut broken: Vec<(usize, bool, Break)> = broken
+            .into_iter()
+            .map(|b| {
+                let (k, flip) = self.held_key[b.w as usize];
+                (k as usize, flip, b)
+            })
+            .collect();
+        broken.sort_unstable_by_key(|b| b.0);
         let mut keep = vec![true; l.len()];
-        for b in &broken {
-            let k = b.k as usize;
+        for &(k, flip, b) in &broken {
             keep[k] = false;
             l.released += b.energy;
             l.broken.push(BrokenBond {
@@ -685,7 +675,7 @@ impl Bonds {
                 a: l.a[k],
                 b: l.b[k],
                 pos: b.pos,
-                normal: b.normal,
+                normal: if flip { -b.normal } else { b.normal },
                 radius: l.radius[k],
                 mode: b.mode,
                 energy: b.energy,
@@ -807,9 +797,11 @@ impl Bonds {
                 * 8
             + l.broken.capacity() * std::mem::size_of::<BrokenBond>()
             + self.held.capacity() * std::mem::size_of::<Held>()
+            + self.held_f.capacity() * std::mem::size_of::<HeldForces>()
+            + (self.held_key.capacity() + self.at.capacity()) * 8
             + self.row.capacity() * 4
             + self.cross.heap_bytes()
-            + self.cross_buf.capacity() * std::mem::size_of::<(BondForce, (f64, f64, f64))>()
+            + self.cross_buf.capacity() * std::mem::size_of::<(BondForce, HeldForces)>()
     }
 }
 

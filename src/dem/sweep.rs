@@ -21,7 +21,7 @@
 //! order, then walls), so the result is bitwise the same on any number of
 //! threads.
 
-use super::bonds::{BondForce, BondLaw, Break, Held, ListForces};
+use super::bonds::{BondForce, BondLaw, Break, Held, HeldForces};
 use super::broadphase::{ContactList, CrossIndex, WallPair};
 use super::clumps::NO_CLUMP;
 use super::contact::{self, ContactForce, ContactLaw, Side, effective_mass};
@@ -112,9 +112,7 @@ struct Ctx<'a> {
     thickness: f64,
     bond_cross: &'a CrossIndex,
     /// What each cross bond does and its new forces.
-    bond_cross_buf: &'a [(BondForce, (f64, f64, f64))],
-    /// Where the bonds' new forces go.
-    bond_out: ListForces<'a>,
+    bond_cross_buf: &'a [(BondForce, HeldForces)],
     /// Evaluate inner pairs four at a time ([`lanes4`]).
     four_lanes: bool,
 }
@@ -146,7 +144,9 @@ struct Block<'a> {
     walls: &'a mut [WallPair],
     wall_buf: &'a mut [ContactForce],
     /// The held bonds of the block's discs (empty without bonds).
-    held: &'a mut [Held],
+    held: &'a [Held],
+    /// Their forces.
+    held_f: &'a mut [HeldForces],
     /// Clump of each disc (empty without clumps): a clump's members are
     /// not advanced here (their clump is, after the sweep).
     clump: &'a [u32],
@@ -195,11 +195,14 @@ impl<'a> Block<'a> {
         } else {
             self.clump.split_at(k)
         };
-        let (held, held2) = if self.held.is_empty() {
-            (self.held, &mut [][..])
+        let (held, held2, held_f, held_f2) = if self.held.is_empty() {
+            (self.held, self.held, self.held_f, &mut [][..])
         } else {
             let r = ctx.bond_row;
-            self.held.split_at_mut((r[at] - r[self.lo]) as usize)
+            let w = (r[at] - r[self.lo]) as usize;
+            let (f, f2) = self.held_f.split_at_mut(w);
+            let (h, h2) = self.held.split_at(w);
+            (h, h2, f, f2)
         };
         (
             Block {
@@ -223,6 +226,7 @@ impl<'a> Block<'a> {
                 walls,
                 wall_buf,
                 held,
+                held_f,
                 clump,
             },
             Block {
@@ -246,6 +250,7 @@ impl<'a> Block<'a> {
                 walls: walls2,
                 wall_buf: wall_buf2,
                 held: held2,
+                held_f: held_f2,
                 clump: clump2,
             },
         )
@@ -378,7 +383,6 @@ impl Granular {
             thickness: self.thickness,
             bond_cross: &self.bonds.cross,
             bond_cross_buf: &self.bonds.cross_buf,
-            bond_out: ListForces::of(&mut self.bonds.list),
             #[cfg(target_arch = "x86_64")]
             four_lanes: lanes4::available(),
             #[cfg(not(target_arch = "x86_64"))]
@@ -411,9 +415,14 @@ impl Granular {
             walls: wall_pairs,
             wall_buf,
             held: if ctx.bond_row.is_empty() {
+                &[]
+            } else {
+                &self.bonds.held
+            },
+            held_f: if ctx.bond_row.is_empty() {
                 &mut []
             } else {
-                &mut self.bonds.held
+                &mut self.bonds.held_f
             },
             clump: if self.clumps.is_empty() {
                 &[]
@@ -573,6 +582,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         walls,
         wall_buf,
         held,
+        held_f,
         clump,
     } = b;
     let n = pos.len();
@@ -620,7 +630,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             omega,
             radius,
         };
-        bond_block(blk, lo, kin, held, acc, acc_b, ctx)
+        bond_block(blk, lo, kin, (held, held_f), acc, acc_b, ctx)
     } else {
         vec![]
     };
@@ -874,7 +884,7 @@ fn bond_block(
     blk: usize,
     lo: usize,
     kin: Kin,
-    held: &mut [Held],
+    (held, held_f): (&[Held], &mut [HeldForces]),
     acc: &mut [(Vec2, f64)],
     acc_b: &mut [f64],
     ctx: &Ctx,
@@ -891,28 +901,86 @@ fn bond_block(
     }
     let mut ck = bx.first[blk] as usize;
     let row = &ctx.bond_row[lo..=lo + n];
+    let held_f = &mut held_f[..held.len()];
+    let (law, w0) = (&ctx.bond_law, row[0] as usize);
     let mut broken = vec![];
-    for d in 0..n {
-        let (b0, b1) = ((row[d] - row[0]) as usize, (row[d + 1] - row[0]) as usize);
-        for h in &mut held[b0..b1] {
-            let j = h.j as usize - lo;
-            let bf = if j >= n {
-                let (bf, f) = ctx.bond_cross_buf[ck];
-                ck += 1;
-                h.f = f;
-                bf
-            } else {
-                let (si, sj) = sides(kin, d, j);
-                let (bf, brk) = h.step(&si, &sj, &ctx.bond_law, ctx.thickness, ctx.bond_dt);
-                broken.extend(brk);
-                acc[j].0 -= bf.f;
-                acc_b[j] += bf.mb;
-                bf
-            };
-            ctx.bond_out.put(h);
-            acc[d].0 += bf.f;
-            acc_b[d] += bf.ma;
+    // what a bond of disc d (its row) and disc j does, in bond order: j's
+    // part (an inner bond's; a cross bond's was added above), then d's
+    let mut add = |d: usize, j: usize, bf: BondForce| {
+        if j < n {
+            acc[j].0 -= bf.f;
+            acc_b[j] += bf.mb;
         }
+        acc[d].0 += bf.f;
+        acc_b[d] += bf.ma;
+    };
+    let mut d = 0;
+    let mut w = 0;
+    while w < held.len() {
+        while (row[d + 1] - row[0]) as usize <= w {
+            d += 1;
+        }
+        let j = held[w].j as usize - lo;
+        if j >= n {
+            let (bf, f_new) = ctx.bond_cross_buf[ck];
+            ck += 1;
+            held_f[w] = f_new;
+            add(d, j, bf);
+            w += 1;
+            continue;
+        }
+        // two inner bonds side by side (of this disc or the next ones;
+        // all from the state before the step), summed in the same order
+        #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+        if let Some(h2) = held.get(w + 1).filter(|h| (h.j as usize) < lo + n) {
+            let mut d2 = d;
+            while (row[d2 + 1] - row[0]) as usize <= w + 1 {
+                d2 += 1;
+            }
+            let j2 = h2.j as usize - lo;
+            let (si, sj) = sides(kin, d, j);
+            let (si2, sj2) = sides(kin, d2, j2);
+            let two = super::bonds::lanes::step2(
+                [&held[w], h2],
+                &mut held_f[w..w + 2],
+                [si, si2],
+                [sj, sj2],
+                law,
+                ctx.thickness,
+                ctx.bond_dt,
+            );
+            if let Some([bf, bf2]) = two {
+                // a bond that may break: the scalar step
+                let mut lane = |w: usize, d: usize, j: usize, bf: Option<BondForce>| {
+                    bf.unwrap_or_else(|| {
+                        let (si, sj) = sides(kin, d, j);
+                        let (t, dt) = (ctx.thickness, ctx.bond_dt);
+                        let (bf, brk) = held[w].step(w0 + w, &mut held_f[w], &si, &sj, law, t, dt);
+                        broken.extend(brk);
+                        bf
+                    })
+                };
+                let bf = lane(w, d, j, bf);
+                add(d, j, bf);
+                let bf2 = lane(w + 1, d2, j2, bf2);
+                add(d2, j2, bf2);
+                w += 2;
+                continue;
+            }
+        }
+        let (si, sj) = sides(kin, d, j);
+        let (bf, brk) = held[w].step(
+            w0 + w,
+            &mut held_f[w],
+            &si,
+            &sj,
+            law,
+            ctx.thickness,
+            ctx.bond_dt,
+        );
+        broken.extend(brk);
+        add(d, j, bf);
+        w += 1;
     }
     broken
 }

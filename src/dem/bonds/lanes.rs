@@ -1,0 +1,143 @@
+//! Two bonds at once, in the two lanes of SSE2 registers: the update of
+//! [`Held::step`] ([`bond_step`](super::bond_step), Potyondy & Cundall
+//! 2004, Eqs. 6–9) lane by lane with the same operations in the same
+//! order, so the forces are bitwise the scalar ones. Breakage is left to
+//! the scalar step: a lane whose bond is not clearly intact
+//! ([`Held::intact`]'s test) keeps its old forces, and the caller steps
+//! that bond with [`Held::step`].
+
+use super::{BondForce, BondLaw, Held, HeldForces, ShearStrength};
+use crate::dem::contact::Side;
+use crate::geom::Vec2;
+use std::arch::x86_64::*;
+
+#[inline(always)]
+fn set(a: f64, b: f64) -> __m128d {
+    // SAFETY: SSE2 is enabled (module cfg).
+    unsafe { _mm_set_pd(b, a) }
+}
+
+#[inline(always)]
+fn get(v: __m128d) -> [f64; 2] {
+    // SAFETY: SSE2 is enabled (module cfg).
+    unsafe { [_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v))] }
+}
+
+/// The bonds `h` between the discs `si[l]` and `sj[l]`, lane l, with
+/// forces `f[l]`: the new forces written into `f` and the forces on the
+/// discs returned for the bonds that are clearly intact (`None` for a
+/// lane whose bond is not: its forces are left as they were); `None` if a
+/// pair's centres coincide (or are not finite), left to the scalar step.
+#[inline(always)]
+pub(in crate::dem) fn step2(
+    h: [&Held; 2],
+    f: &mut [HeldForces],
+    si: [Side; 2],
+    sj: [Side; 2],
+    law: &BondLaw,
+    thickness: f64,
+    dt: f64,
+) -> Option<[Option<BondForce>; 2]> {
+    // SAFETY: SSE2 is enabled (module cfg); no memory is accessed through
+    // pointers.
+    unsafe {
+        let pair = |a: fn(&Side) -> f64| (set(a(&si[0]), a(&si[1])), set(a(&sj[0]), a(&sj[1])));
+        let (pix, pjx) = pair(|s| s.pos.x);
+        let (piy, pjy) = pair(|s| s.pos.y);
+        let (dx, dy) = (_mm_sub_pd(pjx, pix), _mm_sub_pd(pjy, piy));
+        let d2 = _mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy));
+        let zero = _mm_setzero_pd();
+        if _mm_movemask_pd(_mm_cmpgt_pd(d2, zero)) != 3 {
+            return None;
+        }
+        // n = d (1/|d|), t = perp(n) = (−n_y, n_x) (negation flips the sign)
+        let dist = _mm_sqrt_pd(d2);
+        let inv = _mm_div_pd(_mm_set1_pd(1.0), dist);
+        let (nx, ny) = (_mm_mul_pd(dx, inv), _mm_mul_pd(dy, inv));
+        let sign = _mm_set1_pd(-0.0);
+        let tx = _mm_xor_pd(ny, sign);
+        // the lever arms d r_i/(r_i + r_j), d r_j/(r_i + r_j)
+        let (ri, rj) = pair(|s| s.radius);
+        let rs = _mm_add_pd(ri, rj);
+        let la = _mm_mul_pd(dist, _mm_div_pd(ri, rs));
+        let lb = _mm_mul_pd(dist, _mm_div_pd(rj, rs));
+        let (vix, vjx) = pair(|s| s.vel.x);
+        let (viy, vjy) = pair(|s| s.vel.y);
+        let (dvx, dvy) = (_mm_sub_pd(vix, vjx), _mm_sub_pd(viy, vjy));
+        let (wi, wj) = pair(|s| s.omega);
+        let vn = _mm_add_pd(_mm_mul_pd(dvx, nx), _mm_mul_pd(dvy, ny));
+        let vt = _mm_add_pd(
+            _mm_add_pd(
+                _mm_add_pd(_mm_mul_pd(dvx, tx), _mm_mul_pd(dvy, nx)),
+                _mm_mul_pd(wi, la),
+            ),
+            _mm_mul_pd(wj, lb),
+        );
+        // A = 2R̄t, I = (2/3)R̄³t (`section`)
+        let r = set(h[0].radius, h[1].radius);
+        let t = _mm_set1_pd(thickness);
+        let area = _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0), r), t);
+        let inertia = _mm_mul_pd(
+            _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0 / 3.0), r), r), r),
+            t,
+        );
+        let (kn, ks, dt) = (_mm_set1_pd(law.kn), _mm_set1_pd(law.ks), _mm_set1_pd(dt));
+        let inc =
+            |k: __m128d, a: __m128d, v: __m128d| _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(k, a), v), dt);
+        let fn_ = _mm_add_pd(set(f[0].0, f[1].0), inc(kn, area, vn));
+        let fs = _mm_sub_pd(set(f[0].1, f[1].1), inc(ks, area, vt));
+        let m = _mm_sub_pd(set(f[0].2, f[1].2), inc(kn, inertia, _mm_sub_pd(wi, wj)));
+        // f = n (−F_n) + t F_s; M_i = l_i F_s + M, M_j = l_j F_s − M
+        let neg_fn = _mm_xor_pd(fn_, sign);
+        let fx = _mm_add_pd(_mm_mul_pd(nx, neg_fn), _mm_mul_pd(tx, fs));
+        let fy = _mm_add_pd(_mm_mul_pd(ny, neg_fn), _mm_mul_pd(nx, fs));
+        let ma = _mm_add_pd(_mm_mul_pd(la, fs), m);
+        let mb = _mm_sub_pd(_mm_mul_pd(lb, fs), m);
+        let intact = intact2(h, law, fn_, fs, m);
+        // lane l's force (x, y) and new (F_n, F_s)
+        let (f0, f1) = (_mm_unpacklo_pd(fx, fy), _mm_unpackhi_pd(fx, fy));
+        let (s0, s1) = (_mm_unpacklo_pd(fn_, fs), _mm_unpackhi_pd(fn_, fs));
+        let (ma, mb, m) = (get(ma), get(mb), get(m));
+        let mut lane = |l: usize, fv: __m128d, sv: __m128d| {
+            if !intact[l] {
+                return None;
+            }
+            let [fn_l, fs_l] = get(sv);
+            f[l] = (fn_l, fs_l, m[l]);
+            let [x, y] = get(fv);
+            Some(BondForce {
+                f: Vec2::new(x, y),
+                ma: ma[l],
+                mb: mb[l],
+            })
+        };
+        Some([lane(0, f0, s0), lane(1, f1, s1)])
+    }
+}
+
+/// [`Held::intact`] in two lanes.
+#[inline(always)]
+fn intact2(h: [&Held; 2], law: &BondLaw, fn_: __m128d, fs: __m128d, m: __m128d) -> [bool; 2] {
+    // SAFETY: SSE2 is enabled (module cfg).
+    unsafe {
+        let tol = _mm_set1_pd(16.0 * f64::EPSILON);
+        let abs = |v: __m128d| _mm_andnot_pd(_mm_set1_pd(-0.0), v);
+        let inv_a = set(h[0].inv_a, h[1].inv_a);
+        let sn = _mm_mul_pd(_mm_xor_pd(fn_, _mm_set1_pd(-0.0)), inv_a);
+        let sm = _mm_mul_pd(abs(m), set(h[0].r_over_i, h[1].r_over_i));
+        let tau = _mm_mul_pd(abs(fs), inv_a);
+        let friction = match law.shear {
+            ShearStrength::Fixed(_) => _mm_setzero_pd(),
+            ShearStrength::Coulomb { tan_phi, .. } => {
+                _mm_mul_pd(_mm_mul_pd(fn_, inv_a), _mm_set1_pd(tan_phi))
+            }
+        };
+        let tau_c = _mm_add_pd(set(h[0].shear, h[1].shear), friction);
+        let sigma = _mm_add_pd(_mm_add_pd(sn, sm), _mm_mul_pd(tol, _mm_add_pd(abs(sn), sm)));
+        let ok_t = _mm_cmplt_pd(sigma, set(h[0].tensile, h[1].tensile));
+        let shear = _mm_add_pd(tau, _mm_mul_pd(tol, _mm_add_pd(tau, abs(friction))));
+        let ok_s = _mm_cmplt_pd(shear, _mm_mul_pd(tau_c, _mm_sub_pd(_mm_set1_pd(1.0), tol)));
+        let ok = _mm_movemask_pd(_mm_and_pd(ok_t, ok_s));
+        [ok & 1 != 0, ok & 2 != 0]
+    }
+}
