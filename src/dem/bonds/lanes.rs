@@ -141,3 +141,97 @@ fn intact2(h: [&Held; 2], law: &BondLaw, fn_: __m128d, fs: __m128d, m: __m128d) 
         [ok & 1 != 0, ok & 2 != 0]
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::bonds::{section, stresses};
+
+    /// The two lanes give bitwise the scalar step's forces (disc forces,
+    /// moments, new bond forces) for every bond they find intact, leave
+    /// the others' forces alone, and call no bond intact that the scalar
+    /// step breaks: random discs and bonds, fixed and cohesion–friction
+    /// strengths, some bonds loaded to breakage.
+    #[test]
+    fn two_lanes_equal_the_scalar_bond_step_bitwise() {
+        let mut rng = oorandom::Rand64::new(5);
+        let mut u = |a: f64, b: f64| a + (b - a) * rng.rand_float();
+        let (mut same, mut left, mut broke) = (0, 0, 0);
+        for case in 0..4000 {
+            let law = BondLaw {
+                kn: u(1e5, 1e7),
+                ks: u(1e5, 1e7),
+                shear: if case % 2 == 0 {
+                    ShearStrength::Fixed(0.0)
+                } else {
+                    ShearStrength::Coulomb {
+                        cohesion: 0.0,
+                        tan_phi: u(0.1, 1.0),
+                    }
+                },
+                ..Default::default()
+            };
+            let (thickness, dt) = (u(0.5, 2.0), 1e-6);
+            let mut side = |c: Vec2| Side {
+                pos: c + Vec2::new(u(-0.1, 0.1), u(-0.1, 0.1)),
+                vel: Vec2::new(u(-3.0, 3.0), u(-3.0, 3.0)),
+                omega: u(-5.0, 5.0),
+                radius: u(0.8, 1.2),
+            };
+            let si = [side(Vec2::ZERO), side(Vec2::new(5.0, 0.0))];
+            let sj = [side(Vec2::new(2.0, 0.3)), side(Vec2::new(5.3, 2.0))];
+            let mut held = [Held::default(); 2];
+            let mut f = [(0.0, 0.0, 0.0); 2];
+            for (l, h) in held.iter_mut().enumerate() {
+                let radius = u(0.5, 1.0);
+                let (a, i) = section(radius, thickness);
+                let forces = (u(-100.0, 100.0), u(-100.0, 100.0), u(-50.0, 50.0));
+                let (sigma, tau) = stresses(forces.0, forces.1, forces.2, radius, a, i);
+                // strengths about the current stresses: some bonds break
+                *h = Held {
+                    j: 0,
+                    radius,
+                    tensile: sigma.abs() * u(0.8, 2.0),
+                    shear: tau * u(0.8, 2.0),
+                    inv_a: 1.0 / a,
+                    r_over_i: radius / i,
+                };
+                f[l] = forces;
+            }
+            let mut lanes_f = f;
+            let out = step2(
+                [&held[0], &held[1]],
+                &mut lanes_f,
+                si,
+                sj,
+                &law,
+                thickness,
+                dt,
+            )
+            .expect("distinct centres");
+            for l in 0..2 {
+                let mut fl = f[l];
+                let (bf, brk) = held[l].step(l, &mut fl, &si[l], &sj[l], &law, thickness, dt);
+                broke += usize::from(brk.is_some());
+                let bits = |b: &BondForce| [b.f.x, b.f.y, b.ma, b.mb].map(f64::to_bits);
+                let fbits = |f: HeldForces| [f.0, f.1, f.2].map(f64::to_bits);
+                match out[l] {
+                    Some(lb) => {
+                        assert!(brk.is_none(), "case {case} lane {l}: intact but broke");
+                        assert_eq!(bits(&lb), bits(&bf), "case {case} lane {l}");
+                        assert_eq!(fbits(lanes_f[l]), fbits(fl), "case {case} lane {l}");
+                        same += 1;
+                    }
+                    None => {
+                        assert_eq!(fbits(lanes_f[l]), fbits(f[l]), "case {case} lane {l}");
+                        left += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            same > 1000 && left > 500 && broke > 500,
+            "{same} {left} {broke}"
+        );
+    }
+}
