@@ -54,11 +54,13 @@
 //! and merged into that rank's list. What a step works on is derived from
 //! the list (`Bonds::refresh`, after the discs are renumbered or the
 //! list changes): the bonds *held* in the slot order of their discs, in
-//! rows over the smaller slot like the contact list, with their forces in
-//! that orientation. The contact sweep steps them block by block (a
-//! block's bonds just before its discs, from the state before the step; a
-//! bond whose second disc lies in a later block ahead of the sweep, as the
-//! contacts do) and writes each bond's new forces back into the list.
+//! rows over the smaller slot like the contact list — only what a step
+//! reads (`Held`, 48 bytes), with their forces beside them in that
+//! orientation. The contact sweep steps them block by block (a block's
+//! bonds just before its discs, from the state before the step, two at a
+//! time in SIMD lanes with the scalar operations; a bond whose second
+//! disc lies in a later block ahead of the sweep, as the contacts do);
+//! after the sweep the list takes the new forces, in list order.
 //! Every disc sums its bonds in that fixed order, so the result does not
 //! depend on the number of threads or on where the bonds are stored.
 
