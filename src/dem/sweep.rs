@@ -1300,20 +1300,22 @@ fn wall_geometry(disc: &Side, w: &Wall) -> Option<(Vec2, f64, Vec2)> {
 /// The intrinsics are `unsafe` only because they require SSE2, which the
 /// `cfg` guarantees is enabled for the whole build.
 #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-mod lanes {
+pub(super) mod lanes {
     use super::{ContactForce, ContactLaw, Inert, Kin};
     use crate::dem::contact::SlipNormal;
     use crate::geom::Vec2;
     use std::arch::x86_64::*;
 
+    /// `(a, b)` in the two lanes (the bonds' lanes use it too).
     #[inline(always)]
-    fn set(a: f64, b: f64) -> __m128d {
+    pub(in crate::dem) fn set(a: f64, b: f64) -> __m128d {
         // SAFETY: SSE2 is enabled (module cfg).
         unsafe { _mm_set_pd(b, a) }
     }
 
+    /// The two lanes.
     #[inline(always)]
-    fn get(v: __m128d) -> [f64; 2] {
+    pub(in crate::dem) fn get(v: __m128d) -> [f64; 2] {
         // SAFETY: SSE2 is enabled (module cfg).
         unsafe { [_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v))] }
     }

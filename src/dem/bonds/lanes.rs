@@ -8,20 +8,9 @@
 
 use super::{BondForce, BondLaw, Held, HeldForces, ShearStrength};
 use crate::dem::contact::Side;
+use crate::dem::sweep::lanes::{get, set};
 use crate::geom::Vec2;
 use std::arch::x86_64::*;
-
-#[inline(always)]
-fn set(a: f64, b: f64) -> __m128d {
-    // SAFETY: SSE2 is enabled (module cfg).
-    unsafe { _mm_set_pd(b, a) }
-}
-
-#[inline(always)]
-fn get(v: __m128d) -> [f64; 2] {
-    // SAFETY: SSE2 is enabled (module cfg).
-    unsafe { [_mm_cvtsd_f64(v), _mm_cvtsd_f64(_mm_unpackhi_pd(v, v))] }
-}
 
 /// The bonds `h` between the discs `si[l]` and `sj[l]`, lane l, with
 /// forces `f[l]`: the new forces written into `f` and the forces on the
