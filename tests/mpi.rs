@@ -219,7 +219,7 @@ fn mpirun_of_discs_crossing_regions_again_and_again() {
 /// the end is within the threshold (0.1); the files of one process.
 #[test]
 fn mpirun_rebalances_a_collapsing_column() {
-    let dir = workdir("collapse", &common::collapsing_column(10000));
+    let dir = workdir("collapse", &common::collapsing_column(5000));
     let (_, sums) = as_one_process(&dir, &[(3, 1)]);
     let r = &sums[0]["ranks"];
     println!("{r}");
