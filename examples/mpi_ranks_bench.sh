@@ -39,9 +39,9 @@ run() { # name ranks threads
     if [ "$2" -gt 1 ]; then
         # shellcheck disable=SC2086
         mpirun --oversubscribe ${MPIRUN_ARGS:-} -np "$2" "$bin" run "$tmp/bench.toml" -o "$out" \
-            --threads "$3" -q --overwrite
+            --threads "$3" -q --overwrite >/dev/null
     else
-        "$bin" run "$tmp/bench.toml" -o "$out" --threads "$3" -q --overwrite
+        "$bin" run "$tmp/bench.toml" -o "$out" --threads "$3" -q --overwrite >/dev/null
     fi
     if [ -n "${KEEP:-}" ]; then
         mkdir -p "$KEEP"
