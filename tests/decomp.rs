@@ -24,50 +24,10 @@ fn build(src: &str) -> Granular {
         .expect("granular")
 }
 
-/// Discs falling into a box whose lid is a servo wall; rolling resistance.
-fn settling(n: usize, extra: &str) -> String {
-    format!(
-        r#"
-[simulation]
-steps = 1
-gravity = [0.0, -9.81]
-
-[[material]]
-name = "sand"
-density = 2650.0
-kn = 1.0e6
-ks = 5.0e5
-friction = 0.5
-rolling_friction = 0.1
-
-[granular]
-material = "sand"
-discs = {{ generate = "random", box = [[0.0, 0.0], [0.2, 0.3]], count = {n}, radius = [0.002, 0.003], seed = 5 }}
-damping = {{ kind = "critical-ratio", zeta = 0.2 }}
-{extra}
-
-[[wall]]
-name = "floor"
-from = [-0.01, 0.0]
-to = [0.21, 0.0]
-
-[[wall]]
-name = "left"
-from = [0.0, -0.01]
-to = [0.0, 0.4]
-
-[[wall]]
-name = "right"
-from = [0.2, -0.01]
-to = [0.2, 0.4]
-
-[[wall]]
-name = "lid"
-from = [-0.01, 0.3]
-to = [0.21, 0.3]
-servo = {{ stress = 2.0e3, max_velocity = 0.5 }}
-"#
-    )
+/// `n` discs falling into a box 0.2 m × 0.3 m whose lid is a servo wall;
+/// rolling resistance (`common::settling`).
+fn settling(n: usize) -> String {
+    common::settling(n, 1, 0.2, 0.3)
 }
 
 fn bytes(s: &GranularState) -> Vec<u8> {
@@ -229,7 +189,7 @@ fn owned_ids(d: &Decomposed) -> Vec<u32> {
 /// they fall, histories migrating with them); 1–4 ranks.
 #[test]
 fn parts_step_bitwise_as_the_whole() {
-    let whole = build(&settling(1500, ""));
+    let whole = build(&settling(1500));
     for ranks in [1, 2, 3, 4] {
         let worst = compare(&whole, ranks, 4000, 500).worst;
         println!("{ranks} ranks: worst imbalance {worst:.3}");
@@ -295,7 +255,7 @@ fn a_collapsing_column_is_rebalanced() {
 /// Fewer discs than ranks: some ranks own nothing and still take part.
 #[test]
 fn ranks_without_discs_take_part() {
-    let whole = build(&settling(3, ""));
+    let whole = build(&settling(3));
     compare(&whole, 4, 200, 50);
 }
 
@@ -325,7 +285,7 @@ name = "y7"
 disc = 7
 quantity = "y"
 "#;
-    let src = settling(600, "").replace("steps = 1\n", "steps = 4000\n") + probes;
+    let src = settling(600).replace("steps = 1\n", "steps = 4000\n") + probes;
     let sc = scenario::parse(&src, "t.toml").unwrap_or_else(|e| panic!("{e}"));
     let dir = std::env::temp_dir().join(format!("efgdem-decomp-run-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);

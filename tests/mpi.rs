@@ -1,8 +1,13 @@
 //! `mpirun -np N efgdem run` (the `mpi` feature, a system MPI) writes the
 //! outputs of the run on one process, byte for byte, for 1 to 3 ranks
 //! (oversubscribed on a smaller machine) and 1 or 2 threads per rank:
-//! `history.csv`, `discs_final.csv` and the ParaView frames. Run by
-//! `.ci/mpi`: `cargo test --release --features mpi --test mpi`.
+//! `history.csv`, `discs_final.csv` and the ParaView frames — for 20 000
+//! discs settling under a servo lid with rolling resistance, discs that
+//! cross the regions' cuts again and again (a shaken column), a collapsing
+//! column that makes the regions be cut again, granular checkpoints
+//! written on 3 ranks and continued on 2 and the reverse, and a coupled
+//! footing with the exact and the compliant schemes. Run by `.ci/mpi`:
+//! `cargo test --release --features mpi --test mpi`.
 #![cfg(feature = "mpi")]
 
 #[allow(dead_code)]
@@ -10,6 +15,32 @@ mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+/// A history row every 100 steps (the lid's height, the floor's force,
+/// kinetic energy, contacts), frames every 500.
+const OUTPUTS: &str = r#"
+[output]
+every = 100
+vtk_every = 500
+
+[[probe]]
+name = "lid_y"
+quantity = "wall_y"
+wall = "lid"
+
+[[probe]]
+name = "floor_fy"
+quantity = "wall_fy"
+wall = "floor"
+
+[[probe]]
+name = "kinetic"
+quantity = "kinetic"
+
+[[probe]]
+name = "contacts"
+quantity = "contacts"
+"#;
 
 fn efgdem(dir: &Path, out: &str, ranks: usize, threads: usize) -> std::process::Output {
     efgdem_with(dir, out, ranks, threads, &[])
@@ -158,14 +189,14 @@ fn restarted(dir: &Path, want: &[(PathBuf, Vec<u8>)], at: usize, from: usize, to
     );
 }
 
-/// 20 000 discs falling into a box under a servo lid, with rolling
-/// resistance (`common::settling_box`), `steps` steps: the files of one
-/// process on 1, 2 and 3 ranks and on 2 ranks × 2 threads; a checkpoint
-/// at half way written on 3 ranks continues on 2, and one written on 2
-/// on 3, as the uninterrupted run.
-/// Returns the history of one process.
+/// 20 000 discs falling into a box 1.2 m × 0.7 m under a servo lid, with
+/// rolling resistance (`common::settling`), `steps` steps, [`OUTPUTS`]:
+/// the files of one process on 1, 2 and 3 ranks and on 2 ranks × 2
+/// threads; a checkpoint at half way written on 3 ranks continues on 2,
+/// and one written on 2 on 3, as the uninterrupted run. Returns the
+/// history of one process.
 fn settling_20000(tag: &str, steps: usize) -> common::Csv {
-    let dir = workdir(tag, &common::settling_box(20_000, steps));
+    let dir = workdir(tag, &(common::settling(20_000, steps, 1.2, 0.7) + OUTPUTS));
     let (want, _) = as_one_process(&dir, &[(1, 1), (2, 1), (3, 1), (2, 2)]);
     assert!(want.iter().any(|(p, _)| p.ends_with("discs_final.csv")));
     assert!(want.len() >= 4, "{want:?}");
@@ -225,6 +256,15 @@ fn mpirun_rebalances_a_collapsing_column() {
     println!("{r}");
     assert!(r["recuts"].as_u64().unwrap() >= 2, "{r}");
     assert!(r["imbalance"].as_f64().unwrap() <= 0.1, "{r}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Fewer discs than ranks: two discs on 3 ranks (one rank owns none)
+/// run as in one process.
+#[test]
+fn mpirun_with_fewer_discs_than_ranks() {
+    let dir = workdir("few", &(common::settling(2, 300, 0.2, 0.3) + OUTPUTS));
+    as_one_process(&dir, &[(3, 1)]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

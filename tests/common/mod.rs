@@ -99,12 +99,36 @@ friction = 0.5
 rolling_friction = 0.1
 "#;
 
+/// A box `w` wide for discs of [`SAND`]: a floor from `x = −0.01` to
+/// `w + 0.01` (`floor` appended to its table, e.g. a motion) and two side
+/// walls up to `h` (`sides` appended to theirs).
+fn sand_box(w: f64, h: f64, floor: &str, sides: &str) -> String {
+    format!(
+        r#"
+[[wall]]
+name = "floor"
+from = [-0.01, 0.0]
+to = [{r}, 0.0]
+{floor}
+[[wall]]
+name = "left"
+from = [0.0, -0.02]
+to = [0.0, {h}]
+{sides}
+[[wall]]
+name = "right"
+from = [{w}, -0.02]
+to = [{w}, {h}]
+{sides}"#,
+        r = w + 0.01
+    )
+}
+
 /// `n` loose discs of [`SAND`] falling for `steps` steps into a box
-/// 1.2 m wide (generated in its lower 0.7 m, four discs per cm² at most)
-/// under a servo lid (2 kPa), a history row every 100 steps and frames
-/// every 500.
+/// `w` × `h` (they are generated in it, at most four a cm²) under a servo
+/// lid at `h` (2 kPa).
 #[allow(dead_code)]
-pub fn settling_box(n: usize, steps: usize) -> String {
+pub fn settling(n: usize, steps: usize, w: f64, h: f64) -> String {
     format!(
         r#"
 [simulation]
@@ -113,52 +137,17 @@ gravity = [0.0, -9.81]
 {SAND}
 [granular]
 material = "sand"
-discs = {{ generate = "random", box = [[0.0, 0.0], [1.2, 0.7]], count = {n}, radius = [0.002, 0.003], seed = 9 }}
+discs = {{ generate = "random", box = [[0.0, 0.0], [{w}, {h}]], count = {n}, radius = [0.002, 0.003], seed = 5 }}
 damping = {{ kind = "critical-ratio", zeta = 0.2 }}
-
-[[wall]]
-name = "floor"
-from = [-0.01, 0.0]
-to = [1.21, 0.0]
-
-[[wall]]
-name = "left"
-from = [0.0, -0.01]
-to = [0.0, 0.8]
-
-[[wall]]
-name = "right"
-from = [1.2, -0.01]
-to = [1.2, 0.8]
-
+{walls}
 [[wall]]
 name = "lid"
-from = [-0.01, 0.72]
-to = [1.21, 0.72]
+from = [-0.01, {h}]
+to = [{r}, {h}]
 servo = {{ stress = 2.0e3, max_velocity = 0.5 }}
-
-[output]
-every = 100
-vtk_every = 500
-
-[[probe]]
-name = "lid_y"
-quantity = "wall_y"
-wall = "lid"
-
-[[probe]]
-name = "floor_fy"
-quantity = "wall_fy"
-wall = "floor"
-
-[[probe]]
-name = "kinetic"
-quantity = "kinetic"
-
-[[probe]]
-name = "contacts"
-quantity = "contacts"
-"#
+"#,
+        walls = sand_box(w, h + 0.1, "", ""),
+        r = w + 0.01
     )
 }
 
@@ -196,25 +185,7 @@ friction = 0.0
 material = "sand"
 discs = {{ generate = "random", method = "grow", box = [[0.0, 0.0], [0.05, 0.5]], count = 1000, radius = [0.002, 0.003], seed = 4, settle_steps = 3000 }}
 damping = {{ kind = "critical-ratio", zeta = 0.2 }}
-
-[[wall]]
-name = "floor"
-from = [-0.01, 0.0]
-to = [0.06, 0.0]
-history = [{}]
-
-[[wall]]
-name = "left"
-material = "smooth"
-from = [0.0, -0.02]
-to = [0.0, 0.8]
-
-[[wall]]
-name = "right"
-material = "smooth"
-from = [0.05, -0.02]
-to = [0.05, 0.8]
-
+{walls}
 [output]
 every = 500
 vtk_every = 4000
@@ -238,7 +209,12 @@ name = "y900"
 disc = 900
 quantity = "y"
 "#,
-        hist.join(", ")
+        walls = sand_box(
+            0.05,
+            0.8,
+            &format!("history = [{}]", hist.join(", ")),
+            "material = \"smooth\""
+        )
     )
 }
 
@@ -246,7 +222,7 @@ quantity = "y"
 /// tall against the left wall of a box 0.6 m wide, released under
 /// gravity for `steps` steps: it collapses and spreads to the right, so
 /// regions cut for the column lose their balance as it runs out. A
-/// history row every 500 steps (the runout front, the kinetic energy).
+/// history row every 500 steps (the kinetic energy, the contacts).
 #[allow(dead_code)]
 pub fn collapsing_column(steps: usize) -> String {
     format!(
@@ -259,22 +235,7 @@ gravity = [0.0, -9.81]
 material = "sand"
 discs = {{ generate = "random", method = "grow", box = [[0.0, 0.0], [0.1, 0.25]], count = 1000, radius = [0.002, 0.003], seed = 6, settle_steps = 3000 }}
 damping = {{ kind = "critical-ratio", zeta = 0.2 }}
-
-[[wall]]
-name = "floor"
-from = [-0.01, 0.0]
-to = [0.61, 0.0]
-
-[[wall]]
-name = "left"
-from = [0.0, -0.01]
-to = [0.0, 0.4]
-
-[[wall]]
-name = "right"
-from = [0.6, -0.01]
-to = [0.6, 0.4]
-
+{walls}
 [output]
 every = 500
 vtk_every = 0
@@ -286,6 +247,7 @@ quantity = "kinetic"
 [[probe]]
 name = "contacts"
 quantity = "contacts"
-"#
+"#,
+        walls = sand_box(0.6, 0.4, "", "")
     )
 }
