@@ -224,7 +224,10 @@ fn mpirun_settles_20000_discs_as_one_process() {
     let peak = ek.iter().copied().fold(0.0, f64::max);
     assert!(*ek.last().unwrap() < 1e-4 * peak, "{ek:?}");
     let lid = common::column(&hist, "lid_y");
-    assert!((lid[lid.len() - 1] - lid[lid.len() - 21]).abs() < 1e-4, "{lid:?}");
+    assert!(
+        (lid[lid.len() - 1] - lid[lid.len() - 21]).abs() < 1e-4,
+        "{lid:?}"
+    );
 }
 
 /// A dense column shaken at 25 Hz (`common::shaken_column`): discs
