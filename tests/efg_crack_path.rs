@@ -16,6 +16,8 @@
 //! straight path of the same K without T-stress.
 
 use efgdem::continuum::WilliamsSpec;
+mod common;
+
 use efgdem::continuum::crack_tip::{cotterell_rice_path, max_hoop_stress};
 use efgdem::efg::EfgBody;
 use efgdem::geom::Vec2;
@@ -100,4 +102,34 @@ fn without_t_stress_the_kinked_crack_runs_straight() {
         println!("x {:.4}: y {:.5}, straight {y:.5}", q.x, q.y);
         assert!((q.y - y).abs() < 0.02 * q.norm(), "{q:?}");
     }
+}
+
+/// The exact-field boundary conditions from a scenario file: `efgdem
+/// check` accepts the example (`williams`) and the same body with
+/// `griffith`, and refuses a `williams` with an unknown key (file, line,
+/// exit 2).
+#[test]
+fn exact_field_conditions_pass_the_scenario_check() {
+    let dir = common::tmpdir("crack-path-check");
+    let check = |tag: &str, src: &str| {
+        let f = dir.join(format!("{tag}.toml"));
+        std::fs::write(&f, src).unwrap();
+        common::bin()
+            .args(["check", f.to_str().unwrap()])
+            .output()
+            .unwrap()
+    };
+    let williams = "williams = { KI = 1.0e6, KII = 5.0e4, T = -1.0e6 }";
+    assert!(EXAMPLE.contains(williams));
+    assert!(check("w", EXAMPLE).status.success());
+    let g = EXAMPLE.replace(williams, "griffith = { S = 1.0e6, a = 1.0, beta = 30.0 }");
+    assert!(check("g", &g).status.success());
+    let bad = check(
+        "bad",
+        &EXAMPLE.replace("T = -1.0e6", "T = -1.0e6, beta = 3.0"),
+    );
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(2), "{err}");
+    assert!(err.contains("bad.toml:") && err.contains("beta"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
 }
