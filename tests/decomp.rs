@@ -10,6 +10,7 @@ mod common;
 
 use efgdem::decomp::{Comm, Decomposed, Threads};
 use efgdem::dem::Granular;
+use efgdem::dem::particles::GHOST;
 use efgdem::dem::state::GranularState;
 use efgdem::scenario;
 use std::sync::Arc;
@@ -23,50 +24,10 @@ fn build(src: &str) -> Granular {
         .expect("granular")
 }
 
-/// Discs falling into a box whose lid is a servo wall; rolling resistance.
-fn settling(n: usize, extra: &str) -> String {
-    format!(
-        r#"
-[simulation]
-steps = 1
-gravity = [0.0, -9.81]
-
-[[material]]
-name = "sand"
-density = 2650.0
-kn = 1.0e6
-ks = 5.0e5
-friction = 0.5
-rolling_friction = 0.1
-
-[granular]
-material = "sand"
-discs = {{ generate = "random", box = [[0.0, 0.0], [0.2, 0.3]], count = {n}, radius = [0.002, 0.003], seed = 5 }}
-damping = {{ kind = "critical-ratio", zeta = 0.2 }}
-{extra}
-
-[[wall]]
-name = "floor"
-from = [-0.01, 0.0]
-to = [0.21, 0.0]
-
-[[wall]]
-name = "left"
-from = [0.0, -0.01]
-to = [0.0, 0.4]
-
-[[wall]]
-name = "right"
-from = [0.2, -0.01]
-to = [0.2, 0.4]
-
-[[wall]]
-name = "lid"
-from = [-0.01, 0.3]
-to = [0.21, 0.3]
-servo = {{ stress = 2.0e3, max_velocity = 0.5 }}
-"#
-    )
+/// `n` discs falling into a box 0.2 m × 0.3 m whose lid is a servo wall;
+/// rolling resistance (`common::settling`).
+fn settling(n: usize) -> String {
+    common::settling(n, 1, 0.2, 0.3)
 }
 
 fn bytes(s: &GranularState) -> Vec<u8> {
@@ -105,10 +66,23 @@ fn differ(a: &[u8], b: &[u8]) -> String {
     out.join(", ")
 }
 
+/// What the ranks of [`compare`] saw.
+struct Seen {
+    /// Largest imbalance after any step.
+    worst: f64,
+    /// Times the regions were cut again.
+    recuts: usize,
+    /// For each disc id, how many times it changed rank.
+    moves: Vec<u32>,
+    /// Discs that arrived at a new owner, over all ranks.
+    arrivals: usize,
+    /// Non-zero contact histories that arrived with them.
+    histories_in: usize,
+}
+
 /// Step the whole and `ranks` parts `steps` steps, comparing every
-/// `every` steps; returns the parts' largest imbalance and the number of
-/// discs that changed rank.
-fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> f64 {
+/// `every` steps.
+fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> Seen {
     let mut single = whole.clone();
     single.prepare_contacts();
     let mut want = Vec::new();
@@ -119,7 +93,8 @@ fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> f64 {
         }
     }
     let comms = Threads::group(ranks);
-    let got: Vec<(Vec<Vec<u8>>, f64)> = std::thread::scope(|sc| {
+    type Rank = (Vec<Vec<u8>>, f64, Vec<Vec<u32>>, [usize; 3]);
+    let got: Vec<Rank> = std::thread::scope(|sc| {
         let hs: Vec<_> = comms
             .into_iter()
             .map(|c| {
@@ -131,9 +106,16 @@ fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> f64 {
                     d.prepare();
                     let mut out = Vec::new();
                     let mut worst = 0.0f64;
+                    // the ids this rank owns after each rebuild
+                    let mut owned = vec![owned_ids(&d)];
+                    let mut rebuilds = d.part.grid.rebuilds;
                     for s in 1..=steps {
                         d.step(false);
                         worst = worst.max(d.imbalance);
+                        if d.part.grid.rebuilds != rebuilds {
+                            rebuilds = d.part.grid.rebuilds;
+                            owned.push(owned_ids(&d));
+                        }
                         // gather is collective: every rank calls it
                         if s % every == 0
                             && let Some(st) = d.gather()
@@ -141,7 +123,7 @@ fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> f64 {
                             out.push(bytes(&st));
                         }
                     }
-                    (out, worst)
+                    (out, worst, owned, [d.recuts, d.arrivals, d.histories_in])
                 })
             })
             .collect();
@@ -149,12 +131,11 @@ fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> f64 {
     });
     let (dd, dw) = single.touching();
     println!(
-        "{} discs, {} rebuilds, {dd} disc–disc and {dw} disc–wall contacts, lid at {:.4}",
+        "{} discs, {} rebuilds, {dd} disc–disc and {dw} disc–wall contacts",
         single.particles.len(),
         single.grid.rebuilds,
-        single.walls[3].a.y
     );
-    let (root, worst) = &got[0];
+    let root = &got[0].0;
     assert_eq!(root.len(), want.len());
     for (k, (a, b)) in root.iter().zip(&want).enumerate() {
         assert!(
@@ -164,7 +145,43 @@ fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> f64 {
             differ(a, b)
         );
     }
-    *worst
+    // each disc's owner after each rebuild, and how often it changed
+    let n = whole.particles.len();
+    let mut moves = vec![0u32; n];
+    let mut last = vec![usize::MAX; n];
+    for k in 0..got[0].2.len() {
+        let mut now = vec![usize::MAX; n];
+        for (r, g) in got.iter().enumerate() {
+            for &id in &g.2[k] {
+                assert_eq!(now[id as usize], usize::MAX, "disc {id} owned twice");
+                now[id as usize] = r;
+            }
+        }
+        assert!(
+            now.iter().all(|&r| r != usize::MAX),
+            "a disc owned by no rank"
+        );
+        for ((m, a), b) in moves.iter_mut().zip(&now).zip(&last) {
+            *m += (k > 0 && a != b) as u32;
+        }
+        last = now;
+    }
+    Seen {
+        worst: got.iter().map(|g| g.1).fold(0.0, f64::max),
+        recuts: got[0].3[0],
+        moves,
+        arrivals: got.iter().map(|g| g.3[1]).sum(),
+        histories_in: got.iter().map(|g| g.3[2]).sum(),
+    }
+}
+
+/// The ids of the discs `d` owns (ghosts aside).
+fn owned_ids(d: &Decomposed) -> Vec<u32> {
+    let p = &d.part.particles;
+    (0..p.len())
+        .filter(|&s| p.fixity[s] & GHOST == 0)
+        .map(|s| p.id[s])
+        .collect()
 }
 
 /// 1500 discs fall 0.3 m and settle under a servo lid (4000 steps: about
@@ -172,19 +189,73 @@ fn compare(whole: &Granular, ranks: usize, steps: usize, every: usize) -> f64 {
 /// they fall, histories migrating with them); 1–4 ranks.
 #[test]
 fn parts_step_bitwise_as_the_whole() {
-    let whole = build(&settling(1500, ""));
+    let whole = build(&settling(1500));
     for ranks in [1, 2, 3, 4] {
-        let worst = compare(&whole, ranks, 4000, 500);
+        let worst = compare(&whole, ranks, 4000, 500).worst;
         println!("{ranks} ranks: worst imbalance {worst:.3}");
         // recut whenever the counts drift past the threshold (0.1)
         assert!(worst <= 0.1, "{ranks} ranks: imbalance {worst}");
     }
 }
 
+/// A dense column shaken vertically at 25 Hz (`common::shaken_column`):
+/// it leaps and lands every period, discs near the horizontal cuts change
+/// rank again and again with their contact histories, and the state stays
+/// bitwise that of the whole on 2 and 3 ranks.
+#[test]
+fn discs_crossing_regions_again_and_again_stay_bitwise() {
+    let whole = build(&common::shaken_column(1));
+    for ranks in [2, 3] {
+        let seen = compare(&whole, ranks, 8000, 2000);
+        let moved = |k: u32| seen.moves.iter().filter(|&&m| m >= k).count();
+        println!(
+            "{ranks} ranks: {} arrivals, {} histories in, {} recuts; discs that changed rank \
+             at least 1, 4, 8 times: {}, {}, {}; most {}",
+            seen.arrivals,
+            seen.histories_in,
+            seen.recuts,
+            moved(1),
+            moved(4),
+            moved(8),
+            seen.moves.iter().max().unwrap()
+        );
+        let total: u32 = seen.moves.iter().sum();
+        assert_eq!(seen.arrivals, total as usize);
+        assert!(
+            moved(4) >= 30,
+            "{ranks} ranks: {} discs changed rank ≥ 4 times",
+            moved(4)
+        );
+        assert!(
+            seen.histories_in >= seen.arrivals,
+            "{ranks} ranks: {} histories",
+            seen.histories_in
+        );
+    }
+}
+
+/// A column released against the left wall (`common::collapsing_column`)
+/// runs out to the right: regions cut for the column lose their balance,
+/// are cut again, and the imbalance after every step stays within the
+/// threshold (0.1), bitwise as the whole.
+#[test]
+fn a_collapsing_column_is_rebalanced() {
+    let whole = build(&common::collapsing_column(1));
+    for ranks in [2, 3, 4] {
+        let seen = compare(&whole, ranks, 8000, 2000);
+        println!(
+            "{ranks} ranks: {} recuts, worst imbalance {:.3}, {} arrivals",
+            seen.recuts, seen.worst, seen.arrivals
+        );
+        assert!(seen.recuts >= 2, "{ranks} ranks: {} recuts", seen.recuts);
+        assert!(seen.worst <= 0.1, "{ranks} ranks: imbalance {}", seen.worst);
+    }
+}
+
 /// Fewer discs than ranks: some ranks own nothing and still take part.
 #[test]
 fn ranks_without_discs_take_part() {
-    let whole = build(&settling(3, ""));
+    let whole = build(&settling(3));
     compare(&whole, 4, 200, 50);
 }
 
@@ -214,7 +285,7 @@ name = "y7"
 disc = 7
 quantity = "y"
 "#;
-    let src = settling(600, "").replace("steps = 1\n", "steps = 4000\n") + probes;
+    let src = settling(600).replace("steps = 1\n", "steps = 4000\n") + probes;
     let sc = scenario::parse(&src, "t.toml").unwrap_or_else(|e| panic!("{e}"));
     let dir = std::env::temp_dir().join(format!("efgdem-decomp-run-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);

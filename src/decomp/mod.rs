@@ -79,6 +79,15 @@ pub struct Decomposed {
     pub imbalance: f64,
     /// Times the regions were cut again.
     pub recuts: usize,
+    /// Discs that arrived at this rank to be owned here (migrations).
+    pub arrivals: usize,
+    /// Non-zero disc–disc and disc–wall histories (shear or rolling) that
+    /// arrived with them.
+    pub histories_in: usize,
+    /// What this rank sent during the steps ([`begin_step`](Self::begin_step)
+    /// and [`advance`](Self::advance): ghosts, migrations, the step's
+    /// global values), gathers for the outputs aside.
+    pub stepping: Traffic,
     /// Slots of this rank's discs whose ghosts each rank holds.
     halo_send: Vec<(usize, Vec<u32>)>,
     /// Slots of the ghosts each rank refreshes.
@@ -185,6 +194,9 @@ impl Decomposed {
             balance_threshold: 0.1,
             imbalance: 0.0,
             recuts: 0,
+            arrivals: 0,
+            histories_in: 0,
+            stepping: Traffic::default(),
             halo_send: Vec::new(),
             halo_recv: Vec::new(),
             follows,
@@ -263,21 +275,37 @@ impl Decomposed {
     /// refreshed, or the list rebuilt with migration when the whole would
     /// rebuild it (the slots may change).
     pub fn begin_step(&mut self) {
-        if self
-            .part
-            .grid
-            .needs_rebuild(self.part.max_disp, &self.part.walls)
-        {
-            self.rebuild();
-        } else {
-            self.refresh_ghosts();
-        }
+        self.metered(|d| {
+            if d.part.grid.needs_rebuild(d.part.max_disp, &d.part.walls) {
+                d.rebuild();
+            } else {
+                d.refresh_ghosts();
+            }
+        })
+    }
+
+    /// `f`, its traffic added to [`stepping`](Self::stepping).
+    fn metered<T>(&mut self, f: impl FnOnce(&mut Self) -> T) -> T {
+        let t0 = self.comm.traffic();
+        let r = f(self);
+        let t1 = self.comm.traffic();
+        self.stepping.bytes += t1.bytes - t0.bytes;
+        self.stepping.messages += t1.messages - t0.messages;
+        self.stepping.seconds += t1.seconds - t0.seconds;
+        r
     }
 
     /// The rest of [`step`](Self::step) after
     /// [`begin_step`](Self::begin_step) (collective).
     pub fn advance(&mut self, flag: bool) -> (bool, bool) {
         let bad = self.part.advance_discs();
+        self.metered(|d| d.agree(bad, flag))
+    }
+
+    /// The global values of the step (collective): the largest
+    /// displacement, the step check, the totals of the walls that follow
+    /// the state; the part's step finished with them.
+    fn agree(&mut self, bad: bool, flag: bool) -> (bool, bool) {
         let mut out = Pack::default();
         // a rank without discs has no displacement (the sweep's infinity
         // means "no reference")
@@ -598,6 +626,10 @@ impl Decomposed {
         for (k, r) in records.iter().enumerate() {
             keep.push((r.key, Src::Got(k as u32), r.owned));
         }
+        self.arrivals += records.iter().filter(|r| r.owned).count();
+        let live = |e: &&(u32, u32, f64, f64)| e.2 != 0.0 || e.3 != 0.0;
+        self.histories_in += pair_recs.iter().filter(live).count();
+        self.histories_in += wall_recs.iter().filter(live).count();
         keep.sort_unstable_by_key(|e| e.0);
         // old slot → new slot, also for a disc that arrives again
         let old_slot = |id: u32| p.slot.get(id as usize).copied().unwrap_or(GONE);

@@ -7,7 +7,14 @@
 /// Linux). It counts the whole process: in Python, the interpreter too.
 pub fn peak_resident_bytes() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    status_peak(&status)
+    status_field(&status, "VmHWM:")
+}
+
+/// Resident memory of this process now, in bytes (`VmRSS`); `None` where
+/// the system does not provide it.
+pub fn resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    status_field(&status, "VmRSS:")
 }
 
 /// Keep large allocations in their own memory maps (glibc): blocks of
@@ -28,10 +35,11 @@ pub fn keep_large_allocations_mapped() {
     }
 }
 
-/// `VmHWM` of a `/proc/<pid>/status` text, in bytes.
-fn status_peak(status: &str) -> Option<u64> {
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let mut it = line["VmHWM:".len()..].split_whitespace();
+/// The field `key` (`VmHWM:`, `VmRSS:`) of a `/proc/<pid>/status` text,
+/// in bytes.
+fn status_field(status: &str, key: &str) -> Option<u64> {
+    let line = status.lines().find(|l| l.starts_with(key))?;
+    let mut it = line[key.len()..].split_whitespace();
     let v: u64 = it.next()?.parse().ok()?;
     match it.next() {
         Some("kB") => Some(v * 1024),
@@ -46,8 +54,9 @@ mod tests {
     #[test]
     fn reads_the_high_water_mark() {
         let s = "Name:\tefgdem\nVmPeak:\t  999 kB\nVmHWM:\t   2048 kB\nVmRSS:\t 1024 kB\n";
-        assert_eq!(status_peak(s), Some(2048 * 1024));
-        assert_eq!(status_peak("VmRSS:\t1 kB\n"), None);
+        assert_eq!(status_field(s, "VmHWM:"), Some(2048 * 1024));
+        assert_eq!(status_field(s, "VmRSS:"), Some(1024 * 1024));
+        assert_eq!(status_field("VmRSS:\t1 kB\n", "VmHWM:"), None);
         if cfg!(target_os = "linux") {
             // this process holds at least its own code and this buffer
             let big = vec![1u8; 32 << 20];

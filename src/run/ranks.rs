@@ -57,10 +57,15 @@ pub(super) fn ranks_record(d: &Decomposed) -> serde_json::Value {
     let mine = json!({
         "owned": d.owned(),
         "ghosts": d.ghosts(),
+        "arrivals": d.arrivals,
+        "histories_in": d.histories_in,
         "bytes_sent": t.bytes,
         "messages": t.messages,
         "communication_seconds": t.seconds,
+        "step_bytes_sent": d.stepping.bytes,
+        "step_messages": d.stepping.messages,
         "peak_memory_bytes": super::memory::peak_resident_bytes(),
+        "memory_bytes": super::memory::resident_bytes(),
     });
     let all = d.comm().all_gather(mine.to_string().as_bytes());
     let per_rank: Vec<serde_json::Value> = all

@@ -190,6 +190,7 @@ impl Ended {
         // measured, not estimated: the process's peak resident memory
         let peak = super::memory::peak_resident_bytes();
         summary["peak_memory_bytes"] = json!(peak);
+        summary["memory_bytes"] = json!(super::memory::resident_bytes());
         if let (Some(peak), Some(g)) = (peak, model.granular()) {
             let n = g.particles.len().max(1);
             summary["peak_bytes_per_disc"] = json!(peak as f64 / n as f64);
