@@ -16,6 +16,7 @@
 //! straight path of the same K without T-stress.
 
 use efgdem::continuum::WilliamsSpec;
+#[allow(dead_code)]
 mod common;
 
 use efgdem::continuum::crack_tip::{cotterell_rice_path, max_hoop_stress};
