@@ -104,6 +104,10 @@ pub struct EdgeCondition {
     /// Both components from the exact displacement of Griffith's inclined
     /// crack in an infinite plate ([`super::griffith`]).
     pub griffith: Option<GriffithSpec>,
+    /// Both components from the near-tip field (`K_I`, `K_II`, T-stress)
+    /// of a straight crack along the negative x axis with its tip at the
+    /// origin ([`super::crack_tip::k_t_displacement`]).
+    pub williams: Option<WilliamsSpec>,
     /// Parabolic shear traction with resultant `P` (force per unit thickness)
     /// along the edge, `τ = 3P/(2D)·(1 − 4s²/D²)`, s from the edge centre.
     pub parabolic_shear: Option<f64>,
@@ -170,6 +174,24 @@ impl GriffithSpec {
             kappa,
         }
     }
+}
+
+/// `williams = { KI = K_I, KII = K_II, T = T }`: the two-term near-tip
+/// field of a straight crack along the negative x axis with its tip at
+/// the origin (Williams' `√r` terms and the uniform T-stress along the
+/// crack).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WilliamsSpec {
+    /// Mode I stress intensity factor (Pa·√m).
+    #[serde(rename = "KI")]
+    pub k1: f64,
+    /// Mode II stress intensity factor (Pa·√m).
+    #[serde(rename = "KII")]
+    pub k2: f64,
+    /// The T-stress, `σ_xx` along the crack (Pa).
+    #[serde(rename = "T")]
+    pub t: f64,
 }
 
 /// A prescribed displacement component: a number, `{ linear = [a, b, c] }`
@@ -339,6 +361,7 @@ impl EdgeCondition {
             uy: None,
             timoshenko: None,
             griffith: None,
+            williams: None,
             traction: None,
             pressure: None,
             kirsch: None,
@@ -397,7 +420,7 @@ pub fn edge_ends(origin: Vec2, size: Vec2, e: Edge) -> (Vec2, Vec2) {
 
 /// Which components a displacement bc constrains.
 pub fn constrained(bc: &EdgeCondition) -> (bool, bool) {
-    if bc.fixed || bc.timoshenko.is_some() || bc.griffith.is_some() {
+    if bc.fixed || bc.timoshenko.is_some() || bc.griffith.is_some() || bc.williams.is_some() {
         (true, true)
     } else {
         (bc.ux.is_some(), bc.uy.is_some())
@@ -417,6 +440,10 @@ pub fn prescribed(
     }
     if let Some(g) = bc.griffith {
         return g.field(el).displacement(x);
+    }
+    if let Some(w) = bc.williams {
+        let (mu, kappa) = super::crack_tip::mu_kappa(el.e, el.nu, el.plane == super::Plane::Strain);
+        return super::crack_tip::k_t_displacement([w.k1, w.k2], w.t, x, mu, kappa);
     }
     [
         bc.ux.as_ref().map_or(0.0, |v| v.at(x.x, x.y)),

@@ -57,13 +57,38 @@ pub fn williams(mode: usize, r: f64, theta: f64, mu: f64, kappa: f64) -> ([f64; 
     let (s, c) = (0.5 * theta).sin_cos();
     let (s3, c3) = (1.5 * theta).sin_cos();
     let f = 1.0 / (2.0 * PI * r).sqrt();
-    let (stress, g, dg) = if mode == 0 {
+    let stress = if mode == 0 {
+        [
+            f * c * (1.0 - s * s3),
+            f * c * (1.0 + s * s3),
+            f * s * c * c3,
+        ]
+    } else {
+        [
+            -f * s * (2.0 + c * c3),
+            f * s * c * c3,
+            f * c * (1.0 - s * s3),
+        ]
+    };
+    let (g, dg) = williams_g(mode, theta, kappa);
+    let a = (r / (2.0 * PI)).sqrt() / (2.0 * mu);
+    let (st, ct) = theta.sin_cos();
+    let mut grad = [[0.0; 2]; 2];
+    for i in 0..2 {
+        let du_dr = a * g[i] / (2.0 * r);
+        let du_dt = a * dg[i];
+        grad[i][0] = ct * du_dr - st / r * du_dt;
+        grad[i][1] = st * du_dr + ct / r * du_dt;
+    }
+    (stress, grad)
+}
+
+/// Williams' angular displacement function `g(θ)` and `dg/dθ` (see
+/// [`williams`]).
+fn williams_g(mode: usize, theta: f64, kappa: f64) -> ([f64; 2], [f64; 2]) {
+    let (s, c) = (0.5 * theta).sin_cos();
+    if mode == 0 {
         (
-            [
-                f * c * (1.0 - s * s3),
-                f * c * (1.0 + s * s3),
-                f * s * c * c3,
-            ],
             [
                 c * (kappa - 1.0 + 2.0 * s * s),
                 s * (kappa + 1.0 - 2.0 * c * c),
@@ -76,11 +101,6 @@ pub fn williams(mode: usize, r: f64, theta: f64, mu: f64, kappa: f64) -> ([f64; 
     } else {
         (
             [
-                -f * s * (2.0 + c * c3),
-                f * s * c * c3,
-                f * c * (1.0 - s * s3),
-            ],
-            [
                 s * (kappa + 1.0 + 2.0 * c * c),
                 -c * (kappa - 1.0 - 2.0 * s * s),
             ],
@@ -89,17 +109,26 @@ pub fn williams(mode: usize, r: f64, theta: f64, mu: f64, kappa: f64) -> ([f64; 
                 0.5 * s * (kappa - 1.0 - 2.0 * s * s) + 2.0 * s * c * c,
             ],
         )
-    };
-    let a = (r / (2.0 * PI)).sqrt() / (2.0 * mu);
-    let (st, ct) = theta.sin_cos();
-    let mut grad = [[0.0; 2]; 2];
-    for i in 0..2 {
-        let du_dr = a * g[i] / (2.0 * r);
-        let du_dt = a * dg[i];
-        grad[i][0] = ct * du_dr - st / r * du_dt;
-        grad[i][1] = st * du_dr + ct / r * du_dt;
     }
-    (stress, grad)
+}
+
+/// The displacement of the two-term near-tip field of a straight crack
+/// along the negative x axis with its tip at the origin:
+/// `u = K_I √(r/2π)/(2μ) g_I(θ) + K_II √(r/2π)/(2μ) g_II(θ)` ([`williams`])
+/// plus the uniform stress `σ_xx = T` along the crack (the T-stress),
+/// `u_x = T (κ + 1) x/(8μ)`, `u_y = T (κ − 3) y/(8μ)`. On the faces
+/// (`θ = ±π`) the sign of `p.y` picks the face (`y = 0` behind the tip:
+/// the upper face).
+pub fn k_t_displacement(k: [f64; 2], t: f64, p: Vec2, mu: f64, kappa: f64) -> [f64; 2] {
+    let (r, theta) = (p.norm(), p.y.atan2(p.x));
+    let a = (r / (2.0 * PI)).sqrt() / (2.0 * mu);
+    let (g1, _) = williams_g(0, theta, kappa);
+    let (g2, _) = williams_g(1, theta, kappa);
+    let tt = t / (8.0 * mu);
+    [
+        a * (k[0] * g1[0] + k[1] * g2[0]) + tt * (kappa + 1.0) * p.x,
+        a * (k[0] * g1[1] + k[1] * g2[1]) + tt * (kappa - 3.0) * p.y,
+    ]
 }
 
 /// The actual field at a point for the interaction integral: stress
@@ -244,6 +273,32 @@ pub fn max_hoop_stress(k: [f64; 2]) -> (f64, f64) {
     };
     let c = (0.5 * theta).cos();
     (theta, c * (k1 * c * c - 1.5 * k2 * theta.sin()))
+}
+
+/// The path `y = λ(x)` of a crack that starts straight along the x axis
+/// (tip at the origin) under `K_I`, a small `K_II` and the T-stress `T`,
+/// growing with `k_II = 0` at its tip (local symmetry), to first order in
+/// `K_II/K_I` (Cotterell & Rice 1980, "Slightly curved or kinked cracks",
+/// Int. J. Fract. 16:155–169): their first-order
+/// `k_II(x) = K_II + ½ K_I λ′(x) − T √(2/π) ∫₀ˣ λ′(ξ)/√(x − ξ) dξ`
+/// set to zero and solved by Laplace transform gives
+/// `λ′(x) = −(2K_II/K_I) e^{c²x} erfc(−c√x)` with `c = 2√2 T/K_I`, and
+///
+/// `λ(x) = −(2K_II/(K_I c²)) [e^{c²x} erfc(−c√x) − 1 − 2c √(x/π)]`:
+///
+/// the kink `−2K_II/K_I` of the maximum hoop stress at the start; a
+/// negative T turns the path back parallel to the crack, a positive T
+/// away from it (`λ = −2K_II x/K_I` for `T = 0`).
+pub fn cotterell_rice_path(k: [f64; 2], t: f64, x: f64) -> f64 {
+    let [k1, k2] = k;
+    let c = 2.0 * std::f64::consts::SQRT_2 * t / k1;
+    let z = c * x.sqrt();
+    if z.abs() < 1e-4 {
+        // e^{z²} erfc(−z) = 1 + 2z/√π + z² + 4z³/(3√π) + …
+        return -2.0 * k2 / k1 * x * (1.0 + 4.0 * z / (3.0 * PI.sqrt()));
+    }
+    let e = (z * z).exp() * libm::erfc(-z);
+    -2.0 * k2 / (k1 * c * c) * (e - 1.0 - 2.0 * z / PI.sqrt())
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@ pub use body_params::{
 };
 pub use conditions::{
     Edge, EdgeCondition, EdgeName, GriffithSpec, KirschSpec, LinearField, MotionField, PointLoad,
-    Prescribed, TimoshenkoSpec,
+    Prescribed, TimoshenkoSpec, WilliamsSpec,
 };
 pub use drive::{Drive, DriveLaw, DrivePhase, DriveState, Measure, ServoSpec, Target};
 pub use material::{Material, Sample};

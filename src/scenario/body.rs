@@ -1123,13 +1123,15 @@ pub fn validate(sc: &Scenario, p: &mut Problems) {
                 bc.parabolic_shear.is_some(),
                 bc.pressure.is_some(),
                 bc.kirsch.is_some(),
+                bc.griffith.is_some(),
+                bc.williams.is_some(),
             ];
             let n = kinds.iter().filter(|&&x| x).count();
             p.check(
                 n == 1,
                 at("edge"),
                 format!(
-                    "give exactly one of `fixed = true`, `ux`/`uy`, `timoshenko`, `traction`, `parabolic_shear`, `pressure`, `kirsch` ({n} given)"
+                    "give exactly one of `fixed = true`, `ux`/`uy`, `timoshenko`, `traction`, `parabolic_shear`, `pressure`, `kirsch`, `griffith`, `williams` ({n} given)"
                 ),
             );
             match &domain {
