@@ -429,7 +429,8 @@ fn analyse(p: &Pattern) -> Result<SymbolicCholesky<usize>, SparseError> {
     })
 }
 
-/// Sparse Cholesky `A = LLᵀ` (fill-reducing ordering by [`analyse`], faer's supernodal
+/// Sparse Cholesky `A = LLᵀ` (AMD or nested-dissection ordering, whichever
+/// leaves the smaller factor; faer's supernodal
 /// or simplicial kernel as it sees fit). The solve workspace is allocated
 /// once, so [`Cholesky::solve_in_place`] does not allocate.
 pub struct Cholesky {
@@ -465,7 +466,8 @@ fn par(nnz_l: usize) -> Par {
 }
 
 impl Cholesky {
-    /// Symbolic analysis ([`analyse`]) + numeric factorisation of `a`.
+    /// Symbolic analysis (the ordering with the smaller factor) + numeric
+    /// factorisation of `a`.
     pub fn factor(a: &SymCsc) -> Result<Self, SparseError> {
         let symbolic = analyse(&a.pattern)?;
         let par = par(symbolic.len_val());
