@@ -145,7 +145,14 @@ impl Newmark {
     /// The acceleration that satisfies the equation of motion at the current
     /// state: `M Ü = F − C U̇ − K̄ U` (factors M once; call at t = 0).
     pub fn initial_acceleration(&self, state: &mut State, f: &[f64]) -> Result<(), SparseError> {
-        consistent_acceleration(&self.mass, self.damping.as_ref(), &self.stiffness, state, f)
+        consistent_acceleration(
+            &self.mass,
+            self.damping.as_ref(),
+            &self.stiffness,
+            state,
+            f,
+            Some(&self.factor),
+        )
     }
 
     /// One step `t → t + Δt` under the external force `f` at `t + Δt`
@@ -343,13 +350,16 @@ pub fn check_dynamic(dt: f64, density: f64, name: &str) -> Result<(), String> {
 
 /// `Ü` from `M Ü = F − C U̇ − K̄ U` (a temporary Cholesky factor of M; zero
 /// without factoring when the right-hand side vanishes). Call it before
-/// [`Newmark::new`] to keep the two factors from coexisting in memory.
+/// [`Newmark::new`] to keep the two factors from coexisting in memory;
+/// `like`: a factor on `mass`'s pattern whose analysis to reuse (see
+/// [`Cholesky::factor_like`]).
 pub fn consistent_acceleration(
     mass: &SymCsc,
     damping: Option<&SymCsc>,
     stiffness: &SymCsc,
     state: &mut State,
     f: &[f64],
+    like: Option<&Cholesky>,
 ) -> Result<(), SparseError> {
     let mut r = f.to_vec();
     let mut ku = vec![0.0; r.len()];
@@ -364,7 +374,10 @@ pub fn consistent_acceleration(
         state.a = r;
         return Ok(());
     }
-    let mut mf = Cholesky::factor(mass)?;
+    let mut mf = match like {
+        Some(c) => c.factor_like(mass)?,
+        None => Cholesky::factor(mass)?,
+    };
     mf.solve_in_place(&mut r);
     state.a = r;
     Ok(())

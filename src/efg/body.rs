@@ -496,6 +496,7 @@ impl EfgBody {
             &kbar,
             &mut self.state,
             &f,
+            None,
         )?;
         let nm = Newmark::new(m, c, kbar, self.params)?;
         self.newmark = Some(nm);
@@ -691,7 +692,7 @@ impl EfgBody {
         let loads0 = TimedLoad::half_sum(&self.timed, &self.state.u, t0, t1);
         nm.commit(&mut self.state);
         if self.faces.needs_mass() {
-            let mut mf = Cholesky::factor(&nm.mass)?;
+            let mut mf = nm.factor().factor_like(&nm.mass)?;
             self.faces
                 .mass_columns(&mut |x| mf.solve_in_place(x), self.state.a.len());
         }

@@ -651,6 +651,7 @@ impl FemBody {
             &self.k,
             &mut self.state,
             &f,
+            None,
         )?;
         for i in 0..self.constraints.len() {
             let c = &self.constraints[i];

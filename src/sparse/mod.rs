@@ -367,6 +367,11 @@ fn nested_dissection(p: &Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
     let mut nv = n as idx_t;
     let mut options = [0 as idx_t; metis_sys::METIS_NOPTIONS as usize];
     let (mut perm, mut iperm) = (vec![0 as idx_t; n], vec![0 as idx_t; n]);
+    // METIS keeps its random generator in global state (seeded by each
+    // call): calls from two threads at once would interleave their draws
+    // and give orderings that differ from run to run, so one at a time.
+    static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one = METIS.lock().unwrap_or_else(|e| e.into_inner());
     // SAFETY: the arrays have the sizes METIS_NodeND documents (xadj n + 1,
     // adjncy xadj[n], perm/iperm n, options METIS_NOPTIONS), and live for the call.
     let status = unsafe {
@@ -434,7 +439,9 @@ fn analyse(p: &Pattern) -> Result<SymbolicCholesky<usize>, SparseError> {
 /// or simplicial kernel as it sees fit). The solve workspace is allocated
 /// once, so [`Cholesky::solve_in_place`] does not allocate.
 pub struct Cholesky {
-    symbolic: SymbolicCholesky<usize>,
+    symbolic: Arc<SymbolicCholesky<usize>>,
+    /// The pattern the analysis was made for.
+    pattern: Arc<Pattern>,
     values: Vec<f64>,
     solve_mem: MemBuffer,
     par: Par,
@@ -469,10 +476,7 @@ impl Cholesky {
     /// Symbolic analysis (the ordering with the smaller factor) + numeric
     /// factorisation of `a`.
     pub fn factor(a: &SymCsc) -> Result<Self, SparseError> {
-        let symbolic = analyse(&a.pattern)?;
-        let par = par(symbolic.len_val());
-        let solve_mem = MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq))
-            .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
+        let symbolic = Arc::new(analyse(&a.pattern)?);
         let split = match symbolic.raw() {
             SymbolicCholeskyRaw::Supernodal(s) if symbolic.len_val() >= SPLIT_MIN => {
                 let perm = symbolic
@@ -482,12 +486,40 @@ impl Cholesky {
             }
             _ => None,
         };
+        Self::numeric(a, symbolic, a.pattern.clone(), split)
+    }
+
+    /// The factor of `a`, a matrix on the pattern this factor was analysed
+    /// for (e.g. the mass matrix beside the Newmark matrix), reusing the
+    /// analysis: the same ordering as [`factor`](Self::factor) would choose,
+    /// without its cost. Another pattern gets its own analysis.
+    pub fn factor_like(&self, a: &SymCsc) -> Result<Self, SparseError> {
+        if !Arc::ptr_eq(&a.pattern, &self.pattern) && a.pattern != self.pattern {
+            return Self::factor(a);
+        }
+        Self::numeric(
+            a,
+            self.symbolic.clone(),
+            self.pattern.clone(),
+            self.split.clone(),
+        )
+    }
+
+    fn numeric(
+        a: &SymCsc,
+        symbolic: Arc<SymbolicCholesky<usize>>,
+        pattern: Arc<Pattern>,
+        split: Option<SplitSolve>,
+    ) -> Result<Self, SparseError> {
+        let solve_mem = MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq))
+            .map_err(|e| SparseError::Faer(format!("{e:?}")))?;
         let mut c = Cholesky {
-            split,
+            par: par(symbolic.len_val()),
             values: vec![0.0; symbolic.len_val()],
             symbolic,
+            pattern,
+            split,
             solve_mem,
-            par,
         };
         c.refactor(a)?;
         Ok(c)
@@ -732,6 +764,25 @@ pub(crate) mod tests {
             res < 1e-12 * b.iter().fold(0.0f64, |m, x| m.max(x.abs())),
             "residual {res:e}"
         );
+    }
+
+    /// A factor that reuses another's analysis (same pattern) is bitwise
+    /// the factor analysed afresh: the ordering depends on the pattern only
+    /// (also while other tests factor at the same time: METIS's global
+    /// random state is used by one call at a time).
+    #[test]
+    fn a_factor_like_another_is_the_factor() {
+        let a = grid(100, 90, 2);
+        let b = a.combine(0.5, &a.scaled(3.0), 1.0).unwrap();
+        let b_rhs: Vec<f64> = (0..a.n()).map(|i| (i as f64 * 0.11).cos()).collect();
+        let (mut x, mut y) = (b_rhs.clone(), b_rhs.clone());
+        Cholesky::factor(&b).unwrap().solve_in_place(&mut x);
+        Cholesky::factor(&a)
+            .unwrap()
+            .factor_like(&b)
+            .unwrap()
+            .solve_in_place(&mut y);
+        assert!(x.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()));
     }
 
     #[test]
