@@ -55,6 +55,48 @@ impl Pattern {
     pub fn nnz(&self) -> usize {
         self.row_idx.len()
     }
+
+    /// Both triangles by rows, of the stored entries `k` = `(i, j)` that
+    /// `keep(k, i, j)` accepts: `(j, k)` in row `i` and, off the diagonal,
+    /// its mirror `(i, k)` in row `j`. Returns the row starts (`n + 1`),
+    /// each entry's column and its place `k` in the lower-triangle storage;
+    /// every row's columns ascending (columns are visited in order).
+    fn by_rows(
+        &self,
+        keep: impl Fn(usize, usize, usize) -> bool,
+    ) -> (Vec<usize>, Vec<u32>, Vec<usize>) {
+        let n = self.n;
+        let entries = || {
+            (0..n).flat_map(move |j| {
+                (self.col_ptr[j]..self.col_ptr[j + 1]).map(move |k| (k, self.row_idx[k], j))
+            })
+        };
+        let mut start = vec![0usize; n + 1];
+        for (k, i, j) in entries() {
+            if keep(k, i, j) {
+                start[i + 1] += 1;
+                if i != j {
+                    start[j + 1] += 1;
+                }
+            }
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let (mut col, mut pos) = (vec![0u32; start[n]], vec![0usize; start[n]]);
+        let mut at = start.clone();
+        for (k, i, j) in entries() {
+            if keep(k, i, j) {
+                (col[at[i]], pos[at[i]]) = (j as u32, k);
+                at[i] += 1;
+                if i != j {
+                    (col[at[j]], pos[at[j]]) = (i as u32, k);
+                    at[j] += 1;
+                }
+            }
+        }
+        (start, col, pos)
+    }
     fn faer(&self) -> SymbolicSparseColMatRef<'_, usize> {
         // SAFETY: built sorted and in bounds by the assembler; checked in debug builds.
         debug_assert!(self.check());
@@ -191,42 +233,8 @@ impl SymRows {
     /// a mass matrix on a stiffness pattern has no `x`–`y` couplings).
     pub fn new(a: &SymCsc) -> Self {
         let p = &*a.pattern;
-        let mut count = vec![0usize; p.n + 1];
-        for j in 0..p.n {
-            for k in p.col_ptr[j]..p.col_ptr[j + 1] {
-                if a.values[k] != 0.0 {
-                    let i = p.row_idx[k];
-                    count[i + 1] += 1;
-                    if i != j {
-                        count[j + 1] += 1;
-                    }
-                }
-            }
-        }
-        for i in 0..p.n {
-            count[i + 1] += count[i];
-        }
-        let start = count.clone();
-        let (mut col, mut val) = (vec![0u32; start[p.n]], vec![0.0; start[p.n]]);
-        let mut at = count;
-        // columns ascending, rows sorted: every row receives its entries
-        // in column order
-        for j in 0..p.n {
-            for k in p.col_ptr[j]..p.col_ptr[j + 1] {
-                let (i, v) = (p.row_idx[k], a.values[k]);
-                if v != 0.0 {
-                    // entry (i, j) in row i; its mirror (j, i) in row j
-                    col[at[i]] = j as u32;
-                    val[at[i]] = v;
-                    at[i] += 1;
-                    if i != j {
-                        col[at[j]] = i as u32;
-                        val[at[j]] = v;
-                        at[j] += 1;
-                    }
-                }
-            }
-        }
+        let (start, col, pos) = p.by_rows(|k, _, _| a.values[k] != 0.0);
+        let val = pos.iter().map(|&k| a.values[k]).collect();
         let mid = (0..p.n)
             .map(|i| start[i] + col[start[i]..start[i + 1]].partition_point(|&c| (c as usize) < i))
             .collect();
@@ -339,31 +347,9 @@ impl RowSelection {
 fn nested_dissection(p: &Pattern) -> Option<(Vec<usize>, Vec<usize>)> {
     use metis_sys::idx_t;
     let n = p.n;
-    let mut deg = vec![0usize; n + 1];
-    for j in 0..n {
-        for &i in &p.row_idx[p.col_ptr[j]..p.col_ptr[j + 1]] {
-            if i != j {
-                deg[i + 1] += 1;
-                deg[j + 1] += 1;
-            }
-        }
-    }
-    for i in 0..n {
-        deg[i + 1] += deg[i];
-    }
-    let mut at = deg.clone();
-    let mut adj = vec![0 as idx_t; deg[n]];
-    for j in 0..n {
-        for &i in &p.row_idx[p.col_ptr[j]..p.col_ptr[j + 1]] {
-            if i != j {
-                adj[at[i]] = j as idx_t;
-                at[i] += 1;
-                adj[at[j]] = i as idx_t;
-                at[j] += 1;
-            }
-        }
-    }
-    let mut xadj: Vec<idx_t> = deg.iter().map(|&d| d as idx_t).collect();
+    let (start, col, _) = p.by_rows(|_, i, j| i != j);
+    let mut xadj: Vec<idx_t> = start.iter().map(|&d| d as idx_t).collect();
+    let mut adj: Vec<idx_t> = col.iter().map(|&c| c as idx_t).collect();
     let mut nv = n as idx_t;
     let mut options = [0 as idx_t; metis_sys::METIS_NOPTIONS as usize];
     let (mut perm, mut iperm) = (vec![0 as idx_t; n], vec![0 as idx_t; n]);

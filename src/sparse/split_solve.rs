@@ -118,11 +118,7 @@ impl SplitSolve {
             return None;
         }
         let sep = nodes.get(chain).map_or(n, |nd| nd.start);
-        let widest = nodes
-            .iter()
-            .map(|nd| nd.size + nd.rows.len())
-            .max()
-            .unwrap_or(0);
+        let widest = nodes.iter().map(|nd| nd.rows.len()).max().unwrap_or(0);
         let bufs = parts
             .iter()
             .map(|_| (vec![0.0; n - sep], vec![0.0; widest]))
