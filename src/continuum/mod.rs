@@ -180,6 +180,9 @@ pub struct BodyEnergies {
     /// Work done on the body since t = 0 by its own loads (permanent loads,
     /// moving edges) — not by the contacts.
     pub work: f64,
+    /// Energy the growth of its cracks took out of the body and its
+    /// contacts since t = 0 (EFG: [`fracture_energy`](crate::efg::EfgBody::fracture_energy)).
+    pub fracture: f64,
 }
 
 /// Why a body could not advance.
@@ -314,7 +317,11 @@ pub trait Continuum: Send {
     /// After a body step: grow its cracks if due, and rebuild the contact
     /// chains along the longer faces. Whether it grew (a body without
     /// crack growth never does).
-    fn grow(&mut self) -> Result<bool, SolveError> {
+    /// `loads`: the contact forces on the body at the present state
+    /// (`(material point, force)`), which hold it while new crack pieces
+    /// open.
+    fn grow(&mut self, loads: &[(Vec2, Vec2)]) -> Result<bool, SolveError> {
+        let _ = loads;
         Ok(false)
     }
     /// Compliant scheme, at the fraction `s` of the body step: for the
@@ -467,7 +474,9 @@ pub trait ContactBody: Send + Sync + 'static {
     fn commit(&mut self) -> Result<(), Self::Error>;
     /// Grow the body's cracks if due (after a committed step); whether it
     /// grew. Its contact chains ([`chains`](Self::chains)) then change.
-    fn grow(&mut self) -> Result<bool, Self::Error> {
+    /// `loads` as in [`Continuum::grow`].
+    fn grow(&mut self, loads: &[(Vec2, Vec2)]) -> Result<bool, Self::Error> {
+        let _ = loads;
         Ok(false)
     }
     /// Kinetic, strain and penalty energy and load work of the present
@@ -1114,8 +1123,8 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         }
         Ok(())
     }
-    fn grow(&mut self) -> Result<bool, SolveError> {
-        if !self.body.grow().map_err(|e| self.solve_error(e))? {
+    fn grow(&mut self, loads: &[(Vec2, Vec2)]) -> Result<bool, SolveError> {
+        if !self.body.grow(loads).map_err(|e| self.solve_error(e))? {
             return Ok(false);
         }
         self.remake_chains().map_err(|e| self.solve_error(e))?;

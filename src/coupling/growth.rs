@@ -5,6 +5,7 @@
 //! next step.
 
 use super::{CoupledModel, CouplingError};
+use crate::geom::Vec2;
 
 impl CoupledModel {
     /// Grow the bodies' cracks where due ([`Continuum::grow`](crate::continuum::Continuum::grow)),
@@ -14,7 +15,14 @@ impl CoupledModel {
     /// histories, keyed by disc and chain).
     pub(super) fn grow_bodies(&mut self) -> Result<(), CouplingError> {
         for b in 0..self.bodies.len() {
-            if self.bodies[b].grow()? {
+            // the contact forces on the body hold it while its cracks open
+            let loads: Vec<(Vec2, Vec2)> = self
+                .contacts
+                .iter()
+                .filter(|q| q.body as usize == b)
+                .map(|q| (q.material, -q.force))
+                .collect();
+            if self.bodies[b].grow(&loads)? {
                 if let Some(g) = self.grids.get_mut(b) {
                     g.clear();
                 }

@@ -261,8 +261,8 @@ impl ContactBody for EfgBody {
         EfgBody::commit(self)
     }
     /// [`EfgBody::grow_if_due`].
-    fn grow(&mut self) -> Result<bool, EfgError> {
-        Ok(!self.grow_if_due()?.is_empty())
+    fn grow(&mut self, loads: &[(Vec2, Vec2)]) -> Result<bool, EfgError> {
+        Ok(!self.grow_if_due(loads)?.is_empty())
     }
     fn save_state(&self) -> BodyState {
         EfgBody::save_state(self)
@@ -285,6 +285,7 @@ impl ContactBody for EfgBody {
                     .zip(&self.state.u)
                     .map(|(f, u)| f * u)
                     .sum::<f64>(),
+            fracture: self.fracture_energy,
         }
     }
 }

@@ -27,6 +27,7 @@
 use super::EfgError;
 use super::body::EfgBody;
 use super::fracture::Tip;
+use super::penalty::When;
 use super::shape::ShapeRow;
 use crate::continuum::Plane;
 use crate::continuum::crack_tip::{e_prime, energy_release_rate, max_hoop_stress};
@@ -96,6 +97,14 @@ impl EfgBody {
     /// crack stays (growth to the boundary would split the body). Returns
     /// the advances (none: the body is unchanged).
     pub fn grow(&mut self) -> Result<Vec<Growth>, EfgError> {
+        self.grow_under(&[])
+    }
+
+    /// [`grow`](Self::grow) for a body that also carries the point forces
+    /// `loads` (`(reference point, force)`, e.g. the discs' contact forces
+    /// of the present state): they hold the body while its new pieces
+    /// open ([`release`](Self::release)).
+    pub fn grow_under(&mut self, loads: &[(Vec2, Vec2)]) -> Result<Vec<Growth>, EfgError> {
         let Some(fr) = self.spec.fracture else {
             return Ok(Vec::new());
         };
@@ -141,11 +150,19 @@ impl EfgBody {
         let mut new = EfgBody::new(&spec, self.gravity)?;
         new.take_state_of(self)?;
         new.increments.clone_from(&self.increments);
-        new.fracture_energy = self.fracture_energy;
         for g in &out {
             new.increments[g.tip.crack][g.tip.end] += 1;
-            new.fracture_energy += g.released;
         }
+        let mut row = ShapeRow::new();
+        for &(p, f) in loads {
+            // as the coupling's rows: a point no node covers carries nothing
+            if new.shape_row(p, &mut row).is_ok() {
+                new.add_point_load_row(&row, f);
+            }
+        }
+        let held = new.release()?;
+        new.fracture_energy =
+            self.fracture_energy + self.energy_less_work() - new.energy_less_work() + held;
         *self = new;
         Ok(out)
     }
@@ -166,13 +183,71 @@ impl EfgBody {
         }
     }
 
-    /// In a time-stepped run: [`grow`](Self::grow) when the step count is
-    /// a multiple of the fracture's `every`.
-    pub fn grow_if_due(&mut self) -> Result<Vec<Growth>, EfgError> {
+    /// In a time-stepped run: [`grow_under`](Self::grow_under) when the
+    /// step count is a multiple of the fracture's `every`.
+    pub fn grow_if_due(&mut self, loads: &[(Vec2, Vec2)]) -> Result<Vec<Growth>, EfgError> {
         match self.spec.fracture {
-            Some(f) if self.step.is_multiple_of(f.every.max(1)) => self.grow(),
+            Some(f) if self.step.is_multiple_of(f.every.max(1)) => self.grow_under(loads),
             _ => Ok(Vec::new()),
         }
+    }
+
+    /// Stored energy less the work of the body's own loads:
+    /// `½U̇ᵀMU̇ + ½UᵀKU` + the penalty springs and crack faces − the work
+    /// of the permanent (and, static, released) loads, the timed loads and
+    /// the moving edges.
+    fn energy_less_work(&self) -> f64 {
+        let mut f = self.f_permanent.clone();
+        if self.newmark().is_none() {
+            f.iter_mut()
+                .zip(&self.f_released)
+                .for_each(|(a, b)| *a += b);
+        }
+        let fu: f64 = f.iter().zip(&self.state.u).map(|(f, u)| f * u).sum();
+        self.kinetic_energy() + self.strain_energy() - fu - self.load_work - self.motion_work
+    }
+
+    /// Let a body just carried over from a body with shorter cracks open
+    /// its new pieces (module doc, *the energy*): the carried state is
+    /// continuous across them, so it is out of balance by the tractions
+    /// the cut removed, `r = F − K̄U − MÜ − CU̇` (`F` the body's loads at the
+    /// present time, with the pending point loads); the body relaxes by
+    /// `ΔU = K̄⁻¹ r`, its velocity and acceleration kept, and is in balance
+    /// again. The timed loads' work on `ΔU` is booked with them; the point
+    /// loads are then cleared and their work on `ΔU` returned.
+    fn release(&mut self) -> Result<f64, EfgError> {
+        let n = self.n_dofs();
+        let mut r = self.f_point.clone();
+        let mut timed = vec![0.0; n];
+        for l in &self.timed {
+            l.add_to(&mut timed, self.time);
+        }
+        let mut ku = vec![0.0; n];
+        let kbar = self.ops.kbar();
+        kbar.mul_add(&self.state.u, &mut ku);
+        if let Some(nm) = self.newmark() {
+            nm.mass.mul_add(&self.state.a, &mut ku);
+            if let Some(c) = &nm.damping {
+                c.mul_add(&self.state.v, &mut ku);
+            }
+        } else {
+            r.iter_mut()
+                .zip(&self.f_released)
+                .for_each(|(a, b)| *a += b);
+        }
+        self.ops.penalty.add_load(&mut r, When::Now);
+        for i in 0..n {
+            r[i] += self.f_permanent[i] + timed[i] - ku[i];
+        }
+        Cholesky::factor(&kbar)?.solve_in_place(&mut r);
+        let dot = |a: &[f64]| a.iter().zip(&r).map(|(x, y)| x * y).sum::<f64>();
+        self.load_work += dot(&timed);
+        let held = dot(&self.f_point);
+        for (u, d) in self.state.u.iter_mut().zip(&r) {
+            *u += d;
+        }
+        self.f_point.iter_mut().for_each(|x| *x = 0.0);
+        Ok(held)
     }
 
     /// How many times the body was rebuilt by growth (0: as built from
