@@ -12,6 +12,10 @@ use efgdem::model::Model;
 use efgdem::model::body::BodyRef;
 use efgdem::scenario;
 
+/// The beam's Young modulus (plane stress, thickness 1) and the increment.
+const E: f64 = 1.0e8;
+const DA: f64 = 0.01;
+
 /// The beam (1 m × 0.1 m, E = 10⁸ Pa, clamped left end, roller right end)
 /// with a 10 mm notch in the middle of its bottom, struck on its top by
 /// eight discs at 1 m/s; no gravity, no friction, no dashpots.
@@ -99,7 +103,10 @@ fn run(m: &mut Model, steps: usize) -> Vec<EnergyAccount> {
 /// `E_diss` is within the largest change of an ordinary step of the run
 /// without growth (the discs' own central-difference error as they strike
 /// and bear on the beam), and over the run `|E_diss|` stays within
-/// 1.5 times that run's.
+/// 1.5 times that run's. The first growth books within 5 % of Irwin's
+/// `G(a) Δa t` at the tip one step before (which differs from the energy
+/// the increment releases by the change of `G` over it; 17 times that
+/// when the contact forces were held fixed).
 #[test]
 fn the_account_closes_across_every_growth_in_a_coupled_run() {
     const STEPS: usize = 600;
@@ -117,8 +124,16 @@ fn the_account_closes_across_every_growth_in_a_coupled_run() {
         .fold(0.0, f64::max);
     let worst_intact = reference.iter().map(|e| e.diss.abs()).fold(0.0, f64::max);
     let (mut prev, mut growths, mut worst) = (0.0, Vec::new(), 0.0f64);
-    let mut booked = 0.0;
+    let (mut booked, mut irwin) = (0.0, 0.0);
     for (n, r) in reference.iter().enumerate() {
+        // Irwin's estimate at the tip before a step that looks at it
+        // (`every = 10`): G(a) Δa t, G = K_I²/E (plane stress, K_II ≈ 0)
+        if growths.is_empty() && (n + 1) % 10 == 0 {
+            if let BodyRef::Efg(b) = m.body(0) {
+                let k = b.tip_states().unwrap().last().unwrap().k;
+                irwin = (k[0] * k[0] + k[1] * k[1]) / E * DA;
+            }
+        }
         m.step().unwrap();
         let c = m.coupled().unwrap();
         meter.after_step(&c.granular);
@@ -140,6 +155,11 @@ fn the_account_closes_across_every_growth_in_a_coupled_run() {
                     "the first growth moved E_diss by {:.3e} J",
                     e.diss - r.diss
                 );
+                eprintln!(
+                    "first growth: E_diss less that without growth {:.2e} J; G(a) Δa t one step before {irwin:.4e} J",
+                    e.diss - r.diss
+                );
+                assert!((fr / irwin - 1.0).abs() < 0.05, "{fr:.4e} vs {irwin:.4e}");
             }
             assert!(jump.abs() <= step_error, "{jump:.3e} vs {step_error:.3e}");
             // the growth took energy out of the body and its contacts
@@ -154,5 +174,8 @@ fn the_account_closes_across_every_growth_in_a_coupled_run() {
         "growths at steps {growths:?}: fracture {booked:.4e} J of {w0:.4e} J brought in; max |E_diss| {worst:.3e} J (without growth {worst_intact:.3e}), largest step change without growth {step_error:.3e}"
     );
     assert!(growths.len() >= 3, "{growths:?}");
-    assert!(worst <= 1.5 * worst_intact, "{worst:.3e} vs {worst_intact:.3e}");
+    assert!(
+        worst <= 1.5 * worst_intact,
+        "{worst:.3e} vs {worst_intact:.3e}"
+    );
 }

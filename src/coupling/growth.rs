@@ -8,11 +8,14 @@
 //! contacts' normal springs in its matrix
 //! ([`HeldContact`], [`EfgBody::grow_under`](crate::efg::EfgBody::grow_under)).
 //! The energy the growth took is the drop of the body's stored energy less
-//! its loads' work plus the drop of the disc–body contact energy, both
-//! measured on the re-evaluated contacts: the body books its linearised
-//! part, and the rest (the contacts' exact energy against their
-//! linearisation, and the points that moved on the new boundary) is
-//! booked here, so the energy account closes across a growth to round-off.
+//! its loads' work plus the drop of the energy of the contacts' normal
+//! springs, these measured on the contacts evaluated again: the body books
+//! its linearised part, and the rest (the springs' exact energy against
+//! their linearisation, and the points that moved on the new boundary) is
+//! booked here, so in a frictionless run the energy account closes across
+//! a growth to round-off. The contacts evaluated again start without shear
+//! or rolling history (evaluated at rest relative to the body); what those
+//! springs held counts as dissipated, not as fracture.
 
 use super::{CoupledModel, CouplingError};
 use crate::continuum::HeldContact;
@@ -73,17 +76,20 @@ impl CoupledModel {
             .collect()
     }
 
-    /// Body `b`'s stored energy (kinetic, strain, penalty) and that of its
-    /// disc contacts, less the work of its own loads and the energy its
-    /// growth took so far.
+    /// Body `b`'s stored energy (kinetic, strain, penalty) and that of the
+    /// normal springs of its disc contacts, `½ k_n δ²`, less the work of its
+    /// own loads and the energy its growth took so far. (The contacts'
+    /// shear and rolling springs do not hold the body as it grows; the
+    /// contacts evaluated again start them afresh, and what they held
+    /// counts as dissipated.)
     fn energy_less_work(&self, b: usize) -> f64 {
         let e = self.bodies[b].energies();
-        let contact: f64 = self
+        let normal: f64 = self
             .contacts
             .iter()
-            .filter(|q| q.body as usize == b)
-            .map(|q| self.contact_energy(q))
+            .filter(|q| q.body as usize == b && q.overlap > 0.0)
+            .map(|q| 0.5 * q.fn_elastic * q.overlap)
             .sum();
-        e.kinetic + e.strain + e.penalty + contact - e.work + e.fracture
+        e.kinetic + e.strain + e.penalty + normal - e.work + e.fracture
     }
 }
