@@ -446,3 +446,55 @@ fn held_solve(
     }
     Ok(x)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::continuum::{BodyParams, Edge, EdgeCondition, Elastic, Rectangle};
+
+    /// The held solve meets `(K̄ + Σ k bbᵀ) x = r` to round-off with
+    /// springs both softer and far stiffer than the body.
+    #[test]
+    fn held_solve_solves_the_body_with_its_springs() {
+        let mut p = BodyParams::new(
+            "b",
+            Rectangle {
+                origin: [0.0, 0.0],
+                size: [2.0, 1.0],
+            },
+            [9, 5],
+            Elastic::new(1000.0, 0.3).density(1.0),
+        );
+        p.bc.push(EdgeCondition::fixed(Edge::Left));
+        let mut b = EfgBody::new(&p, [0.0, 0.0]).unwrap();
+        let held: Vec<HeldContact> = [(0.7, 1.0e2), (1.3, 1.0e7), (2.0, 5.0)]
+            .iter()
+            .map(|&(x, kn)| HeldContact {
+                point: Vec2::new(x, 1.0),
+                force: Vec2::new(0.0, -1.0),
+                normal: Vec2::new(0.3, -1.0) * (1.0 / 1.09f64.sqrt()),
+                kn,
+            })
+            .collect();
+        let springs = b.hold(&held);
+        assert_eq!(springs.len(), 3);
+        let kbar = b.ops.kbar();
+        let r: Vec<f64> = (0..b.n_dofs())
+            .map(|i| ((i * 7) % 5) as f64 - 2.0)
+            .collect();
+        let x = held_solve(&kbar, &springs, r.clone()).unwrap();
+        let mut ax = vec![0.0; x.len()];
+        kbar.mul_add(&x, &mut ax);
+        for (k, s) in &springs {
+            let d = k * s.iter().map(|&(i, v)| v * x[i]).sum::<f64>();
+            s.iter().for_each(|&(i, v)| ax[i] += d * v);
+        }
+        let norm = |a: &[f64]| a.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let res: Vec<f64> = ax.iter().zip(&r).map(|(a, r)| a - r).collect();
+        assert!(norm(&res) < 1e-9 * norm(&r), "{:e}", norm(&res) / norm(&r));
+        // the stiff spring holds its point: its normal motion is tiny
+        let stiff: f64 = springs[1].1.iter().map(|&(i, v)| v * x[i]).sum();
+        let soft: f64 = springs[0].1.iter().map(|&(i, v)| v * x[i]).sum();
+        assert!(stiff.abs() < 1e-3 * soft.abs(), "{stiff:e} vs {soft:e}");
+    }
+}
