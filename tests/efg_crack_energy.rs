@@ -128,11 +128,9 @@ fn the_account_closes_across_every_growth_in_a_coupled_run() {
     for (n, r) in reference.iter().enumerate() {
         // Irwin's estimate at the tip before a step that looks at it
         // (`every = 10`): G(a) Δa t, G = K_I²/E (plane stress, K_II ≈ 0)
-        if growths.is_empty() && (n + 1) % 10 == 0 {
-            if let BodyRef::Efg(b) = m.body(0) {
-                let k = b.tip_states().unwrap().last().unwrap().k;
-                irwin = (k[0] * k[0] + k[1] * k[1]) / E * DA;
-            }
+        if let (true, BodyRef::Efg(b)) = (growths.is_empty() && (n + 1) % 10 == 0, m.body(0)) {
+            let k = b.tip_states().unwrap().last().unwrap().k;
+            irwin = (k[0] * k[0] + k[1] * k[1]) / E * DA;
         }
         m.step().unwrap();
         let c = m.coupled().unwrap();
