@@ -23,9 +23,9 @@
 //! **The energy.** The carried state is continuous across the new piece,
 //! so it still holds the tractions the cut removed; the new piece opens
 //! at once: the body relaxes to balance under its loads at the present
-//! time, its velocity and acceleration kept (no
-//! time passes), held by the disc contacts of a coupled run as springs
-//! with the discs in place ([`HeldContact`]). Each growth books in
+//! time, its velocity and acceleration kept (no time passes), held by the
+//! disc contacts of a coupled run as springs with the discs in place
+//! ([`HeldContact`]). Each growth books in
 //! [`EfgBody::fracture_energy`] what the body and those springs lost: the
 //! drop of its stored energy (kinetic, strain, penalty) less the work of
 //! its loads, plus the energy the springs gave up. In a static analysis
@@ -64,7 +64,9 @@ pub struct Growth {
     pub theta: f64,
     /// `K_eq` of the maximum hoop-stress criterion.
     pub k_eq: f64,
-    /// Energy released, `G Δa t`.
+    /// Irwin's estimate of the energy released, `G Δa t` with `G` at the
+    /// old tip (the growth books what the body lost,
+    /// [`EfgBody::fracture_energy`]).
     pub released: f64,
 }
 
