@@ -344,6 +344,29 @@ impl Decomposed {
         (!bad, any)
     }
 
+    /// Make the part ready for outputs reduced over the ranks (shares of
+    /// probes, `crate::model::probe::share`), collective: the ghosts
+    /// refreshed from their owners and every wall's totals summed as the
+    /// whole sums them (terms merged in key order). The steps are not
+    /// changed by it.
+    pub fn ready_outputs(&mut self) {
+        self.refresh_ghosts();
+        let mut out = Pack::default();
+        for t in self.part.wall_terms() {
+            pack_term(&mut out, self.key[t.disc as usize], &t);
+        }
+        let all = self.comm.all_gather(&out.0);
+        let mut merged = Vec::new();
+        for b in &all {
+            let mut u = Unpack(b);
+            while !u.is_empty() {
+                merged.push(unpack_term(&mut u));
+            }
+        }
+        merged.sort_by_key(|(k, t)| (*k, t.wall));
+        self.part.set_wall_totals(merged.iter().map(|(_, t)| t));
+    }
+
     /// Refresh every ghost from its owner: position, velocity, spin.
     fn refresh_ghosts(&mut self) {
         const B: usize = 40;

@@ -1,16 +1,20 @@
 //! Driver for granular scenarios on several ranks (MPI processes, or the
 //! threads of a test): the assembly is divided over the ranks
-//! ([`Decomposed`]); rank 0 keeps the whole model, into which the ranks'
-//! parts are gathered whenever an output is due (history rows, frames,
-//! checkpoints, the end), and writes every file. The outputs are those of
-//! the run on one rank, bitwise.
+//! ([`Decomposed`]). A history row is reduced from the ranks' shares of
+//! each probe (exact sums, counts, the value of the disc's owner:
+//! [`probe::share`]), without moving the discs; rank 0 keeps the whole
+//! model, into which the ranks' parts are gathered only for frames,
+//! checkpoints and the end (`discs_final.csv`, `summary.json`), and
+//! writes every file. The outputs are those of the run on one rank,
+//! bitwise.
 
 use super::checkpoint::{self, Checkpoint};
-use super::granular::{columns, granular, record, summary};
+use super::granular::{columns, granular, summary};
 use super::progress::Progress;
 use super::session::{Ended, Outputs, checkpoint_due, due};
 use super::{Run, RunError};
 use crate::decomp::{Comm, Decomposed};
+use crate::model::probe::{self, Share};
 use crate::model::{Model, ModelState, System, SystemState, stability};
 use crate::output::csv::write_discs_csv;
 use crate::output::write_json;
@@ -114,12 +118,15 @@ pub(super) fn run(
     let mut d = Decomposed::new(granular(&whole), comm.clone());
     let mut model = root.then_some(whole);
     let res = drive(&run, &mut d, &mut model, steps);
+    // the end's outputs, timed apart from the steps
+    let t0 = Instant::now();
+    let res = res.and_then(|r| gather(&d, &mut model).map(|()| r));
     let ranks = ranks_record(&d);
     let res = match (res, model) {
         (Ok((ended, wall_s, start)), Some(model)) => {
             let mut s = summary(&run, &model, warnings, wall_s, model.step - start);
             s["ranks"] = ranks;
-            finish(&run, &model, ended, s)
+            finish(&run, &model, ended, s, t0)
         }
         (Ok(_), None) => Ok(serde_json::Value::Null),
         (Err(e), _) => Err(e),
@@ -127,17 +134,52 @@ pub(super) fn run(
     agree(&*comm, res)
 }
 
-/// Rank 0's outputs due now, from its gathered model.
+/// The history row of the present state (collective), on rank 0: each
+/// probe's [shares](probe::share) of every rank merged in rank order and
+/// finished (bitwise the value of the undivided assembly: exact sums,
+/// counts, the owner's value).
+fn reduced_row(run: &Run, d: &mut Decomposed, row: &mut [f64]) -> bool {
+    row[0] = d.part.step as f64;
+    row[1] = d.part.time;
+    if run.probes.is_empty() {
+        return d.comm().rank() == 0;
+    }
+    d.ready_outputs();
+    let mut mine = Vec::new();
+    for (_, p) in &run.probes {
+        probe::share(p, &d.part)
+            .expect("granular probes only")
+            .pack(&mut mine);
+    }
+    let bytes: Vec<u8> = mine.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let all = d.comm().all_gather(&bytes);
+    if d.comm().rank() != 0 {
+        return false;
+    }
+    let mut merged = vec![Share::default(); run.probes.len()];
+    for b in &all {
+        let v: Vec<f64> = b
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
+            .collect();
+        let mut rest = &v[..];
+        for m in &mut merged {
+            m.merge(&Share::unpack(&mut rest));
+        }
+    }
+    for (k, ((_, p), m)) in run.probes.iter().zip(&merged).enumerate() {
+        row[2 + k] = probe::finish(p, m, &d.part);
+    }
+    true
+}
+
+/// Rank 0's frames and checkpoints due now, from its gathered model.
 fn write(
     run: &Run,
     model: &Model,
     out: &mut Outputs,
-    row: &mut [f64],
-    (rec, frame, ck): (bool, bool, bool),
+    (frame, ck): (bool, bool),
 ) -> Result<(), RunError> {
-    if rec {
-        record(run, model, row, out)?;
-    }
     if frame {
         out.frames.write(model)?;
     }
@@ -169,12 +211,25 @@ fn drive(
     let mut outputs = agree(d.comm(), opened)?;
     let (every, vtk_every) = (sc.output.every.max(1), sc.output.vtk_every);
     let mut failed: Option<RunError> = None;
-    // gather (collective), then rank 0 writes; its failure is kept
-    let mut output = |d: &Decomposed, model: &mut Option<Model>, due, failed: &mut Option<_>| {
-        let r = gather(d, model).and_then(|()| match (model.as_ref(), outputs.as_mut()) {
-            (Some(m), Some(out)) => write(run, m, out, &mut row, due),
-            _ => Ok(()),
-        });
+    // the row reduced, the whole gathered for frames and checkpoints
+    // (collective), then rank 0 writes; its failure is kept
+    let mut output = |d: &mut Decomposed,
+                      model: &mut Option<Model>,
+                      (rec, frame, ck): (bool, bool, bool),
+                      failed: &mut Option<_>| {
+        let root = rec && reduced_row(run, d, &mut row);
+        let mut r = Ok(());
+        if root && let Some(out) = outputs.as_mut() {
+            r = out.hist.row(&row).map_err(RunError::from);
+        }
+        if frame || ck {
+            r = r
+                .and(gather(d, model))
+                .and_then(|()| match (model.as_ref(), outputs.as_mut()) {
+                    (Some(m), Some(out)) => write(run, m, out, (frame, ck)),
+                    _ => Ok(()),
+                });
+        }
         if let Err(e) = r {
             failed.get_or_insert(e);
         }
@@ -197,7 +252,9 @@ fn drive(
         let (clean, stop) = d.step(signal != 0 || failed.is_some());
         let step = step + 1;
         if !clean {
-            output(d, model, (false, false, false), &mut failed);
+            if let Err(e) = gather(d, model) {
+                failed.get_or_insert(e);
+            }
             // rank 0 diagnoses; the others learn the end from it
             let unstable = model.as_ref().and_then(|m| stability::check(m).err());
             break unstable.map_or(Ended::Completed, |i| Ended::Unstable(Box::new(i)));
@@ -225,18 +282,22 @@ fn drive(
     Ok((ended, wall_s, start))
 }
 
-/// Rank 0's end of the run: `discs_final.csv` and `summary.json`.
+/// Rank 0's end of the run: `discs_final.csv` and `summary.json`
+/// (`output_seconds`: from `t0`, the start of the end's gather, to the
+/// summary).
 fn finish(
     run: &Run,
     model: &Model,
     ended: Ended,
     mut s: serde_json::Value,
+    t0: Instant,
 ) -> Result<serde_json::Value, RunError> {
     let out = &run.opts.out_dir;
     if !matches!(ended, Ended::Unstable(_)) {
         write_discs_csv(granular(model), &out.join("discs_final.csv"))?;
     }
     ended.record(&mut s, model);
+    s["output_seconds"] = json!(t0.elapsed().as_secs_f64());
     write_json(&out.join("summary.json"), &s)?;
     ended.result(s, model, out)
 }
