@@ -345,6 +345,19 @@ rectangle = [[0.05, 0.0], [0.15, 0.15]]
         let s: serde_json::Value = serde_json::from_slice(&read(&name, "summary.json")).unwrap();
         assert_eq!(s["ranks"]["count"], ranks);
         assert_eq!(s["status"], "completed");
+        // the summary's account of the discs, reduced over the ranks: that
+        // of one process, bitwise
+        let one: serde_json::Value = serde_json::from_slice(&read("one", "summary.json")).unwrap();
+        for k in [
+            "discs",
+            "energies",
+            "contacts",
+            "wall_forces",
+            "critical_dt",
+            "time",
+        ] {
+            assert_eq!(s[k], one[k], "{ranks} ranks: summary {k}");
+        }
     }
     // a checkpoint written on 3 ranks continues on 2 (and on 1) as if
     // the run had never stopped

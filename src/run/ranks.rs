@@ -9,14 +9,14 @@
 //! bitwise.
 
 use super::checkpoint::{self, Checkpoint};
-use super::granular::{columns, granular, summary};
+use super::granular::{Facts, columns, granular, summary_of};
 use super::progress::Progress;
 use super::session::{Ended, Outputs, checkpoint_due, due};
 use super::{Run, RunError};
 use crate::decomp::{Comm, Decomposed};
 use crate::model::probe::{self, Share};
-use crate::model::{Model, ModelState, System, SystemState, stability};
-use crate::output::csv::write_discs_csv;
+use crate::model::{Model, System, stability};
+use crate::output::csv::write_discs_csv_by_ids;
 use crate::output::write_json;
 use serde_json::json;
 use std::sync::Arc;
@@ -84,79 +84,99 @@ pub(super) fn ranks_record(d: &Decomposed) -> serde_json::Value {
     })
 }
 
-/// Rank 0's whole model set to the gathered state (collective).
-fn gather(d: &Decomposed, model: &mut Option<Model>) -> Result<(), RunError> {
-    if let (Some(state), Some(model)) = (d.gather(), model.as_mut()) {
-        let st = ModelState {
-            step: state.step,
-            system: SystemState::Granular(Box::new(state)),
-        };
-        model.restore_state(&st)?;
-    }
-    Ok(())
+/// `f` of the whole model (collective): rank 0's model holds the
+/// assembly gathered from the ranks while `f` runs, then its assembly
+/// without discs again; `None` on the other ranks.
+fn with_whole<T>(
+    d: &Decomposed,
+    model: &mut Option<Model>,
+    f: impl FnOnce(&Model) -> T,
+) -> Option<T> {
+    let model = model.as_mut();
+    let skeleton = model.as_ref().map_or(&d.part, |m| granular(m));
+    let whole = d.gather_whole(skeleton)?;
+    let model = model.expect("rank 0 has the model");
+    let System::Granular(g) = &mut model.system else {
+        unreachable!("a granular model")
+    };
+    let skeleton = std::mem::replace(&mut **g, whole);
+    model.step = d.part.step;
+    let r = f(model);
+    let System::Granular(g) = &mut model.system else {
+        unreachable!("a granular model")
+    };
+    **g = skeleton;
+    Some(r)
 }
 
 /// Run a granular scenario divided over the ranks of `comm` (every rank
 /// calls it with the same scenario, options and freshly built or restored
 /// `model`). Rank 0 writes the outputs and returns the summary; the
-/// others return `Null`.
+/// others return `Null`. No rank keeps the whole assembly: rank 0's
+/// model keeps its walls, laws and clock without discs, and holds the
+/// whole only while a frame or a checkpoint is written.
 pub(super) fn run(
     run: Run,
-    model: Model,
+    mut model: Model,
     comm: Arc<dyn Comm>,
 ) -> Result<serde_json::Value, RunError> {
     let root = comm.rank() == 0;
-    let mut whole = model;
-    if let System::Granular(g) = &mut whole.system {
-        g.prepare_contacts();
-    }
-    let steps = whole.steps;
-    let warnings: Vec<String> = granular(&whole).dt_warning(&[]).into_iter().collect();
+    let steps = model.steps;
+    let warnings: Vec<String> = granular(&model).dt_warning(&[]).into_iter().collect();
     if root && run.opts.warn {
         warnings.iter().for_each(|w| eprintln!("warning: {w}"));
     }
-    let mut d = Decomposed::new(granular(&whole), comm.clone());
-    let mut model = root.then_some(whole);
+    // the critical step of the discs' constants (the same at the end)
+    let crit = granular(&model).critical_step(&[]);
+    // the whole's contact list is never built: each part builds its own
+    // (`Decomposed::prepare`)
+    let mut d = Decomposed::new(granular(&model), comm.clone());
+    let mut model = root.then(|| {
+        if let System::Granular(g) = &mut model.system {
+            **g = g.with_discs(Default::default());
+        }
+        model
+    });
     let res = drive(&run, &mut d, &mut model, steps);
     // the end's outputs, timed apart from the steps
     let t0 = Instant::now();
-    let res = res.and_then(|r| gather(&d, &mut model).map(|()| r));
-    let ranks = ranks_record(&d);
-    let res = match (res, model) {
-        (Ok((ended, wall_s, start)), Some(model)) => {
-            let mut s = summary(&run, &model, warnings, wall_s, model.step - start);
-            s["ranks"] = ranks;
-            finish(&run, &model, ended, s, t0)
+    let res = res.and_then(|r| {
+        let ended = !matches!(r.0, Ended::Unstable(_));
+        let path = run.opts.out_dir.join("discs_final.csv");
+        let path = (root && ended).then_some(path.as_path());
+        // every rank takes part in the gathers, or none (an unstable end)
+        if ended {
+            write_discs_csv_by_ids(path, d.total(), |ids| d.gather_ids(ids))?;
         }
-        (Ok(_), None) => Ok(serde_json::Value::Null),
-        (Err(e), _) => Err(e),
+        Ok(r)
+    });
+    let facts = facts(&mut d, crit);
+    let ranks = ranks_record(&d);
+    let res = match (res, model, facts) {
+        (Ok((ended, wall_s, start)), Some(mut model), Some(facts)) => {
+            model.step = d.part.step;
+            let took = (warnings, wall_s, d.part.step - start);
+            let mut s = summary_of(&run, &d.part, steps, &facts, took);
+            s["ranks"] = ranks;
+            finish(&model, ended, s, (facts.discs, t0), &run)
+        }
+        (Ok(_), _, _) => Ok(serde_json::Value::Null),
+        (Err(e), _, _) => Err(e),
     };
     agree(&*comm, res)
 }
 
-/// The history row of the present state (collective), on rank 0: each
-/// probe's [shares](probe::share) of every rank merged in rank order and
-/// finished (bitwise the value of the undivided assembly: exact sums,
-/// counts, the owner's value).
-fn reduced_row(run: &Run, d: &mut Decomposed, row: &mut [f64]) -> bool {
-    row[0] = d.part.step as f64;
-    row[1] = d.part.time;
-    if run.probes.is_empty() {
-        return d.comm().rank() == 0;
-    }
-    d.ready_outputs();
+/// Every rank's shares merged on rank 0 (`None` on the others),
+/// collective.
+fn reduce(d: &Decomposed, shares: &[Share]) -> Option<Vec<Share>> {
     let mut mine = Vec::new();
-    for (_, p) in &run.probes {
-        probe::share(p, &d.part)
-            .expect("granular probes only")
-            .pack(&mut mine);
-    }
+    shares.iter().for_each(|s| s.pack(&mut mine));
     let bytes: Vec<u8> = mine.iter().flat_map(|x| x.to_le_bytes()).collect();
     let all = d.comm().all_gather(&bytes);
     if d.comm().rank() != 0 {
-        return false;
+        return None;
     }
-    let mut merged = vec![Share::default(); run.probes.len()];
+    let mut merged = vec![Share::default(); shares.len()];
     for b in &all {
         let v: Vec<f64> = b
             .chunks_exact(8)
@@ -167,6 +187,59 @@ fn reduced_row(run: &Run, d: &mut Decomposed, row: &mut [f64]) -> bool {
             m.merge(&Share::unpack(&mut rest));
         }
     }
+    Some(merged)
+}
+
+/// The summary's [`Facts`] of the whole assembly, reduced over the ranks
+/// (collective; on rank 0). Leaves the part ready for the summary
+/// ([`Decomposed::ready_outputs`]: the walls' totals of the whole).
+fn facts(d: &mut Decomposed, crit: crate::dem::critical::Critical) -> Option<Facts> {
+    d.ready_outputs();
+    let g = &d.part;
+    let p = &g.particles;
+    let own = |k: usize| p.fixity[k] & crate::dem::particles::GHOST == 0;
+    let (dd, dw) = g.touching();
+    let listed = g.contacts.pairs().filter(|&(i, _)| own(i)).count();
+    let share = Share {
+        sums: g.energy_sums(&p.vel, &p.omega).into_iter().collect(),
+        counts: vec![dd as u64, dw as u64, listed as u64, g.heap_bytes() as u64],
+        value: None,
+    };
+    let s = reduce(d, &[share])?.remove(0);
+    let c = |k: usize| s.counts[k] as usize;
+    Some(Facts {
+        discs: d.total(),
+        touching: (c(0), c(1)),
+        listed: c(2),
+        heap_bytes: c(3),
+        energies: crate::dem::Energies {
+            kinetic: s.sums[0].value(),
+            rotational: s.sums[1].value(),
+            spring: s.sums[2].value(),
+            gravity: s.sums[3].value(),
+            bond: 0.0,
+        },
+        crit,
+    })
+}
+
+/// The history row of the present state (collective), on rank 0: each
+/// probe's [shares](probe::share) of every rank merged and finished
+/// (bitwise the value of the undivided assembly: exact sums, counts, the
+/// owner's value). Whether this is rank 0.
+fn reduced_row(run: &Run, d: &mut Decomposed, row: &mut [f64]) -> bool {
+    row[0] = d.part.step as f64;
+    row[1] = d.part.time;
+    if run.probes.is_empty() {
+        return d.comm().rank() == 0;
+    }
+    d.ready_outputs();
+    let shares: Vec<Share> = (run.probes.iter())
+        .map(|(_, p)| probe::share(p, &d.part).expect("granular probes only"))
+        .collect();
+    let Some(merged) = reduce(d, &shares) else {
+        return false;
+    };
     for (k, ((_, p), m)) in run.probes.iter().zip(&merged).enumerate() {
         row[2 + k] = probe::finish(p, m, &d.part);
     }
@@ -223,12 +296,9 @@ fn drive(
             r = out.hist.row(&row).map_err(RunError::from);
         }
         if frame || ck {
-            r = r
-                .and(gather(d, model))
-                .and_then(|()| match (model.as_ref(), outputs.as_mut()) {
-                    (Some(m), Some(out)) => write(run, m, out, (frame, ck)),
-                    _ => Ok(()),
-                });
+            let out = outputs.as_mut();
+            let w = with_whole(d, model, |m| out.map(|o| write(run, m, o, (frame, ck))));
+            r = r.and(w.flatten().unwrap_or(Ok(())));
         }
         if let Err(e) = r {
             failed.get_or_insert(e);
@@ -252,11 +322,8 @@ fn drive(
         let (clean, stop) = d.step(signal != 0 || failed.is_some());
         let step = step + 1;
         if !clean {
-            if let Err(e) = gather(d, model) {
-                failed.get_or_insert(e);
-            }
             // rank 0 diagnoses; the others learn the end from it
-            let unstable = model.as_ref().and_then(|m| stability::check(m).err());
+            let unstable = with_whole(d, model, |m| stability::check(m).err()).flatten();
             break unstable.map_or(Ended::Completed, |i| Ended::Unstable(Box::new(i)));
         }
         let ck = stop || checkpoint_due(step, opts.checkpoint_every, steps);
@@ -282,21 +349,21 @@ fn drive(
     Ok((ended, wall_s, start))
 }
 
-/// Rank 0's end of the run: `discs_final.csv` and `summary.json`
-/// (`output_seconds`: from `t0`, the start of the end's gather, to the
-/// summary).
+/// Rank 0's end of the run: `summary.json` (`output_seconds`: from `t0`,
+/// the start of the end's outputs, to the summary; the peak memory per
+/// disc of the whole assembly's `discs`).
 fn finish(
-    run: &Run,
     model: &Model,
     ended: Ended,
     mut s: serde_json::Value,
-    t0: Instant,
+    (discs, t0): (usize, Instant),
+    run: &Run,
 ) -> Result<serde_json::Value, RunError> {
     let out = &run.opts.out_dir;
-    if !matches!(ended, Ended::Unstable(_)) {
-        write_discs_csv(granular(model), &out.join("discs_final.csv"))?;
-    }
     ended.record(&mut s, model);
+    if let Some(peak) = s["peak_memory_bytes"].as_f64() {
+        s["peak_bytes_per_disc"] = json!(peak / discs.max(1) as f64);
+    }
     s["output_seconds"] = json!(t0.elapsed().as_secs_f64());
     write_json(&out.join("summary.json"), &s)?;
     ended.result(s, model, out)
