@@ -709,13 +709,13 @@ impl Decomposed {
 
     /// The undivided assembly as it would be now, assembled on rank 0
     /// (`None` on the other ranks; collective) from `skeleton` (an
-    /// assembly of the run without discs, e.g. the whole's
-    /// `with_discs(Default::default())`): discs in slot (key) order, the
+    /// assembly of the run without discs, the whole's
+    /// [`with_same_discs`](Granular::with_same_discs)): discs in slot (key) order, the
     /// pair list, histories, walls with their global totals. Rank 0 holds
     /// it only as long as the caller keeps it (frames, checkpoints).
     pub fn gather_whole(&self, skeleton: &Granular) -> Option<Granular> {
         let (state, particles) = self.gather_parts()?;
-        let mut whole = skeleton.with_discs(particles);
+        let mut whole = skeleton.with_same_discs(particles);
         whole
             .restore_state(&state)
             .expect("the gathered state fits the gathered discs");

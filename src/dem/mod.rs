@@ -335,6 +335,15 @@ impl Granular {
         }
     }
 
+    /// [`with_discs`](Self::with_discs) keeping the discs' start positions
+    /// (by id, for [`displacement`](Self::displacement)): the assembly
+    /// without its discs, or with the same discs gathered again.
+    pub fn with_same_discs(&self, particles: Particles) -> Granular {
+        let mut g = self.with_discs(particles);
+        g.start.clone_from(&self.start);
+        g
+    }
+
     /// Displacement of the disc in `slot` since the assembly was made (for a
     /// scenario: since t = 0, after any preparation).
     pub fn displacement(&self, slot: usize) -> Vec2 {

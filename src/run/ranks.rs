@@ -133,11 +133,11 @@ pub(super) fn run(
     let mut d = Decomposed::new(granular(&model), comm.clone());
     let mut model = root.then(|| {
         if let System::Granular(g) = &mut model.system {
-            **g = g.with_discs(Default::default());
+            **g = g.with_same_discs(Default::default());
         }
         model
     });
-    let res = drive(&run, &mut d, &mut model, steps);
+    let res = drive_granular(&run, &mut d, &mut model, steps);
     // the end's outputs, timed apart from the steps
     let t0 = Instant::now();
     let res = res.and_then(|r| {
@@ -264,74 +264,92 @@ fn write(
     Ok(())
 }
 
-/// The step loop (collective): how it ended, its wall-clock seconds and
-/// its first step. Rank 0's failures (an output that cannot be written)
-/// stop every rank at the next step.
-fn drive(
-    run: &Run,
-    d: &mut Decomposed,
-    model: &mut Option<Model>,
-    steps: usize,
-) -> Result<(Ended, f64, usize), RunError> {
-    let (sc, opts) = (run.sc, run.opts);
-    // bonded scenarios do not run on several ranks
-    let cols = columns(run, false);
-    let mut row = vec![0.0; cols.len()];
-    let opened = model
-        .as_ref()
-        .map(|m| Outputs::open(run, m, &cols))
-        .transpose();
-    let mut outputs = agree(d.comm(), opened)?;
-    let (every, vtk_every) = (sc.output.every.max(1), sc.output.vtk_every);
-    let mut failed: Option<RunError> = None;
-    // the row reduced, the whole gathered for frames and checkpoints
-    // (collective), then rank 0 writes; its failure is kept
-    let mut output = |d: &mut Decomposed,
-                      model: &mut Option<Model>,
-                      (rec, frame, ck): (bool, bool, bool),
-                      failed: &mut Option<_>| {
-        let root = rec && reduced_row(run, d, &mut row);
-        let mut r = Ok(());
-        if root && let Some(out) = outputs.as_mut() {
-            r = out.hist.row(&row).map_err(RunError::from);
-        }
-        if frame || ck {
-            let out = outputs.as_mut();
-            let w = with_whole(d, model, |m| out.map(|o| write(run, m, o, (frame, ck))));
-            r = r.and(w.flatten().unwrap_or(Ok(())));
-        }
-        if let Err(e) = r {
-            failed.get_or_insert(e);
-        }
-    };
-    if run.restart.is_none() {
-        // the start state, as the one-rank run records it
-        d.prepare();
-        output(d, model, (true, vtk_every > 0, false), &mut failed);
+/// What a step taken on ranks came to ([`RankRun::step`]).
+pub(super) enum Stepped {
+    /// The step was taken; `stop`: a rank saw the stop flag.
+    Taken {
+        /// A rank saw the stop flag.
+        stop: bool,
+    },
+    /// The run ends here (an unphysical state, a failed step): the step
+    /// is not recorded.
+    Ended(Ended),
+}
+
+/// The outputs due after a step: a history row, a frame, a checkpoint.
+#[derive(Clone, Copy)]
+pub(super) struct Due {
+    /// A history row.
+    pub row: bool,
+    /// A frame.
+    pub frame: bool,
+    /// A checkpoint (periodic, or the stop's).
+    pub checkpoint: bool,
+}
+
+impl Due {
+    /// Any output.
+    pub fn any(self) -> bool {
+        self.row || self.frame || self.checkpoint
     }
-    let start = d.part.step;
-    let mut progress = Progress::new(start, steps, opts.quiet || model.is_none());
-    let t0 = Instant::now();
+}
+
+/// A run divided over ranks as [`drive`] steps it: the granular run
+/// ([`GranularRanks`]) or the coupled one
+/// (`coupled::on_ranks::CoupledRanks`). Every method is collective.
+pub(super) trait RankRun {
+    /// The step count and the time now.
+    fn clock(&self) -> (usize, f64);
+    /// One step; `flag` (a stop request, a failed output) is or-ed over
+    /// the ranks.
+    fn step(&mut self, flag: bool) -> Result<Stepped, RunError>;
+    /// Warnings of the last step, for rank 0 to print.
+    fn notices(&mut self) -> Vec<String> {
+        Vec::new()
+    }
+    /// The outputs after `step` (rank 0 writes them).
+    fn after_step(&mut self, step: usize, due: Due) -> Result<(), RunError>;
+}
+
+/// The step loop of a run on ranks (collective) up to `steps`, history
+/// rows every `every` steps: signals, checkpoints, progress; rank 0's
+/// failures (an output that cannot be written, `first` that of the
+/// outputs before the loop) stop every rank at the next step.
+pub(super) fn drive(
+    run: &Run,
+    x: &mut impl RankRun,
+    (steps, every): (usize, usize),
+    root: bool,
+    first: Result<(), RunError>,
+) -> Result<Ended, RunError> {
+    let opts = run.opts;
+    let vtk_every = run.sc.output.vtk_every;
+    let mut progress = Progress::new(x.clock().0, steps, opts.quiet || !root);
+    let mut failed = first.err();
     let ended = loop {
-        let step = d.part.step;
+        let step = x.clock().0;
         if step >= steps {
             break Ended::Completed;
         }
-        d.part.store_forces = due(step + 1, vtk_every, steps);
         let signal = opts.stop.as_ref().map_or(0, |s| s.load(Ordering::Relaxed));
-        let (clean, stop) = d.step(signal != 0 || failed.is_some());
+        let stepped = x.step(signal != 0 || failed.is_some())?;
+        for n in x.notices().iter().filter(|_| root) {
+            progress.warn(&format!("warning: {n}"));
+        }
+        let stop = match stepped {
+            Stepped::Ended(e) => break e,
+            Stepped::Taken { stop } => stop,
+        };
         let step = step + 1;
-        if !clean {
-            // rank 0 diagnoses; the others learn the end from it
-            let unstable = with_whole(d, model, |m| stability::check(m).err()).flatten();
-            break unstable.map_or(Ended::Completed, |i| Ended::Unstable(Box::new(i)));
+        let d = Due {
+            row: due(step, every, steps),
+            frame: due(step, vtk_every, steps),
+            checkpoint: stop || checkpoint_due(step, opts.checkpoint_every, steps),
+        };
+        if let Err(e) = x.after_step(step, d) {
+            failed.get_or_insert(e);
         }
-        let ck = stop || checkpoint_due(step, opts.checkpoint_every, steps);
-        let due = (due(step, every, steps), due(step, vtk_every, steps), ck);
-        if due.0 || due.1 || due.2 {
-            output(d, model, due, &mut failed);
-        }
-        progress.update(step, d.part.time);
+        progress.update(step, x.clock().1);
         run.last_step.set(step);
         if stop {
             // a stop that another rank saw: SIGINT, as mpirun forwards it
@@ -339,11 +357,109 @@ fn drive(
         }
     };
     progress.finish();
-    let wall_s = t0.elapsed().as_secs_f64();
-    if let Some(e) = failed {
-        return Err(e);
+    match failed {
+        Some(e) => Err(e),
+        None => Ok(ended),
     }
-    if let Some(out) = outputs.as_mut() {
+}
+
+/// A granular run on ranks as [`drive`] steps it.
+struct GranularRanks<'a> {
+    run: &'a Run<'a>,
+    d: &'a mut Decomposed,
+    /// Rank 0's model (without discs between outputs).
+    model: &'a mut Option<Model>,
+    /// Rank 0's files.
+    outputs: Option<Outputs>,
+    row: Vec<f64>,
+    steps: usize,
+}
+
+impl GranularRanks<'_> {
+    /// The outputs `due` now: the row reduced, the whole gathered for
+    /// frames and checkpoints, then rank 0 writes.
+    fn output(&mut self, due: Due) -> Result<(), RunError> {
+        let root = due.row && reduced_row(self.run, self.d, &mut self.row);
+        let mut r = Ok(());
+        if root && let Some(out) = self.outputs.as_mut() {
+            r = out.hist.row(&self.row).map_err(RunError::from);
+        }
+        if due.frame || due.checkpoint {
+            let (run, out) = (self.run, self.outputs.as_mut());
+            let fc = (due.frame, due.checkpoint);
+            let w = with_whole(self.d, self.model, |m| out.map(|o| write(run, m, o, fc)));
+            r = r.and(w.flatten().unwrap_or(Ok(())));
+        }
+        r
+    }
+}
+
+impl RankRun for GranularRanks<'_> {
+    fn clock(&self) -> (usize, f64) {
+        (self.d.part.step, self.d.part.time)
+    }
+
+    fn step(&mut self, flag: bool) -> Result<Stepped, RunError> {
+        let vtk_every = self.run.sc.output.vtk_every;
+        // disc forces are only read by the frames
+        self.d.part.store_forces = due(self.d.part.step + 1, vtk_every, self.steps);
+        let (clean, stop) = self.d.step(flag);
+        if clean {
+            return Ok(Stepped::Taken { stop });
+        }
+        // rank 0 diagnoses; the others learn the end from it
+        let unstable = with_whole(self.d, self.model, |m| stability::check(m).err()).flatten();
+        Ok(Stepped::Ended(unstable.map_or(Ended::Completed, |i| {
+            Ended::Unstable(Box::new(i))
+        })))
+    }
+
+    fn after_step(&mut self, _: usize, due: Due) -> Result<(), RunError> {
+        if due.any() { self.output(due) } else { Ok(()) }
+    }
+}
+
+/// The granular step loop (collective): how it ended, its wall-clock
+/// seconds and its first step.
+fn drive_granular(
+    run: &Run,
+    d: &mut Decomposed,
+    model: &mut Option<Model>,
+    steps: usize,
+) -> Result<(Ended, f64, usize), RunError> {
+    // bonded scenarios do not run on several ranks
+    let cols = columns(run, false);
+    let opened = model
+        .as_ref()
+        .map(|m| Outputs::open(run, m, &cols))
+        .transpose();
+    let outputs = agree(d.comm(), opened)?;
+    let root = model.is_some();
+    let mut x = GranularRanks {
+        run,
+        d,
+        model,
+        outputs,
+        row: vec![0.0; cols.len()],
+        steps,
+    };
+    let mut first = Ok(());
+    if run.restart.is_none() {
+        // the start state, as the one-rank run records it
+        x.d.prepare();
+        let start = Due {
+            row: true,
+            frame: run.sc.output.vtk_every > 0,
+            checkpoint: false,
+        };
+        first = x.output(start);
+    }
+    let start = x.d.part.step;
+    let t0 = Instant::now();
+    let every = run.sc.output.every.max(1);
+    let ended = drive(run, &mut x, (steps, every), root, first)?;
+    let wall_s = t0.elapsed().as_secs_f64();
+    if let Some(out) = x.outputs.as_mut() {
         out.hist.flush()?;
     }
     Ok((ended, wall_s, start))
