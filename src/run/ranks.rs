@@ -140,12 +140,14 @@ pub(super) fn run(
     let res = drive_granular(&run, &mut d, &mut model, steps);
     // the end's outputs, timed apart from the steps
     let t0 = Instant::now();
+    // rank 0 decides (only it knows an instability or a failed output);
+    // every rank takes part in the gathers, or none
+    let write = matches!(&res, Ok((e, ..)) if !matches!(e, Ended::Unstable(_)));
+    let write = comm.all_gather(&[write as u8])[0][0] != 0;
     let res = res.and_then(|r| {
-        let ended = !matches!(r.0, Ended::Unstable(_));
-        let path = run.opts.out_dir.join("discs_final.csv");
-        let path = (root && ended).then_some(path.as_path());
-        // every rank takes part in the gathers, or none (an unstable end)
-        if ended {
+        if write {
+            let path = run.opts.out_dir.join("discs_final.csv");
+            let path = root.then_some(path.as_path());
             write_discs_csv_by_ids(path, d.total(), |ids| d.gather_ids(ids))?;
         }
         Ok(r)
