@@ -284,6 +284,22 @@ quantity = "contacts"
 name = "y7"
 disc = 7
 quantity = "y"
+[[probe]]
+name = "er"
+quantity = "rotational"
+[[probe]]
+name = "eg"
+quantity = "gravity_energy"
+[[probe]]
+name = "et"
+quantity = "total_energy"
+[[probe]]
+name = "f12"
+contact = [1, 2]
+quantity = "normal_total"
+[[measure]]
+name = "mid"
+rectangle = [[0.05, 0.0], [0.15, 0.15]]
 "#;
     let src = settling(600).replace("steps = 1\n", "steps = 4000\n") + probes;
     let sc = scenario::parse(&src, "t.toml").unwrap_or_else(|e| panic!("{e}"));
@@ -295,6 +311,16 @@ quantity = "y"
     let read = |d: &str, f: &str| std::fs::read(dir.join(d).join(f)).unwrap();
     let hist = String::from_utf8(read("one", "history.csv")).unwrap();
     println!("{}", hist.lines().last().unwrap());
+    // the region's columns measure a settled bed (not a vacuous match):
+    // stress, porosity, coordination and fabric from its contacts
+    let head: Vec<&str> = hist.lines().next().unwrap().split(',').collect();
+    let last: Vec<f64> = (hist.lines().last().unwrap().split(','))
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let col = |name: &str| last[head.iter().position(|h| *h == name).unwrap()];
+    assert!(col("mid_syy_cpos") > 0.0 && col("mid_coordination") > 2.0);
+    assert!((col("mid_fxx") + col("mid_fyy") - 1.0).abs() < 1e-12);
+    assert!(col("mid_porosity") > 0.1 && col("mid_porosity") < 0.9);
     let on = |ranks: usize, opts: &efgdem::run::RunOptions| {
         std::thread::scope(|s| {
             for c in Threads::group(ranks) {
@@ -319,6 +345,19 @@ quantity = "y"
         let s: serde_json::Value = serde_json::from_slice(&read(&name, "summary.json")).unwrap();
         assert_eq!(s["ranks"]["count"], ranks);
         assert_eq!(s["status"], "completed");
+        // the summary's account of the discs, reduced over the ranks: that
+        // of one process, bitwise
+        let one: serde_json::Value = serde_json::from_slice(&read("one", "summary.json")).unwrap();
+        for k in [
+            "discs",
+            "energies",
+            "contacts",
+            "wall_forces",
+            "critical_dt",
+            "time",
+        ] {
+            assert_eq!(s[k], one[k], "{ranks} ranks: summary {k}");
+        }
     }
     // a checkpoint written on 3 ranks continues on 2 (and on 1) as if
     // the run had never stopped

@@ -344,6 +344,29 @@ impl Decomposed {
         (!bad, any)
     }
 
+    /// Make the part ready for outputs reduced over the ranks (shares of
+    /// probes, `crate::model::probe::share`), collective: the ghosts
+    /// refreshed from their owners and every wall's totals summed as the
+    /// whole sums them (terms merged in key order). The steps are not
+    /// changed by it.
+    pub fn ready_outputs(&mut self) {
+        self.refresh_ghosts();
+        let mut out = Pack::default();
+        for t in self.part.wall_terms() {
+            pack_term(&mut out, self.key[t.disc as usize], &t);
+        }
+        let all = self.comm.all_gather(&out.0);
+        let mut merged = Vec::new();
+        for b in &all {
+            let mut u = Unpack(b);
+            while !u.is_empty() {
+                merged.push(unpack_term(&mut u));
+            }
+        }
+        merged.sort_by_key(|(k, t)| (*k, t.wall));
+        self.part.set_wall_totals(merged.iter().map(|(_, t)| t));
+    }
+
     /// Refresh every ghost from its owner: position, velocity, spin.
     fn refresh_ghosts(&mut self) {
         const B: usize = 40;
@@ -684,10 +707,30 @@ impl Decomposed {
         self.part.contacts = list;
     }
 
+    /// The undivided assembly as it would be now, assembled on rank 0
+    /// (`None` on the other ranks; collective) from `skeleton` (an
+    /// assembly of the run without discs, the whole's
+    /// [`with_same_discs`](Granular::with_same_discs)): discs in slot (key) order, the
+    /// pair list, histories, walls with their global totals. Rank 0 holds
+    /// it only as long as the caller keeps it (frames, checkpoints).
+    pub fn gather_whole(&self, skeleton: &Granular) -> Option<Granular> {
+        let (state, particles) = self.gather_parts()?;
+        let mut whole = skeleton.with_same_discs(particles);
+        whole
+            .restore_state(&state)
+            .expect("the gathered state fits the gathered discs");
+        Some(whole)
+    }
+
     /// The state the undivided assembly would have now, assembled on rank
     /// 0 (`None` on the other ranks); collective. Discs in slot (key)
     /// order, the pair list sorted, walls with their global totals.
     pub fn gather(&self) -> Option<GranularState> {
+        self.gather_parts().map(|(state, _)| state)
+    }
+
+    /// [`gather`](Self::gather), and the discs with their constants.
+    fn gather_parts(&self) -> Option<(GranularState, Particles)> {
         let me = self.comm.rank();
         let g = &self.part;
         let p = &g.particles;
@@ -699,14 +742,7 @@ impl Decomposed {
         let owned: Vec<usize> = (0..n).filter(|&s| p.fixity[s] & GHOST == 0).collect();
         b.u32(owned.len() as u32);
         for &s in &owned {
-            b.u64(self.key[s]);
-            b.u32(p.id[s]);
-            b.vec2(p.pos[s]);
-            b.vec2(p.vel[s]);
-            b.f64(p.theta[s]);
-            b.f64(p.omega[s]);
-            b.vec2(p.force[s]);
-            b.f64(p.torque[s]);
+            pack_disc(&mut b, p, s, self.key[s], true);
             b.vec2(if has_ref {
                 g.grid.ref_pos[s]
             } else {
@@ -744,22 +780,18 @@ impl Decomposed {
     }
 
     /// [`gather`](Self::gather) on rank 0: every rank's records merged.
-    fn assemble(&self, got: &[Vec<u8>], has_ref: bool) -> GranularState {
+    fn assemble(&self, got: &[Vec<u8>], has_ref: bool) -> (GranularState, Particles) {
         let g = &self.part;
         let rolling = g.contacts.rolling;
-        type Disc = (u64, u32, [Vec2; 2], f64, f64, Vec2, f64, Vec2);
-        let mut discs: Vec<Disc> = Vec::with_capacity(self.n_total);
+        let mut discs: Vec<(Record, Vec2)> = Vec::with_capacity(self.n_total);
         let mut pairs: Vec<(u64, u64, f64, f64)> = Vec::new();
         let mut wall_pairs: Vec<(u64, u32, f64, f64)> = Vec::new();
         let mut terms = Vec::new();
         for b in got {
             let mut u = Unpack(b);
             for _ in 0..u.u32() {
-                let (key, id) = (u.u64(), u.u32());
-                let (pos, vel) = (u.vec2(), u.vec2());
-                let (theta, omega) = (u.f64(), u.f64());
-                let (force, torque) = (u.vec2(), u.f64());
-                discs.push((key, id, [pos, vel], theta, omega, force, torque, u.vec2()));
+                let r = unpack_disc(&mut u);
+                discs.push((r, u.vec2()));
             }
             for _ in 0..u.u32() {
                 pairs.push((u.u64(), u.u64(), u.f64(), u.f64()));
@@ -771,13 +803,14 @@ impl Decomposed {
                 terms.push(unpack_term(&mut u));
             }
         }
-        discs.sort_unstable_by_key(|d| d.0);
-        let keys: Vec<u64> = discs.iter().map(|d| d.0).collect();
+        discs.sort_unstable_by_key(|d| d.0.key);
+        let keys: Vec<u64> = discs.iter().map(|d| d.0.key).collect();
         let slot = |k: u64| keys.partition_point(|&x| x < k) as u32;
         let mut pk: Vec<([u32; 2], f64, f64)> = pairs
             .iter()
             .map(|&(a, b, fs, mr)| ([slot(a), slot(b)], fs, mr))
             .collect();
+        drop(pairs);
         pk.sort_unstable_by_key(|e| e.0);
         let mut wp: Vec<WallPairState> = wall_pairs
             .iter()
@@ -798,20 +831,30 @@ impl Decomposed {
             tmp.set_wall_totals(terms.iter().map(|(_, t)| t));
             walls = tmp.walls;
         }
-        GranularState {
+        let ref_pos = if has_ref {
+            discs.iter().map(|d| d.1).collect()
+        } else {
+            Vec::new()
+        };
+        let records: Vec<Record> = discs.into_iter().map(|d| d.0).collect();
+        let sources: Vec<Src> = (0..records.len() as u32).map(Src::Got).collect();
+        let particles = take_discs(&Particles::default(), &sources, &records, self.n_total);
+        drop(records);
+        let p = &particles;
+        let state = GranularState {
             // bonded and clumped assemblies are not decomposed
             bonds: Default::default(),
             clumps: Default::default(),
             step: g.step,
             time: g.time,
             max_disp: g.max_disp,
-            id: discs.iter().map(|d| d.1).collect(),
-            pos: discs.iter().map(|d| d.2[0]).collect(),
-            vel: discs.iter().map(|d| d.2[1]).collect(),
-            theta: discs.iter().map(|d| d.3).collect(),
-            omega: discs.iter().map(|d| d.4).collect(),
-            force: discs.iter().map(|d| d.5).collect(),
-            torque: discs.iter().map(|d| d.6).collect(),
+            id: p.id.clone(),
+            pos: p.pos.clone(),
+            vel: p.vel.clone(),
+            theta: p.theta.clone(),
+            omega: p.omega.clone(),
+            force: p.force.clone(),
+            torque: p.torque.clone(),
             walls: walls.iter().map(WallState::from).collect(),
             pairs: pk.iter().map(|e| e.0).collect(),
             shear: pk.iter().map(|e| e.1).collect(),
@@ -822,15 +865,44 @@ impl Decomposed {
                 Vec::new()
             },
             wall_pairs: wp,
-            ref_pos: if has_ref {
-                discs.iter().map(|d| d.7).collect()
-            } else {
-                Vec::new()
-            },
+            ref_pos,
             wall_ref: g.grid.wall_ref.clone(),
             rebuilds: g.grid.rebuilds,
             stale: g.grid.stale,
+        };
+        (state, particles)
+    }
+
+    /// Position and radius of the discs with ids `ids`, on rank 0 (`None`
+    /// on the others); collective. Each rank sends those it owns: a file
+    /// of every disc is written a range of ids at a time, without the
+    /// whole assembly on any rank.
+    pub fn gather_ids(&self, ids: std::ops::Range<usize>) -> Option<Vec<(Vec2, f64)>> {
+        let p = &self.part.particles;
+        let mut b = Pack::default();
+        for id in ids.clone() {
+            let s = p.slot.get(id).map_or(usize::MAX, |&s| s as usize);
+            if s < p.len() && p.fixity[s] & GHOST == 0 {
+                b.u32(id as u32);
+                b.vec2(p.pos[s]);
+                b.f64(p.radius[s]);
+            }
         }
+        let mut send = vec![Vec::new(); self.comm.size()];
+        send[0] = b.0;
+        let got = self.comm.all_to_all(send);
+        if self.comm.rank() != 0 {
+            return None;
+        }
+        let mut out = vec![(Vec2::ZERO, f64::NAN); ids.len()];
+        for b in &got {
+            let mut u = Unpack(b);
+            while !u.is_empty() {
+                let id = u.u32() as usize;
+                out[id - ids.start] = (u.vec2(), u.f64());
+            }
+        }
+        Some(out)
     }
 }
 

@@ -45,7 +45,9 @@
 use super::Granular;
 use super::clumps::NO_CLUMP;
 use super::contact::normal_between;
+use super::particles::GHOST;
 use crate::geom::Vec2;
+use crate::geom::exact_sum::ExactSum;
 
 /// The region of a measurement.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -266,6 +268,12 @@ impl ContactMeasure {
 /// the discs' areas), so that a clump inside the region counts its area
 /// once.
 pub fn porosity(g: &Granular, region: &Region) -> f64 {
+    1.0 - solid_area(g, region).value() / region.area()
+}
+
+/// `Σ_p |disc_p ∩ region|` of [`porosity`], exactly, over the discs that
+/// are not ghosts (a part's share, see [`Granular::energy_sums`]).
+pub fn solid_area(g: &Granular, region: &Region) -> ExactSum {
     let p = &g.particles;
     let c = &g.clumps;
     let share: Vec<f64> = (0..c.len())
@@ -278,7 +286,8 @@ pub fn porosity(g: &Granular, region: &Region) -> f64 {
             c.mass[k] / discs
         })
         .collect();
-    let solid: f64 = (0..p.len())
+    (0..p.len())
+        .filter(|&k| p.fixity[k] & GHOST == 0)
         .map(|k| {
             let a = region.disc_area_inside(p.pos[k], p.radius[k]);
             match p.clump[k] {
@@ -286,40 +295,93 @@ pub fn porosity(g: &Granular, region: &Region) -> f64 {
                 ck => a * share[ck as usize],
             }
         })
-        .sum();
-    1.0 - solid / region.area()
+        .collect()
+}
+
+/// The sums of a region's [`ContactMeasure`]: `Σ f ⊗ l` as `[xx, xy, yx,
+/// yy]`, `Σ n ⊗ n` as `[xx, yy, xy]` (exact sums), the contacts and the
+/// discs. Those of the parts of a divided assembly, merged, are those of
+/// the whole.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ContactSums {
+    /// `Σ f ⊗ l` as `[xx, xy, yx, yy]`.
+    pub fl: [ExactSum; 4],
+    /// `Σ n ⊗ n` as `[xx, yy, xy]`.
+    pub nn: [ExactSum; 3],
+    /// Contacts, N_c.
+    pub contacts: usize,
+    /// Discs with centre inside, N_p.
+    pub discs: usize,
+}
+
+impl ContactSums {
+    /// Add the sums of another part.
+    pub fn merge(&mut self, o: &ContactSums) {
+        self.fl.iter_mut().zip(&o.fl).for_each(|(a, b)| a.merge(b));
+        self.nn.iter_mut().zip(&o.nn).for_each(|(a, b)| a.merge(b));
+        self.contacts += o.contacts;
+        self.discs += o.discs;
+    }
+
+    /// The measurement of `region` (of an assembly `thickness` thick).
+    pub fn finish(&self, region: &Region, thickness: f64) -> ContactMeasure {
+        let s = self.fl.each_ref().map(ExactSum::value);
+        let fab = self.nn.each_ref().map(ExactSum::value);
+        let (nc, np) = (self.contacts, self.discs);
+        let at = -1.0 / (region.area() * thickness);
+        let per = |v: f64, n: usize| if n > 0 { v / n as f64 } else { 0.0 };
+        ContactMeasure {
+            stress: [s[0] * at, s[3] * at, 0.5 * (s[1] + s[2]) * at],
+            coordination: per(nc as f64, np),
+            fabric: [per(fab[0], nc), per(fab[1], nc), per(fab[2], nc)],
+            discs: np,
+            contacts: nc,
+        }
+    }
 }
 
 /// Love–Weber stress, coordination number and fabric of the discs whose
 /// centre is in `region` ([module](self)), from the present state, their
 /// disc–disc and disc–wall contacts and the `outer` contacts (disc–body).
-/// One pass over the contact list, no allocation.
 pub fn contacts(
     g: &Granular,
     region: &Region,
     outer: impl IntoIterator<Item = OuterContact>,
 ) -> ContactMeasure {
+    contact_sums(g, region, outer).finish(region, g.thickness)
+}
+
+/// The sums behind [`contacts`], over the discs that are not ghosts and
+/// the pairs whose first disc is not one (a part's share, see
+/// [`Granular::energy_sums`]). One pass over the contact list.
+pub fn contact_sums(
+    g: &Granular,
+    region: &Region,
+    outer: impl IntoIterator<Item = OuterContact>,
+) -> ContactSums {
     let p = &g.particles;
+    let own = |k: usize| p.fixity[k] & GHOST == 0;
     // the centre of the body disc k belongs to: a clump's, or its own
     let centre = |k: usize| match p.clump[k] {
         NO_CLUMP => p.pos[k],
         c => g.clumps.pos[c as usize],
     };
-    // Σ f ⊗ l as [xx, xy, yx, yy], Σ n ⊗ n as [xx, yy, xy], N_c
-    let mut s = [0.0f64; 4];
-    let mut fab = [0.0f64; 3];
-    let mut nc = 0usize;
+    let mut sums = ContactSums::default();
     let mut add = |f: Vec2, l: Vec2, n: Vec2| {
-        s[0] += f.x * l.x;
-        s[1] += f.x * l.y;
-        s[2] += f.y * l.x;
-        s[3] += f.y * l.y;
-        fab[0] += n.x * n.x;
-        fab[1] += n.y * n.y;
-        fab[2] += n.x * n.y;
-        nc += 1;
+        let s = &mut sums;
+        s.fl[0].add(f.x * l.x);
+        s.fl[1].add(f.x * l.y);
+        s.fl[2].add(f.y * l.x);
+        s.fl[3].add(f.y * l.y);
+        s.nn[0].add(n.x * n.x);
+        s.nn[1].add(n.y * n.y);
+        s.nn[2].add(n.x * n.y);
+        s.contacts += 1;
     };
     for (k, (i, j)) in g.contacts.pairs().enumerate() {
+        if !own(i) {
+            continue;
+        }
         let (in_i, in_j) = (region.contains(p.pos[i]), region.contains(p.pos[j]));
         if !in_i && !in_j {
             continue;
@@ -342,7 +404,7 @@ pub fn contacts(
     }
     for q in &g.contacts.walls {
         let d = q.disc as usize;
-        if !region.contains(p.pos[d]) {
+        if !own(d) || !region.contains(p.pos[d]) {
             continue;
         }
         let Some(wc) = g.wall_contact(q) else {
@@ -352,20 +414,14 @@ pub fn contacts(
         add(n * (-fn_tot) + n.perp() * q.fs, c - centre(d), n);
     }
     for o in outer {
-        if region.contains(p.pos[o.slot]) {
+        if own(o.slot) && region.contains(p.pos[o.slot]) {
             add(o.force, o.point - centre(o.slot), o.normal);
         }
     }
-    let np = p.pos.iter().filter(|&&x| region.contains(x)).count();
-    let at = -1.0 / (region.area() * g.thickness);
-    let per = |v: f64, n: usize| if n > 0 { v / n as f64 } else { 0.0 };
-    ContactMeasure {
-        stress: [s[0] * at, s[3] * at, 0.5 * (s[1] + s[2]) * at],
-        coordination: per(nc as f64, np),
-        fabric: [per(fab[0], nc), per(fab[1], nc), per(fab[2], nc)],
-        discs: np,
-        contacts: nc,
-    }
+    sums.discs = (0..p.len())
+        .filter(|&k| own(k) && region.contains(p.pos[k]))
+        .count();
+    sums
 }
 
 #[cfg(test)]

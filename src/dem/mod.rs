@@ -42,6 +42,7 @@ pub mod sweep;
 pub mod walls;
 
 use crate::geom::Vec2;
+use crate::geom::exact_sum::ExactSum;
 
 /// `efgdem check` and `run` warn above this fraction of the critical step
 /// ([`Granular::critical_step`]).
@@ -332,6 +333,15 @@ impl Granular {
             last_check: None,
             start: Vec::new(),
         }
+    }
+
+    /// [`with_discs`](Self::with_discs) keeping the discs' start positions
+    /// (by id, for [`displacement`](Self::displacement)): the assembly
+    /// without its discs, or with the same discs gathered again.
+    pub fn with_same_discs(&self, particles: Particles) -> Granular {
+        let mut g = self.with_discs(particles);
+        g.start.clone_from(&self.start);
+        g
     }
 
     /// Displacement of the disc in `slot` since the assembly was made (for a
@@ -929,21 +939,38 @@ impl Granular {
     /// state after a step has positions at t + Δt and velocities at
     /// t + Δt/2; pass synchronous velocities for an exact energy balance.
     pub fn energies_with(&self, vel: &[Vec2], omega: &[f64]) -> Energies {
+        let s = self.energy_sums(vel, omega);
+        Energies {
+            kinetic: s[0].value(),
+            rotational: s[1].value(),
+            spring: s[2].value(),
+            gravity: s[3].value(),
+            bond: self.bonds.energy(self.thickness),
+        }
+    }
+
+    /// The exact sums behind [`energies_with`](Self::energies_with)
+    /// (kinetic, rotational, spring, gravity) over the discs that are not
+    /// ghosts and the pairs whose first disc is not one: the terms of a
+    /// part of a divided assembly, whose sums over the parts are exactly
+    /// those of the whole.
+    pub fn energy_sums(&self, vel: &[Vec2], omega: &[f64]) -> [ExactSum; 4] {
         let p = &self.particles;
-        let mut e = Energies::default();
-        for k in 0..p.len() {
+        let mut e: [ExactSum; 4] = Default::default();
+        let own = |k: usize| p.fixity[k] & particles::GHOST == 0;
+        for k in (0..p.len()).filter(|&k| own(k)) {
             if p.clump[k] != clumps::NO_CLUMP {
                 continue; // counted with its clump below
             }
-            e.kinetic += 0.5 * p.mass[k] * vel[k].norm2();
-            e.rotational += 0.5 * p.inertia[k] * omega[k] * omega[k];
-            e.gravity -= p.mass[k] * self.gravity.dot(p.pos[k]);
+            e[0].add(0.5 * p.mass[k] * vel[k].norm2());
+            e[1].add(0.5 * p.inertia[k] * omega[k] * omega[k]);
+            e[3].add(-(p.mass[k] * self.gravity.dot(p.pos[k])));
         }
         let c = &self.clumps;
         for k in 0..c.len() {
-            e.kinetic += 0.5 * c.mass[k] * c.vel[k].norm2();
-            e.rotational += 0.5 * c.inertia[k] * c.omega[k] * c.omega[k];
-            e.gravity -= c.mass[k] * self.gravity.dot(c.pos[k]);
+            e[0].add(0.5 * c.mass[k] * c.vel[k].norm2());
+            e[1].add(0.5 * c.inertia[k] * c.omega[k] * c.omega[k]);
+            e[3].add(-(c.mass[k] * self.gravity.dot(c.pos[k])));
         }
         let spring = |law: &ContactLaw, delta: f64, fs: f64| {
             if delta <= 0.0 {
@@ -958,26 +985,32 @@ impl Granular {
         let roll = &self.contacts.roll;
         let rolling = self.contacts.rolling && roll.len() == self.contacts.len();
         for (k, ((i, j), &fs)) in self.contacts.pairs().zip(&self.contacts.shear).enumerate() {
+            if !own(i) {
+                continue;
+            }
             let dist = (p.pos[j] - p.pos[i]).norm();
             let (ri, rj) = (p.radius[i], p.radius[j]);
             let law = self.law(i, j);
-            e.spring += spring(law, ri + rj - dist, fs);
+            e[2].add(spring(law, ri + rj - dist, fs));
             if rolling && ri + rj > dist {
-                e.spring += contact::rolling_energy(law, contact::rolling_radius(ri, rj), roll[k]);
+                e[2].add(contact::rolling_energy(
+                    law,
+                    contact::rolling_radius(ri, rj),
+                    roll[k],
+                ));
             }
         }
         let nm = self.materials.len();
-        for q in &self.contacts.walls {
+        for q in self.contacts.walls.iter().filter(|q| own(q.disc as usize)) {
             let d = q.disc as usize;
             let w = &self.walls[q.wall as usize];
             let dist = (w.closest(p.pos[d]) - p.pos[d]).norm();
             let law = &self.wall_laws[q.wall as usize * nm + p.material[d] as usize];
-            e.spring += spring(law, p.radius[d] - dist, q.fs);
+            e[2].add(spring(law, p.radius[d] - dist, q.fs));
             if q.mr != 0.0 && p.radius[d] > dist {
-                e.spring += contact::rolling_energy(law, p.radius[d], q.mr);
+                e[2].add(contact::rolling_energy(law, p.radius[d], q.mr));
             }
         }
-        e.bond = self.bonds.energy(self.thickness);
         e
     }
 
@@ -986,15 +1019,18 @@ impl Granular {
         self.energies_with(&self.particles.vel, &self.particles.omega)
     }
 
-    /// Number of listed pairs that are touching (disc–disc, disc–wall).
+    /// Number of listed pairs that are touching (disc–disc, disc–wall);
+    /// of a part of a divided assembly, those whose first disc is not a
+    /// ghost (see [`energy_sums`](Self::energy_sums)).
     pub fn touching(&self) -> (usize, usize) {
         let p = &self.particles;
+        let own = |k: usize| p.fixity[k] & particles::GHOST == 0;
         let dd = self
             .contacts
             .pairs()
             .filter(|&(i, j)| {
                 let r = p.radius[i] + p.radius[j];
-                (p.pos[j] - p.pos[i]).norm2() < r * r
+                own(i) && (p.pos[j] - p.pos[i]).norm2() < r * r
             })
             .count();
         let dw = self
@@ -1003,6 +1039,9 @@ impl Granular {
             .iter()
             .filter(|q| {
                 let d = q.disc as usize;
+                if !own(d) {
+                    return false;
+                }
                 let w = &self.walls[q.wall as usize];
                 (w.closest(p.pos[d]) - p.pos[d]).norm2() < p.radius[d] * p.radius[d]
             })

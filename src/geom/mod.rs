@@ -3,6 +3,7 @@
 //! triangulation ([`triangulate`]).
 
 pub mod crack;
+pub mod exact_sum;
 pub mod polygon;
 pub mod segment_index;
 pub mod triangulate;

@@ -8,6 +8,7 @@ use crate::dem::Granular;
 use crate::dem::measure::{self, OuterContact, Quantity, Region};
 use crate::dem::walls::Wall;
 use crate::geom::Vec2;
+use crate::geom::exact_sum::ExactSum;
 
 /// A quantity of the state, bound to its target.
 #[derive(Debug)]
@@ -148,24 +149,24 @@ impl Probe {
 /// the measurement), so a state changed in any other way is measured
 /// afresh.
 #[derive(Debug, Default)]
-pub struct MeasureMemo(std::sync::Mutex<Option<(u64, measure::ContactMeasure)>>);
+pub struct MeasureMemo(std::sync::Mutex<Option<(u64, measure::ContactSums)>>);
 
 impl MeasureMemo {
-    /// The measurement of `region` in this state, from the memo if the
-    /// state is the one it was taken from.
+    /// The sums of `region` in this state, from the memo if the state is
+    /// the one they were taken from.
     fn get(
         &self,
         g: &Granular,
         region: &Region,
         outer: impl IntoIterator<Item = OuterContact>,
-    ) -> measure::ContactMeasure {
+    ) -> measure::ContactSums {
         let key = state_key(g);
         let mut m = self.0.lock().unwrap_or_else(|e| e.into_inner());
-        match *m {
-            Some((k, c)) if k == key => c,
+        match &*m {
+            Some((k, c)) if *k == key => c.clone(),
             _ => {
-                let c = measure::contacts(g, region, outer);
-                *m = Some((key, c));
+                let c = measure::contact_sums(g, region, outer);
+                *m = Some((key, c.clone()));
                 c
             }
         }
@@ -233,7 +234,12 @@ pub fn global_quantity(gr: &Granular, q: &str) -> f64 {
         let (a, b) = gr.touching();
         return (a + b) as f64;
     }
-    let e = gr.energies();
+    energy_quantity(&gr.energies(), q)
+}
+
+/// `kinetic`, `rotational`, `spring`, `gravity_energy` or (else) the
+/// total of `e`.
+fn energy_quantity(e: &crate::dem::Energies, q: &str) -> f64 {
     match q {
         "kinetic" => e.kinetic,
         "rotational" => e.rotational,
@@ -334,7 +340,8 @@ pub fn value<'a>(
                     force: c.force,
                 })
             });
-            memo.get(g, region, outer).get(*quantity)
+            let sums = memo.get(g, region, outer);
+            sums.finish(region, g.thickness).get(*quantity)
         }
         Probe::Global { quantity } => {
             let v = global_quantity(g(), quantity);
@@ -368,5 +375,182 @@ fn crack_quantity(b: BodyRef<'_>, crack: usize, end: usize, q: &str) -> f64 {
         "k1" => k[0],
         "k2" => k[1],
         _ => crate::continuum::crack_tip::max_hoop_stress(k).1,
+    }
+}
+
+/// A probe's share of one part of a granular assembly divided over ranks
+/// (`crate::decomp`): the shares of every part, [merged](Share::merge) in
+/// any order, [finish](finish) into the value the undivided assembly
+/// gives, bitwise. Sums are exact ([`ExactSum`]), counts integers, and a
+/// value of one disc comes from the part that owns it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Share {
+    /// Exact sums.
+    pub sums: Vec<ExactSum>,
+    /// Counts.
+    pub counts: Vec<u64>,
+    /// A value known to the part that owns its disc, or to every part (a
+    /// wall's, the same on each); the first part's that has one wins.
+    pub value: Option<f64>,
+}
+
+impl Share {
+    /// Add the share of another part.
+    pub fn merge(&mut self, o: &Share) {
+        // a default share takes the shape of the first merged into it
+        if self.sums.len() < o.sums.len() {
+            self.sums.resize(o.sums.len(), ExactSum::default());
+        }
+        if self.counts.len() < o.counts.len() {
+            self.counts.resize(o.counts.len(), 0);
+        }
+        self.sums
+            .iter_mut()
+            .zip(&o.sums)
+            .for_each(|(a, b)| a.merge(b));
+        self.counts
+            .iter_mut()
+            .zip(&o.counts)
+            .for_each(|(a, b)| *a += b);
+        self.value = self.value.or(o.value);
+    }
+
+    /// The share as `f64`s, for another process.
+    pub fn pack(&self, out: &mut Vec<f64>) {
+        out.push(self.sums.len() as f64);
+        for s in &self.sums {
+            let p = s.parts();
+            out.push(p.len() as f64);
+            out.extend(p);
+        }
+        out.push(self.counts.len() as f64);
+        out.extend(self.counts.iter().map(|&c| c as f64));
+        out.push(self.value.is_some() as u8 as f64);
+        out.push(self.value.unwrap_or(0.0));
+    }
+
+    /// A share [packed](Self::pack) at the front of `v`; `v` moves past it.
+    pub fn unpack(v: &mut &[f64]) -> Share {
+        let mut take = |n: usize| {
+            let (a, b) = v.split_at(n);
+            *v = b;
+            a
+        };
+        let n = take(1)[0] as usize;
+        let sums = (0..n)
+            .map(|_| {
+                let k = take(1)[0] as usize;
+                ExactSum::from_parts(take(k))
+            })
+            .collect();
+        let n = take(1)[0] as usize;
+        let counts = take(n).iter().map(|&c| c as u64).collect();
+        let h = take(2);
+        Share {
+            sums,
+            counts,
+            value: (h[0] != 0.0).then_some(h[1]),
+        }
+    }
+}
+
+/// The share of `p` ([`Share`]) of the part `g` of a divided granular
+/// assembly, its ghosts up to date and its walls' totals those of the
+/// whole. `None` for a probe of a body (coupled runs are not reduced
+/// this way).
+pub fn share(p: &Probe, g: &Granular) -> Option<Share> {
+    let ps = &g.particles;
+    // the slot of disc `id` if this part owns it
+    let owned = |id: usize| {
+        let s = *ps.slot.get(id)? as usize;
+        (s < ps.len() && ps.fixity[s] & crate::dem::particles::GHOST == 0).then_some(s)
+    };
+    let sums = |sums: Vec<ExactSum>| Share {
+        sums,
+        ..Share::default()
+    };
+    Some(match p {
+        Probe::Disc { id, quantity, x0 } => Share {
+            value: owned(*id).map(|s| match quantity.as_str() {
+                "ux" => ps.pos[s].x - x0.x,
+                "uy" => ps.pos[s].y - x0.y,
+                q => disc_quantity(g, *id, q),
+            }),
+            ..Share::default()
+        },
+        Probe::Contact { a, b, total } => Share {
+            value: owned(*a).map(|sa| {
+                // a partner beyond a ghost's reach touches nothing
+                let sb = ps.slot.get(*b).map_or(usize::MAX, |&s| s as usize);
+                let (el, tot) = if sb < ps.len() {
+                    g.normal_force(sa, sb)
+                } else {
+                    (0.0, 0.0)
+                };
+                if *total { tot } else { el }
+            }),
+            ..Share::default()
+        },
+        Probe::Wall { wall, quantity } => Share {
+            value: Some(wall_quantity(&g.walls[*wall], quantity, g.thickness)),
+            ..Share::default()
+        },
+        Probe::Measure {
+            region,
+            quantity: Quantity::Porosity,
+            ..
+        } => sums(vec![measure::solid_area(g, region)]),
+        Probe::Measure { region, memo, .. } => {
+            let c = memo.get(g, region, []);
+            Share {
+                sums: c.fl.into_iter().chain(c.nn).collect(),
+                counts: vec![c.contacts as u64, c.discs as u64],
+                value: None,
+            }
+        }
+        Probe::Global { quantity } if quantity == "contacts" => {
+            let (a, b) = g.touching();
+            Share {
+                counts: vec![(a + b) as u64],
+                ..Share::default()
+            }
+        }
+        Probe::Global { .. } => sums(g.energy_sums(&ps.vel, &ps.omega).into_iter().collect()),
+        _ => return None,
+    })
+}
+
+/// The value of `p` from the [`Share`]s of every part merged (`g`: any
+/// part, for the constants).
+pub fn finish(p: &Probe, s: &Share, g: &Granular) -> f64 {
+    match p {
+        Probe::Measure {
+            region,
+            quantity: Quantity::Porosity,
+            ..
+        } => 1.0 - s.sums[0].value() / region.area(),
+        Probe::Measure {
+            region, quantity, ..
+        } => {
+            let c = measure::ContactSums {
+                fl: std::array::from_fn(|k| s.sums[k].clone()),
+                nn: std::array::from_fn(|k| s.sums[4 + k].clone()),
+                contacts: s.counts[0] as usize,
+                discs: s.counts[1] as usize,
+            };
+            c.finish(region, g.thickness).get(*quantity)
+        }
+        Probe::Global { .. } if !s.counts.is_empty() => s.counts[0] as f64,
+        Probe::Global { quantity } => {
+            let e = crate::dem::Energies {
+                kinetic: s.sums[0].value(),
+                rotational: s.sums[1].value(),
+                spring: s.sums[2].value(),
+                gravity: s.sums[3].value(),
+                bond: g.bonds.energy(g.thickness),
+            };
+            energy_quantity(&e, quantity)
+        }
+        _ => s.value.unwrap_or(f64::NAN),
     }
 }

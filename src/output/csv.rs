@@ -3,6 +3,7 @@
 
 use super::io_at;
 use crate::dem::Granular;
+use crate::geom::Vec2;
 use std::fs::File;
 use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -229,8 +230,7 @@ pub fn write_discs_csv(gr: &Granular, path: &Path) -> std::io::Result<()> {
         writeln!(w, "x,y,r,id{}", if clumps { ",clump" } else { "" })?;
         for id in 0..p.len() {
             let k = p.slot[id] as usize;
-            let (x, y, r) = (p.pos[k].x, p.pos[k].y, p.radius[k]);
-            write!(w, "{x:e},{y:e},{r:e},{}", id + 1)?;
+            disc_row(w, p.pos[k], p.radius[k], id)?;
             if clumps {
                 write!(w, ",{}", clump_number(p.clump[k]))?;
             }
@@ -238,6 +238,45 @@ pub fn write_discs_csv(gr: &Granular, path: &Path) -> std::io::Result<()> {
         }
         Ok(())
     })
+}
+
+/// The columns `x,y,r,id` of disc `id` (0-based) in `discs_final.csv`.
+fn disc_row(w: &mut impl Write, x: Vec2, r: f64, id: usize) -> std::io::Result<()> {
+    write!(w, "{:e},{:e},{r:e},{}", x.x, x.y, id + 1)
+}
+
+/// `discs_final.csv` of `n` discs without clumps, as [`write_discs_csv`]
+/// writes it, from `chunk(ids)`: the positions and radii of a range of
+/// ids at a time (`None`: not this process's to write; a decomposed
+/// assembly gathers them from the ranks). `chunk` is called for every
+/// range even when writing fails, so that every rank takes part in the
+/// same gathers.
+pub fn write_discs_csv_by_ids(
+    path: Option<&Path>,
+    n: usize,
+    mut chunk: impl FnMut(std::ops::Range<usize>) -> Option<Vec<(Vec2, f64)>>,
+) -> std::io::Result<()> {
+    const IDS: usize = 1 << 16;
+    let mut ranges = (0..n).step_by(IDS).map(|lo| lo..(lo + IDS).min(n));
+    let res = match path {
+        Some(path) => super::write_atomic(path, true, |w| {
+            writeln!(w, "x,y,r,id")?;
+            let mut res = Ok(());
+            for ids in ranges.by_ref() {
+                let got = chunk(ids.clone()).unwrap_or_default();
+                for (k, (x, r)) in got.into_iter().enumerate() {
+                    if res.is_ok() {
+                        res = disc_row(w, x, r, ids.start + k).and_then(|()| writeln!(w));
+                    }
+                }
+            }
+            res
+        }),
+        None => Ok(()),
+    };
+    // the gathers the writer did not reach
+    ranges.for_each(|ids| drop(chunk(ids)));
+    res
 }
 
 /// A disc's clump as written: its number from 1, 0 for no clump.

@@ -116,6 +116,38 @@ pub(super) fn record(
     out.hist.row(row)
 }
 
+/// What a granular run's summary says of its discs at the end: computed
+/// from the whole assembly ([`Facts::of`]), or reduced over the ranks of
+/// a divided one.
+pub(super) struct Facts {
+    /// Discs.
+    pub discs: usize,
+    /// Touching disc–disc and disc–wall pairs.
+    pub touching: (usize, usize),
+    /// Listed pairs.
+    pub listed: usize,
+    /// Heap bytes of the assembly (of every rank).
+    pub heap_bytes: usize,
+    /// Energies.
+    pub energies: crate::dem::Energies,
+    /// The critical time step.
+    pub crit: crate::dem::critical::Critical,
+}
+
+impl Facts {
+    /// The facts of an undivided assembly.
+    pub fn of(gr: &crate::dem::Granular) -> Facts {
+        Facts {
+            discs: gr.particles.len(),
+            touching: gr.touching(),
+            listed: gr.contacts.len(),
+            heap_bytes: gr.heap_bytes(),
+            energies: gr.energies(),
+            crit: gr.critical_step(&[]),
+        }
+    }
+}
+
 /// `summary.json` of a granular run that took `steps` steps in `wall_s`
 /// seconds (its end is recorded by [`Ended::record`]).
 pub(super) fn summary(
@@ -126,14 +158,26 @@ pub(super) fn summary(
     steps: usize,
 ) -> serde_json::Value {
     let gr = granular(model);
-    let n = gr.particles.len();
-    let (dd, dw) = gr.touching();
-    let crit = gr.critical_step(&[]);
+    let facts = Facts::of(gr);
+    summary_of(run, gr, model.steps, &facts, (warnings, wall_s, steps))
+}
+
+/// [`summary`] from the [`Facts`] of the discs and `gr` for the walls,
+/// the clock and the contact search (a part of a divided assembly, its
+/// walls' totals those of the whole), of a run of `total_steps`.
+pub(super) fn summary_of(
+    run: &Run,
+    gr: &crate::dem::Granular,
+    total_steps: usize,
+    f: &Facts,
+    (warnings, wall_s, steps): (Vec<String>, f64, usize),
+) -> serde_json::Value {
+    let (n, crit, (dd, dw)) = (f.discs, &f.crit, f.touching);
     let mut summary = json!({
         "kind": "granular",
         "discs": n,
         "walls": gr.walls.len(),
-        "steps": model.steps,
+        "steps": total_steps,
         "dt": gr.dt,
         "critical_dt": crit.dt,
         "critical_mode": crit.mode,
@@ -144,9 +188,9 @@ pub(super) fn summary(
         "run_seconds": wall_s,
         "particle_steps_per_second": if wall_s > 0.0 { (n * steps) as f64 / wall_s } else { 0.0 },
         "neighbour_rebuilds": gr.grid.rebuilds,
-        "contacts": { "disc_disc": dd, "disc_wall": dw, "listed_pairs": gr.contacts.len() },
-        "bytes_per_disc": gr.heap_bytes() as f64 / n.max(1) as f64,
-        "energies": gr.energies(),
+        "contacts": { "disc_disc": dd, "disc_wall": dw, "listed_pairs": f.listed },
+        "bytes_per_disc": f.heap_bytes as f64 / n.max(1) as f64,
+        "energies": f.energies,
         "wall_forces": gr.walls.iter().map(|w| json!({"name": w.name, "force": [w.force.x, w.force.y], "position_from": [w.a.x, w.a.y]})).collect::<Vec<_>>(),
         "warnings": warnings,
     });
