@@ -239,6 +239,7 @@ impl Granular {
         self.grid.stale = s.stale;
         self.bonds.replace_list(&s.bonds);
         let c = &mut self.clumps;
+        c.invalidate();
         c.pos.clone_from(&s.clumps.pos);
         c.vel.clone_from(&s.clumps.vel);
         c.theta.clone_from(&s.clumps.theta);
