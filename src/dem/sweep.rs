@@ -546,14 +546,19 @@ fn sweep_block<const ADVANCE: bool, const ROLL: bool>(
     with_zeroed(&ACC, true, n, |acc| {
         with_zeroed(&ACC_ROLL, ROLL, n, |acc_r| {
             with_zeroed(&ACC_BOND, bonded, n, |acc_b| {
-                sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, acc_r, acc_b, ctx)
+                // without bonds, a sweep without their code
+                if bonded {
+                    sweep_block_in::<ADVANCE, ROLL, true>(blk, b, acc, acc_r, acc_b, ctx)
+                } else {
+                    sweep_block_in::<ADVANCE, ROLL, false>(blk, b, acc, acc_r, acc_b, ctx)
+                }
             })
         })
     })
 }
 
 #[inline(never)]
-fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
+fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
     blk: usize,
     b: Block,
     acc: &mut [(Vec2, f64)],
@@ -621,9 +626,8 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             acc_r[j as usize - lo] -= ctx.cross_roll[k as usize].0;
         }
     }
-    // the bonds: stepped with the contacts of their pairs
-    let bonded = !ctx.bond_row.is_empty();
-    let mut bonds = bonded.then(|| BondCursor::new(blk, lo, n, held, held_f, acc, acc_b, ctx));
+    // the bonds (`BOND`): stepped with the contacts of their pairs
+    let mut bonds = BOND.then(|| BondCursor::new(blk, lo, n, held, held_f, acc, acc_b, ctx));
     let mut ck = ctx.cross_first[blk] as usize;
     let pair_lo = ctx.first[lo] as usize;
     let mut pk = 0usize;
@@ -670,7 +674,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                     omega,
                     radius,
                 };
-                let f = with_bond(&mut bonds, d, j, cf.f, kin, &mut sf, acc, acc_b, ctx);
+                let f = with_bond::<BOND>(&mut bonds, d, j, cf.f, kin, &mut sf, acc, acc_b, ctx);
                 sf += f;
                 st += cf.fs;
                 k += 1;
@@ -709,7 +713,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                         roll[k] = mr[0];
                         roll[k + 1] = mr[1];
                         for (jx, c, m) in [(jl, cf[0], m[0]), (j2, cf[1], m[1])] {
-                            let f = with_bond(&mut bonds, d, jx + lo, c.f, kin, &mut sf, acc, acc_b, ctx);
+                            let f = with_bond::<BOND>(&mut bonds, d, jx + lo, c.f, kin, &mut sf, acc, acc_b, ctx);
                             let a = &mut acc[jx];
                             a.0 -= f;
                             a.1 += c.fs;
@@ -730,7 +734,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                     let (law, dash) = (&ctx.laws[l], &ctx.dash[l]);
                     pair_contact_roll(kin, inert, d, jl, law, dash, q, fs, mr, ctx.dt)
                 };
-                let f = with_bond(&mut bonds, d, j, cf.f, kin, &mut sf, acc, acc_b, ctx);
+                let f = with_bond::<BOND>(&mut bonds, d, j, cf.f, kin, &mut sf, acc, acc_b, ctx);
                 let a = &mut acc[jl];
                 a.0 -= f;
                 a.1 += cf.fs;
@@ -756,7 +760,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                 }
                 if k < ahead_hi {
                     let c = ahead[k - ahead_lo];
-                    let f = with_bond(&mut bonds, d, j, c.f, kin, &mut sf, acc, acc_b, ctx);
+                    let f = with_bond::<BOND>(&mut bonds, d, j, c.f, kin, &mut sf, acc, acc_b, ctx);
                     let a = &mut acc[jl];
                     a.0 -= f;
                     a.1 += c.fs;
@@ -772,7 +776,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                 let j2 = pairs[k + 1] as usize - lo;
                 let fs2 = [shear[k], shear[k + 1]];
                 let sm2 = [sm_at(sm, k), sm_at(sm, k + 1)];
-                let two = if let Some(b) = &mut bonds {
+                let two = if BOND && let Some(b) = &mut bonds {
                     b.pair_contacts(kin, d, [jl, j2], fs2, sm2, (&law0, &dash0), &mut sf, acc, acc_b, ctx)
                 } else {
                     lanes::pair_contacts(kin, [d, d], [jl, j2], fs2, sm2, &law0, &dash0, ctx.dt)
@@ -800,7 +804,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
                 let l = material[d] as usize * ctx.n_mat + material[jl] as usize;
                 pair_contact(kin, d, jl, &ctx.laws[l], &ctx.dash[l], q, fs, ctx.dt)
             };
-            let f = with_bond(&mut bonds, d, j, cf.f, kin, &mut sf, acc, acc_b, ctx);
+            let f = with_bond::<BOND>(&mut bonds, d, j, cf.f, kin, &mut sf, acc, acc_b, ctx);
             let a = &mut acc[jl];
             a.0 -= f;
             a.1 += cf.fs;
@@ -809,7 +813,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             k += 1;
         }
         pk = end;
-        if let Some(b) = &mut bonds {
+        if BOND && let Some(b) = &mut bonds {
             let kin = Kin {
                 pos,
                 vel,
@@ -845,7 +849,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         if ROLL {
             tq += sr;
         }
-        if bonded {
+        if BOND {
             tq += std::mem::take(&mut acc_b[d]);
         }
         while ek < ctx.external.len() && ctx.external[ek].0 as usize == lo + d {
@@ -1065,7 +1069,7 @@ impl<'a> BondCursor<'a> {
 /// bond's), the bonds' moments added to `acc_b`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn with_bond(
+fn with_bond<const BOND: bool>(
     bonds: &mut Option<BondCursor>,
     d: usize,
     j: usize,
@@ -1076,7 +1080,10 @@ fn with_bond(
     acc_b: &mut [f64],
     ctx: &Ctx,
 ) -> Vec2 {
-    let Some(b) = bonds else { return f };
+    // (`BOND` false: no bond code, whatever the compiler proves of `bonds`)
+    let Some(b) = bonds.as_mut().filter(|_| BOND) else {
+        return f;
+    };
     b.lone(d, j, kin, sf, acc, acc_b, ctx);
     let Some(w) = b.next_is(d, j) else { return f };
     b.w = w + 1;
