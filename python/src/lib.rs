@@ -938,7 +938,11 @@ impl PyModel {
     fn bonds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let g = self.lock()?;
         let out = PyDict::new(py);
-        let l = g.model.granular().map(|gr| gr.bonds.list()).unwrap_or_default();
+        let l = g
+            .model
+            .granular()
+            .map(|gr| gr.bonds.list())
+            .unwrap_or_default();
         let number = |v: &[u32]| v.iter().map(|k| k + 1).collect::<Vec<u32>>();
         out.set_item("a", number(&l.a).into_pyarray(py))?;
         out.set_item("b", number(&l.b).into_pyarray(py))?;

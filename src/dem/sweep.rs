@@ -713,7 +713,17 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
                         roll[k] = mr[0];
                         roll[k + 1] = mr[1];
                         for (jx, c, m) in [(jl, cf[0], m[0]), (j2, cf[1], m[1])] {
-                            let f = with_bond::<BOND>(&mut bonds, d, jx + lo, c.f, kin, &mut sf, acc, acc_b, ctx);
+                            let f = with_bond::<BOND>(
+                                &mut bonds,
+                                d,
+                                jx + lo,
+                                c.f,
+                                kin,
+                                &mut sf,
+                                acc,
+                                acc_b,
+                                ctx,
+                            );
                             let a = &mut acc[jx];
                             a.0 -= f;
                             a.1 += c.fs;
@@ -777,7 +787,18 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
                 let fs2 = [shear[k], shear[k + 1]];
                 let sm2 = [sm_at(sm, k), sm_at(sm, k + 1)];
                 let two = if BOND && let Some(b) = &mut bonds {
-                    b.pair_contacts(kin, d, [jl, j2], fs2, sm2, (&law0, &dash0), &mut sf, acc, acc_b, ctx)
+                    b.pair_contacts(
+                        kin,
+                        d,
+                        [jl, j2],
+                        fs2,
+                        sm2,
+                        (&law0, &dash0),
+                        &mut sf,
+                        acc,
+                        acc_b,
+                        ctx,
+                    )
                 } else {
                     lanes::pair_contacts(kin, [d, d], [jl, j2], fs2, sm2, &law0, &dash0, ctx.dt)
                         .map(|(cf, fs)| (cf, fs, [None; 2]))

@@ -119,10 +119,7 @@ pub(in crate::dem) fn step2_at(
         let (la, lb) = (_mm_mul_pd(k, g.ri), _mm_mul_pd(k, g.rj));
         let (wi, wj) = (g.wi, g.wj);
         let vn = _mm_add_pd(_mm_mul_pd(g.dvx, nx), _mm_mul_pd(g.dvy, ny));
-        let vt = _mm_add_pd(
-            _mm_add_pd(g.dvt, _mm_mul_pd(wi, la)),
-            _mm_mul_pd(wj, lb),
-        );
+        let vt = _mm_add_pd(_mm_add_pd(g.dvt, _mm_mul_pd(wi, la)), _mm_mul_pd(wj, lb));
         // A = 2R̄t, I = (2/3)R̄³t (`section`)
         let r = set(h[0].radius, h[1].radius);
         let t = _mm_set1_pd(thickness);
