@@ -463,7 +463,9 @@ impl Held {
     ) -> (BondForce, Option<Break>) {
         let sec = section(self.radius, thickness);
         let old = *f;
-        let (bf, n, la) = bond_step(si, sj, law, sec, dt, f);
+        let rs = si.radius + sj.radius;
+        let arms = (si.radius / rs, sj.radius / rs);
+        let (bf, n, la) = bond_step(si, sj, law, sec, arms, dt, f);
         if self.intact(law, *f) {
             return (bf, None);
         }
@@ -870,23 +872,23 @@ impl Bonds {
 }
 
 /// One bond between discs `si` and `sj`, in that orientation (normal n
-/// from i to j, `M` the moment on i): update its forces `(F_n, F_s, M)`
-/// by the increments of the step (module docs), with the lever arms
-/// `l_i = k r_i`, `l_j = k r_j`, `k = d/(r_i + r_j)`. Returns what it
-/// does to the two discs, n and the lever arm `l_i`.
+/// from i to j, `M` the moment on i), `(c_i, c_j)` the arms over the
+/// distance: update its forces `(F_n, F_s, M)` by the increments of the
+/// step (module docs). Returns what it does to the two discs, n and the
+/// lever arm `l_i`.
 #[inline(always)]
 fn bond_step(
     si: &Side,
     sj: &Side,
     law: &BondLaw,
     (area, inertia): (f64, f64),
+    (ci, cj): (f64, f64),
     dt: f64,
     (fn_, fs, m): &mut (f64, f64, f64),
 ) -> (BondForce, Vec2, f64) {
     let (n, d) = super::contact::normal_between(si.pos, sj.pos);
     let t = n.perp();
-    let k = d / (si.radius + sj.radius);
-    let (la, lb) = (k * si.radius, k * sj.radius);
+    let (la, lb) = (d * ci, d * cj);
     let dv = si.vel - sj.vel;
     let (wi, wj) = (si.omega, sj.omega);
     let vn = dv.dot(n);

@@ -114,9 +114,9 @@ pub(in crate::dem) fn step2_at(
     unsafe {
         let (nx, ny, tx) = (g.nx, g.ny, g.tx);
         let sign = _mm_set1_pd(-0.0);
-        // the lever arms k r_i, k r_j, k = d/(r_i + r_j)
-        let k = _mm_div_pd(g.dist, g.rsum);
-        let (la, lb) = (_mm_mul_pd(k, g.ri), _mm_mul_pd(k, g.rj));
+        // the lever arms d r_i/(r_i + r_j), d r_j/(r_i + r_j)
+        let la = _mm_mul_pd(g.dist, _mm_div_pd(g.ri, g.rsum));
+        let lb = _mm_mul_pd(g.dist, _mm_div_pd(g.rj, g.rsum));
         let (wi, wj) = (g.wi, g.wj);
         let vn = _mm_add_pd(_mm_mul_pd(g.dvx, nx), _mm_mul_pd(g.dvy, ny));
         let vt = _mm_add_pd(_mm_add_pd(g.dvt, _mm_mul_pd(wi, la)), _mm_mul_pd(wj, lb));
