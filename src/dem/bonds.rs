@@ -56,17 +56,15 @@
 //! list changes): the bonds *held* in the slot order of their discs, in
 //! rows over the smaller slot like the contact list — only what a step
 //! reads (`Held`, 48 bytes), with their forces beside them in that
-//! orientation. The contact sweep steps a bond with the contact of the
-//! same pair, from the state before the step (a bonded pair is listed as
-//! a contact pair while its gap is below the Verlet skin: one geometry,
-//! one force summed, two pairs at a time in SIMD lanes with the scalar
-//! operations), or on its own when the pair is not listed; a bond whose
-//! second disc lies in a later block is stepped ahead of the sweep, as
-//! the contacts are. Every disc sums its contacts and bonds in that fixed
-//! order, so the result does not depend on the number of threads or on
-//! where the bonds are stored. The list takes the new forces only when
-//! it is read ([`Bonds::list`], [`Bonds::sync`]; a checkpoint, an output)
-//! or the bonds are held anew (the discs renumbered, a bond broken).
+//! orientation. The contact sweep steps them block by block (a block's
+//! bonds just before its discs, from the state before the step, two at a
+//! time in SIMD lanes with the scalar operations; a bond whose second
+//! disc lies in a later block ahead of the sweep, as the contacts do).
+//! Every disc sums its bonds in that fixed order, so the result does not
+//! depend on the number of threads or on where the bonds are stored. The
+//! list takes the new forces only when it is read ([`Bonds::list`],
+//! [`Bonds::sync`]; a checkpoint, an output) or the bonds are held anew
+//! (the discs renumbered, a bond broken).
 
 #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
 pub(super) mod lanes;

@@ -546,19 +546,14 @@ fn sweep_block<const ADVANCE: bool, const ROLL: bool>(
     with_zeroed(&ACC, true, n, |acc| {
         with_zeroed(&ACC_ROLL, ROLL, n, |acc_r| {
             with_zeroed(&ACC_BOND, bonded, n, |acc_b| {
-                // without bonds, a sweep without their code
-                if bonded {
-                    sweep_block_in::<ADVANCE, ROLL, true>(blk, b, acc, acc_r, acc_b, ctx)
-                } else {
-                    sweep_block_in::<ADVANCE, ROLL, false>(blk, b, acc, acc_r, acc_b, ctx)
-                }
+                sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, acc_r, acc_b, ctx)
             })
         })
     })
 }
 
 #[inline(never)]
-fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
+fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
     blk: usize,
     b: Block,
     acc: &mut [(Vec2, f64)],
@@ -626,8 +621,19 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
             acc_r[j as usize - lo] -= ctx.cross_roll[k as usize].0;
         }
     }
-    // the bonds (`BOND`): stepped with the contacts of their pairs
-    let mut bonds = BOND.then(|| BondCursor::new(blk, lo, n, held, held_f, acc, acc_b, ctx));
+    // the bonds, before any disc advances
+    let bonded = !ctx.bond_row.is_empty();
+    let broken = if bonded {
+        let kin = Kin {
+            pos,
+            vel,
+            omega,
+            radius,
+        };
+        bond_block(blk, lo, kin, (held, held_f), acc, acc_b, ctx)
+    } else {
+        vec![]
+    };
     let mut ck = ctx.cross_first[blk] as usize;
     let pair_lo = ctx.first[lo] as usize;
     let mut pk = 0usize;
@@ -668,14 +674,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
                 }
                 ck += 1;
                 shear[k] = fs;
-                let kin = Kin {
-                    pos,
-                    vel,
-                    omega,
-                    radius,
-                };
-                let f = with_bond::<BOND>(&mut bonds, d, j, cf.f, kin, &mut sf, acc, acc_b, ctx);
-                sf += f;
+                sf += cf.f;
                 st += cf.fs;
                 k += 1;
                 continue;
@@ -713,22 +712,11 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
                         roll[k] = mr[0];
                         roll[k + 1] = mr[1];
                         for (jx, c, m) in [(jl, cf[0], m[0]), (j2, cf[1], m[1])] {
-                            let f = with_bond::<BOND>(
-                                &mut bonds,
-                                d,
-                                jx + lo,
-                                c.f,
-                                kin,
-                                &mut sf,
-                                acc,
-                                acc_b,
-                                ctx,
-                            );
                             let a = &mut acc[jx];
-                            a.0 -= f;
+                            a.0 -= c.f;
                             a.1 += c.fs;
                             acc_r[jx] -= m;
-                            sf += f;
+                            sf += c.f;
                             st += c.fs;
                             sr += m;
                         }
@@ -744,12 +732,11 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
                     let (law, dash) = (&ctx.laws[l], &ctx.dash[l]);
                     pair_contact_roll(kin, inert, d, jl, law, dash, q, fs, mr, ctx.dt)
                 };
-                let f = with_bond::<BOND>(&mut bonds, d, j, cf.f, kin, &mut sf, acc, acc_b, ctx);
                 let a = &mut acc[jl];
-                a.0 -= f;
+                a.0 -= cf.f;
                 a.1 += cf.fs;
                 acc_r[jl] -= m;
-                sf += f;
+                sf += cf.f;
                 st += cf.fs;
                 sr += m;
                 k += 1;
@@ -770,11 +757,10 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
                 }
                 if k < ahead_hi {
                     let c = ahead[k - ahead_lo];
-                    let f = with_bond::<BOND>(&mut bonds, d, j, c.f, kin, &mut sf, acc, acc_b, ctx);
                     let a = &mut acc[jl];
-                    a.0 -= f;
+                    a.0 -= c.f;
                     a.1 += c.fs;
-                    sf += f;
+                    sf += c.f;
                     st += c.fs;
                     k += 1;
                     continue;
@@ -784,34 +770,23 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
             #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
             if single && k + 1 < end && (pairs[k + 1] as usize) < hi {
                 let j2 = pairs[k + 1] as usize - lo;
-                let fs2 = [shear[k], shear[k + 1]];
-                let sm2 = [sm_at(sm, k), sm_at(sm, k + 1)];
-                let two = if BOND && let Some(b) = &mut bonds {
-                    b.pair_contacts(
-                        kin,
-                        d,
-                        [jl, j2],
-                        fs2,
-                        sm2,
-                        (&law0, &dash0),
-                        &mut sf,
-                        acc,
-                        acc_b,
-                        ctx,
-                    )
-                } else {
-                    lanes::pair_contacts(kin, [d, d], [jl, j2], fs2, sm2, &law0, &dash0, ctx.dt)
-                        .map(|(cf, fs)| (cf, fs, [None; 2]))
-                };
-                if let Some((cf, fs, bf)) = two {
+                if let Some((cf, fs)) = lanes::pair_contacts(
+                    kin,
+                    [d, d],
+                    [jl, j2],
+                    [shear[k], shear[k + 1]],
+                    [sm_at(sm, k), sm_at(sm, k + 1)],
+                    &law0,
+                    &dash0,
+                    ctx.dt,
+                ) {
                     shear[k] = fs[0];
                     shear[k + 1] = fs[1];
-                    for (jx, c, b) in [(jl, cf[0], bf[0]), (j2, cf[1], bf[1])] {
-                        let f = add_bond(c.f, b, d, jx, acc_b);
+                    for (jx, c) in [(jl, cf[0]), (j2, cf[1])] {
                         let a = &mut acc[jx];
-                        a.0 -= f;
+                        a.0 -= c.f;
                         a.1 += c.fs;
-                        sf += f;
+                        sf += c.f;
                         st += c.fs;
                     }
                     k += 2;
@@ -825,24 +800,14 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
                 let l = material[d] as usize * ctx.n_mat + material[jl] as usize;
                 pair_contact(kin, d, jl, &ctx.laws[l], &ctx.dash[l], q, fs, ctx.dt)
             };
-            let f = with_bond::<BOND>(&mut bonds, d, j, cf.f, kin, &mut sf, acc, acc_b, ctx);
             let a = &mut acc[jl];
-            a.0 -= f;
+            a.0 -= cf.f;
             a.1 += cf.fs;
-            sf += f;
+            sf += cf.f;
             st += cf.fs;
             k += 1;
         }
         pk = end;
-        if BOND && let Some(b) = &mut bonds {
-            let kin = Kin {
-                pos,
-                vel,
-                omega,
-                radius,
-            };
-            b.lone(d, usize::MAX, kin, &mut sf, acc, acc_b, ctx);
-        }
         while wk < walls.len() && walls[wk].disc as usize == lo + d {
             let q = &mut walls[wk];
             let w = q.wall as usize;
@@ -870,7 +835,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
         if ROLL {
             tq += sr;
         }
-        if BOND {
+        if bonded {
             tq += std::mem::take(&mut acc_b[d]);
         }
         while ek < ctx.external.len() && ctx.external[ek].0 as usize == lo + d {
@@ -905,224 +870,119 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool, const BOND: bool>(
             bad |= !integrate::passes_check(pos[d], vel[d], omega[d], radius[d], ctx.max_v2);
         }
     }
-    (m2, bad, bonds.map_or(vec![], |b| b.broken))
+    (m2, bad, broken)
 }
 
-/// The held bonds of a block as its sweep reaches them. A disc's bonds
-/// (its row, second discs ascending like its contact pairs) are stepped
-/// with the contact of the same pair when the pair is listed — one
-/// geometry, one force summed — and on their own otherwise (a bonded pair
-/// whose gap grew past the Verlet skin), all from the state before the
-/// step (a pair is evaluated before either of its discs advances). A bond
-/// whose second disc lies in a later block was stepped ahead of the sweep
-/// ([`Bonds::step_cross`](super::bonds::Bonds::step_cross)): the cursor
-/// takes its result in row order.
-struct BondCursor<'a> {
-    held: &'a [Held],
-    held_f: &'a mut [HeldForces],
-    /// The block's rows: disc d's bonds are `row[d] − row[0]..row[d + 1] − row[0]`.
-    row: &'a [u32],
+/// The bonds of block `blk` (discs `lo..`, their data in `kin`, their held
+/// bonds `held`), from the state before the step, in a pass of their own
+/// before the block's discs are swept: the forces and moments on the
+/// block's discs into `acc` and `acc_b` (bond by bond in slot order, each
+/// bond's cross part from the cross buffer), the held forces updated.
+/// Returns the bonds that broke.
+#[inline(never)]
+fn bond_block(
+    blk: usize,
     lo: usize,
-    hi: usize,
-    /// The next bond (in the block's `held`) and the next cross bond.
-    w: usize,
-    ck: usize,
-    /// The bonds that broke.
-    broken: Vec<Break>,
-}
-
-impl<'a> BondCursor<'a> {
-    /// The cursor of block `blk` (discs `lo..lo + n`), after adding the
-    /// cross bonds whose second disc is in the block to its accumulators.
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        blk: usize,
-        lo: usize,
-        n: usize,
-        held: &'a [Held],
-        held_f: &'a mut [HeldForces],
-        acc: &mut [(Vec2, f64)],
-        acc_b: &mut [f64],
-        ctx: &'a Ctx,
-    ) -> Self {
-        let bx = ctx.bond_cross;
-        let (a, e) = (bx.in_start[blk] as usize, bx.in_start[blk + 1] as usize);
-        for &(j, c) in &bx.incoming[a..e] {
-            let bf = &ctx.bond_cross_buf[c as usize].0;
-            acc[j as usize - lo].0 -= bf.f;
-            acc_b[j as usize - lo] += bf.mb;
-        }
-        let held_f = &mut held_f[..held.len()];
-        BondCursor {
-            held,
-            held_f,
-            row: &ctx.bond_row[lo..=lo + n],
-            lo,
-            hi: lo + n,
-            w: 0,
-            ck: bx.first[blk] as usize,
-            broken: vec![],
-        }
-    }
-
-    /// The next bond, if it is disc d's (local) with second disc `j`
-    /// (absolute slot).
-    #[inline(always)]
-    fn next_is(&self, d: usize, j: usize) -> Option<usize> {
-        let end = (self.row[d + 1] - self.row[0]) as usize;
-        (self.w < end && self.held[self.w].j as usize == j).then_some(self.w)
-    }
-
-    /// Step bond `w` of disc d on its own: what it does to the two discs.
-    #[inline(always)]
-    fn step(&mut self, w: usize, d: usize, kin: Kin, ctx: &Ctx) -> BondForce {
-        let j = self.held[w].j as usize;
-        if j >= self.hi {
-            let (bf, f) = ctx.bond_cross_buf[self.ck];
-            self.ck += 1;
-            self.held_f[w] = f;
-            return bf;
-        }
-        let (si, sj) = sides(kin, d, j - self.lo);
-        let (t, dt) = (ctx.thickness, ctx.bond_dt);
-        let at = self.row[0] as usize + w;
-        let (bf, brk) = self.held[w].step(at, &mut self.held_f[w], &si, &sj, &ctx.bond_law, t, dt);
-        self.broken.extend(brk);
-        bf
-    }
-
-    /// Disc d's bonds with a second disc before `j` not yet stepped (pairs
-    /// not listed as contacts): stepped on their own, their forces added
-    /// to d's sum `sf` and the accumulators.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn lone(
-        &mut self,
-        d: usize,
-        j: usize,
-        kin: Kin,
-        sf: &mut Vec2,
-        acc: &mut [(Vec2, f64)],
-        acc_b: &mut [f64],
-        ctx: &Ctx,
-    ) {
-        let end = (self.row[d + 1] - self.row[0]) as usize;
-        while self.w < end && (self.held[self.w].j as usize) < j {
-            let (w, jb) = (self.w, self.held[self.w].j as usize);
-            self.w += 1;
-            let bf = self.step(w, d, kin, ctx);
-            if jb < self.hi {
-                acc[jb - self.lo].0 -= bf.f;
-                acc_b[jb - self.lo] += bf.mb;
-            }
-            acc_b[d] += bf.ma;
-            *sf += bf.f;
-        }
-    }
-
-    /// The two inner contacts `(d, jx[l])` (local) in the lanes with their
-    /// bonds, if bonded, in the same lanes (one geometry): contact forces,
-    /// new shear histories and what the bonds do (as the two-lane kernel
-    /// and [`Held::step`]); disc d's bonds before the first pair stepped
-    /// on their own first. `None` when the lanes do not apply (then no
-    /// bond of the pairs was stepped).
-    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
-    #[inline(always)]
-    fn pair_contacts(
-        &mut self,
-        kin: Kin,
-        d: usize,
-        jx: [usize; 2],
-        fs: [f64; 2],
-        sm: [f64; 2],
-        (law, dash): (&ContactLaw, &[f64; 4]),
-        sf: &mut Vec2,
-        acc: &mut [(Vec2, f64)],
-        acc_b: &mut [f64],
-        ctx: &Ctx,
-    ) -> Option<([ContactForce; 2], [f64; 2], [Option<BondForce>; 2])> {
-        let lo = self.lo;
-        self.lone(d, jx[0] + lo, kin, sf, acc, acc_b, ctx);
-        let w0 = self.next_is(d, jx[0] + lo);
-        let w1 = {
-            let end = (self.row[d + 1] - self.row[0]) as usize;
-            let w = self.w + usize::from(w0.is_some());
-            (w < end && self.held[w].j as usize == jx[1] + lo).then_some(w)
-        };
-        if w0.is_none() && w1.is_none() {
-            return lanes::pair_contacts(kin, [d, d], jx, fs, sm, law, dash, ctx.dt)
-                .map(|(cf, fs)| (cf, fs, [None; 2]));
-        }
-        let none = Held::default();
-        let ws = [w0, w1];
-        let h = ws.map(|w| w.map_or(&none, |w| &self.held[w]));
-        let f = ws.map(|w| w.map_or((0.0, 0.0, 0.0), |w| self.held_f[w]));
-        let b = lanes::BondLanes {
-            held: h,
-            f,
-            law: &ctx.bond_law,
-            thickness: ctx.thickness,
-            dt: ctx.bond_dt,
-        };
-        let (cf, fs, out) =
-            lanes::pair_contacts_bonded(kin, [d, d], jx, fs, sm, law, dash, ctx.dt, &b)?;
-        let mut bf = [None; 2];
-        for l in 0..2 {
-            let Some(w) = ws[l] else { continue };
-            self.w = w + 1;
-            bf[l] = Some(match out[l] {
-                Some((b, f)) => {
-                    self.held_f[w] = f;
-                    b
-                }
-                // a bond that may break: the scalar step
-                None => self.step(w, d, kin, ctx),
-            });
-        }
-        Some((cf, fs, bf))
-    }
-}
-
-/// The contact force `f` of pair `(d, j)` (d local, j absolute) with the
-/// force of the pair's bond, if bonded ([`BondCursor`]; d's bonds before
-/// j stepped on their own first): the force on d to sum (`f` plus the
-/// bond's), the bonds' moments added to `acc_b`.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn with_bond<const BOND: bool>(
-    bonds: &mut Option<BondCursor>,
-    d: usize,
-    j: usize,
-    f: Vec2,
     kin: Kin,
-    sf: &mut Vec2,
+    (held, held_f): (&[Held], &mut [HeldForces]),
     acc: &mut [(Vec2, f64)],
     acc_b: &mut [f64],
     ctx: &Ctx,
-) -> Vec2 {
-    // (`BOND` false: no bond code, whatever the compiler proves of `bonds`)
-    let Some(b) = bonds.as_mut().filter(|_| BOND) else {
-        return f;
-    };
-    b.lone(d, j, kin, sf, acc, acc_b, ctx);
-    let Some(w) = b.next_is(d, j) else { return f };
-    b.w = w + 1;
-    let bf = b.step(w, d, kin, ctx);
-    add_bond(f, Some(bf), d, j.wrapping_sub(b.lo), acc_b)
-}
-
-/// The force on disc d of a pair `(d, j)` (local; j past the block: a
-/// cross pair) whose contact force is `f` and bond does `bf`: `f` plus the
-/// bond's force; the bond's moments added to d's and j's in `acc_b`.
-#[inline(always)]
-fn add_bond(f: Vec2, bf: Option<BondForce>, d: usize, j: usize, acc_b: &mut [f64]) -> Vec2 {
-    let Some(bf) = bf else { return f };
-    acc_b[d] += bf.ma;
-    if let Some(m) = acc_b.get_mut(j) {
-        *m += bf.mb;
+) -> Vec<Break> {
+    let n = kin.pos.len();
+    let (acc, acc_b) = (&mut acc[..n], &mut acc_b[..n]);
+    let bx = ctx.bond_cross;
+    // cross bonds whose second disc is here
+    let (a, e) = (bx.in_start[blk] as usize, bx.in_start[blk + 1] as usize);
+    for &(j, c) in &bx.incoming[a..e] {
+        let bf = &ctx.bond_cross_buf[c as usize].0;
+        acc[j as usize - lo].0 -= bf.f;
+        acc_b[j as usize - lo] += bf.mb;
     }
-    f + bf.f
+    let mut ck = bx.first[blk] as usize;
+    let row = &ctx.bond_row[lo..=lo + n];
+    let held_f = &mut held_f[..held.len()];
+    let (law, w0) = (&ctx.bond_law, row[0] as usize);
+    let mut broken = vec![];
+    // what a bond of disc d (its row) and disc j does, in bond order: j's
+    // part (an inner bond's; a cross bond's was added above), then d's
+    let mut add = |d: usize, j: usize, bf: BondForce| {
+        if j < n {
+            acc[j].0 -= bf.f;
+            acc_b[j] += bf.mb;
+        }
+        acc[d].0 += bf.f;
+        acc_b[d] += bf.ma;
+    };
+    let mut d = 0;
+    let mut w = 0;
+    while w < held.len() {
+        while (row[d + 1] - row[0]) as usize <= w {
+            d += 1;
+        }
+        let j = held[w].j as usize - lo;
+        if j >= n {
+            let (bf, f_new) = ctx.bond_cross_buf[ck];
+            ck += 1;
+            held_f[w] = f_new;
+            add(d, j, bf);
+            w += 1;
+            continue;
+        }
+        // two inner bonds side by side (of this disc or the next ones;
+        // all from the state before the step), summed in the same order
+        #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+        if let Some(h2) = held.get(w + 1).filter(|h| (h.j as usize) < lo + n) {
+            let mut d2 = d;
+            while (row[d2 + 1] - row[0]) as usize <= w + 1 {
+                d2 += 1;
+            }
+            let j2 = h2.j as usize - lo;
+            let (si, sj) = sides(kin, d, j);
+            let (si2, sj2) = sides(kin, d2, j2);
+            let two = super::bonds::lanes::step2(
+                [&held[w], h2],
+                &mut held_f[w..w + 2],
+                [si, si2],
+                [sj, sj2],
+                law,
+                ctx.thickness,
+                ctx.bond_dt,
+            );
+            if let Some([bf, bf2]) = two {
+                // a bond that may break: the scalar step
+                let mut lane = |w: usize, d: usize, j: usize, bf: Option<BondForce>| {
+                    bf.unwrap_or_else(|| {
+                        let (si, sj) = sides(kin, d, j);
+                        let (t, dt) = (ctx.thickness, ctx.bond_dt);
+                        let (bf, brk) = held[w].step(w0 + w, &mut held_f[w], &si, &sj, law, t, dt);
+                        broken.extend(brk);
+                        bf
+                    })
+                };
+                let bf = lane(w, d, j, bf);
+                add(d, j, bf);
+                let bf2 = lane(w + 1, d2, j2, bf2);
+                add(d2, j2, bf2);
+                w += 2;
+                continue;
+            }
+        }
+        let (si, sj) = sides(kin, d, j);
+        let (bf, brk) = held[w].step(
+            w0 + w,
+            &mut held_f[w],
+            &si,
+            &sj,
+            law,
+            ctx.thickness,
+            ctx.bond_dt,
+        );
+        broken.extend(brk);
+        add(d, j, bf);
+        w += 1;
+    }
+    broken
 }
 
 /// Where a block's pairs and discs are, for [`lanes4`]'s batches.
@@ -1441,8 +1301,7 @@ fn wall_geometry(disc: &Side, w: &Wall) -> Option<(Vec2, f64, Vec2)> {
 /// `cfg` guarantees is enabled for the whole build.
 #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
 pub(super) mod lanes {
-    use super::{BondForce, BondLaw, ContactForce, ContactLaw, Held, HeldForces, Inert, Kin};
-    use crate::dem::bonds::lanes::{Geom2, step2_at};
+    use super::{ContactForce, ContactLaw, Inert, Kin};
     use crate::dem::contact::SlipNormal;
     use crate::geom::Vec2;
     use std::arch::x86_64::*;
@@ -1480,47 +1339,8 @@ pub(super) mod lanes {
             inv_mass: &[],
             inv_inertia: &[],
         };
-        pair_contacts_in::<false, false>(p, no, ix, jx, fs, [0.0; 2], sm, law, dash, dt, None)
-            .map(|(cf, fs, _, _, _)| (cf, fs))
-    }
-
-    /// The bonds of two pairs for [`pair_contacts_bonded`]: held bonds
-    /// (a lane without one carries any, its result is dropped), their
-    /// forces, law, the discs' thickness and the bonds' step.
-    pub(super) struct BondLanes<'a> {
-        pub held: [&'a Held; 2],
-        pub f: [HeldForces; 2],
-        pub law: &'a BondLaw,
-        pub thickness: f64,
-        pub dt: f64,
-    }
-
-    /// [`pair_contacts`] with the pairs' bonds in the same lanes, on the
-    /// contacts' geometry ([`step2_at`]): also, for each lane whose bond
-    /// is clearly intact, what the bond does and its new forces.
-    #[inline(always)]
-    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
-    pub(super) fn pair_contacts_bonded(
-        p: Kin,
-        ix: [usize; 2],
-        jx: [usize; 2],
-        fs: [f64; 2],
-        sm: [f64; 2],
-        law: &ContactLaw,
-        dash: &[f64; 4],
-        dt: f64,
-        bonds: &BondLanes,
-    ) -> Option<(
-        [ContactForce; 2],
-        [f64; 2],
-        [Option<(BondForce, HeldForces)>; 2],
-    )> {
-        let no = Inert {
-            inv_mass: &[],
-            inv_inertia: &[],
-        };
-        pair_contacts_in::<false, true>(p, no, ix, jx, fs, [0.0; 2], sm, law, dash, dt, Some(bonds))
-            .map(|(cf, fs, _, _, b)| (cf, fs, b))
+        pair_contacts_in::<false>(p, no, ix, jx, fs, [0.0; 2], sm, law, dash, dt)
+            .map(|(cf, fs, _, _)| (cf, fs))
     }
 
     /// [`pair_contacts`] with rolling resistance: also the rolling moments
@@ -1539,13 +1359,12 @@ pub(super) mod lanes {
         dash: &[f64; 4],
         dt: f64,
     ) -> Option<([ContactForce; 2], [f64; 2], [f64; 2], [f64; 2])> {
-        pair_contacts_in::<true, false>(p, m, ix, jx, fs, mr, sm, law, dash, dt, None)
-            .map(|(cf, fs, m, mr, _)| (cf, fs, m, mr))
+        pair_contacts_in::<true>(p, m, ix, jx, fs, mr, sm, law, dash, dt)
     }
 
     #[inline(always)]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
-    fn pair_contacts_in<const ROLL: bool, const BOND: bool>(
+    fn pair_contacts_in<const ROLL: bool>(
         p: Kin,
         m: Inert,
         ix: [usize; 2],
@@ -1556,17 +1375,10 @@ pub(super) mod lanes {
         law: &ContactLaw,
         dash: &[f64; 4],
         dt: f64,
-        bonds: Option<&BondLanes>,
-    ) -> Option<(
-        [ContactForce; 2],
-        [f64; 2],
-        [f64; 2],
-        [f64; 2],
-        [Option<(BondForce, HeldForces)>; 2],
-    )> {
+    ) -> Option<([ContactForce; 2], [f64; 2], [f64; 2], [f64; 2])> {
         // SAFETY: SSE2 is enabled (module cfg); no memory is accessed
         // through pointers.
-        let (fx, fy, fs_tot, fs_new, mom, mr_new, bond) = unsafe {
+        let (fx, fy, fs_tot, fs_new, mom, mr_new) = unsafe {
             let [i1, i2] = ix;
             let [j1, j2] = jx;
             let (pi1, pi2, pj1, pj2) = (p.pos[i1], p.pos[i2], p.pos[j1], p.pos[j2]);
@@ -1600,29 +1412,13 @@ pub(super) mod lanes {
             let vn = _mm_add_pd(_mm_mul_pd(dvx, nx), _mm_mul_pd(dvy, ny));
             let wi = set(p.omega[i1], p.omega[i2]);
             let wj = set(p.omega[j1], p.omega[j2]);
-            let dvt = _mm_add_pd(_mm_mul_pd(dvx, tx), _mm_mul_pd(dvy, nx));
-            let vt = _mm_add_pd(_mm_add_pd(dvt, _mm_mul_pd(wi, ri)), _mm_mul_pd(wj, rj));
-            // the pairs' bonds on the same geometry (BOND only)
-            let bond = match bonds {
-                Some(b) if BOND => {
-                    let g = Geom2 {
-                        nx,
-                        ny,
-                        tx,
-                        dist,
-                        ri,
-                        rj,
-                        rsum,
-                        dvx,
-                        dvy,
-                        wi,
-                        wj,
-                        dvt,
-                    };
-                    step2_at(&g, b.held, b.f, b.law, b.thickness, b.dt)
-                }
-                _ => [None; 2],
-            };
+            let vt = _mm_add_pd(
+                _mm_add_pd(
+                    _mm_add_pd(_mm_mul_pd(dvx, tx), _mm_mul_pd(dvy, nx)),
+                    _mm_mul_pd(wi, ri),
+                ),
+                _mm_mul_pd(wj, rj),
+            );
             let fn_el = _mm_mul_pd(_mm_set1_pd(law.kn), delta);
             let mut fn_tot = _mm_add_pd(fn_el, _mm_mul_pd(cn, vn));
             if law.no_tension {
@@ -1704,7 +1500,7 @@ pub(super) mod lanes {
             } else {
                 ([0.0; 2], [0.0; 2])
             };
-            (fx, fy, fs_tot, fs_new, mom, mr_new, bond)
+            (fx, fy, fs_tot, fs_new, mom, mr_new)
         };
         Some((
             [
@@ -1720,7 +1516,6 @@ pub(super) mod lanes {
             fs_new,
             mom,
             mr_new,
-            bond,
         ))
     }
 }

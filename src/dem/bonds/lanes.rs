@@ -4,45 +4,21 @@
 //! order, so the forces are bitwise the scalar ones. Breakage is left to
 //! the scalar step: a lane whose bond is not clearly intact
 //! ([`Held::intact`]'s test) keeps its old forces, and the caller steps
-//! that bond with [`Held::step`]. The contact sweep calls [`step2_at`]
-//! from its two-lane contact kernel, on the geometry it has computed for
-//! the same two pairs (a bonded pair is a contact pair too).
+//! that bond with [`Held::step`].
 
 use super::{BondForce, BondLaw, Held, HeldForces, ShearStrength};
-#[cfg(test)]
 use crate::dem::contact::Side;
 use crate::dem::sweep::lanes::{get, set};
 use crate::geom::Vec2;
 use std::arch::x86_64::*;
-
-/// The geometry of two pairs `(i, j)` in the lanes, as the contact
-/// kernel has it: the unit normal `n` from i to j (`t = perp(n)`, its x
-/// part `tx = −n_y`), the distance, the radii and their sum, the relative
-/// velocity `v_i − v_j`, the spins and `(v_i − v_j)·t`.
-#[derive(Clone, Copy)]
-pub(in crate::dem) struct Geom2 {
-    pub nx: __m128d,
-    pub ny: __m128d,
-    pub tx: __m128d,
-    pub dist: __m128d,
-    pub ri: __m128d,
-    pub rj: __m128d,
-    pub rsum: __m128d,
-    pub dvx: __m128d,
-    pub dvy: __m128d,
-    pub wi: __m128d,
-    pub wj: __m128d,
-    /// `(v_i − v_j)·t = dvx tx + dvy n_x`.
-    pub dvt: __m128d,
-}
 
 /// The bonds `h` between the discs `si[l]` and `sj[l]`, lane l, with
 /// forces `f[l]`: the new forces written into `f` and the forces on the
 /// discs returned for the bonds that are clearly intact (`None` for a
 /// lane whose bond is not: its forces are left as they were); `None` if a
 /// pair's centres coincide (or are not finite), left to the scalar step.
-#[cfg(test)]
-fn step2(
+#[inline(always)]
+pub(in crate::dem) fn step2(
     h: [&Held; 2],
     f: &mut [HeldForces],
     si: [Side; 2],
@@ -53,73 +29,39 @@ fn step2(
 ) -> Option<[Option<BondForce>; 2]> {
     // SAFETY: SSE2 is enabled (module cfg); no memory is accessed through
     // pointers.
-    let g = unsafe {
+    unsafe {
         let pair = |a: fn(&Side) -> f64| (set(a(&si[0]), a(&si[1])), set(a(&sj[0]), a(&sj[1])));
         let (pix, pjx) = pair(|s| s.pos.x);
         let (piy, pjy) = pair(|s| s.pos.y);
         let (dx, dy) = (_mm_sub_pd(pjx, pix), _mm_sub_pd(pjy, piy));
         let d2 = _mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy));
-        if _mm_movemask_pd(_mm_cmpgt_pd(d2, _mm_setzero_pd())) != 3 {
+        let zero = _mm_setzero_pd();
+        if _mm_movemask_pd(_mm_cmpgt_pd(d2, zero)) != 3 {
             return None;
         }
         // n = d (1/|d|), t = perp(n) = (−n_y, n_x) (negation flips the sign)
         let dist = _mm_sqrt_pd(d2);
         let inv = _mm_div_pd(_mm_set1_pd(1.0), dist);
         let (nx, ny) = (_mm_mul_pd(dx, inv), _mm_mul_pd(dy, inv));
-        let tx = _mm_xor_pd(ny, _mm_set1_pd(-0.0));
+        let sign = _mm_set1_pd(-0.0);
+        let tx = _mm_xor_pd(ny, sign);
+        // the lever arms d r_i/(r_i + r_j), d r_j/(r_i + r_j)
         let (ri, rj) = pair(|s| s.radius);
+        let rs = _mm_add_pd(ri, rj);
+        let la = _mm_mul_pd(dist, _mm_div_pd(ri, rs));
+        let lb = _mm_mul_pd(dist, _mm_div_pd(rj, rs));
         let (vix, vjx) = pair(|s| s.vel.x);
         let (viy, vjy) = pair(|s| s.vel.y);
         let (dvx, dvy) = (_mm_sub_pd(vix, vjx), _mm_sub_pd(viy, vjy));
         let (wi, wj) = pair(|s| s.omega);
-        Geom2 {
-            nx,
-            ny,
-            tx,
-            dist,
-            ri,
-            rj,
-            rsum: _mm_add_pd(ri, rj),
-            dvx,
-            dvy,
-            wi,
-            wj,
-            dvt: _mm_add_pd(_mm_mul_pd(dvx, tx), _mm_mul_pd(dvy, nx)),
-        }
-    };
-    let out = step2_at(&g, h, [f[0], f[1]], law, thickness, dt);
-    Some(std::array::from_fn(|l| {
-        out[l].map(|(bf, fl)| {
-            f[l] = fl;
-            bf
-        })
-    }))
-}
-
-/// [`step2`] on the geometry `g` of the two pairs (from the contact
-/// kernel, which has it already), the bonds' forces `f`: for each lane
-/// whose bond is clearly intact, what it does to the discs and its new
-/// forces; `None` for the others (left to the scalar step).
-#[inline(always)]
-pub(in crate::dem) fn step2_at(
-    g: &Geom2,
-    h: [&Held; 2],
-    f: [HeldForces; 2],
-    law: &BondLaw,
-    thickness: f64,
-    dt: f64,
-) -> [Option<(BondForce, HeldForces)>; 2] {
-    // SAFETY: SSE2 is enabled (module cfg); no memory is accessed through
-    // pointers.
-    unsafe {
-        let (nx, ny, tx) = (g.nx, g.ny, g.tx);
-        let sign = _mm_set1_pd(-0.0);
-        // the lever arms d r_i/(r_i + r_j), d r_j/(r_i + r_j)
-        let la = _mm_mul_pd(g.dist, _mm_div_pd(g.ri, g.rsum));
-        let lb = _mm_mul_pd(g.dist, _mm_div_pd(g.rj, g.rsum));
-        let (wi, wj) = (g.wi, g.wj);
-        let vn = _mm_add_pd(_mm_mul_pd(g.dvx, nx), _mm_mul_pd(g.dvy, ny));
-        let vt = _mm_add_pd(_mm_add_pd(g.dvt, _mm_mul_pd(wi, la)), _mm_mul_pd(wj, lb));
+        let vn = _mm_add_pd(_mm_mul_pd(dvx, nx), _mm_mul_pd(dvy, ny));
+        let vt = _mm_add_pd(
+            _mm_add_pd(
+                _mm_add_pd(_mm_mul_pd(dvx, tx), _mm_mul_pd(dvy, nx)),
+                _mm_mul_pd(wi, la),
+            ),
+            _mm_mul_pd(wj, lb),
+        );
         // A = 2R̄t, I = (2/3)R̄³t (`section`)
         let r = set(h[0].radius, h[1].radius);
         let t = _mm_set1_pd(thickness);
@@ -141,18 +83,24 @@ pub(in crate::dem) fn step2_at(
         let ma = _mm_add_pd(_mm_mul_pd(la, fs), m);
         let mb = _mm_sub_pd(_mm_mul_pd(lb, fs), m);
         let intact = intact2(h, law, fn_, fs, m);
-        let (fx, fy, fn_, fs) = (get(fx), get(fy), get(fn_), get(fs));
+        // lane l's force (x, y) and new (F_n, F_s)
+        let (f0, f1) = (_mm_unpacklo_pd(fx, fy), _mm_unpackhi_pd(fx, fy));
+        let (s0, s1) = (_mm_unpacklo_pd(fn_, fs), _mm_unpackhi_pd(fn_, fs));
         let (ma, mb, m) = (get(ma), get(mb), get(m));
-        std::array::from_fn(|l| {
-            intact[l].then(|| {
-                let bf = BondForce {
-                    f: Vec2::new(fx[l], fy[l]),
-                    ma: ma[l],
-                    mb: mb[l],
-                };
-                (bf, (fn_[l], fs[l], m[l]))
+        let mut lane = |l: usize, fv: __m128d, sv: __m128d| {
+            if !intact[l] {
+                return None;
+            }
+            let [fn_l, fs_l] = get(sv);
+            f[l] = (fn_l, fs_l, m[l]);
+            let [x, y] = get(fv);
+            Some(BondForce {
+                f: Vec2::new(x, y),
+                ma: ma[l],
+                mb: mb[l],
             })
-        })
+        };
+        Some([lane(0, f0, s0), lane(1, f1, s1)])
     }
 }
 
