@@ -975,7 +975,7 @@ impl PyModel {
         let (broken, dt) = g
             .model
             .granular()
-            .map_or((&[][..], 0.0), |gr| (&gr.bonds.broken()[..], gr.dt));
+            .map_or((&[][..], 0.0), |gr| (gr.bonds.broken(), gr.dt));
         let col = |f: &dyn Fn(&efgdem::dem::bonds::BrokenBond) -> f64| {
             broken.iter().map(f).collect::<Vec<f64>>()
         };
