@@ -3,7 +3,9 @@
 //! 1 and 2 threads, measured in one run: blocks of coupled steps and of
 //! DEM-only steps (the same bed built without its bodies) alternate, so a
 //! busy machine slows both alike; the ratio of each pair of blocks is
-//! reported as a median with its min–max, with the coupled step's timing
+//! reported as a median with its min–max (the thread counts take turns
+//! block by block, so each samples the same stretch of the run), with the
+//! coupled step's timing
 //! split and the scheme's energy account.
 //!
 //!     cargo run --release --example scheme_bench -- SCENARIO [options]
@@ -174,20 +176,23 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|");
     let sub = cm.coupled().map_or(1, |c| c.substeps);
     let k = a.block.next_multiple_of(sub);
-    for (pool, &nt) in pools.iter().zip(&a.threads) {
-        let (mut ratios, mut cms, mut dms) = (Vec::new(), Vec::new(), Vec::new());
-        let before = cm.coupled().expect("coupled").timing;
-        let p0 = cm.coupled().expect("coupled").compliance_products;
-        let rebuilds = |m: &Model| m.granular().map_or(0, |g| g.grid.rebuilds);
-        let (rc0, rd0) = (rebuilds(&cm), rebuilds(&dm));
-        let (mut contacts, mut react) = (0usize, 0.0);
-        pool.install(|| {
-            for _ in 0..a.blocks {
+    let rebuilds = |m: &Model| m.granular().map_or(0, |g| g.grid.rebuilds);
+    let mut per: Vec<PerThreads> = a.threads.iter().map(|_| PerThreads::default()).collect();
+    // thread counts interleaved block by block: each samples the same
+    // stretch of the run
+    for _ in 0..a.blocks {
+        for (pool, s) in pools.iter().zip(&mut per) {
+            let c = cm.coupled().expect("coupled");
+            let (before, p0) = (c.timing, c.compliance_products);
+            let (rc0, rd0) = (rebuilds(&cm), rebuilds(&dm));
+            pool.install(|| {
                 let t = Instant::now();
                 for _ in 0..k {
                     cm.step().unwrap_or_else(|e| panic!("{e}"));
-                    contacts += cm.coupled().expect("coupled").contacts.len();
-                    react += reaction(&cm);
+                    s.contacts += cm.coupled().expect("coupled").contacts.len();
+                    s.react += reaction(&cm);
+                    let it = cm.coupled().expect("coupled").newton_iterations.min(9);
+                    s.newton[it] += 1;
                 }
                 let tc = t.elapsed().as_secs_f64() * 1e3 / k as f64;
                 let t = Instant::now();
@@ -195,35 +200,49 @@ fn main() {
                     dm.step().unwrap_or_else(|e| panic!("{e}"));
                 }
                 let td = t.elapsed().as_secs_f64() * 1e3 / k as f64;
-                ratios.push(tc / td);
-                cms.push(tc);
-                dms.push(td);
+                s.ratios.push(tc / td);
+                s.cms.push(tc);
+                s.dms.push(td);
+            });
+            let c = cm.coupled().expect("coupled");
+            let t = &c.timing;
+            for (acc, x) in s.split.iter_mut().zip([
+                t.dem - before.dem,
+                t.transfer - before.transfer,
+                t.contact_solve - before.contact_solve,
+                t.body - before.body,
+            ]) {
+                *acc += x;
             }
-        });
-        let c = cm.coupled().expect("coupled");
-        let n = (k * a.blocks) as f64;
-        let per = |x: f64, y: f64| (x - y) * 1e3 / n;
-        let (lo, hi) = ratios
-            .iter()
-            .fold((f64::MAX, f64::MIN), |(l, h), &r| (l.min(r), h.max(r)));
-        let (created, exchanged) = c.subcycling_energy();
+            s.products += c.compliance_products - p0;
+            s.rebuilds.0 += rebuilds(&cm) - rc0;
+            s.rebuilds.1 += rebuilds(&dm) - rd0;
+        }
+    }
+    let (created, exchanged) = cm.coupled().expect("coupled").subcycling_energy();
+    let n = (k * a.blocks) as f64;
+    for (s, nt) in per.iter_mut().zip(&a.threads) {
+        let (lo, hi) =
+            (s.ratios.iter()).fold((f64::MAX, f64::MIN), |(l, h), &r| (l.min(r), h.max(r)));
         eprintln!(
-            "  {nt} threads: products S x per step {:.1}; neighbour rebuilds coupled {} / DEM-only {}",
-            (c.compliance_products - p0) as f64 / n,
-            rebuilds(&cm) - rc0,
-            rebuilds(&dm) - rd0
+            "  {nt} threads: products S x per step {:.1}; Newton iterations per step (0..9+) {:?}; neighbour rebuilds coupled {} / DEM-only {}",
+            s.products as f64 / n,
+            s.newton,
+            s.rebuilds.0,
+            s.rebuilds.1
         );
+        let ms = |x: f64| x * 1e3 / n;
         println!(
             "| {nt} | {:.3} | {:.3} | {:.2} ({lo:.2}–{hi:.2}) | {:.3} / {:.3} / {:.3} / {:.3} | {:.0} | {:.1} | {} |",
-            median(&mut dms),
-            median(&mut cms),
-            median(&mut ratios),
-            per(c.timing.dem, before.dem),
-            per(c.timing.transfer, before.transfer),
-            per(c.timing.contact_solve, before.contact_solve),
-            per(c.timing.body, before.body),
-            contacts as f64 / n,
-            react / n,
+            median(&mut s.dms),
+            median(&mut s.cms),
+            median(&mut s.ratios),
+            ms(s.split[0]),
+            ms(s.split[1]),
+            ms(s.split[2]),
+            ms(s.split[3]),
+            s.contacts as f64 / n,
+            s.react / n,
             if exchanged > 0.0 {
                 format!("{:.3e} / {:.3e}", created, exchanged)
             } else {
@@ -231,4 +250,20 @@ fn main() {
             }
         );
     }
+}
+
+/// One thread count's measurements.
+#[derive(Default)]
+struct PerThreads {
+    ratios: Vec<f64>,
+    cms: Vec<f64>,
+    dms: Vec<f64>,
+    /// DEM / transfer / contact solve / body seconds
+    split: [f64; 4],
+    products: usize,
+    rebuilds: (usize, usize),
+    contacts: usize,
+    react: f64,
+    /// DEM steps by the contact solve's Newton iterations (9: 9 or more)
+    newton: [usize; 10],
 }

@@ -270,7 +270,7 @@ pub struct Solver {
     /// The squared residual and squared scale of the last damped step
     /// ([`line_search`](Self::line_search)).
     last: (f64, f64),
-    /// Row permutations of [`lu_solve`].
+    /// Row permutation of the LU factors in `mat` ([`lu_factor`]).
     perm: (Vec<usize>, Vec<usize>),
 }
 
@@ -335,6 +335,8 @@ impl Solver {
             v.resize(m, Vec2::ZERO);
         }
         let mut closed: Vec<usize> = Vec::new();
+        // the closed contacts and their Jacobians of the factored matrix
+        let mut factored: (Vec<usize>, Vec<[f64; 4]>) = (vec![usize::MAX], Vec::new());
         for iter in 1..=self.newton_cap() {
             // −R = −(w + base − free − S g)
             for (t, e) in self.t.iter_mut().zip(out.iter()) {
@@ -345,29 +347,45 @@ impl Solver {
             for k in 0..m {
                 self.r[k] = -(self.w[k] + base[k] - free[k] - self.st[k]);
             }
-            // (I − S_CC J_C) d_C = −R_C over the closed contacts
+            // (I − S_CC J_C) d_C = −R_C over the closed contacts; the
+            // matrix depends on those contacts' Jacobians only (S is fixed
+            // for the solve), so while they stay the same its LU factors
+            // are used again: the same arithmetic, one factorisation less
             closed.clear();
             closed.extend((0..m).filter(|&k| out[k].regime != 0));
             let c2 = 2 * closed.len();
-            self.mat.clear();
-            self.mat.resize(c2 * c2, 0.0);
+            let same = closed == factored.0
+                && closed
+                    .iter()
+                    .zip(&factored.1)
+                    .all(|(&k, j)| out[k].jac == *j);
             self.rhs.clear();
-            for (i, &k) in closed.iter().enumerate() {
+            for &k in &closed {
                 self.rhs.extend([self.r[k].x, self.r[k].y]);
-                // column-major: entry (row 2i + a, column q) at q c2 + 2i + a
-                for a in 0..2 {
-                    let row = &s[(2 * k + a) * m2..(2 * k + a + 1) * m2];
-                    let ri = 2 * i + a;
-                    for (j, &l) in closed.iter().enumerate() {
-                        let (x, y) = (row[2 * l], row[2 * l + 1]);
-                        let jac = &out[l].jac;
-                        self.mat[2 * j * c2 + ri] = -(x * jac[0] + y * jac[2]);
-                        self.mat[(2 * j + 1) * c2 + ri] = -(x * jac[1] + y * jac[3]);
-                    }
-                    self.mat[ri * c2 + ri] += 1.0;
-                }
             }
-            lu_solve(&mut self.mat, &mut self.rhs, c2, &mut self.perm);
+            if !same {
+                self.mat.clear();
+                self.mat.resize(c2 * c2, 0.0);
+                for (i, &k) in closed.iter().enumerate() {
+                    // column-major: entry (row 2i + a, column q) at q c2 + 2i + a
+                    for a in 0..2 {
+                        let row = &s[(2 * k + a) * m2..(2 * k + a + 1) * m2];
+                        let ri = 2 * i + a;
+                        for (j, &l) in closed.iter().enumerate() {
+                            let (x, y) = (row[2 * l], row[2 * l + 1]);
+                            let jac = &out[l].jac;
+                            self.mat[2 * j * c2 + ri] = -(x * jac[0] + y * jac[2]);
+                            self.mat[(2 * j + 1) * c2 + ri] = -(x * jac[1] + y * jac[3]);
+                        }
+                        self.mat[ri * c2 + ri] += 1.0;
+                    }
+                }
+                lu_factor(&mut self.mat, c2, &mut self.perm);
+                factored.0.clone_from(&closed);
+                factored.1.clear();
+                factored.1.extend(closed.iter().map(|&k| out[k].jac));
+            }
+            lu_apply(&self.mat, &mut self.rhs, c2, &self.perm);
             // d_O = −R_O + S_OC J_C d_C: J d on the closed ones, S of it
             self.t.iter_mut().for_each(|t| *t = Vec2::ZERO);
             for (i, &k) in closed.iter().enumerate() {
@@ -383,6 +401,8 @@ impl Solver {
             // the compliance of a whole body step makes the contacts
             // strongly coupled: damped steps from the first
             let touch = iter > UNDAMPED;
+            // the residual at the present iterate is −R's (its squares)
+            let phi = self.r[..m].iter().map(|r| r.dot(*r)).sum::<f64>();
             if self.line_search(
                 contacts,
                 base,
@@ -390,7 +410,7 @@ impl Solver {
                 &mut Compliance::Dense(s),
                 out,
                 &d,
-                touch,
+                (touch, Some(phi)),
             ) {
                 return Ok(iter);
             }
@@ -446,7 +466,7 @@ impl Solver {
                     &mut Compliance::Dense(&dense),
                     out,
                     &d,
-                    true,
+                    (true, None),
                 );
                 self.s = dense;
                 settled
@@ -494,7 +514,7 @@ impl Solver {
             let settled = if iter <= UNDAMPED {
                 settle(&mut self.w, contacts, out, |k| d[k])
             } else {
-                self.line_search(contacts, base, free, s, out, &d, true)
+                self.line_search(contacts, base, free, s, out, &d, (true, None))
             };
             self.d = d;
             if settled {
@@ -517,6 +537,7 @@ impl Solver {
     /// normal dashpot the force jumps at `δ = 0` (from 0 to `c_n δ̇`), and
     /// a contact just touching has no exact solution on either side of the
     /// jump — the step ends with it on the side the last iterate found.
+    /// `phi`: the squared residual at the present iterate, if known.
     #[allow(clippy::too_many_arguments)]
     fn line_search(
         &mut self,
@@ -526,7 +547,7 @@ impl Solver {
         s: &mut Compliance,
         out: &mut [Eval],
         d: &[Vec2],
-        touch: bool,
+        (touch, phi): (bool, Option<f64>),
     ) -> bool {
         let m = contacts.len();
         for v in [&mut self.t, &mut self.st, &mut self.scratch] {
@@ -544,7 +565,10 @@ impl Solver {
                 })
                 .sum::<f64>()
         };
-        let phi = residual(&self.w, out, &mut self.t, &mut self.st);
+        let phi = phi.unwrap_or_else(|| {
+            self.products += 1;
+            residual(&self.w, out, &mut self.t, &mut self.st)
+        });
         let mut step = 1.0;
         loop {
             for ((x, &w), &dk) in self.scratch[..m].iter_mut().zip(&self.w).zip(d) {
@@ -554,7 +578,7 @@ impl Solver {
                 .map(|(c, w)| c.eval(*w))
                 .collect();
             let now = residual(&self.scratch, &trial, &mut self.t, &mut self.st);
-            self.products += 2;
+            self.products += 1;
             if now <= (1.0 - 1e-4 * step) * phi || step < 1.0 / 64.0 {
                 let mut flips = false;
                 let same = (trial.iter().zip(out.iter()).zip(contacts.iter().zip(d))).all(
@@ -776,34 +800,50 @@ fn apply2(a: &[f64; 4], x: Vec2) -> Vec2 {
     Vec2::new(a[0] * x.x + a[1] * x.y, a[2] * x.x + a[3] * x.y)
 }
 
-/// Solve `a x = b` in place (`b ← x`) by an LU factorization with partial
-/// pivoting (faer's, sequential: the same on any number of threads); `a`
-/// is n × n column-major and is destroyed.
-fn lu_solve(a: &mut [f64], b: &mut [f64], n: usize, perm: &mut (Vec<usize>, Vec<usize>)) {
-    use faer::dyn_stack::{MemBuffer, MemStack};
+/// The scratch of faer's dense LU with partial pivoting and of its solve
+/// with one right-hand side, for `n × n`.
+fn lu_scratch(n: usize) -> faer::dyn_stack::MemBuffer {
     use faer::linalg::lu::partial_pivoting::{factor, solve};
-    use faer::prelude::{Reborrow, ReborrowMut};
+    let par = faer::Par::Seq;
+    let req = factor::lu_in_place_scratch::<usize, f64>(n, n, par, Default::default())
+        .or(solve::solve_in_place_scratch::<usize, f64>(n, 1, par));
+    faer::dyn_stack::MemBuffer::new(req)
+}
+
+/// `a` (n × n, column-major) overwritten by its LU factors with partial
+/// pivoting, the row permutation in `perm`.
+fn lu_factor(a: &mut [f64], n: usize, perm: &mut (Vec<usize>, Vec<usize>)) {
+    use faer::dyn_stack::MemStack;
+    use faer::linalg::lu::partial_pivoting::factor;
     if n == 0 {
         return;
     }
-    let par = faer::Par::Seq;
     perm.0.resize(n, 0);
     perm.1.resize(n, 0);
-    let req = factor::lu_in_place_scratch::<usize, f64>(n, n, par, Default::default())
-        .or(solve::solve_in_place_scratch::<usize, f64>(n, 1, par));
-    let mut mem = MemBuffer::new(req);
-    let stack = MemStack::new(&mut mem);
-    let mut m = faer::MatMut::from_column_major_slice_mut(a, n, n);
-    let (_, p) = factor::lu_in_place(
-        m.rb_mut(),
+    let mut mem = lu_scratch(n);
+    let m = faer::MatMut::from_column_major_slice_mut(a, n, n);
+    factor::lu_in_place(
+        m,
         &mut perm.0,
         &mut perm.1,
-        par,
-        stack,
+        faer::Par::Seq,
+        MemStack::new(&mut mem),
         Default::default(),
     );
+}
+
+/// `b ← A⁻¹ b` from the factors of [`lu_factor`].
+fn lu_apply(lu: &[f64], b: &mut [f64], n: usize, perm: &(Vec<usize>, Vec<usize>)) {
+    use faer::dyn_stack::MemStack;
+    use faer::linalg::lu::partial_pivoting::solve;
+    if n == 0 {
+        return;
+    }
+    let mut mem = lu_scratch(n);
+    let m = faer::MatRef::from_column_major_slice(lu, n, n);
+    let p = faer::perm::PermRef::new_checked(&perm.0, &perm.1, n);
     let rhs = faer::MatMut::from_column_major_slice_mut(b, n, 1);
-    solve::solve_in_place(m.rb(), m.rb(), p, rhs, par, stack);
+    solve::solve_in_place(m, m, p, rhs, faer::Par::Seq, MemStack::new(&mut mem));
 }
 
 #[cfg(test)]

@@ -651,9 +651,12 @@ impl CoupledModel {
             let (created, exchanged) = body.path_energy();
             // against what the body and its contacts hold too: a stiff
             // body barely moving exchanges almost no work, and a fraction
-            // of nothing is noise
-            let e = body.energies();
-            g.held = g.held.max(e.kinetic + e.strain + interface);
+            // of nothing is noise (its energies, two products with the
+            // body's matrices, only when the work alone would not do)
+            if created > MAX_CREATED * exchanged.max(g.held) {
+                let e = body.energies();
+                g.held = g.held.max(e.kinetic + e.strain + interface);
+            }
             if created > MAX_CREATED * exchanged.max(g.held) {
                 if g.over == 0 {
                     (g.created, g.exchanged) = (created, exchanged);
@@ -690,7 +693,8 @@ impl CoupledModel {
 
     /// One DEM step of the compliant sub-cycled scheme. At the start of a
     /// body step (`h = nΔt`) each body predicts its step under the held
-    /// loads (the last body step's end loads); the discs then take one DEM
+    /// loads (the last body step's end loads; on another thread while the
+    /// discs take their step, except in the very first); the discs take one DEM
     /// step with the disc–body forces of the present state, the boundary
     /// goes to its path at the new fraction `s` of the body step, and the
     /// contacts are solved implicitly ([`implicit`], as in the exact
@@ -704,13 +708,16 @@ impl CoupledModel {
     /// DEM step; with n = 1 it is the exact step with the contact forces
     /// shared by the segment ends.
     fn step_compliant(&mut self, discs: &mut dyn DiscStep) -> Result<(), CouplingError> {
+        // a body step's prediction does not depend on the discs' step:
+        // once primed, the two run side by side (as in the exact step)
+        let side_by_side = self.sub == 0 && self.primed;
+        let h = self.granular.dt * self.substeps as f64;
         workers::awake(|| {
             let t = Instant::now();
             discs.prepare(&mut self.granular);
             let t0 = Instant::now();
             self.timing.dem += (t0 - t).as_secs_f64();
-            if self.sub == 0 {
-                let h = self.granular.dt * self.substeps as f64;
+            if self.sub == 0 && !side_by_side {
                 for b in &mut self.bodies {
                     b.begin_path(h)?;
                 }
@@ -725,8 +732,21 @@ impl CoupledModel {
             Ok::<_, CouplingError>(())
         })?;
         let t2 = Instant::now();
-        discs.step(&mut self.granular, &self.contacts);
-        self.timing.dem += t2.elapsed().as_secs_f64();
+        let (granular, bodies) = (&mut self.granular, &mut self.bodies);
+        let contacts = &self.contacts;
+        let ((), (begun, tb)) = rayon::join(
+            || discs.step(granular, contacts),
+            || {
+                let t = Instant::now();
+                let r = (bodies.iter_mut())
+                    .filter(|_| side_by_side)
+                    .try_for_each(|b| b.begin_path(h));
+                (r, t.elapsed().as_secs_f64())
+            },
+        );
+        self.timing.body += tb;
+        self.timing.dem += (t2.elapsed().as_secs_f64() - tb).max(0.0);
+        begun?;
         workers::awake(|| {
             let t3 = Instant::now();
             self.check_finite()?;
@@ -1216,7 +1236,8 @@ pub struct GuardRecord {
     /// Work exchanged when the row began.
     pub exchanged: f64,
     /// The largest energy the body and its contacts have held (kinetic,
-    /// strain, the disc–body contact springs).
+    /// strain, the disc–body contact springs), sampled at the body steps
+    /// whose creation exceeded [`MAX_CREATED`] of the work exchanged.
     pub held: f64,
 }
 
