@@ -180,6 +180,27 @@ pub struct BodyEnergies {
     /// Work done on the body since t = 0 by its own loads (permanent loads,
     /// moving edges) — not by the contacts.
     pub work: f64,
+    /// Energy the growth of its cracks took out of the body and its
+    /// contacts since t = 0 (EFG: [`fracture_energy`](crate::efg::EfgBody::fracture_energy)).
+    pub fracture: f64,
+}
+
+/// A disc–body contact holding a body while its cracks grow
+/// ([`Continuum::grow`]): the disc is held in place, and the contact is a
+/// normal spring `k_n` between it and the body's material point `point`
+/// (the linearisation of the contact law about the present state, the
+/// normal fixed).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeldContact {
+    /// Material (reference) point of the body.
+    pub point: Vec2,
+    /// Force on the body at the present state.
+    pub force: Vec2,
+    /// Unit normal from the disc towards the body: the force grows by
+    /// `k_n` per unit the body's point moves against it.
+    pub normal: Vec2,
+    /// Normal stiffness `k_n` (0: the force is held fixed).
+    pub kn: f64,
 }
 
 /// Why a body could not advance.
@@ -313,9 +334,21 @@ pub trait Continuum: Send {
     }
     /// After a body step: grow its cracks if due, and rebuild the contact
     /// chains along the longer faces. Whether it grew (a body without
-    /// crack growth never does).
-    fn grow(&mut self) -> Result<bool, SolveError> {
+    /// crack growth never does). `held`: the disc contacts of the present
+    /// state, which hold the body while its new crack pieces open.
+    fn grow(&mut self, held: &[HeldContact]) -> Result<bool, SolveError> {
+        let _ = held;
         Ok(false)
+    }
+    /// Whether [`grow`](Self::grow) would look at the tips now (a body
+    /// without crack growth: never).
+    fn growth_due(&self) -> bool {
+        false
+    }
+    /// Add `e` to the energy its crack growth took
+    /// ([`BodyEnergies::fracture`]); a body without cracks ignores it.
+    fn book_fracture(&mut self, e: f64) {
+        let _ = e;
     }
     /// Compliant scheme, at the fraction `s` of the body step: for the
     /// contact points `pts[k] = (chain, segment, σ)` (parameter σ on the
@@ -467,8 +500,18 @@ pub trait ContactBody: Send + Sync + 'static {
     fn commit(&mut self) -> Result<(), Self::Error>;
     /// Grow the body's cracks if due (after a committed step); whether it
     /// grew. Its contact chains ([`chains`](Self::chains)) then change.
-    fn grow(&mut self) -> Result<bool, Self::Error> {
+    /// `held` as in [`Continuum::grow`].
+    fn grow(&mut self, held: &[HeldContact]) -> Result<bool, Self::Error> {
+        let _ = held;
         Ok(false)
+    }
+    /// As [`Continuum::growth_due`].
+    fn growth_due(&self) -> bool {
+        false
+    }
+    /// As [`Continuum::book_fracture`].
+    fn book_fracture(&mut self, e: f64) {
+        let _ = e;
     }
     /// Kinetic, strain and penalty energy and load work of the present
     /// state.
@@ -1114,12 +1157,18 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         }
         Ok(())
     }
-    fn grow(&mut self) -> Result<bool, SolveError> {
-        if !self.body.grow().map_err(|e| self.solve_error(e))? {
+    fn grow(&mut self, held: &[HeldContact]) -> Result<bool, SolveError> {
+        if !self.body.grow(held).map_err(|e| self.solve_error(e))? {
             return Ok(false);
         }
         self.remake_chains().map_err(|e| self.solve_error(e))?;
         Ok(true)
+    }
+    fn growth_due(&self) -> bool {
+        self.body.growth_due()
+    }
+    fn book_fracture(&mut self, e: f64) {
+        self.body.book_fracture(e);
     }
     fn set_step(&mut self, h: f64) -> Result<(), SolveError> {
         self.body

@@ -26,8 +26,12 @@ pub struct EnergyAccount {
     /// Work of gravity on the discs, of the bodies' permanent loads and
     /// moving edges, and of the walls since t = 0.
     pub w_ext: f64,
-    /// `W_ext − (stored − stored at t = 0)`: friction, dashpots and
-    /// numerical dissipation.
+    /// Energy the growth of the bodies' cracks took (the
+    /// drop of the stored energy less the work of the loads as the new
+    /// crack pieces open, [`EfgBody::grow_under`](crate::efg::EfgBody::grow_under)).
+    pub fracture: f64,
+    /// `W_ext − (stored − stored at t = 0) − fracture`: friction, dashpots
+    /// and numerical dissipation.
     pub diss: f64,
 }
 
@@ -67,7 +71,8 @@ impl WorkMeter {
             wall_work: 0.0,
             stored0: 0.0,
         };
-        // stored minus external work at t = 0, so that E_diss(0) = 0
+        // stored minus external work (and fracture energy) at t = 0, so
+        // that E_diss(0) = 0
         w.stored0 = -w.account(m).diss;
         w
     }
@@ -87,12 +92,14 @@ impl WorkMeter {
             w_grav += p.mass[k] * g.gravity.dot(p.pos[k] - self.x0[p.id[k] as usize]);
         }
         let (mut kin_body, mut strain, mut penalty, mut w_body) = (0.0, 0.0, 0.0, 0.0);
+        let mut fracture = 0.0;
         for b in &m.bodies {
             let en = b.energies();
             kin_body += en.kinetic;
             strain += en.strain;
             penalty += en.penalty;
             w_body += en.work;
+            fracture += en.fracture;
         }
         let contact = e.spring + e.bond + m.body_contact_energy();
         let w_ext = w_grav + w_body + self.wall_work;
@@ -104,9 +111,10 @@ impl WorkMeter {
             penalty,
             contact,
             w_ext,
+            fracture,
             diss: 0.0,
         };
-        e.diss = w_ext - (e.stored() - self.stored0);
+        e.diss = w_ext - (e.stored() - self.stored0) - fracture;
         e
     }
 }

@@ -122,8 +122,10 @@ pub struct EfgBody {
     pub spec: BodyParams,
     /// `[simulation] gravity` of the build.
     pub gravity: [f64; 2],
-    /// Energy released by crack growth since t = 0: `Σ G Δa t` with
-    /// `G = (K_I² + K_II²)/E′` at each growth (Irwin).
+    /// Energy crack growth took since t = 0: at each growth the drop of
+    /// the stored energy less the load work as the new pieces open (with
+    /// the holding contacts' springs; [`super::growth`], *the energy*) —
+    /// at fixed loads `∫ G t da`, `G = (K_I² + K_II²)/E′`.
     pub fracture_energy: f64,
     /// Growth increments so far, per crack tip `[crack][end]`.
     pub increments: Vec<[usize; 2]>,

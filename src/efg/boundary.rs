@@ -8,8 +8,8 @@ use super::body::EfgBody;
 use super::shape::ShapeRow;
 use crate::continuum::newmark::{Newmark, State};
 use crate::continuum::{
-    BodyEnergies, BodyState, ContactBody, Edge, Row, StateError, WithBoundary, add_dof_load,
-    add_row_load,
+    BodyEnergies, BodyState, ContactBody, Edge, HeldContact, Row, StateError, WithBoundary,
+    add_dof_load, add_row_load,
 };
 use crate::geom::Vec2;
 
@@ -261,8 +261,14 @@ impl ContactBody for EfgBody {
         EfgBody::commit(self)
     }
     /// [`EfgBody::grow_if_due`].
-    fn grow(&mut self) -> Result<bool, EfgError> {
-        Ok(!self.grow_if_due()?.is_empty())
+    fn grow(&mut self, held: &[HeldContact]) -> Result<bool, EfgError> {
+        Ok(!self.grow_if_due(held)?.is_empty())
+    }
+    fn growth_due(&self) -> bool {
+        EfgBody::growth_due(self)
+    }
+    fn book_fracture(&mut self, e: f64) {
+        self.fracture_energy += e;
     }
     fn save_state(&self) -> BodyState {
         EfgBody::save_state(self)
@@ -285,6 +291,7 @@ impl ContactBody for EfgBody {
                     .zip(&self.state.u)
                     .map(|(f, u)| f * u)
                     .sum::<f64>(),
+            fracture: self.fracture_energy,
         }
     }
 }

@@ -69,6 +69,7 @@ impl ContactBody for FemBody {
             strain: self.strain_energy(),
             penalty: 0.0,
             work: self.work(),
+            fracture: 0.0,
         }
     }
 }

@@ -66,7 +66,7 @@ impl Body {
         match self {
             Body::Efg(b) => {
                 b.advance()?;
-                Ok(b.grow_if_due().map(drop)?)
+                Ok(b.grow_if_due(&[]).map(drop)?)
             }
             Body::Fem(b) => Ok(b.advance()?),
         }

@@ -413,6 +413,10 @@ pub(super) fn run(run: Run, mut model: Model, comm: Arc<dyn Comm>) -> Result<Val
         "W_ext",
         "E_diss",
     ]);
+    let growing = sc.body.iter().any(|b| b.fracture.is_some());
+    if growing {
+        cols.push("E_fracture");
+    }
     let bonded = coupled(&model).granular.bonds.active();
     if bonded {
         cols.extend(BOND_COLUMNS);
@@ -453,6 +457,9 @@ pub(super) fn run(run: Run, mut model: Model, comm: Arc<dyn Comm>) -> Result<Val
             row.extend([
                 fn_sum, e.kin_dem, e.kin_body, e.strain, e.penalty, e.contact, e.w_ext, e.diss,
             ]);
+            if growing {
+                row.push(e.fracture);
+            }
             if bonded {
                 row.extend(bond_row(&m.granular));
             }
@@ -553,6 +560,7 @@ fn finish(
         "energy": {
             "E_kin_dem": e.kin_dem, "E_kin_body": e.kin_body, "E_strain": e.strain,
             "E_penalty": e.penalty, "E_contact": e.contact, "W_ext": e.w_ext, "E_diss": e.diss,
+            "E_fracture": e.fracture,
         },
         "timing": {
             "build_seconds": run.build_s,

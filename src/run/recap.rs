@@ -105,9 +105,17 @@ fn energy(s: &mut String, kind: &str, summary: &Value) {
                 true => format!(" ({:.1} % of W_ext)", 100.0 * d / w),
                 false => String::new(),
             };
+            // a run with growing cracks: the energy the growth took
+            let (plus, fracture) = match e["E_fracture"].as_f64() {
+                Some(fr) if fr != 0.0 => (
+                    " + fracture",
+                    format!("; taken by crack growth E_fracture = {} J", num(fr)),
+                ),
+                _ => ("", String::new()),
+            };
             let _ = writeln!(
                 s,
-                "energy: work done W_ext = {} J = stored change + dissipated; stored now {} J (kinetic {} + {}, strain {}, contact {}); dissipated E_diss = {} J{share}",
+                "energy: work done W_ext = {} J = stored change{plus} + dissipated; stored now {} J (kinetic {} + {}, strain {}, contact {}){fracture}; dissipated E_diss = {} J{share}",
                 num(w),
                 num(stored),
                 num(f(&e["E_kin_dem"])),
