@@ -58,7 +58,7 @@ fn main() {
     }
     println!(
         "{n} discs: {} bonds, {} clumps ({} discs in clumps), {} threads",
-        runs[1].1.bonds.list.len(),
+        runs[1].1.bonds.list().len(),
         runs[2].1.clumps.len(),
         runs[2].1.clumps.members.len(),
         rayon::current_num_threads()

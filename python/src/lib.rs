@@ -938,8 +938,11 @@ impl PyModel {
     fn bonds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let g = self.lock()?;
         let out = PyDict::new(py);
-        let empty = Default::default();
-        let l = g.model.granular().map_or(&empty, |gr| &gr.bonds.list);
+        let l = g
+            .model
+            .granular()
+            .map(|gr| gr.bonds.list())
+            .unwrap_or_default();
         let number = |v: &[u32]| v.iter().map(|k| k + 1).collect::<Vec<u32>>();
         out.set_item("a", number(&l.a).into_pyarray(py))?;
         out.set_item("b", number(&l.b).into_pyarray(py))?;
@@ -972,7 +975,7 @@ impl PyModel {
         let (broken, dt) = g
             .model
             .granular()
-            .map_or((&[][..], 0.0), |gr| (&gr.bonds.list.broken[..], gr.dt));
+            .map_or((&[][..], 0.0), |gr| (gr.bonds.broken(), gr.dt));
         let col = |f: &dyn Fn(&efgdem::dem::bonds::BrokenBond) -> f64| {
             broken.iter().map(f).collect::<Vec<f64>>()
         };

@@ -59,10 +59,12 @@
 //! orientation. The contact sweep steps them block by block (a block's
 //! bonds just before its discs, from the state before the step, two at a
 //! time in SIMD lanes with the scalar operations; a bond whose second
-//! disc lies in a later block ahead of the sweep, as the contacts do);
-//! after the sweep the list takes the new forces, in list order.
+//! disc lies in a later block ahead of the sweep, as the contacts do).
 //! Every disc sums its bonds in that fixed order, so the result does not
-//! depend on the number of threads or on where the bonds are stored.
+//! depend on the number of threads or on where the bonds are stored. The
+//! list takes the new forces only when it is read ([`Bonds::list`],
+//! [`Bonds::sync`]; a checkpoint, an output) or the bonds are held anew
+//! (the discs renumbered, a bond broken).
 
 #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
 pub(super) mod lanes;
@@ -519,8 +521,11 @@ pub struct Bonds {
     pub law: BondLaw,
     /// Which pairs are bonded and when (`None`: no bonds).
     pub rule: Option<BondRule>,
-    /// The bonds and their history (saved by a checkpoint).
-    pub list: BondList,
+    /// The bonds and their history (saved by a checkpoint). Its forces
+    /// are brought up to date only when read ([`list`](Self::list),
+    /// [`sync`](Self::sync)): a step leaves the new forces where the
+    /// sweep holds them.
+    pub(crate) list: BondList,
     /// Bonds of the disc in slot `i` as the smaller slot:
     /// `held[row[i]..row[i + 1]]` (`n + 1` offsets; empty without bonds).
     pub(super) row: Vec<u32>,
@@ -541,6 +546,8 @@ pub struct Bonds {
     thickness: f64,
     /// The slots or the list changed since `held` was built.
     stale: bool,
+    /// `held_f` holds newer forces than the list.
+    dirty: bool,
 }
 
 impl Bonds {
@@ -549,10 +556,68 @@ impl Bonds {
         self.rule.is_some()
     }
 
-    /// The index needs rebuilding (the discs were renumbered, the list was
-    /// replaced).
+    /// The index needs rebuilding (the discs were renumbered).
     pub fn invalidate(&mut self) {
         self.stale = true;
+    }
+
+    /// The bonds and their history, with the forces of the present state
+    /// (a copy when the list's forces are behind the sweep's: see
+    /// [`sync`](Self::sync) to bring them up to date in place).
+    pub fn list(&self) -> std::borrow::Cow<'_, BondList> {
+        if !self.dirty {
+            return std::borrow::Cow::Borrowed(&self.list);
+        }
+        let mut l = self.list.clone();
+        self.copy_forces(&mut l);
+        std::borrow::Cow::Owned(l)
+    }
+
+    /// Every bond broken so far ([`BondList::broken`]).
+    pub fn broken(&self) -> &[BrokenBond] {
+        &self.list.broken
+    }
+
+    /// Bring the list's forces up to date with the last step (a step
+    /// leaves them where the sweep holds them, in slot order).
+    pub fn sync(&mut self) {
+        if self.dirty {
+            let mut l = std::mem::take(&mut self.list);
+            self.copy_forces(&mut l);
+            self.list = l;
+            self.dirty = false;
+        }
+    }
+
+    /// Replace the list (a saved state): the index is rebuilt from it.
+    pub(super) fn replace_list(&mut self, list: &BondList) {
+        self.list.clone_from(list);
+        self.dirty = false;
+        self.stale = true;
+    }
+
+    /// The held forces into `l`'s force arrays, in list order (in
+    /// parallel).
+    fn copy_forces(&self, l: &mut BondList) {
+        let held_f = &self.held_f;
+        (&mut l.fn_, &mut l.fs, &mut l.moment, &self.at)
+            .into_par_iter()
+            .with_min_len(4096)
+            .for_each(|(n, s, m, &(w, flip))| {
+                let f = held_f[w as usize];
+                (*n, *s, *m) = (f.0, f.1, if flip { -f.2 } else { f.2 });
+            });
+    }
+
+    /// The forces `(F_n, F_s, M)` of listed bond k in the present state.
+    fn forces(&self, k: usize) -> (f64, f64, f64) {
+        let l = &self.list;
+        if !self.dirty {
+            return (l.fn_[k], l.fs[k], l.moment[k]);
+        }
+        let (w, flip) = self.at[k];
+        let f = self.held_f[w as usize];
+        (f.0, f.1, if flip { -f.2 } else { f.2 })
     }
 
     /// Hold the listed bonds in slot order, in rows of `n + 1` offsets,
@@ -567,6 +632,8 @@ impl Bonds {
         {
             return;
         }
+        // the forces of the last step, from the old order
+        self.sync();
         self.stale = false;
         self.thickness = thickness;
         let l = &self.list;
@@ -642,23 +709,17 @@ impl Bonds {
             .collect()
     }
 
-    /// After the sweep (which left each bond's new forces in `held_f`):
-    /// the list takes the held forces (in list order, in parallel), then
-    /// the bonds that broke (`broken`, in any order) are removed and
-    /// recorded in [`BondList::broken`] with `step` and `time`, in list
-    /// order.
+    /// After the sweep (which left each bond's new forces in `held_f`,
+    /// where they stay until read): the bonds that broke (`broken`, in
+    /// any order) are removed and recorded in [`BondList::broken`] with
+    /// `step` and `time`, in list order.
     pub(super) fn finish_step(&mut self, broken: Vec<Break>, step: usize, time: f64) {
-        let (l, held_f) = (&mut self.list, &self.held_f);
-        (&mut l.fn_, &mut l.fs, &mut l.moment, &self.at)
-            .into_par_iter()
-            .with_min_len(4096)
-            .for_each(|(n, s, m, &(w, flip))| {
-                let f = held_f[w as usize];
-                (*n, *s, *m) = (f.0, f.1, if flip { -f.2 } else { f.2 });
-            });
+        self.dirty = true;
         if broken.is_empty() {
             return;
         }
+        self.sync();
+        let l = &mut self.list;
         let mut broken: Vec<(usize, bool, Break)> = broken
             .into_iter()
             .map(|b| {
@@ -690,6 +751,7 @@ impl Bonds {
     /// Apply the rule: bond every pair `(i, j)` of `pairs` (slots) that it
     /// accepts. The bonds are sorted by their disc ids.
     pub fn create(&mut self, p: &Particles, pairs: impl Iterator<Item = (usize, usize)>) {
+        self.sync();
         let Some(rule) = &self.rule else { return };
         let inside = |x: Vec2| {
             rule.region
@@ -740,7 +802,7 @@ impl Bonds {
         (0..l.len())
             .map(|k| {
                 let (a, i) = section(l.radius[k], thickness);
-                bond_energy(&self.law, (l.fn_[k], l.fs[k], l.moment[k]), a, i)
+                bond_energy(&self.law, self.forces(k), a, i)
             })
             .sum()
     }

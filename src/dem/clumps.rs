@@ -177,6 +177,10 @@ pub struct Clumps {
     member_of: Vec<u32>,
     /// `(sin θ, cos θ)` of each clump, from its last advance.
     rot: Vec<(f64, f64)>,
+    /// Slot of each member (as `members`) in the slot order of `n_slots`
+    /// discs (empty: to be found again, [`invalidate`](Self::invalidate)).
+    slots: Vec<u32>,
+    n_slots: usize,
 }
 
 impl Clumps {
@@ -188,6 +192,20 @@ impl Clumps {
     /// No clumps.
     pub fn is_empty(&self) -> bool {
         self.pos.is_empty()
+    }
+
+    /// The member slots need finding again (the discs were renumbered).
+    pub fn invalidate(&mut self) {
+        self.slots.clear();
+    }
+
+    /// Each member's slot (as `members`), found again if invalidated or
+    /// the number of discs changed.
+    fn refresh_slots(&mut self, p: &Particles) {
+        if self.slots.len() != self.members.len() || self.n_slots != p.len() {
+            self.slots = self.members.iter().map(|&id| p.slot[id as usize]).collect();
+            self.n_slots = p.len();
+        }
     }
 
     /// Disc ids of clump `c`'s members.
@@ -280,6 +298,7 @@ impl Clumps {
         self.force.push(Vec2::ZERO);
         self.torque.push(0.0);
         self.rot.push((0.0, 1.0));
+        self.invalidate();
         self.place(c, p);
         Ok(c)
     }
@@ -303,13 +322,11 @@ impl Clumps {
         }
     }
 
-    /// Centre and velocity of the member of clump `c` at offset `o`:
-    /// `x = X + R(θ) o`, `v = V + ω × (x − X)`.
+    /// Centre and velocity of the member of clump `c` at offset `o`
+    /// ([`rigid_motion`]).
     #[inline(always)]
     fn member_motion(&self, c: usize, o: Vec2) -> (Vec2, Vec2) {
-        let (s, co) = self.rot[c];
-        let r = Vec2::new(co * o.x - s * o.y, s * o.x + co * o.y);
-        (self.pos[c] + r, self.vel[c] + r.perp() * self.omega[c])
+        rigid_motion(self.pos[c], self.vel[c], self.omega[c], self.rot[c], o)
     }
 
     /// Sum each clump's members' forces (`particles.force`/`torque`,
@@ -339,8 +356,7 @@ impl Clumps {
     /// force with [`integrate::advance`] and place its members (module
     /// docs).
     pub fn advance(&mut self, p: &mut Particles, g: Vec2, damping: BodyDamping, dt: f64) {
-        self.move_clumps(p, false, (g, damping, dt));
-        self.place_members(p, &[], f64::INFINITY);
+        self.pass(p, false, &[], (g, damping, dt), f64::INFINITY);
     }
 
     /// One step of every clump after a contact sweep that left its
@@ -356,78 +372,74 @@ impl Clumps {
         motion: (Vec2, BodyDamping, f64),
         max_v2: f64,
     ) -> (f64, bool) {
-        self.move_clumps(p, true, motion);
-        self.place_members(p, ref_pos, max_v2)
+        self.pass(p, true, ref_pos, motion, max_v2)
     }
 
-    /// Every clump advanced by one step (first its members' forces
-    /// gathered, with `gather`), in parallel over the clumps: each one's
-    /// own state, so the same on any number of threads.
-    fn move_clumps(
+    /// One pass over the clumps, in parallel: each one's members' forces
+    /// summed (with `gather`, [`gathered`](Self::gathered)'s sums), the
+    /// clump advanced, its members placed and checked (as
+    /// [`step`](Self::step)), reading and writing its members at their
+    /// slots, found once per slot order. Each clump works on its own state
+    /// and members: the same on any number of threads.
+    fn pass(
         &mut self,
-        p: &Particles,
+        p: &mut Particles,
         gather: bool,
+        ref_pos: &[Vec2],
         (g, damping, dt): (Vec2, BodyDamping, f64),
-    ) {
-        let mut force = std::mem::take(&mut self.force);
-        let mut torque = std::mem::take(&mut self.torque);
-        if gather {
-            (&mut force, &mut torque)
-                .into_par_iter()
-                .enumerate()
-                .with_min_len(256)
-                .for_each(|(c, (f, t))| (*f, *t) = self.gathered(c, p));
-        }
+        max_v2: f64,
+    ) -> (f64, bool) {
+        self.refresh_slots(p);
+        let has_ref = ref_pos.len() == p.len();
+        let discs = MembersMut {
+            pos: p.pos.as_mut_ptr(),
+            vel: p.vel.as_mut_ptr(),
+            theta: p.theta.as_mut_ptr(),
+            omega: p.omega.as_mut_ptr(),
+        };
+        let (force, torque, radius) = (&p.force, &p.torque, &p.radius);
+        let (first, slots, offset) = (&self.first, &self.slots, &self.offset);
         (
             &mut self.pos,
             &mut self.vel,
             &mut self.theta,
             &mut self.omega,
             &mut self.rot,
-            (&force, &torque),
+            &mut self.force,
+            &mut self.torque,
             (&self.mass, &self.inertia),
         )
             .into_par_iter()
-            .with_min_len(256)
-            .for_each(|(x, v, th, w, rot, (&f, &t), (&m, &i))| {
-                integrate::advance(x, v, th, w, f, t, 1.0 / m, 1.0 / i, 0, g, damping, dt);
-                *rot = th.sin_cos();
-            });
-        (self.force, self.torque) = (force, torque);
-    }
-
-    /// Every member put where its clump's motion takes it, in parallel
-    /// over the slots; returns the members' largest squared displacement
-    /// from `ref_pos` (0 when it is not one per disc) and whether one
-    /// failed the step check `v·v ≤ max_v2 r²` (or is not finite).
-    fn place_members(&self, p: &mut Particles, ref_pos: &[Vec2], max_v2: f64) -> (f64, bool) {
-        const CHUNK: usize = 1024;
-        let has_ref = ref_pos.len() == p.len();
-        (
-            p.pos.par_chunks_mut(CHUNK),
-            p.vel.par_chunks_mut(CHUNK),
-            p.theta.par_chunks_mut(CHUNK),
-            p.omega.par_chunks_mut(CHUNK),
-            p.clump.par_chunks(CHUNK),
-            p.id.par_chunks(CHUNK),
-            p.radius.par_chunks(CHUNK),
-        )
-            .into_par_iter()
             .enumerate()
-            .map(|(ch, (pos, vel, theta, omega, clump, id, radius))| {
+            .with_min_len(256)
+            .map(|(c, (x, v, th, w, rot, f, t, (&m, &i)))| {
+                let (a, b) = (first[c] as usize, first[c + 1] as usize);
+                let members = (&slots[a..b], &offset[a..b]);
+                if gather {
+                    let (mut fc, mut tc) = (Vec2::ZERO, 0.0);
+                    for &s in members.0 {
+                        let s = s as usize;
+                        // SAFETY: a slot below the number of discs
+                        // (`refresh_slots`), of this clump's member only.
+                        let xs = unsafe { discs.pos(s) };
+                        fc += force[s];
+                        tc += torque[s] + (xs - *x).cross(force[s]);
+                    }
+                    (*f, *t) = (fc, tc);
+                }
+                integrate::advance(x, v, th, w, *f, *t, 1.0 / m, 1.0 / i, 0, g, damping, dt);
+                *rot = th.sin_cos();
                 let (mut m2, mut bad) = (0.0f64, false);
-                for k in 0..pos.len() {
-                    let c = clump[k] as usize;
-                    if clump[k] == NO_CLUMP {
-                        continue;
-                    }
-                    let o = self.offset[self.member_of[id[k] as usize] as usize];
-                    let (x, v) = self.member_motion(c, o);
-                    (pos[k], vel[k], theta[k], omega[k]) = (x, v, self.theta[c], self.omega[c]);
+                for (&s, &o) in members.0.iter().zip(members.1) {
+                    let s = s as usize;
+                    let (xm, vm) = rigid_motion(*x, *v, *w, *rot, o);
+                    // SAFETY: as above: no other clump reads or writes
+                    // this member's slot.
+                    unsafe { discs.set(s, xm, vm, *th, *w) };
                     if has_ref {
-                        m2 = m2.max((x - ref_pos[ch * CHUNK + k]).norm2());
+                        m2 = m2.max((xm - ref_pos[s]).norm2());
                     }
-                    bad |= !integrate::passes_check(x, v, omega[k], radius[k], max_v2);
+                    bad |= !integrate::passes_check(xm, vm, *w, radius[s], max_v2);
                 }
                 (m2, bad)
             })
@@ -470,6 +482,57 @@ impl Clumps {
             + self.rot.capacity() * size_of::<(f64, f64)>()
     }
 }
+
+/// Centre and velocity of the member at offset `o` of a clump at `x`
+/// with velocity `v`, spin `w` and `(sin θ, cos θ)` `rot`:
+/// `x_m = x + R(θ) o`, `v_m = v + ω × (x_m − x)`.
+#[inline(always)]
+fn rigid_motion(x: Vec2, v: Vec2, w: f64, (s, co): (f64, f64), o: Vec2) -> (Vec2, Vec2) {
+    let r = Vec2::new(co * o.x - s * o.y, s * o.x + co * o.y);
+    (x + r, v + r.perp() * w)
+}
+
+/// The members' positions, velocities, rotations and spins, written by
+/// [`Clumps::pass`] clump by clump in parallel: a disc is a member of one
+/// clump at most ([`Clumps::add`]), so no two clumps touch the same slot.
+struct MembersMut {
+    pos: *mut Vec2,
+    vel: *mut Vec2,
+    theta: *mut f64,
+    omega: *mut f64,
+}
+
+impl MembersMut {
+    /// The position of the disc in slot `s`.
+    ///
+    /// # Safety
+    /// `s` is a slot of the discs, and no other thread writes it.
+    #[inline(always)]
+    unsafe fn pos(&self, s: usize) -> Vec2 {
+        // SAFETY: as the caller promises.
+        unsafe { *self.pos.add(s) }
+    }
+
+    /// Set the position, velocity, rotation and spin of the disc in slot
+    /// `s`.
+    ///
+    /// # Safety
+    /// `s` is a slot of the discs, and no other thread reads or writes it.
+    #[inline(always)]
+    unsafe fn set(&self, s: usize, x: Vec2, v: Vec2, theta: f64, omega: f64) {
+        // SAFETY: as the caller promises.
+        unsafe {
+            *self.pos.add(s) = x;
+            *self.vel.add(s) = v;
+            *self.theta.add(s) = theta;
+            *self.omega.add(s) = omega;
+        }
+    }
+}
+
+// SAFETY: the pointers are used by one clump per slot (see above).
+unsafe impl Sync for MembersMut {}
+unsafe impl Send for MembersMut {}
 
 /// How a template is scaled onto the disc it replaces
 /// ([`replace_with_template`]).

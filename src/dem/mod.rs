@@ -617,6 +617,7 @@ impl Granular {
             .rebuild(&mut self.particles, &self.walls, &mut self.contacts);
         self.max_disp = 0.0;
         self.bonds.invalidate();
+        self.clumps.invalidate();
     }
 
     /// Apply the bond rule to the present state: every listed pair whose

@@ -177,7 +177,7 @@ impl Granular {
             wall_ref: self.grid.wall_ref.clone(),
             rebuilds: self.grid.rebuilds,
             stale: self.grid.stale,
-            bonds: self.bonds.list.clone(),
+            bonds: self.bonds.list().into_owned(),
             clumps: ClumpState {
                 pos: self.clumps.pos.clone(),
                 vel: self.clumps.vel.clone(),
@@ -237,9 +237,9 @@ impl Granular {
         self.grid.wall_ref.clone_from(&s.wall_ref);
         self.grid.rebuilds = s.rebuilds;
         self.grid.stale = s.stale;
-        self.bonds.list.clone_from(&s.bonds);
-        self.bonds.invalidate();
+        self.bonds.replace_list(&s.bonds);
         let c = &mut self.clumps;
+        c.invalidate();
         c.pos.clone_from(&s.clumps.pos);
         c.vel.clone_from(&s.clumps.vel);
         c.theta.clone_from(&s.clumps.theta);
