@@ -380,7 +380,7 @@ fn crack_quantity(b: BodyRef<'_>, crack: usize, end: usize, q: &str) -> f64 {
 
 /// A probe's share of one part of a granular assembly divided over ranks
 /// (`crate::decomp`): the shares of every part, [merged](Share::merge) in
-/// any order, [finish](finish) into the value the undivided assembly
+/// any order, [finish] into the value the undivided assembly
 /// gives, bitwise. Sums are exact ([`ExactSum`]), counts integers, and a
 /// value of one disc comes from the part that owns it.
 #[derive(Clone, Debug, Default, PartialEq)]
