@@ -881,8 +881,7 @@ impl Decomposed {
         let p = &self.part.particles;
         let mut b = Pack::default();
         for id in ids.clone() {
-            let s = p.slot.get(id).map_or(usize::MAX, |&s| s as usize);
-            if s < p.len() && p.fixity[s] & GHOST == 0 {
+            if let Some(s) = p.own_slot(id) {
                 b.u32(id as u32);
                 b.vec2(p.pos[s]);
                 b.f64(p.radius[s]);

@@ -429,6 +429,12 @@ pub(super) struct Held {
 /// `F_n` and `F_s` are the same either way): `(F_n, F_s, M on i)`.
 pub(super) type HeldForces = (f64, f64, f64);
 
+/// `(F_n, F_s, M)` with the moment's sign turned when `flip` (slot i is
+/// the bond's b): the listed forces from the held ones, and back.
+fn flipped((fn_, fs, m): HeldForces, flip: bool) -> HeldForces {
+    (fn_, fs, if flip { -m } else { m })
+}
+
 /// A bond that broke in the sweep: where it is held (`w`), mode, energy
 /// released, centre and normal from slot i to slot j (state before the
 /// step).
@@ -603,10 +609,7 @@ impl Bonds {
         (&mut l.fn_, &mut l.fs, &mut l.moment, &self.at)
             .into_par_iter()
             .with_min_len(4096)
-            .for_each(|(n, s, m, &(w, flip))| {
-                let f = held_f[w as usize];
-                (*n, *s, *m) = (f.0, f.1, if flip { -f.2 } else { f.2 });
-            });
+            .for_each(|(n, s, m, &(w, flip))| (*n, *s, *m) = flipped(held_f[w as usize], flip));
     }
 
     /// The forces `(F_n, F_s, M)` of listed bond k in the present state.
@@ -616,8 +619,7 @@ impl Bonds {
             return (l.fn_[k], l.fs[k], l.moment[k]);
         }
         let (w, flip) = self.at[k];
-        let f = self.held_f[w as usize];
-        (f.0, f.1, if flip { -f.2 } else { f.2 })
+        flipped(self.held_f[w as usize], flip)
     }
 
     /// Hold the listed bonds in slot order, in rows of `n + 1` offsets,
@@ -677,8 +679,8 @@ impl Bonds {
                 inv_a: 1.0 / a,
                 r_over_i: l.radius[k] / inertia,
             });
-            let m = if flip { -l.moment[k] } else { l.moment[k] };
-            self.held_f.push((l.fn_[k], l.fs[k], m));
+            self.held_f
+                .push(flipped((l.fn_[k], l.fs[k], l.moment[k]), flip));
             self.held_key.push((k as u32, flip));
             self.at[k] = (w as u32, flip);
         }

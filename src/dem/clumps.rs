@@ -172,9 +172,6 @@ pub struct Clumps {
     pub members: Vec<u32>,
     /// Each member's centre relative to X at θ = 0.
     pub offset: Vec<Vec2>,
-    /// Index in `members` of each disc id (`NO_CLUMP`: in no clump; ids
-    /// past the end are in none).
-    member_of: Vec<u32>,
     /// `(sin θ, cos θ)` of each clump, from its last advance.
     rot: Vec<(f64, f64)>,
     /// Slot of each member (as `members`) in the slot order of `n_slots`
@@ -277,11 +274,7 @@ impl Clumps {
         if self.first.is_empty() {
             self.first.push(0);
         }
-        if self.member_of.len() < p.len() {
-            self.member_of.resize(p.len(), NO_CLUMP);
-        }
         for (&id, &s) in ids.iter().zip(&slots) {
-            self.member_of[id] = self.members.len() as u32;
             self.members.push(id as u32);
             self.offset.push(p.pos[s] - shape.centroid);
             p.clump[s] = c as u32;
@@ -342,14 +335,8 @@ impl Clumps {
     /// [`gather`](Self::gather) for clump `c`, in member order.
     #[inline(always)]
     fn gathered(&self, c: usize, p: &Particles) -> (Vec2, f64) {
-        let x = self.pos[c];
-        let (mut f, mut t) = (Vec2::ZERO, 0.0);
-        for &id in self.members_of(c) {
-            let k = p.slot[id as usize] as usize;
-            f += p.force[k];
-            t += p.torque[k] + (p.pos[k] - x).cross(p.force[k]);
-        }
-        (f, t)
+        let slots = self.members_of(c).iter().map(|&id| p.slot[id as usize]);
+        member_sum(self.pos[c], slots, |k| p.pos[k], (&p.force, &p.torque))
     }
 
     /// Advance every clump by one step under its [`gather`](Self::gather)ed
@@ -416,16 +403,10 @@ impl Clumps {
                 let (a, b) = (first[c] as usize, first[c + 1] as usize);
                 let members = (&slots[a..b], &offset[a..b]);
                 if gather {
-                    let (mut fc, mut tc) = (Vec2::ZERO, 0.0);
-                    for &s in members.0 {
-                        let s = s as usize;
-                        // SAFETY: a slot below the number of discs
-                        // (`refresh_slots`), of this clump's member only.
-                        let xs = unsafe { discs.pos(s) };
-                        fc += force[s];
-                        tc += torque[s] + (xs - *x).cross(force[s]);
-                    }
-                    (*f, *t) = (fc, tc);
+                    // SAFETY: a slot below the number of discs
+                    // (`refresh_slots`), of this clump's member only.
+                    let at = |s: usize| unsafe { discs.pos(s) };
+                    (*f, *t) = member_sum(*x, members.0.iter().copied(), at, (force, torque));
                 }
                 integrate::advance(x, v, th, w, *f, *t, 1.0 / m, 1.0 / i, 0, g, damping, dt);
                 *rot = th.sin_cos();
@@ -478,9 +459,27 @@ impl Clumps {
         use std::mem::size_of;
         (self.pos.capacity() * 3 + self.offset.capacity()) * size_of::<Vec2>()
             + self.theta.capacity() * 5 * size_of::<f64>()
-            + (self.first.capacity() + self.members.capacity() + self.member_of.capacity()) * 4
+            + (self.first.capacity() + self.members.capacity() + self.slots.capacity()) * 4
             + self.rot.capacity() * size_of::<(f64, f64)>()
     }
+}
+
+/// The force and the moment about `x` of the members in `slots`, at
+/// `pos(slot)`, in member order: what a clump at `x` receives.
+#[inline(always)]
+fn member_sum(
+    x: Vec2,
+    slots: impl Iterator<Item = u32>,
+    pos: impl Fn(usize) -> Vec2,
+    (force, torque): (&[Vec2], &[f64]),
+) -> (Vec2, f64) {
+    let (mut f, mut t) = (Vec2::ZERO, 0.0);
+    for s in slots {
+        let s = s as usize;
+        f += force[s];
+        t += torque[s] + (pos(s) - x).cross(force[s]);
+    }
+    (f, t)
 }
 
 /// Centre and velocity of the member at offset `o` of a clump at `x`

@@ -45,7 +45,6 @@
 use super::Granular;
 use super::clumps::NO_CLUMP;
 use super::contact::normal_between;
-use super::particles::GHOST;
 use crate::geom::Vec2;
 use crate::geom::exact_sum::ExactSum;
 
@@ -287,7 +286,7 @@ pub fn solid_area(g: &Granular, region: &Region) -> ExactSum {
         })
         .collect();
     (0..p.len())
-        .filter(|&k| p.fixity[k] & GHOST == 0)
+        .filter(|&k| !p.is_ghost(k))
         .map(|k| {
             let a = region.disc_area_inside(p.pos[k], p.radius[k]);
             match p.clump[k] {
@@ -360,7 +359,7 @@ pub fn contact_sums(
     outer: impl IntoIterator<Item = OuterContact>,
 ) -> ContactSums {
     let p = &g.particles;
-    let own = |k: usize| p.fixity[k] & GHOST == 0;
+    let own = |k: usize| !p.is_ghost(k);
     // the centre of the body disc k belongs to: a clump's, or its own
     let centre = |k: usize| match p.clump[k] {
         NO_CLUMP => p.pos[k],

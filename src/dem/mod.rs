@@ -170,6 +170,19 @@ pub struct Energies {
 }
 
 impl Energies {
+    /// The energies of the exact sums of
+    /// [`Granular::energy_sums`] (kinetic, rotational, spring, gravity)
+    /// and the bonds' energy.
+    pub fn from_sums(s: &[ExactSum], bond: f64) -> Energies {
+        Energies {
+            kinetic: s[0].value(),
+            rotational: s[1].value(),
+            spring: s[2].value(),
+            gravity: s[3].value(),
+            bond,
+        }
+    }
+
     /// Kinetic + rotational + spring + gravity potential + bond energy.
     pub fn total(&self) -> f64 {
         self.kinetic + self.rotational + self.spring + self.gravity + self.bond
@@ -940,14 +953,10 @@ impl Granular {
     /// state after a step has positions at t + Δt and velocities at
     /// t + Δt/2; pass synchronous velocities for an exact energy balance.
     pub fn energies_with(&self, vel: &[Vec2], omega: &[f64]) -> Energies {
-        let s = self.energy_sums(vel, omega);
-        Energies {
-            kinetic: s[0].value(),
-            rotational: s[1].value(),
-            spring: s[2].value(),
-            gravity: s[3].value(),
-            bond: self.bonds.energy(self.thickness),
-        }
+        Energies::from_sums(
+            &self.energy_sums(vel, omega),
+            self.bonds.energy(self.thickness),
+        )
     }
 
     /// The exact sums behind [`energies_with`](Self::energies_with)
@@ -958,7 +967,7 @@ impl Granular {
     pub fn energy_sums(&self, vel: &[Vec2], omega: &[f64]) -> [ExactSum; 4] {
         let p = &self.particles;
         let mut e: [ExactSum; 4] = Default::default();
-        let own = |k: usize| p.fixity[k] & particles::GHOST == 0;
+        let own = |k: usize| !p.is_ghost(k);
         for k in (0..p.len()).filter(|&k| own(k)) {
             if p.clump[k] != clumps::NO_CLUMP {
                 continue; // counted with its clump below
@@ -1025,7 +1034,7 @@ impl Granular {
     /// ghost (see [`energy_sums`](Self::energy_sums)).
     pub fn touching(&self) -> (usize, usize) {
         let p = &self.particles;
-        let own = |k: usize| p.fixity[k] & particles::GHOST == 0;
+        let own = |k: usize| !p.is_ghost(k);
         let dd = self
             .contacts
             .pairs()

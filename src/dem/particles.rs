@@ -69,6 +69,16 @@ impl Particles {
     pub fn is_empty(&self) -> bool {
         self.pos.is_empty()
     }
+    /// Is the disc in `slot` a [`GHOST`] (another part's disc)?
+    pub fn is_ghost(&self, slot: usize) -> bool {
+        self.fixity[slot] & GHOST != 0
+    }
+    /// The slot of disc `id` if this assembly holds it as its own (not
+    /// as a ghost).
+    pub fn own_slot(&self, id: usize) -> Option<usize> {
+        let s = *self.slot.get(id)? as usize;
+        (s < self.len() && !self.is_ghost(s)).then_some(s)
+    }
 
     /// No discs, with room for `n` (an assembly's arrays are then
     /// allocated once, at their size: no growth by doubling, whose copies

@@ -287,7 +287,7 @@ impl EfgBody {
         self.load_work += dot(&timed);
         let taken: f64 = springs
             .iter()
-            .map(|(k, b)| 0.5 * k * b.iter().map(|&(i, v)| v * du[i]).sum::<f64>().powi(2))
+            .map(|(k, b)| 0.5 * k * along(b, &du).powi(2))
             .sum();
         let given = dot(&self.f_point) - taken;
         for (u, d) in self.state.u.iter_mut().zip(&du) {
@@ -395,6 +395,12 @@ impl EfgBody {
     }
 }
 
+/// `bᵀx` of a spring's sparse functional `b` (the normal motion of its
+/// point).
+fn along(b: &[(usize, f64)], x: &[f64]) -> f64 {
+    b.iter().map(|&(i, v)| v * x[i]).sum()
+}
+
 /// `x = (K̄ + Σ k bbᵀ)⁻¹ r` for the springs `(k, b)`: conjugate gradients
 /// preconditioned with `K̄⁻¹` (one factorisation). The preconditioned
 /// operator is the identity plus a term of rank `m` (the number of
@@ -420,7 +426,7 @@ fn held_solve(
         let mut y = vec![0.0; x.len()];
         kbar.mul_add(x, &mut y);
         for (k, b) in springs {
-            let s = k * b.iter().map(|&(i, v)| v * x[i]).sum::<f64>();
+            let s = k * along(b, x);
             b.iter().for_each(|&(i, v)| y[i] += s * v);
         }
         y
@@ -488,15 +494,14 @@ mod tests {
         let mut ax = vec![0.0; x.len()];
         kbar.mul_add(&x, &mut ax);
         for (k, s) in &springs {
-            let d = k * s.iter().map(|&(i, v)| v * x[i]).sum::<f64>();
+            let d = k * along(s, &x);
             s.iter().for_each(|&(i, v)| ax[i] += d * v);
         }
         let norm = |a: &[f64]| a.iter().map(|v| v * v).sum::<f64>().sqrt();
         let res: Vec<f64> = ax.iter().zip(&r).map(|(a, r)| a - r).collect();
         assert!(norm(&res) < 1e-9 * norm(&r), "{:e}", norm(&res) / norm(&r));
         // the stiff spring holds its point: its normal motion is tiny
-        let stiff: f64 = springs[1].1.iter().map(|&(i, v)| v * x[i]).sum();
-        let soft: f64 = springs[0].1.iter().map(|&(i, v)| v * x[i]).sum();
+        let (stiff, soft) = (along(&springs[1].1, &x), along(&springs[0].1, &x));
         assert!(stiff.abs() < 1e-3 * soft.abs(), "{stiff:e} vs {soft:e}");
     }
 }

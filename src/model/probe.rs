@@ -460,11 +460,7 @@ impl Share {
 /// this way).
 pub fn share(p: &Probe, g: &Granular) -> Option<Share> {
     let ps = &g.particles;
-    // the slot of disc `id` if this part owns it
-    let owned = |id: usize| {
-        let s = *ps.slot.get(id)? as usize;
-        (s < ps.len() && ps.fixity[s] & crate::dem::particles::GHOST == 0).then_some(s)
-    };
+    let owned = |id: usize| ps.own_slot(id);
     let sums = |sums: Vec<ExactSum>| Share {
         sums,
         ..Share::default()
@@ -542,13 +538,7 @@ pub fn finish(p: &Probe, s: &Share, g: &Granular) -> f64 {
         }
         Probe::Global { .. } if !s.counts.is_empty() => s.counts[0] as f64,
         Probe::Global { quantity } => {
-            let e = crate::dem::Energies {
-                kinetic: s.sums[0].value(),
-                rotational: s.sums[1].value(),
-                spring: s.sums[2].value(),
-                gravity: s.sums[3].value(),
-                bond: g.bonds.energy(g.thickness),
-            };
+            let e = crate::dem::Energies::from_sums(&s.sums, g.bonds.energy(g.thickness));
             energy_quantity(&e, quantity)
         }
         _ => s.value.unwrap_or(f64::NAN),

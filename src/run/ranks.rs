@@ -94,18 +94,19 @@ fn with_whole<T>(
 ) -> Option<T> {
     let model = model.as_mut();
     let skeleton = model.as_ref().map_or(&d.part, |m| granular(m));
-    let whole = d.gather_whole(skeleton)?;
+    let mut whole = d.gather_whole(skeleton)?;
     let model = model.expect("rank 0 has the model");
-    let System::Granular(g) = &mut model.system else {
-        unreachable!("a granular model")
+    // the model's assembly and `whole` change places, and back after `f`
+    let swap = |model: &mut Model, other: &mut crate::dem::Granular| {
+        let System::Granular(g) = &mut model.system else {
+            unreachable!("a granular model")
+        };
+        std::mem::swap(&mut **g, other);
     };
-    let skeleton = std::mem::replace(&mut **g, whole);
+    swap(model, &mut whole);
     model.step = d.part.step;
     let r = f(model);
-    let System::Granular(g) = &mut model.system else {
-        unreachable!("a granular model")
-    };
-    **g = skeleton;
+    swap(model, &mut whole);
     Some(r)
 }
 
@@ -199,9 +200,8 @@ fn facts(d: &mut Decomposed, crit: crate::dem::critical::Critical) -> Option<Fac
     d.ready_outputs();
     let g = &d.part;
     let p = &g.particles;
-    let own = |k: usize| p.fixity[k] & crate::dem::particles::GHOST == 0;
     let (dd, dw) = g.touching();
-    let listed = g.contacts.pairs().filter(|&(i, _)| own(i)).count();
+    let listed = g.contacts.pairs().filter(|&(i, _)| !p.is_ghost(i)).count();
     let share = Share {
         sums: g.energy_sums(&p.vel, &p.omega).into_iter().collect(),
         counts: vec![dd as u64, dw as u64, listed as u64, g.heap_bytes() as u64],
@@ -214,13 +214,8 @@ fn facts(d: &mut Decomposed, crit: crate::dem::critical::Critical) -> Option<Fac
         touching: (c(0), c(1)),
         listed: c(2),
         heap_bytes: c(3),
-        energies: crate::dem::Energies {
-            kinetic: s.sums[0].value(),
-            rotational: s.sums[1].value(),
-            spring: s.sums[2].value(),
-            gravity: s.sums[3].value(),
-            bond: 0.0,
-        },
+        // bonded assemblies are not divided
+        energies: crate::dem::Energies::from_sums(&s.sums, 0.0),
         crit,
     })
 }
