@@ -127,14 +127,15 @@ impl ChainCompliance {
         [c[2 * a], c[n2 + 2 * a], c[2 * a + 1], c[n2 + 2 * a + 1]]
     }
 
-    /// `y[a] += S_ab f` for every chain point `a` (the column of `b` must
-    /// be known).
-    pub fn add_response(&self, b: usize, f: Vec2, y: &mut [Vec2]) {
-        let c = &self.cols[b];
-        let (cx, cy) = c.split_at(2 * self.n);
-        for ((ya, x), yv) in y.iter_mut().zip(cx.chunks_exact(2)).zip(cy.chunks_exact(2)) {
-            ya.x += x[0] * f.x + yv[0] * f.y;
-            ya.y += x[1] * f.x + yv[1] * f.y;
+    /// `Σ_b S_ab f_b` at chain point `a` over the `loads` `(b, f_b)`, added
+    /// in their order (the columns must be known).
+    pub fn response_at(&self, a: usize, loads: &[(usize, Vec2)]) -> Vec2 {
+        let mut r = Vec2::ZERO;
+        for &(b, f) in loads {
+            let k = self.block(a, b);
+            r.x += k[0] * f.x + k[1] * f.y;
+            r.y += k[2] * f.x + k[3] * f.y;
         }
+        r
     }
 }

@@ -644,8 +644,13 @@ pub struct WithBoundary<B> {
     /// Compliant scheme: the columns of the body step's compliance among
     /// the chain points computed so far.
     chain_s: ChainCompliance,
-    /// Compliant scheme, per chain point: the response to the held loads.
-    held_resp: Vec<Vec2>,
+    /// Compliant scheme, per chain point: the response to the held loads,
+    /// once a contact point's segment needs it in the body step (`None`
+    /// until then: most chain points are never near a contact).
+    held_resp: Vec<Option<Vec2>>,
+    /// Compliant scheme: the held loads `(chain point, load)` of the body
+    /// step.
+    held_loads: Vec<(usize, Vec2)>,
     /// The edge names, edges and points per spacing the chains were made
     /// of ([`named`](Self::named)); `None` for chains given as points.
     source: Option<ChainSource>,
@@ -759,6 +764,7 @@ impl<B: ContactBody> WithBoundary<B> {
             offsets: Vec::new(),
             chain_s: ChainCompliance::default(),
             held_resp: Vec::new(),
+            held_loads: Vec::new(),
             source: None,
         };
         c.set_chains(points)?;
@@ -785,7 +791,7 @@ impl<B: ContactBody> WithBoundary<B> {
             total += ch.reference.len();
         }
         c.chain_s = ChainCompliance::new(total);
-        c.held_resp = vec![Vec2::ZERO; total];
+        c.held_resp = vec![None; total];
         let zeros: Vec<Vec<Vec2>> = c
             .chains
             .iter()
@@ -922,15 +928,14 @@ impl<B: ContactBody> WithBoundary<B> {
             })
     }
 
-    /// Compliant scheme: every chain point's response to the held loads.
+    /// Compliant scheme: the held loads of the body step, their columns
+    /// known; their response at a chain point is formed when a contact
+    /// first needs it ([`compliant_system`](Continuum::compliant_system)).
     fn held_response(&mut self) -> Result<(), SolveError> {
-        let held: Vec<(usize, Vec2)> = nonzero(&self.path.held).collect();
-        let pts: Vec<usize> = held.iter().map(|h| h.0).collect();
+        self.held_loads = nonzero(&self.path.held).collect();
+        let pts: Vec<usize> = self.held_loads.iter().map(|h| h.0).collect();
         self.ensure_columns(&pts)?;
-        self.held_resp.iter_mut().for_each(|r| *r = Vec2::ZERO);
-        for &(b, f) in &held {
-            self.chain_s.add_response(b, f, &mut self.held_resp);
-        }
+        self.held_resp.iter_mut().for_each(|r| *r = None);
         Ok(())
     }
 
@@ -1354,10 +1359,17 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
             .collect();
         let ends: Vec<usize> = w.iter().flatten().map(|e| e.0).collect();
         self.ensure_columns(&ends)?;
+        for &a in &ends {
+            if self.held_resp[a].is_none() {
+                self.held_resp[a] = Some(self.chain_s.response_at(a, &self.held_loads));
+            }
+        }
         let (p, held) = (&self.path, &self.held_resp);
         free.clear();
         free.extend(pts.iter().zip(&w).map(|(&(c, seg, _), wk)| {
-            let at = |i: usize, (a, x): (usize, f64)| (path_at(p, c, i, s) - held[a]) * x;
+            let at = |i: usize, (a, x): (usize, f64)| {
+                (path_at(p, c, i, s) - held[a].unwrap_or(Vec2::ZERO)) * x
+            };
             at(seg, wk[0]) + at(seg + 1, wk[1])
         }));
         let m2 = 2 * pts.len();
