@@ -15,7 +15,9 @@
 //! `bench` steps one assembly alternately on each pool (results are bitwise
 //! the same on any thread count, so every pool continues the same run) and
 //! prints, per thread count, the median, min and max of M particle-steps/s,
-//! and the paired ratio to the first thread count. `physics` runs from the
+//! and the paired ratio to the first thread count, then that ratio once
+//! more on a line of its own (`scaling 1 → 2 threads at N discs: r×`,
+//! the scaling row of docs/performance.md). `physics` runs from the
 //! dense packing at rest and prints the contacts per disc, the kinetic
 //! energy and the force on each wall as JSON (contacts per disc: disc–disc
 //! contacts counted at both discs, `2 N_c/N`; wall contacts apart) (`bench/peers/` compares them
@@ -125,6 +127,14 @@ fn main() {
                 let (r, rlo, rhi) = median_min_max(&ratio[k]);
                 println!(
                     "threads {t}: {m:.2} M p-steps/s ({lo:.2}–{hi:.2}); ÷ threads {}: {r:.3} ({rlo:.3}–{rhi:.3})",
+                    threads[0]
+                );
+            }
+            // the scaling target of the performance page, on one line
+            for (k, t) in threads.iter().enumerate().skip(1) {
+                let (r, rlo, rhi) = median_min_max(&ratio[k]);
+                println!(
+                    "scaling {} → {t} threads at {n} discs: {r:.2}× (median of {reps} paired reps, {rlo:.2}–{rhi:.2})",
                     threads[0]
                 );
             }
