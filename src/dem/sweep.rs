@@ -44,6 +44,8 @@ thread_local! {
     /// Per-thread accumulators of the bond moments on second discs (bonds
     /// only), kept as `ACC`.
     static ACC_BOND: std::cell::RefCell<(Vec<f64>, bool)> = const { std::cell::RefCell::new((Vec::new(), false)) };
+    /// Per-thread buffer of what the block's bonds do ([`bond_block`]).
+    static BOND_OUT: std::cell::RefCell<Vec<BondForce>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 type Acc<T> = std::thread::LocalKey<std::cell::RefCell<(Vec<T>, bool)>>;
@@ -113,6 +115,8 @@ struct Ctx<'a> {
     bond_cross: &'a CrossIndex,
     /// What each cross bond does and its new forces.
     bond_cross_buf: &'a [(BondForce, HeldForces)],
+    /// The radius of each held bond (read when one breaks).
+    bond_radius: &'a [f64],
     /// Evaluate inner pairs four at a time ([`lanes4`]).
     four_lanes: bool,
 }
@@ -383,6 +387,7 @@ impl Granular {
             thickness: self.thickness,
             bond_cross: &self.bonds.cross,
             bond_cross_buf: &self.bonds.cross_buf,
+            bond_radius: &self.bonds.held_r,
             #[cfg(target_arch = "x86_64")]
             four_lanes: lanes4::available(),
             #[cfg(not(target_arch = "x86_64"))]
@@ -878,7 +883,9 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
 /// before the block's discs are swept: the forces and moments on the
 /// block's discs into `acc` and `acc_b` (bond by bond in slot order, each
 /// bond's cross part from the cross buffer), the held forces updated.
-/// Returns the bonds that broke.
+/// Returns the bonds that broke. The bonds are stepped first, all of them
+/// into a buffer (independent of each other: the processor overlaps
+/// them), then summed onto the discs in the same order.
 #[inline(never)]
 fn bond_block(
     blk: usize,
@@ -899,45 +906,60 @@ fn bond_block(
         acc[j as usize - lo].0 -= bf.f;
         acc_b[j as usize - lo] += bf.mb;
     }
-    let mut ck = bx.first[blk] as usize;
-    let row = &ctx.bond_row[lo..=lo + n];
-    let held_f = &mut held_f[..held.len()];
-    let (law, w0) = (&ctx.bond_law, row[0] as usize);
-    let mut broken = vec![];
-    // what a bond of disc d (its row) and disc j does, in bond order: j's
-    // part (an inner bond's; a cross bond's was added above), then d's
-    let mut add = |d: usize, j: usize, bf: BondForce| {
-        if j < n {
-            acc[j].0 -= bf.f;
-            acc_b[j] += bf.mb;
+    BOND_OUT.with_borrow_mut(|out| {
+        if out.len() < held.len() {
+            out.resize(held.len(), BondForce::default());
         }
-        acc[d].0 += bf.f;
-        acc_b[d] += bf.ma;
-    };
-    let mut d = 0;
+        let out = &mut out[..held.len()];
+        let broken = bond_forces(blk, lo, kin, (held, held_f), out, ctx);
+        // what a bond of disc d and disc j does, in bond order: j's part
+        // (an inner bond's; a cross bond's was added above), then d's
+        for (h, bf) in held.iter().zip(out.iter()) {
+            let (d, j) = (h.i as usize - lo, h.j as usize - lo);
+            if j < n {
+                acc[j].0 -= bf.f;
+                acc_b[j] += bf.mb;
+            }
+            acc[d].0 += bf.f;
+            acc_b[d] += bf.ma;
+        }
+        broken
+    })
+}
+
+/// What each bond of block `blk` does ([`bond_block`]) into `out`, the
+/// held forces updated; returns the bonds that broke.
+#[inline(never)]
+fn bond_forces(
+    blk: usize,
+    lo: usize,
+    kin: Kin,
+    (held, held_f): (&[Held], &mut [HeldForces]),
+    out: &mut [BondForce],
+    ctx: &Ctx,
+) -> Vec<Break> {
+    let n = kin.pos.len();
+    let mut ck = ctx.bond_cross.first[blk] as usize;
+    let held_f = &mut held_f[..held.len()];
+    let (law, w0) = (&ctx.bond_law, ctx.bond_row[lo] as usize);
+    let (t, dt, rad) = (ctx.thickness, ctx.bond_dt, ctx.bond_radius);
+    let mut broken = vec![];
+    let ends = |h: &Held| (h.i as usize - lo, h.j as usize - lo);
     let mut w = 0;
     while w < held.len() {
-        while (row[d + 1] - row[0]) as usize <= w {
-            d += 1;
-        }
-        let j = held[w].j as usize - lo;
+        let (d, j) = ends(&held[w]);
         if j >= n {
             let (bf, f_new) = ctx.bond_cross_buf[ck];
             ck += 1;
             held_f[w] = f_new;
-            add(d, j, bf);
+            out[w] = bf;
             w += 1;
             continue;
         }
-        // two inner bonds side by side (of this disc or the next ones;
-        // all from the state before the step), summed in the same order
+        // two inner bonds side by side (all from the state before the step)
         #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
         if let Some(h2) = held.get(w + 1).filter(|h| (h.j as usize) < lo + n) {
-            let mut d2 = d;
-            while (row[d2 + 1] - row[0]) as usize <= w + 1 {
-                d2 += 1;
-            }
-            let j2 = h2.j as usize - lo;
+            let (d2, j2) = ends(h2);
             let (si, sj) = sides(kin, d, j);
             let (si2, sj2) = sides(kin, d2, j2);
             let two = super::bonds::lanes::step2(
@@ -946,40 +968,27 @@ fn bond_block(
                 [si, si2],
                 [sj, sj2],
                 law,
-                ctx.thickness,
-                ctx.bond_dt,
+                dt,
+                &mut out[w..w + 2],
             );
-            if let Some([bf, bf2]) = two {
+            if let Some(intact) = two {
                 // a bond that may break: the scalar step
-                let mut lane = |w: usize, d: usize, j: usize, bf: Option<BondForce>| {
-                    bf.unwrap_or_else(|| {
-                        let (si, sj) = sides(kin, d, j);
-                        let (t, dt) = (ctx.thickness, ctx.bond_dt);
-                        let (bf, brk) = held[w].step(w0 + w, &mut held_f[w], &si, &sj, law, t, dt);
-                        broken.extend(brk);
-                        bf
-                    })
-                };
-                let bf = lane(w, d, j, bf);
-                add(d, j, bf);
-                let bf2 = lane(w + 1, d2, j2, bf2);
-                add(d2, j2, bf2);
+                for l in (0..2).filter(|l| intact & (1 << l) == 0) {
+                    let (d, j) = ends(&held[w + l]);
+                    let (si, sj) = sides(kin, d, j);
+                    let f = &mut held_f[w + l];
+                    let (bf, brk) = held[w + l].step(w0 + w + l, f, &si, &sj, law, rad, t, dt);
+                    broken.extend(brk);
+                    out[w + l] = bf;
+                }
                 w += 2;
                 continue;
             }
         }
         let (si, sj) = sides(kin, d, j);
-        let (bf, brk) = held[w].step(
-            w0 + w,
-            &mut held_f[w],
-            &si,
-            &sj,
-            law,
-            ctx.thickness,
-            ctx.bond_dt,
-        );
+        let (bf, brk) = held[w].step(w0 + w, &mut held_f[w], &si, &sj, law, rad, t, dt);
         broken.extend(brk);
-        add(d, j, bf);
+        out[w] = bf;
         w += 1;
     }
     broken
