@@ -906,51 +906,60 @@ fn bond_block(
         acc[j as usize - lo].0 -= bf.f;
         acc_b[j as usize - lo] += bf.mb;
     }
+    let mut ck = bx.first[blk] as usize;
+    let w0 = ctx.bond_row[lo] as usize;
+    let mut broken = vec![];
+    let held_f = &mut held_f[..held.len()];
     BOND_OUT.with_borrow_mut(|out| {
-        if out.len() < held.len() {
-            out.resize(held.len(), BondForce::default());
-        }
-        let out = &mut out[..held.len()];
-        let broken = bond_forces(blk, lo, kin, (held, held_f), out, ctx);
-        // what a bond of disc d and disc j does, in bond order: j's part
-        // (an inner bond's; a cross bond's was added above), then d's
-        for (h, bf) in held.iter().zip(out.iter()) {
-            let (d, j) = (h.i as usize - lo, h.j as usize - lo);
-            if j < n {
-                acc[j].0 -= bf.f;
-                acc_b[j] += bf.mb;
+        out.resize(BOND_CHUNK, BondForce::default());
+        // in chunks that stay in the L1 cache between the two passes
+        for c in (0..held.len()).step_by(BOND_CHUNK) {
+            let e = held.len().min(c + BOND_CHUNK);
+            let (h, out) = (&held[c..e], &mut out[..e - c]);
+            let at = (lo, w0 + c, &mut ck);
+            bond_forces(kin, (h, &mut held_f[c..e]), out, at, &mut broken, ctx);
+            // what a bond of disc d and disc j does, in bond order: j's
+            // part (an inner bond's; a cross bond's was added above), then d's
+            for (h, bf) in h.iter().zip(out.iter()) {
+                let (d, j) = (h.i as usize - lo, h.j as usize - lo);
+                if j < n {
+                    acc[j].0 -= bf.f;
+                    acc_b[j] += bf.mb;
+                }
+                acc[d].0 += bf.f;
+                acc_b[d] += bf.ma;
             }
-            acc[d].0 += bf.f;
-            acc_b[d] += bf.ma;
         }
-        broken
-    })
+    });
+    broken
 }
 
-/// What each bond of block `blk` does ([`bond_block`]) into `out`, the
-/// held forces updated; returns the bonds that broke.
-#[inline(never)]
+/// Bonds stepped at a time before they are summed ([`bond_block`]).
+const BOND_CHUNK: usize = 256;
+
+/// What the bonds `held` of a block with its first disc at slot `lo`
+/// do ([`bond_block`]) into `out`, their held forces updated; `w0`: where
+/// `held` starts among all held bonds, `ck`: the next cross bond. The
+/// bonds that broke are added to `broken`.
+#[inline(always)]
 fn bond_forces(
-    blk: usize,
-    lo: usize,
     kin: Kin,
     (held, held_f): (&[Held], &mut [HeldForces]),
     out: &mut [BondForce],
+    (lo, w0, ck): (usize, usize, &mut usize),
+    broken: &mut Vec<Break>,
     ctx: &Ctx,
-) -> Vec<Break> {
+) {
     let n = kin.pos.len();
-    let mut ck = ctx.bond_cross.first[blk] as usize;
-    let held_f = &mut held_f[..held.len()];
-    let (law, w0) = (&ctx.bond_law, ctx.bond_row[lo] as usize);
+    let law = &ctx.bond_law;
     let (t, dt, rad) = (ctx.thickness, ctx.bond_dt, ctx.bond_radius);
-    let mut broken = vec![];
     let ends = |h: &Held| (h.i as usize - lo, h.j as usize - lo);
     let mut w = 0;
     while w < held.len() {
         let (d, j) = ends(&held[w]);
         if j >= n {
-            let (bf, f_new) = ctx.bond_cross_buf[ck];
-            ck += 1;
+            let (bf, f_new) = ctx.bond_cross_buf[*ck];
+            *ck += 1;
             held_f[w] = f_new;
             out[w] = bf;
             w += 1;
@@ -991,7 +1000,6 @@ fn bond_forces(
         out[w] = bf;
         w += 1;
     }
-    broken
 }
 
 /// Where a block's pairs and discs are, for [`lanes4`]'s batches.
