@@ -55,7 +55,7 @@
 //! the list (`Bonds::refresh`, after the discs are renumbered or the
 //! list changes): the bonds *held* in the slot order of their discs, in
 //! rows over the smaller slot like the contact list — only what a step
-//! reads (`Held`, 48 bytes), with their forces beside them in that
+//! reads (`Held`, 80 bytes of constants), with their forces beside them in that
 //! orientation. The contact sweep steps them block by block (a block's
 //! bonds just before its discs, from the state before the step, two at a
 //! time in SIMD lanes with the scalar operations; a bond whose second

@@ -883,9 +883,9 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
 /// before the block's discs are swept: the forces and moments on the
 /// block's discs into `acc` and `acc_b` (bond by bond in slot order, each
 /// bond's cross part from the cross buffer), the held forces updated.
-/// Returns the bonds that broke. The bonds are stepped first, all of them
-/// into a buffer (independent of each other: the processor overlaps
-/// them), then summed onto the discs in the same order.
+/// Returns the bonds that broke. The bonds are stepped [`BOND_CHUNK`] at
+/// a time into a buffer (independent of each other: the processor
+/// overlaps them), then summed onto the discs in the same order.
 #[inline(never)]
 fn bond_block(
     blk: usize,
