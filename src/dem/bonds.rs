@@ -55,7 +55,7 @@
 //! the list (`Bonds::refresh`, after the discs are renumbered or the
 //! list changes): the bonds *held* in the slot order of their discs, in
 //! rows over the smaller slot like the contact list — only what a step
-//! reads (`Held`, 48 bytes), with their forces beside them in that
+//! reads (`Held`, 80 bytes of constants), with their forces beside them in that
 //! orientation. The contact sweep steps them block by block (a block's
 //! bonds just before its discs, from the state before the step, two at a
 //! time in SIMD lanes with the scalar operations; a bond whose second
@@ -404,17 +404,26 @@ pub fn strengths(law: &BondLaw, a: u32, b: u32) -> (f64, f64) {
 
 /// A bond as the contact sweep holds it: in the row of the smaller of its
 /// two slots `i < j` (rows by `i`, `j` ascending, as the contact list).
-/// Only what a step reads: the bond's constants (48 bytes, read and never
-/// written by a step); its forces are held beside it ([`Bonds::held_f`]),
-/// its index in the list apart ([`Bonds::held_key`]). The lever arms
-/// `r_i/(r_i + r_j)`, `r_j/(r_i + r_j)` are taken from the discs' radii
-/// in the step.
+/// Only what a step reads: the bond's constants (80 bytes, read and never
+/// written by a step, made once when the bonds are held); its forces are
+/// held beside it ([`Bonds::held_f`]), its radius and index in the list
+/// apart ([`Bonds::held_r`], [`Bonds::held_key`]), read only when it
+/// breaks. Every constant is the value the step's formula would compute
+/// first (`k̄_n A` before `k̄_n A v_n Δt`, the arms' ratios before
+/// `d r_i/(r_i + r_j)`), so the step is bitwise the one that computes
+/// them every time — without its divisions.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Held {
-    /// Slot of the second disc.
+    /// Slots of the first and the second disc.
+    pub i: u32,
     pub j: u32,
-    /// Bond radius R̄.
-    radius: f64,
+    /// The arms over the distance: `r_i/(r_i + r_j)`, `r_j/(r_i + r_j)`.
+    ci: f64,
+    cj: f64,
+    /// `k̄_n A`, `k̄_s A` and `k̄_n I` of the bond's section.
+    kn_a: f64,
+    ks_a: f64,
+    kn_i: f64,
     /// Tensile strength σ_c.
     tensile: f64,
     /// Shear strength τ_c (or cohesion c).
@@ -448,11 +457,38 @@ pub(super) struct Break {
 }
 
 impl Held {
-    /// One step of the bond held at `w` between discs `si` (slot i) and
-    /// `sj`, with forces `f`, from the state before the step: its forces
-    /// updated ([`bond_step`]) and what it does to the two discs —
-    /// nothing, with the [`Break`], when the updated forces reach its
-    /// strength ([`breaks`]).
+    /// The bond of radius `radius` and strengths `(σ_c, τ_c or c)` between
+    /// slots `(i, j)` (radii `(ri, rj)`), through `thickness`.
+    pub(super) fn new(
+        (i, j): (u32, u32),
+        radius: f64,
+        (tensile, shear): (f64, f64),
+        (ri, rj): (f64, f64),
+        law: &BondLaw,
+        thickness: f64,
+    ) -> Held {
+        let (a, inertia) = section(radius, thickness);
+        let rs = ri + rj;
+        Held {
+            i,
+            j,
+            ci: ri / rs,
+            cj: rj / rs,
+            kn_a: law.kn * a,
+            ks_a: law.ks * a,
+            kn_i: law.kn * inertia,
+            tensile,
+            shear,
+            inv_a: 1.0 / a,
+            r_over_i: radius / inertia,
+        }
+    }
+
+    /// One step of the bond held at `w` (radius `radius`) between discs
+    /// `si` (slot i) and `sj`, with forces `f`, from the state before the
+    /// step: its forces updated ([`bond_step`]) and what it does to the
+    /// two discs — nothing, with the [`Break`], when the updated forces
+    /// reach its strength ([`breaks`]).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     pub(super) fn step(
@@ -462,28 +498,44 @@ impl Held {
         si: &Side,
         sj: &Side,
         law: &BondLaw,
+        radius: &[f64],
         thickness: f64,
         dt: f64,
     ) -> (BondForce, Option<Break>) {
-        let sec = section(self.radius, thickness);
         let old = *f;
-        let rs = si.radius + sj.radius;
-        let arms = (si.radius / rs, sj.radius / rs);
-        let (bf, n, la) = bond_step(si, sj, law, sec, arms, dt, f);
+        let (bf, n, la) = bond_step(si, sj, self, dt, f);
         if self.intact(law, *f) {
             return (bf, None);
         }
-        let Some(mode) = breaks(law, *f, self.radius, sec, self.tensile, self.shear) else {
-            return (bf, None);
-        };
-        let brk = Break {
+        self.breakage(w, old, *f, radius[w], (si.pos, n, la), law, thickness)
+            .map_or((bf, None), |b| (BondForce::default(), Some(b)))
+    }
+
+    /// The bond's breakage, if its new forces `new` reach its strength
+    /// ([`breaks`]); `old`: its forces before the step, `(x_i, n, l_i)`
+    /// the centre of disc i, the normal and the arm of i.
+    #[cold]
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn breakage(
+        &self,
+        w: usize,
+        old: HeldForces,
+        new: HeldForces,
+        radius: f64,
+        (xi, n, la): (Vec2, Vec2, f64),
+        law: &BondLaw,
+        thickness: f64,
+    ) -> Option<Break> {
+        let sec = section(radius, thickness);
+        let mode = breaks(law, new, radius, sec, self.tensile, self.shear)?;
+        Some(Break {
             w: w as u32,
             mode,
-            energy: released(law, old, *f, sec),
-            pos: si.pos + n * la,
+            energy: released(law, old, new, sec),
+            pos: xi + n * la,
             normal: n,
-        };
-        (BondForce::default(), Some(brk))
+        })
     }
 
     /// Are the bond's stresses clearly below its strengths? The stresses
@@ -539,6 +591,8 @@ pub struct Bonds {
     pub(super) held: Vec<Held>,
     /// Their forces (in `held`'s order and orientation).
     pub(super) held_f: Vec<HeldForces>,
+    /// Their radii R̄ (read when a bond breaks).
+    pub(super) held_r: Vec<f64>,
     /// Index in the list of each held bond, and whether its slot i is the
     /// bond's b.
     held_key: Vec<(u32, bool)>,
@@ -548,8 +602,9 @@ pub struct Bonds {
     pub(super) cross: CrossIndex,
     /// What each cross bond does in this step and its new forces.
     pub(super) cross_buf: Vec<(BondForce, HeldForces)>,
-    /// The disc thickness `held` was built for.
+    /// The disc thickness and the law `held` was built for.
     thickness: f64,
+    held_law: BondLaw,
     /// The slots or the list changed since `held` was built.
     stale: bool,
     /// `held_f` holds newer forces than the list.
@@ -631,6 +686,7 @@ impl Bonds {
             && self.row.len() == n + 1
             && self.cross.block == block
             && self.thickness == thickness
+            && self.held_law == self.law
         {
             return;
         }
@@ -638,6 +694,7 @@ impl Bonds {
         self.sync();
         self.stale = false;
         self.thickness = thickness;
+        self.held_law = self.law;
         let l = &self.list;
         let ends = |k: usize| {
             let (sa, sb) = (p.slot[l.a[k] as usize], p.slot[l.b[k] as usize]);
@@ -664,21 +721,18 @@ impl Bonds {
         }
         self.held.clear();
         self.held_f.clear();
+        self.held_r.clear();
         self.held_key.clear();
         self.at.clear();
         self.at.resize(l.len(), (0, false));
         for (w, &k) in order.iter().enumerate() {
             let k = k as usize;
-            let (_, j, flip) = ends(k);
-            let (a, inertia) = section(l.radius[k], thickness);
-            self.held.push(Held {
-                j,
-                radius: l.radius[k],
-                tensile: l.tensile[k],
-                shear: l.shear[k],
-                inv_a: 1.0 / a,
-                r_over_i: l.radius[k] / inertia,
-            });
+            let (i, j, flip) = ends(k);
+            let radii = (p.radius[i as usize], p.radius[j as usize]);
+            let strengths = (l.tensile[k], l.shear[k]);
+            let h = Held::new((i, j), l.radius[k], strengths, radii, &self.law, thickness);
+            self.held.push(h);
+            self.held_r.push(l.radius[k]);
             self.held_f
                 .push(flipped((l.fn_[k], l.fs[k], l.moment[k]), flip));
             self.held_key.push((k as u32, flip));
@@ -694,7 +748,7 @@ impl Bonds {
     /// Step the cross bonds (second disc in a later block) from the state
     /// before the step into `cross_buf`; returns those that broke.
     pub(super) fn step_cross(&mut self, p: &Particles, thickness: f64, dt: f64) -> Vec<Break> {
-        let (held, held_f, law) = (&self.held, &self.held_f, &self.law);
+        let (held, held_f, held_r, law) = (&self.held, &self.held_f, &self.held_r, &self.law);
         self.cross
             .pairs
             .par_iter()
@@ -704,7 +758,7 @@ impl Bonds {
                 let (w, mut f) = (w as usize, held_f[w as usize]);
                 let h = &held[w];
                 let (si, sj) = (side(p, i as usize), side(p, h.j as usize));
-                let (bf, brk) = h.step(w, &mut f, &si, &sj, law, thickness, dt);
+                let (bf, brk) = h.step(w, &mut f, &si, &sj, law, held_r, thickness, dt);
                 *out = (bf, f);
                 brk
             })
@@ -864,6 +918,7 @@ impl Bonds {
             + l.broken.capacity() * std::mem::size_of::<BrokenBond>()
             + self.held.capacity() * std::mem::size_of::<Held>()
             + self.held_f.capacity() * std::mem::size_of::<HeldForces>()
+            + self.held_r.capacity() * 8
             + (self.held_key.capacity() + self.at.capacity()) * 8
             + self.row.capacity() * 4
             + self.cross.heap_bytes()
@@ -871,31 +926,28 @@ impl Bonds {
     }
 }
 
-/// One bond between discs `si` and `sj`, in that orientation (normal n
-/// from i to j, `M` the moment on i), `(c_i, c_j)` the arms over the
-/// distance: update its forces `(F_n, F_s, M)` by the increments of the
-/// step (module docs). Returns what it does to the two discs, n and the
-/// lever arm `l_i`.
+/// One bond `h` between discs `si` and `sj`, in that orientation (normal
+/// n from i to j, `M` the moment on i): update its forces `(F_n, F_s, M)`
+/// by the increments of the step (module docs). Returns what it does to
+/// the two discs, n and the lever arm `l_i`.
 #[inline(always)]
 fn bond_step(
     si: &Side,
     sj: &Side,
-    law: &BondLaw,
-    (area, inertia): (f64, f64),
-    (ci, cj): (f64, f64),
+    h: &Held,
     dt: f64,
     (fn_, fs, m): &mut (f64, f64, f64),
 ) -> (BondForce, Vec2, f64) {
     let (n, d) = super::contact::normal_between(si.pos, sj.pos);
     let t = n.perp();
-    let (la, lb) = (d * ci, d * cj);
+    let (la, lb) = (d * h.ci, d * h.cj);
     let dv = si.vel - sj.vel;
     let (wi, wj) = (si.omega, sj.omega);
     let vn = dv.dot(n);
     let vt = dv.dot(t) + wi * la + wj * lb;
-    *fn_ += law.kn * area * vn * dt;
-    *fs -= law.ks * area * vt * dt;
-    *m -= law.kn * inertia * (wi - wj) * dt;
+    *fn_ += h.kn_a * vn * dt;
+    *fs -= h.ks_a * vt * dt;
+    *m -= h.kn_i * (wi - wj) * dt;
     let bf = BondForce {
         f: n * -*fn_ + t * *fs,
         ma: la * *fs + *m,

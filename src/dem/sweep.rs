@@ -44,6 +44,8 @@ thread_local! {
     /// Per-thread accumulators of the bond moments on second discs (bonds
     /// only), kept as `ACC`.
     static ACC_BOND: std::cell::RefCell<(Vec<f64>, bool)> = const { std::cell::RefCell::new((Vec::new(), false)) };
+    /// Per-thread buffer of what the block's bonds do ([`bond_block`]).
+    static BOND_OUT: std::cell::RefCell<Vec<BondForce>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 type Acc<T> = std::thread::LocalKey<std::cell::RefCell<(Vec<T>, bool)>>;
@@ -113,6 +115,8 @@ struct Ctx<'a> {
     bond_cross: &'a CrossIndex,
     /// What each cross bond does and its new forces.
     bond_cross_buf: &'a [(BondForce, HeldForces)],
+    /// The radius of each held bond (read when one breaks).
+    bond_radius: &'a [f64],
     /// Evaluate inner pairs four at a time ([`lanes4`]).
     four_lanes: bool,
 }
@@ -383,6 +387,7 @@ impl Granular {
             thickness: self.thickness,
             bond_cross: &self.bonds.cross,
             bond_cross_buf: &self.bonds.cross_buf,
+            bond_radius: &self.bonds.held_r,
             #[cfg(target_arch = "x86_64")]
             four_lanes: lanes4::available(),
             #[cfg(not(target_arch = "x86_64"))]
@@ -883,7 +888,9 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
 /// before the block's discs are swept: the forces and moments on the
 /// block's discs into `acc` and `acc_b` (bond by bond in slot order, each
 /// bond's cross part from the cross buffer), the held forces updated.
-/// Returns the bonds that broke.
+/// Returns the bonds that broke. The bonds are stepped [`BOND_CHUNK`] at
+/// a time into a buffer (independent of each other: the processor
+/// overlaps them), then summed onto the discs in the same order.
 #[inline(never)]
 fn bond_block(
     blk: usize,
@@ -905,44 +912,68 @@ fn bond_block(
         acc_b[j as usize - lo] += bf.mb;
     }
     let mut ck = bx.first[blk] as usize;
-    let row = &ctx.bond_row[lo..=lo + n];
-    let held_f = &mut held_f[..held.len()];
-    let (law, w0) = (&ctx.bond_law, row[0] as usize);
+    let w0 = ctx.bond_row[lo] as usize;
     let mut broken = vec![];
-    // what a bond of disc d (its row) and disc j does, in bond order: j's
-    // part (an inner bond's; a cross bond's was added above), then d's
-    let mut add = |d: usize, j: usize, bf: BondForce| {
-        if j < n {
-            acc[j].0 -= bf.f;
-            acc_b[j] += bf.mb;
+    let held_f = &mut held_f[..held.len()];
+    BOND_OUT.with_borrow_mut(|out| {
+        out.resize(BOND_CHUNK, BondForce::default());
+        // in chunks that stay in the L1 cache between the two passes
+        for c in (0..held.len()).step_by(BOND_CHUNK) {
+            let e = held.len().min(c + BOND_CHUNK);
+            let (h, out) = (&held[c..e], &mut out[..e - c]);
+            let at = (lo, w0 + c, &mut ck);
+            bond_forces(kin, (h, &mut held_f[c..e]), out, at, &mut broken, ctx);
+            // what a bond of disc d and disc j does, in bond order: j's
+            // part (an inner bond's; a cross bond's was added above), then d's
+            for (h, bf) in h.iter().zip(out.iter()) {
+                let (d, j) = (h.i as usize - lo, h.j as usize - lo);
+                if j < n {
+                    acc[j].0 -= bf.f;
+                    acc_b[j] += bf.mb;
+                }
+                acc[d].0 += bf.f;
+                acc_b[d] += bf.ma;
+            }
         }
-        acc[d].0 += bf.f;
-        acc_b[d] += bf.ma;
-    };
-    let mut d = 0;
+    });
+    broken
+}
+
+/// Bonds stepped at a time before they are summed ([`bond_block`]).
+const BOND_CHUNK: usize = 256;
+
+/// What the bonds `held` of a block with its first disc at slot `lo`
+/// do ([`bond_block`]) into `out`, their held forces updated; `w0`: where
+/// `held` starts among all held bonds, `ck`: the next cross bond. The
+/// bonds that broke are added to `broken`.
+#[inline(always)]
+fn bond_forces(
+    kin: Kin,
+    (held, held_f): (&[Held], &mut [HeldForces]),
+    out: &mut [BondForce],
+    (lo, w0, ck): (usize, usize, &mut usize),
+    broken: &mut Vec<Break>,
+    ctx: &Ctx,
+) {
+    let n = kin.pos.len();
+    let law = &ctx.bond_law;
+    let (t, dt, rad) = (ctx.thickness, ctx.bond_dt, ctx.bond_radius);
+    let ends = |h: &Held| (h.i as usize - lo, h.j as usize - lo);
     let mut w = 0;
     while w < held.len() {
-        while (row[d + 1] - row[0]) as usize <= w {
-            d += 1;
-        }
-        let j = held[w].j as usize - lo;
+        let (d, j) = ends(&held[w]);
         if j >= n {
-            let (bf, f_new) = ctx.bond_cross_buf[ck];
-            ck += 1;
+            let (bf, f_new) = ctx.bond_cross_buf[*ck];
+            *ck += 1;
             held_f[w] = f_new;
-            add(d, j, bf);
+            out[w] = bf;
             w += 1;
             continue;
         }
-        // two inner bonds side by side (of this disc or the next ones;
-        // all from the state before the step), summed in the same order
+        // two inner bonds side by side (all from the state before the step)
         #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
         if let Some(h2) = held.get(w + 1).filter(|h| (h.j as usize) < lo + n) {
-            let mut d2 = d;
-            while (row[d2 + 1] - row[0]) as usize <= w + 1 {
-                d2 += 1;
-            }
-            let j2 = h2.j as usize - lo;
+            let (d2, j2) = ends(h2);
             let (si, sj) = sides(kin, d, j);
             let (si2, sj2) = sides(kin, d2, j2);
             let two = super::bonds::lanes::step2(
@@ -951,43 +982,29 @@ fn bond_block(
                 [si, si2],
                 [sj, sj2],
                 law,
-                ctx.thickness,
-                ctx.bond_dt,
+                dt,
+                &mut out[w..w + 2],
             );
-            if let Some([bf, bf2]) = two {
+            if let Some(intact) = two {
                 // a bond that may break: the scalar step
-                let mut lane = |w: usize, d: usize, j: usize, bf: Option<BondForce>| {
-                    bf.unwrap_or_else(|| {
-                        let (si, sj) = sides(kin, d, j);
-                        let (t, dt) = (ctx.thickness, ctx.bond_dt);
-                        let (bf, brk) = held[w].step(w0 + w, &mut held_f[w], &si, &sj, law, t, dt);
-                        broken.extend(brk);
-                        bf
-                    })
-                };
-                let bf = lane(w, d, j, bf);
-                add(d, j, bf);
-                let bf2 = lane(w + 1, d2, j2, bf2);
-                add(d2, j2, bf2);
+                for l in (0..2).filter(|l| intact & (1 << l) == 0) {
+                    let (d, j) = ends(&held[w + l]);
+                    let (si, sj) = sides(kin, d, j);
+                    let f = &mut held_f[w + l];
+                    let (bf, brk) = held[w + l].step(w0 + w + l, f, &si, &sj, law, rad, t, dt);
+                    broken.extend(brk);
+                    out[w + l] = bf;
+                }
                 w += 2;
                 continue;
             }
         }
         let (si, sj) = sides(kin, d, j);
-        let (bf, brk) = held[w].step(
-            w0 + w,
-            &mut held_f[w],
-            &si,
-            &sj,
-            law,
-            ctx.thickness,
-            ctx.bond_dt,
-        );
+        let (bf, brk) = held[w].step(w0 + w, &mut held_f[w], &si, &sj, law, rad, t, dt);
         broken.extend(brk);
-        add(d, j, bf);
+        out[w] = bf;
         w += 1;
     }
-    broken
 }
 
 /// Where a block's pairs and discs are, for [`lanes4`]'s batches.

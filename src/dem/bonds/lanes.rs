@@ -13,10 +13,11 @@ use crate::geom::Vec2;
 use std::arch::x86_64::*;
 
 /// The bonds `h` between the discs `si[l]` and `sj[l]`, lane l, with
-/// forces `f[l]`: the new forces written into `f` and the forces on the
-/// discs returned for the bonds that are clearly intact (`None` for a
-/// lane whose bond is not: its forces are left as they were); `None` if a
-/// pair's centres coincide (or are not finite), left to the scalar step.
+/// forces `f[l]`: what they do to the discs written into `out[l]`, and
+/// the new forces into `f[l]` for the bonds that are clearly intact (bit
+/// l of the mask returned; a lane whose bond is not keeps its forces, and
+/// its `out` is to be replaced by the scalar step's); `None` if a pair's
+/// centres coincide (or are not finite), left to the scalar step.
 #[inline(always)]
 pub(in crate::dem) fn step2(
     h: [&Held; 2],
@@ -24,9 +25,9 @@ pub(in crate::dem) fn step2(
     si: [Side; 2],
     sj: [Side; 2],
     law: &BondLaw,
-    thickness: f64,
     dt: f64,
-) -> Option<[Option<BondForce>; 2]> {
+    out: &mut [BondForce],
+) -> Option<i32> {
     // SAFETY: SSE2 is enabled (module cfg); no memory is accessed through
     // pointers.
     unsafe {
@@ -46,10 +47,8 @@ pub(in crate::dem) fn step2(
         let sign = _mm_set1_pd(-0.0);
         let tx = _mm_xor_pd(ny, sign);
         // the lever arms d r_i/(r_i + r_j), d r_j/(r_i + r_j)
-        let (ri, rj) = pair(|s| s.radius);
-        let rs = _mm_add_pd(ri, rj);
-        let la = _mm_mul_pd(dist, _mm_div_pd(ri, rs));
-        let lb = _mm_mul_pd(dist, _mm_div_pd(rj, rs));
+        let la = _mm_mul_pd(dist, set(h[0].ci, h[1].ci));
+        let lb = _mm_mul_pd(dist, set(h[0].cj, h[1].cj));
         let (vix, vjx) = pair(|s| s.vel.x);
         let (viy, vjy) = pair(|s| s.vel.y);
         let (dvx, dvy) = (_mm_sub_pd(vix, vjx), _mm_sub_pd(viy, vjy));
@@ -62,20 +61,15 @@ pub(in crate::dem) fn step2(
             ),
             _mm_mul_pd(wj, lb),
         );
-        // A = 2R̄t, I = (2/3)R̄³t (`section`)
-        let r = set(h[0].radius, h[1].radius);
-        let t = _mm_set1_pd(thickness);
-        let area = _mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0), r), t);
-        let inertia = _mm_mul_pd(
-            _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(_mm_set1_pd(2.0 / 3.0), r), r), r),
-            t,
-        );
-        let (kn, ks, dt) = (_mm_set1_pd(law.kn), _mm_set1_pd(law.ks), _mm_set1_pd(dt));
-        let inc =
-            |k: __m128d, a: __m128d, v: __m128d| _mm_mul_pd(_mm_mul_pd(_mm_mul_pd(k, a), v), dt);
-        let fn_ = _mm_add_pd(set(f[0].0, f[1].0), inc(kn, area, vn));
-        let fs = _mm_sub_pd(set(f[0].1, f[1].1), inc(ks, area, vt));
-        let m = _mm_sub_pd(set(f[0].2, f[1].2), inc(kn, inertia, _mm_sub_pd(wi, wj)));
+        // k̄_n A v_n Δt, k̄_s A v_t Δt, k̄_n I (ω_i − ω_j) Δt
+        let dt = _mm_set1_pd(dt);
+        let inc = |k: __m128d, v: __m128d| _mm_mul_pd(_mm_mul_pd(k, v), dt);
+        let kn_a = set(h[0].kn_a, h[1].kn_a);
+        let ks_a = set(h[0].ks_a, h[1].ks_a);
+        let kn_i = set(h[0].kn_i, h[1].kn_i);
+        let fn_ = _mm_add_pd(set(f[0].0, f[1].0), inc(kn_a, vn));
+        let fs = _mm_sub_pd(set(f[0].1, f[1].1), inc(ks_a, vt));
+        let m = _mm_sub_pd(set(f[0].2, f[1].2), inc(kn_i, _mm_sub_pd(wi, wj)));
         // f = n (−F_n) + t F_s; M_i = l_i F_s + M, M_j = l_j F_s − M
         let neg_fn = _mm_xor_pd(fn_, sign);
         let fx = _mm_add_pd(_mm_mul_pd(nx, neg_fn), _mm_mul_pd(tx, fs));
@@ -83,30 +77,33 @@ pub(in crate::dem) fn step2(
         let ma = _mm_add_pd(_mm_mul_pd(la, fs), m);
         let mb = _mm_sub_pd(_mm_mul_pd(lb, fs), m);
         let intact = intact2(h, law, fn_, fs, m);
-        // lane l's force (x, y) and new (F_n, F_s)
+        // lane l's force (x, y) and new (F_n, F_s), stored whole
         let (f0, f1) = (_mm_unpacklo_pd(fx, fy), _mm_unpackhi_pd(fx, fy));
-        let (s0, s1) = (_mm_unpacklo_pd(fn_, fs), _mm_unpackhi_pd(fn_, fs));
-        let (ma, mb, m) = (get(ma), get(mb), get(m));
-        let mut lane = |l: usize, fv: __m128d, sv: __m128d| {
-            if !intact[l] {
-                return None;
-            }
-            let [fn_l, fs_l] = get(sv);
-            f[l] = (fn_l, fs_l, m[l]);
-            let [x, y] = get(fv);
-            Some(BondForce {
+        let (m0, m1) = (_mm_unpacklo_pd(ma, mb), _mm_unpackhi_pd(ma, mb));
+        let (f, out) = (&mut f[..2], &mut out[..2]);
+        for (o, (fv, mv)) in out.iter_mut().zip([(f0, m0), (f1, m1)]) {
+            let ([x, y], [ma, mb]) = (get(fv), get(mv));
+            *o = BondForce {
                 f: Vec2::new(x, y),
-                ma: ma[l],
-                mb: mb[l],
-            })
-        };
-        Some([lane(0, f0, s0), lane(1, f1, s1)])
+                ma,
+                mb,
+            };
+        }
+        let (s0, s1) = (_mm_unpacklo_pd(fn_, fs), _mm_unpackhi_pd(fn_, fs));
+        let m = get(m);
+        for (l, sv) in [s0, s1].into_iter().enumerate() {
+            if intact & (1 << l) != 0 {
+                let [fn_l, fs_l] = get(sv);
+                f[l] = (fn_l, fs_l, m[l]);
+            }
+        }
+        Some(intact)
     }
 }
 
-/// [`Held::intact`] in two lanes.
+/// [`Held::intact`] in two lanes: bit l set when lane l's bond is.
 #[inline(always)]
-fn intact2(h: [&Held; 2], law: &BondLaw, fn_: __m128d, fs: __m128d, m: __m128d) -> [bool; 2] {
+fn intact2(h: [&Held; 2], law: &BondLaw, fn_: __m128d, fs: __m128d, m: __m128d) -> i32 {
     // SAFETY: SSE2 is enabled (module cfg).
     unsafe {
         let tol = _mm_set1_pd(16.0 * f64::EPSILON);
@@ -126,8 +123,7 @@ fn intact2(h: [&Held; 2], law: &BondLaw, fn_: __m128d, fs: __m128d, m: __m128d) 
         let ok_t = _mm_cmplt_pd(sigma, set(h[0].tensile, h[1].tensile));
         let shear = _mm_add_pd(tau, _mm_mul_pd(tol, _mm_add_pd(tau, abs(friction))));
         let ok_s = _mm_cmplt_pd(shear, _mm_mul_pd(tau_c, _mm_sub_pd(_mm_set1_pd(1.0), tol)));
-        let ok = _mm_movemask_pd(_mm_and_pd(ok_t, ok_s));
-        [ok & 1 != 0, ok & 2 != 0]
+        _mm_movemask_pd(_mm_and_pd(ok_t, ok_s))
     }
 }
 
@@ -170,6 +166,7 @@ mod tests {
             let si = [side(Vec2::ZERO), side(Vec2::new(5.0, 0.0))];
             let sj = [side(Vec2::new(2.0, 0.3)), side(Vec2::new(5.3, 2.0))];
             let mut held = [Held::default(); 2];
+            let mut radii_of = [0.0; 2];
             let mut f = [(0.0, 0.0, 0.0); 2];
             for (l, h) in held.iter_mut().enumerate() {
                 let radius = u(0.5, 1.0);
@@ -177,44 +174,39 @@ mod tests {
                 let forces = (u(-100.0, 100.0), u(-100.0, 100.0), u(-50.0, 50.0));
                 let (sigma, tau) = stresses(forces.0, forces.1, forces.2, radius, a, i);
                 // strengths about the current stresses: some bonds break
-                *h = Held {
-                    j: 0,
-                    radius,
-                    tensile: sigma.abs() * u(0.8, 2.0),
-                    shear: tau * u(0.8, 2.0),
-                    inv_a: 1.0 / a,
-                    r_over_i: radius / i,
-                };
+                let strengths = (sigma.abs() * u(0.8, 2.0), tau * u(0.8, 2.0));
+                let radii = (si[l].radius, sj[l].radius);
+                *h = Held::new((0, 0), radius, strengths, radii, &law, thickness);
+                radii_of[l] = radius;
                 f[l] = forces;
             }
             let mut lanes_f = f;
-            let out = step2(
+            let mut out = [BondForce::default(); 2];
+            let intact = step2(
                 [&held[0], &held[1]],
                 &mut lanes_f,
                 si,
                 sj,
                 &law,
-                thickness,
                 dt,
+                &mut out,
             )
             .expect("distinct centres");
             for l in 0..2 {
                 let mut fl = f[l];
-                let (bf, brk) = held[l].step(l, &mut fl, &si[l], &sj[l], &law, thickness, dt);
+                let (bf, brk) =
+                    held[l].step(l, &mut fl, &si[l], &sj[l], &law, &radii_of, thickness, dt);
                 broke += usize::from(brk.is_some());
                 let bits = |b: &BondForce| [b.f.x, b.f.y, b.ma, b.mb].map(f64::to_bits);
                 let fbits = |f: HeldForces| [f.0, f.1, f.2].map(f64::to_bits);
-                match out[l] {
-                    Some(lb) => {
-                        assert!(brk.is_none(), "case {case} lane {l}: intact but broke");
-                        assert_eq!(bits(&lb), bits(&bf), "case {case} lane {l}");
-                        assert_eq!(fbits(lanes_f[l]), fbits(fl), "case {case} lane {l}");
-                        same += 1;
-                    }
-                    None => {
-                        assert_eq!(fbits(lanes_f[l]), fbits(f[l]), "case {case} lane {l}");
-                        left += 1;
-                    }
+                if intact & (1 << l) != 0 {
+                    assert!(brk.is_none(), "case {case} lane {l}: intact but broke");
+                    assert_eq!(bits(&out[l]), bits(&bf), "case {case} lane {l}");
+                    assert_eq!(fbits(lanes_f[l]), fbits(fl), "case {case} lane {l}");
+                    same += 1;
+                } else {
+                    assert_eq!(fbits(lanes_f[l]), fbits(f[l]), "case {case} lane {l}");
+                    left += 1;
                 }
             }
         }
