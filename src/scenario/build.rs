@@ -351,7 +351,7 @@ fn granular_with(
             .filter_map(|(k, r)| (!gone.contains(&k)).then_some(r))
             .collect();
     }
-    let (mut rows, groups) = super::clumps::clump_rows(sc, rows, removed)?;
+    let (rows, groups) = super::clumps::clump_rows(sc, rows, removed)?;
     let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
     // a part: the whole's columns that choose its discs and that the
@@ -373,49 +373,23 @@ fn granular_with(
         }
         None => None,
     };
-    let keep = whole.as_ref().zip(select).map(|(w, f)| {
-        let max_r = w.max_radius();
-        f(&w.pos, max_r, g.skin.unwrap_or(default_skin(max_r)))
-    });
-    let mut p = Particles::default();
-    let count = keep
-        .as_ref()
-        .map_or(rows.len(), |k| k.iter().filter(|&&x| x).count());
-    p.try_reserve(count).map_err(|e| {
-        bad(
-            "granular.discs",
-            format!(
-                "cannot allocate the arrays of {count} discs ({e}): more than this process may use"
-            ),
-        )
-    })?;
     let v0 = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
-    let density = |mi: u16| sc.material[mi as usize].density;
-    match (&whole, &keep) {
-        (Some(w), Some(keep)) => {
-            drop(std::mem::take(&mut rows));
-            for k in (0..keep.len()).filter(|&k| keep[k]) {
-                let mi = w.material[k];
-                p.push(w.pos[k], w.radius[k], density(mi), g.thickness, mi);
-                let last = p.len() - 1;
-                p.vel[last] = v0;
-                // the whole's numbering
-                p.id[last] = k as u32;
-            }
-            p.slot = vec![u32::MAX; keep.len()];
-            for (s, &id) in p.id.iter().enumerate() {
-                p.slot[id as usize] = s as u32;
-            }
-        }
-        _ => {
-            for (k, r) in rows.iter().enumerate() {
-                let (mi, ..) = disc_of(sc, k, r, default_mat)?;
-                p.push(r.pos, r.r, density(mi), g.thickness, mi);
-                p.vel[k] = v0;
-            }
+    // a part's discs are made at the end, from the whole's columns
+    let mut p = Particles::default();
+    if whole.is_none() {
+        reserve(&mut p, rows.len())?;
+        for (k, r) in rows.iter().enumerate() {
+            let (mi, ..) = disc_of(sc, k, r, default_mat)?;
+            p.push(
+                r.pos,
+                r.r,
+                sc.material[mi as usize].density,
+                g.thickness,
+                mi,
+            );
+            p.vel[k] = v0;
         }
     }
-    drop(keep);
     drop(rows);
     let mut clumps = Clumps::default();
     for (i, m) in groups.iter().enumerate() {
@@ -441,10 +415,7 @@ fn granular_with(
     }
     // a part's time step and checks are those of the whole; its start
     // positions are the whole's (set at the end)
-    let mut whole = whole.map(|w| {
-        gr.set_start(Vec::new());
-        gr.with_discs(w)
-    });
+    let mut whole = whole.map(|w| gr.with_discs(w));
     gr.dt = match sc.simulation.dt {
         Some(dt) => dt,
         None => {
@@ -465,13 +436,63 @@ fn granular_with(
     if let Some(s) = g.skin {
         gr.set_skin(s);
     }
-    if let Some(w) = whole.as_mut() {
-        let max_r = w.particles.max_radius();
-        gr.set_skin(g.skin.unwrap_or(default_skin(max_r)));
-        start_state(sc, w, purpose)?;
-        gr.set_start(std::mem::take(&mut w.particles.pos));
+    if let (Some(w), Some(select)) = (whole, select) {
+        start_state(sc, &w, purpose)?;
+        let mut w = w.particles;
+        // the checks' columns are done with: the part is made without them
+        (w.mass, w.id, w.clump) = Default::default();
+        let max_r = w.max_radius();
+        let skin = g.skin.unwrap_or(default_skin(max_r));
+        gr.set_skin(skin);
+        let keep = select(&w.pos, max_r, skin);
+        gr.particles = part_of(sc, (&w.pos, &w.radius, &w.material), &keep, v0)?;
+        gr.set_start(w.pos);
     }
     Ok(gr)
+}
+
+/// `p` with room for `n` discs, or the error that they do not fit.
+fn reserve(p: &mut Particles, n: usize) -> Result<(), Invalid> {
+    p.try_reserve(n).map_err(|e| {
+        bad(
+            "granular.discs",
+            format!(
+                "cannot allocate the arrays of {n} discs ({e}): more than this process may use"
+            ),
+        )
+    })
+}
+
+/// The discs `keep` holds of the whole's centres, radii and materials,
+/// with the whole's ids, at velocity `v0`.
+fn part_of(
+    sc: &Scenario,
+    (pos, radius, material): (&[Vec2], &[f64], &[u16]),
+    keep: &[bool],
+    v0: Vec2,
+) -> Result<Particles, Invalid> {
+    let thickness = spec(sc)?.thickness;
+    let mut p = Particles::default();
+    reserve(&mut p, keep.iter().filter(|&&k| k).count())?;
+    for k in (0..keep.len()).filter(|&k| keep[k]) {
+        let mi = material[k];
+        p.push(
+            pos[k],
+            radius[k],
+            sc.material[mi as usize].density,
+            thickness,
+            mi,
+        );
+        let last = p.len() - 1;
+        p.vel[last] = v0;
+        // the whole's numbering
+        p.id[last] = k as u32;
+    }
+    p.slot = vec![u32::MAX; keep.len()];
+    for (s, &id) in p.id.iter().enumerate() {
+        p.slot[id as usize] = s as u32;
+    }
+    Ok(p)
 }
 
 /// The material of disc `k` (row `r`; its own or the section's
