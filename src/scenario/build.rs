@@ -538,7 +538,7 @@ fn disc_of(
             if v > best.0 { (v, f) } else { best }
         },
     );
-    return Err(bad(
+    Err(bad(
         at,
         format!(
             "disc {}: its mass ρπr²t = {mass:e} and moment of inertia m r²/2 = {inertia:e} must be finite and > 0 (ρ = {:e}, r = {:e}, t = {:e})",
@@ -547,7 +547,7 @@ fn disc_of(
             r.r,
             g.thickness
         ),
-    ));
+    ))
 }
 
 /// The search grid's skin of discs of largest radius `max_r` when the
