@@ -34,12 +34,13 @@ fn run(e: f64, scheme: Scheme, n: usize) -> Result<(f64, f64, f64, f64, f64), St
         .build()
         .map_err(|e| e.to_string())?;
     let c = m.coupled_mut().expect("coupled");
-    let gain = scheme::gains(c, n).map_err(|e| e.to_string())?[0];
+    let gain = scheme::gains(c, n).map_err(|e| e.to_string())?[0].gain;
     let omega_h = scheme::contact_omega(c) * c.granular.dt * n as f64;
     let choice = Choice {
         scheme,
         substeps: n,
         omega_dt: 0.0,
+        body_omega_dt: 0.0,
         gains: Vec::new(),
         automatic: false,
         why: String::new(),

@@ -213,6 +213,17 @@ pub struct SolveError {
     pub message: String,
 }
 
+/// A body's collective response to a layer of contacts along its whole
+/// contact boundary ([`Continuum::collective_gain`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Collective {
+    /// The layer's gain: the largest eigenvalue of `K^½ S K^½`.
+    pub gain: f64,
+    /// Angular frequency of the body's response to the layer's push
+    /// (Rayleigh's quotient, rad/s; 0 if unknown).
+    pub omega: f64,
+}
+
 /// What the coupling needs from a continuum body (EFG or FE).
 pub trait Continuum: Send {
     /// Name (for messages and outputs).
@@ -398,8 +409,19 @@ pub trait Continuum: Send {
     /// `spacing` of boundary (the densest row of the smallest discs: each
     /// chain point carries the contacts of its share of the boundary). A
     /// single contact's gain `k_n φᵀA⁻¹φ` is at most this. 0 if unknown.
-    fn collective_gain(&mut self, _kn: f64, _ks: f64, _spacing: f64) -> Result<f64, SolveError> {
-        Ok(0.0)
+    /// With it, the angular frequency of the body's response to that
+    /// collective push, `ω² = uᵀK̄u / uᵀMu` (Rayleigh's quotient of the
+    /// displacement `u = A⁻¹ φ K^½ x`): for a body step long against the
+    /// body's own period `u` is the static response and `ω` the frequency
+    /// of the mode the contacts drive together; shorter, `u` holds more
+    /// inertia and `ω` comes out higher. 0 if unknown.
+    fn collective_gain(
+        &mut self,
+        _kn: f64,
+        _ks: f64,
+        _spacing: f64,
+    ) -> Result<Collective, SolveError> {
+        Ok(Collective::default())
     }
     /// Stored entries of the factor of the body step's Newmark matrix (the
     /// cost of a body solve; 0 if not dynamic).
@@ -1189,7 +1211,12 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     }
     /// Power iteration on `K^½ S K^½` (one solve per product), from a
     /// uniform push along the normals, to 1e-3 or 60 products.
-    fn collective_gain(&mut self, kn: f64, ks: f64, spacing: f64) -> Result<f64, SolveError> {
+    fn collective_gain(
+        &mut self,
+        kn: f64,
+        ks: f64,
+        spacing: f64,
+    ) -> Result<Collective, SolveError> {
         // per chain point: K^½ (2 × 2, symmetric) from its normal and share
         let mut half: Vec<[f64; 4]> = Vec::new();
         for ch in &self.chains {
@@ -1221,7 +1248,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         let rows: Vec<&Row> = self.rows.iter().flatten().collect();
         let name = self.body.name().to_string();
         let Some(nm) = self.body.newmark_mut() else {
-            return Ok(0.0);
+            return Ok(Collective::default());
         };
         let apply =
             |k: &[f64; 4], v: Vec2| Vec2::new(k[0] * v.x + k[1] * v.y, k[2] * v.x + k[3] * v.y);
@@ -1231,7 +1258,7 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         for _ in 0..60 {
             let norm = x.iter().map(|v| v.dot(*v)).sum::<f64>().sqrt();
             if !(norm > 0.0 && norm.is_finite()) {
-                return Ok(0.0);
+                return Ok(Collective::default());
             }
             load.iter_mut().for_each(|l| *l = 0.0);
             for ((row, k), v) in rows.iter().zip(&half).zip(&x) {
@@ -1262,7 +1289,17 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
                 message: "the collective contact gain is not finite".to_string(),
             });
         }
-        Ok(lambda)
+        // `load` holds the last response u = A⁻¹ φ K^½ x
+        let (stiff, mass) = (nm.stiffness.quad_form(&load), nm.mass.quad_form(&load));
+        let omega = if mass > 0.0 && stiff > 0.0 {
+            (stiff / mass).sqrt()
+        } else {
+            0.0
+        };
+        Ok(Collective {
+            gain: lambda,
+            omega,
+        })
     }
     fn path_extent(&self) -> f64 {
         let p = &self.path;

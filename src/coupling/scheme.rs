@@ -19,13 +19,15 @@
 //!   body's response to the contacts as quasi-static within a body step,
 //!   so the body step must not be long against the contacts' own period.
 //!
-//! The choice uses two numbers: `Γ(n)` per body for the predicted scheme
-//! (one factorization and a few dozen solves per candidate n), and
-//! `ω_c h`, the contacts' own angular frequency `ω_c = √(k_n/m)` (the
-//! lightest disc on the stiffest body law) times the body step.
+//! The choice uses three numbers: `Γ(n)` per body for the predicted scheme
+//! (one factorization and a few dozen solves per candidate n); `ω_c h`,
+//! the contacts' own angular frequency `ω_c = √(k_n/m)` (the lightest
+//! disc on the stiffest body law) times the body step; and `ω_b h`, the
+//! bodies' collective-mode frequency ([`Collective::omega`]) times the
+//! body step: the compliant scheme resolves both periods.
 
 use super::{CoupledModel, CouplingError};
-use crate::continuum::SolveError;
+use crate::continuum::{Collective, SolveError};
 
 /// A coupled scheme ([module docs](self)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -73,6 +75,10 @@ pub struct Choice {
     pub substeps: usize,
     /// `ω_c Δt`: the contacts' own angular frequency times the DEM step.
     pub omega_dt: f64,
+    /// `ω_b Δt`: the bodies' collective-mode angular frequency
+    /// ([`Collective::omega`], the largest over the bodies, at the longest
+    /// body step examined) times the DEM step; 0 if not examined.
+    pub body_omega_dt: f64,
     /// The predicted scheme's collective gain per body at each substep
     /// count examined, `(n, [Γ per body])`, largest n first.
     pub gains: Vec<(usize, Vec<f64>)>,
@@ -142,7 +148,10 @@ fn predicted_rule() -> String {
 /// (`examples/scheme_map.rs`, the undamped, frictionless bed: the hardest
 /// case, nothing dissipates the contacts' oscillation): at E = 0.1 and
 /// 2 GPa the energy created stays within 0.3 % of the work exchanged up to
-/// `ω_c h` = 2.08, and is 16 % at 2.98.
+/// `ω_c h` = 2.08, and is 16 % at 2.98. The same bound holds for `ω_b h`,
+/// the bodies' collective mode: the 10 GPa footing of
+/// `examples/soft_footing.toml` (ω_b Δt = 0.68) created 2.5 % at
+/// `ω_b h` = 4.1, 0.84 % at 2.0 and 0.16 % at 1.35.
 pub const COMPLIANT_MAX_OMEGA_H: f64 = 2.0;
 
 /// The choice keeps the exact step for assemblies of fewer discs than
@@ -192,8 +201,9 @@ pub fn contact_omega(m: &CoupledModel) -> f64 {
 }
 
 /// Per body, the collective gain of the predicted scheme with body steps
-/// of `n` DEM steps (each body factored again for them).
-pub fn gains(m: &mut CoupledModel, n: usize) -> Result<Vec<f64>, SolveError> {
+/// of `n` DEM steps (each body factored again for them), and the body's
+/// frequency in that push ([`Collective`]).
+pub fn gains(m: &mut CoupledModel, n: usize) -> Result<Vec<Collective>, SolveError> {
     let nm = m.granular.materials.len();
     let r_min = (m.granular.particles.radius.iter()).fold(f64::INFINITY, |a, &r| a.min(r));
     let spacing = 2.0 * r_min;
@@ -204,7 +214,7 @@ pub fn gains(m: &mut CoupledModel, n: usize) -> Result<Vec<f64>, SolveError> {
         let kn = laws.iter().fold(0.0f64, |k, l| k.max(l.kn));
         let ks = laws.iter().fold(0.0f64, |k, l| k.max(l.ks));
         if !(spacing.is_finite() && spacing > 0.0) || kn == 0.0 {
-            out.push(0.0);
+            out.push(Collective::default());
             continue;
         }
         if m.factored != n {
@@ -219,6 +229,12 @@ pub fn gains(m: &mut CoupledModel, n: usize) -> Result<Vec<f64>, SolveError> {
 /// Largest gain of a list (0 for none).
 fn worst(g: &[f64]) -> f64 {
     g.iter().fold(0.0f64, |a, &b| a.max(b))
+}
+
+/// The gains of `gains`, and the largest body frequency.
+fn split(c: Vec<Collective>) -> (Vec<f64>, f64) {
+    let omega = c.iter().fold(0.0f64, |a, b| a.max(b.omega));
+    (c.into_iter().map(|c| c.gain).collect(), omega)
 }
 
 /// Choose the scheme for `req` (see the [module docs](self)); the bodies
@@ -239,27 +255,44 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
     let omega_dt = contact_omega(m) * dt;
     let overhead = exact_overhead(m);
     let contacts = max_contacts(m);
-    let compliant_n = || {
-        let n = if omega_dt > 0.0 {
-            (COMPLIANT_MAX_OMEGA_H / omega_dt).floor()
+    // the compliant scheme's longest body step: the contacts' and the
+    // bodies' own periods resolved (`body_dt`: ω_b Δt)
+    let compliant_n = |body_dt: f64| {
+        let fastest = omega_dt.max(body_dt);
+        let n = if fastest > 0.0 {
+            (COMPLIANT_MAX_OMEGA_H / fastest).floor()
         } else {
             CANDIDATES[0] as f64
         };
         (n.min(CANDIDATES[0] as f64) as usize).max(1)
     };
-    let mut examined: Vec<(usize, Vec<f64>)> = Vec::new();
-    let choice = |scheme, substeps, examined: Vec<_>, automatic, why: String| Choice {
-        scheme,
-        substeps,
-        omega_dt,
-        gains: examined,
-        automatic,
-        why,
-        warning: None,
-        fallback: None,
-        exact_overhead: 0.0,
-        max_contacts: 0,
+    let compliant_why = |n: usize, body_dt: f64| {
+        if body_dt > omega_dt {
+            format!(
+                "{n} is the largest with ω_b h ≤ {COMPLIANT_MAX_OMEGA_H}, ω_b the bodies' collective-mode frequency (ω_b Δt = {body_dt:.3}; the contacts' ω_c Δt = {omega_dt:.3})"
+            )
+        } else {
+            format!(
+                "{n} is the largest with ω_c h ≤ {COMPLIANT_MAX_OMEGA_H} (ω_c Δt = {omega_dt:.3}; the bodies' ω_b Δt = {body_dt:.3})"
+            )
+        }
     };
+    let mut body_dt = 0.0;
+    let mut examined: Vec<(usize, Vec<f64>)> = Vec::new();
+    let choice =
+        |scheme, substeps, examined: Vec<_>, body_omega_dt, automatic, why: String| Choice {
+            scheme,
+            substeps,
+            omega_dt,
+            body_omega_dt,
+            gains: examined,
+            automatic,
+            why,
+            warning: None,
+            fallback: None,
+            exact_overhead: 0.0,
+            max_contacts: 0,
+        };
     let gain_text = |n: usize, g: &[f64]| {
         format!(
             "collective gain Γ = {:.3} at {n} substeps (ω_c h = {:.2})",
@@ -273,6 +306,7 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
             Scheme::Staggered,
             n.unwrap_or(1),
             examined,
+            0.0,
             false,
             "named by the scenario (coupling = \"staggered\")".into(),
         ))),
@@ -280,6 +314,7 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
             Scheme::Exact,
             1,
             examined,
+            0.0,
             false,
             "named by the scenario".into(),
         ))),
@@ -287,30 +322,61 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
             "the exact step takes one DEM step per body step (got substeps = {n}); use substeps = 1 or \"auto\", or another coupling"
         ))),
         (Some(Scheme::Compliant), n) => {
-            let n = n.unwrap_or_else(compliant_n);
-            let why = match req.substeps {
+            let why = match n {
                 Some(_) => "named by the scenario".to_string(),
-                None => format!(
-                    "named by the scenario; {n} substeps: the largest with ω_c h ≤ {COMPLIANT_MAX_OMEGA_H} (ω_c Δt = {omega_dt:.3})"
-                ),
+                None => {
+                    // the bodies' frequency at the longest body step the
+                    // automatic choice would examine
+                    let long = CANDIDATES
+                        .into_iter()
+                        .find(|&k| omega_dt * k as f64 <= PREDICTED_MAX_OMEGA_H);
+                    let (g, omega) = split(gains(m, long.unwrap_or(2))?);
+                    body_dt = omega * dt;
+                    examined.push((long.unwrap_or(2), g));
+                    let n = compliant_n(body_dt);
+                    format!("named by the scenario; {}", compliant_why(n, body_dt))
+                }
             };
-            Ok(Ok(choice(Scheme::Compliant, n, examined, false, why)))
+            let n = n.unwrap_or_else(|| compliant_n(body_dt));
+            Ok(Ok(choice(
+                Scheme::Compliant,
+                n,
+                examined,
+                body_dt,
+                false,
+                why,
+            )))
         }
         (Some(Scheme::Predicted), Some(n)) | (None, Some(n)) => {
-            let g = gains(m, n)?;
+            let (g, omega) = split(gains(m, n)?);
+            body_dt = omega * dt;
             let safe = predicted_safe(worst(&g), omega_dt * n as f64) || no_bodies;
             let text = gain_text(n, &g);
             examined.push((n, g));
             if safe {
                 let why = format!("{text}: safe ({})", predicted_rule());
                 let auto = req.scheme.is_none();
-                Ok(Ok(choice(Scheme::Predicted, n, examined, auto, why)))
+                Ok(Ok(choice(
+                    Scheme::Predicted,
+                    n,
+                    examined,
+                    body_dt,
+                    auto,
+                    why,
+                )))
             } else if req.scheme.is_none() {
                 let why = format!(
                     "the predicted scheme's {text} is not safe (it needs {}): the boundary gives way to the contacts in every DEM step instead",
                     predicted_rule()
                 );
-                Ok(Ok(choice(Scheme::Compliant, n, examined, true, why)))
+                Ok(Ok(choice(
+                    Scheme::Compliant,
+                    n,
+                    examined,
+                    body_dt,
+                    true,
+                    why,
+                )))
             } else {
                 // forced: the user's choice, with a warning; the run-time
                 // guard stops it if its scheme creates energy
@@ -318,6 +384,7 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
                     Scheme::Predicted,
                     n,
                     examined,
+                    body_dt,
                     false,
                     "named by the scenario".into(),
                 );
@@ -333,7 +400,7 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
         (scheme @ (None | Some(Scheme::Predicted)), None) => {
             if no_bodies {
                 let why = "exact: no disc–body contact stiffness to sub-cycle against".into();
-                return Ok(Ok(choice(Scheme::Exact, 1, examined, true, why)));
+                return Ok(Ok(choice(Scheme::Exact, 1, examined, 0.0, true, why)));
             }
             let discs = m.granular.particles.len();
             if scheme.is_none() && (discs < AUTO_MIN_DISCS || overhead <= EXACT_OVERHEAD) {
@@ -346,7 +413,7 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
                         "exact: its body solves are estimated at {overhead:.2} × the DEM step of {discs} discs (at most {EXACT_OVERHEAD}: sub-cycling would gain little)"
                     )
                 };
-                return Ok(Ok(choice(Scheme::Exact, 1, examined, true, why)));
+                return Ok(Ok(choice(Scheme::Exact, 1, examined, 0.0, true, why)));
             }
             // the predicted scheme at the largest safe n
             let mut predicted = None;
@@ -354,7 +421,12 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
                 if omega_dt * n as f64 > PREDICTED_MAX_OMEGA_H {
                     continue;
                 }
-                let g = gains(m, n)?;
+                let (g, omega) = split(gains(m, n)?);
+                if examined.is_empty() {
+                    // the longest body step examined: the most nearly
+                    // static response, the bodies' lowest ω_b
+                    body_dt = omega * dt;
+                }
                 let ok = predicted_safe(worst(&g), omega_dt * n as f64);
                 examined.push((n, g));
                 if ok {
@@ -371,7 +443,7 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
                             last.unwrap_or_default(),
                             predicted_rule()
                         );
-                        Ok(choice(Scheme::Predicted, n, examined, true, why))
+                        Ok(choice(Scheme::Predicted, n, examined, body_dt, true, why))
                     }
                     None => Err(format!(
                         "no substep count is safe for the predicted scheme ({}; it needs {}); use coupling = \"compliant\" or \"exact\"",
@@ -380,7 +452,7 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
                     )),
                 });
             }
-            let nc = compliant_n();
+            let nc = compliant_n(body_dt);
             Ok(Ok(match predicted {
                 Some(n) if n >= nc.min(PREDICTED_WORTH) || nc < 2 => {
                     let why = format!(
@@ -388,29 +460,35 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
                         last.unwrap_or_default(),
                         predicted_rule()
                     );
-                    choice(Scheme::Predicted, n, examined, true, why)
+                    choice(Scheme::Predicted, n, examined, body_dt, true, why)
                 }
                 _ if nc >= 2 && contacts <= COMPLIANT_MAX_CONTACTS => {
                     let why = format!(
-                        "compliant, {nc} substeps: the predicted scheme is not safe at a useful step ({}); {nc} is the largest with ω_c h ≤ {COMPLIANT_MAX_OMEGA_H} (ω_c Δt = {omega_dt:.3})",
-                        last.unwrap_or_default()
+                        "compliant, {nc} substeps: the predicted scheme is not safe at a useful step ({}); {}",
+                        last.unwrap_or_default(),
+                        compliant_why(nc, body_dt)
                     );
-                    choice(Scheme::Compliant, nc, examined, true, why)
+                    choice(Scheme::Compliant, nc, examined, body_dt, true, why)
                 }
                 _ if nc < 2 => {
+                    let (what, fastest) = if body_dt > omega_dt {
+                        ("the bodies' collective mode", body_dt)
+                    } else {
+                        ("the contacts' own period", omega_dt)
+                    };
                     let why = format!(
-                        "exact: the contacts' own period is resolved by few DEM steps (ω_c Δt = {omega_dt:.3}: a body step of 2 would reach ω_c h = {:.2} > {COMPLIANT_MAX_OMEGA_H}) and the predicted scheme is not safe ({})",
-                        2.0 * omega_dt,
+                        "exact: {what} is resolved by few DEM steps (ω Δt = {fastest:.3}: a body step of 2 would reach ω h = {:.2} > {COMPLIANT_MAX_OMEGA_H}) and the predicted scheme is not safe ({})",
+                        2.0 * fastest,
                         last.unwrap_or_default()
                     );
-                    choice(Scheme::Exact, 1, examined, true, why)
+                    choice(Scheme::Exact, 1, examined, body_dt, true, why)
                 }
                 _ => {
                     let why = format!(
                         "exact: the predicted scheme is not safe ({}), and the bodies' chains can carry {contacts} contacts at once, more than the compliant scheme's {COMPLIANT_MAX_CONTACTS} (its contact solve grows with their cube)",
                         last.unwrap_or_default()
                     );
-                    choice(Scheme::Exact, 1, examined, true, why)
+                    choice(Scheme::Exact, 1, examined, body_dt, true, why)
                 }
             }))
         }

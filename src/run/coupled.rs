@@ -651,6 +651,12 @@ fn scheme_lines(m: &CoupledModel) -> String {
         "  the exact step's body solves are estimated at {:.2} × the DEM step; the bodies' chains can carry {} contacts at once\n",
         c.exact_overhead, c.max_contacts
     );
+    if c.body_omega_dt > 0.0 {
+        s += &format!(
+            "  the bodies' collective mode: ω_b Δt = {:.3} (the contacts' ω_c Δt = {:.3})\n",
+            c.body_omega_dt, c.omega_dt
+        );
+    }
     for (n, g) in &c.gains {
         let per: Vec<String> = (m.bodies.iter().zip(g))
             .map(|(b, g)| format!("`{}` {g:.4}", b.name()))
