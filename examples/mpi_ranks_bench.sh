@@ -117,5 +117,7 @@ if "1x2" in runs and "2x1" in runs:
 if "half" in runs and "2x1" in runs:
     one = statistics.median(r[2][0] for r in runs["half"])
     for k, p in enumerate(zip(*(r[2] for r in runs["2x1"]))):
-        print(f"peak memory of rank {k} of 2 ÷ one process with half the discs: {statistics.median(p) / one:.2f}")
+        print(f"peak memory per rank ÷ half: rank {k} of 2 {statistics.median(p) / one:.2f}"
+              f" (its peak {statistics.median(p) / 2**20:.0f} MiB ÷ {one / 2**20:.0f} MiB"
+              f" of one process with half the discs; target ≤ 1.20)")
 PY

@@ -201,11 +201,16 @@ fn main() -> ExitCode {
 }
 
 /// The ranks of this process's MPI job (`mpirun -np N`): one rank when not
-/// started by mpirun. A build without the `mpi` feature started as one of
+/// started by mpirun (the build with MPI then never initialises it: it is
+/// the one-process program, as a build without it). A build without the `mpi` feature started as one of
 /// several ranks refuses to run (each copy would run the whole scenario).
 fn ranks() -> anyhow::Result<Arc<dyn efgdem::decomp::Comm>> {
     #[cfg(feature = "mpi")]
     {
+        // not started by a launcher: the one-process program, without MPI
+        if launched_ranks().is_none() {
+            return Ok(Arc::new(efgdem::decomp::Solo));
+        }
         match efgdem::decomp::mpi::Mpi::init() {
             Some(m) => Ok(Arc::new(m)),
             None => anyhow::bail!("MPI cannot be initialised with serialised thread support"),
@@ -213,10 +218,7 @@ fn ranks() -> anyhow::Result<Arc<dyn efgdem::decomp::Comm>> {
     }
     #[cfg(not(feature = "mpi"))]
     {
-        let size = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"]
-            .iter()
-            .find_map(|v| std::env::var(v).ok()?.parse::<usize>().ok());
-        if let Some(n) = size.filter(|&n| n > 1) {
+        if let Some(n) = launched_ranks().filter(|&n| n > 1) {
             return Err(RunError::Ranks(format!(
                 "started as one of {n} MPI ranks, but this efgdem was built without MPI: build it with `cargo build --release --features mpi` (needs a system MPI, e.g. the libopenmpi-dev, openmpi-bin and libclang-dev packages)"
             ))
@@ -224,6 +226,17 @@ fn ranks() -> anyhow::Result<Arc<dyn efgdem::decomp::Comm>> {
         }
         Ok(Arc::new(efgdem::decomp::Solo))
     }
+}
+
+/// The number of ranks an MPI launcher (mpirun, mpiexec, srun) started
+/// this process as one of, from the variables it sets (OpenMPI, MPICH and
+/// Hydra, PMIx); `None` when no launcher started it.
+fn launched_ranks() -> Option<usize> {
+    let size = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"]
+        .iter()
+        .find_map(|v| std::env::var(v).ok()?.parse::<usize>().ok());
+    // PMIx launchers (srun --mpi=pmix) may set the rank only
+    size.or_else(|| std::env::var_os("PMIX_RANK").map(|_| 1))
 }
 
 /// A flag that SIGINT and SIGTERM set to their number, so that a run can

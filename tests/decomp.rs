@@ -679,3 +679,74 @@ fn coupled_compliant_scheme_on_ranks_is_bitwise_the_whole() {
         coupled_bitwise("substeps = 10\ncoupling = \"compliant\"", ranks, 1600, 400);
     }
 }
+
+/// A rank's part built alone (`Scenario::build_part`: only the discs the
+/// cut keeps are made) is bitwise the share `Decomposed::new` takes of
+/// the whole built on every rank: the same discs with the same ids, keys,
+/// constants and ghost flags, the same time step, the whole's critical
+/// step; and it holds fewer discs than the whole.
+#[test]
+fn a_part_built_alone_is_the_share_of_the_whole() {
+    let src = settling(1200);
+    let sc = scenario::parse(&src, "t.toml").unwrap();
+    let whole = build(&src);
+    let crit = whole.critical_step(&[]);
+    for ranks in [2, 3] {
+        std::thread::scope(|s| {
+            for c in Threads::group(ranks) {
+                let (sc, whole, crit) = (&sc, &whole, &crit);
+                s.spawn(move || {
+                    let comm: Arc<dyn Comm> = Arc::new(c);
+                    let me = comm.rank();
+                    let share = Decomposed::new(whole, comm.clone());
+                    let cut = std::cell::RefCell::new(None);
+                    let model = sc
+                        .build_part(None, &|pos, max_r, skin| {
+                            let c = efgdem::decomp::Cut::new(pos, max_r, skin, ranks);
+                            let keep = c.keeps(pos, me);
+                            *cut.borrow_mut() = Some(c);
+                            keep
+                        })
+                        .unwrap()
+                        .expect("a granular scenario is built in parts");
+                    let mut g = model.into_granular().unwrap();
+                    assert_eq!(g.dt.to_bits(), whole.dt.to_bits());
+                    let cut = cut.into_inner().unwrap();
+                    let alone = Decomposed::from_part(&mut g, cut, comm);
+                    let (a, b) = (&share.part.particles, &alone.part.particles);
+                    assert!(b.len() < whole.particles.len());
+                    assert_eq!(share.keys(), alone.keys());
+                    assert_eq!(a.id, b.id);
+                    assert_eq!(a.slot, b.slot);
+                    assert_eq!(a.fixity, b.fixity);
+                    assert_eq!(a.material, b.material);
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    let xy = |v: &[efgdem::geom::Vec2]| {
+                        v.iter()
+                            .flat_map(|q| [q.x.to_bits(), q.y.to_bits()])
+                            .collect::<Vec<_>>()
+                    };
+                    assert_eq!(xy(&a.pos), xy(&b.pos));
+                    assert_eq!(xy(&a.vel), xy(&b.vel));
+                    for (x, y) in [
+                        (&a.radius, &b.radius),
+                        (&a.mass, &b.mass),
+                        (&a.inertia, &b.inertia),
+                        (&a.inv_mass, &b.inv_mass),
+                        (&a.inv_inertia, &b.inv_inertia),
+                    ] {
+                        assert_eq!(bits(x), bits(y));
+                    }
+                    assert_eq!(
+                        share.part.grid.skin.to_bits(),
+                        alone.part.grid.skin.to_bits()
+                    );
+                    let (got, _) = alone.critical_step(&[]);
+                    assert_eq!(got.dt.to_bits(), crit.dt.to_bits());
+                    assert_eq!(got.certain.to_bits(), crit.certain.to_bits());
+                    assert_eq!(got.mode, crit.mode);
+                });
+            }
+        });
+    }
+}

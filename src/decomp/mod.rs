@@ -97,6 +97,46 @@ pub struct Decomposed {
     follows: Vec<bool>,
 }
 
+/// The regions of a fresh division over ranks, cut from the centres of
+/// the whole assembly: which discs each rank holds (its own and their
+/// ghosts). Every rank computes the same from the same centres.
+#[derive(Debug, Clone)]
+pub struct Cut {
+    /// The ranks' regions.
+    pub regions: Subdomains,
+    /// Discs of the whole assembly.
+    pub n_total: usize,
+    /// Largest radius of the whole assembly.
+    pub max_radius: f64,
+    /// How far from its region a rank holds ghosts: the reach of a pair
+    /// plus the skin (since the last rebuild the discs moved by up to half
+    /// the skin each: partners listed then are within reach + skin now).
+    pub width: f64,
+}
+
+impl Cut {
+    /// The regions of `ranks` for discs at `pos` (the whole assembly's
+    /// centres, in slot order), of largest radius `max_radius`, with the
+    /// search grid's `skin`.
+    pub fn new(pos: &[Vec2], max_radius: f64, skin: f64, ranks: usize) -> Cut {
+        Cut {
+            regions: Subdomains::bisect(&sample(pos, pos.len()), ranks),
+            n_total: pos.len(),
+            max_radius,
+            width: reach(max_radius, skin) + skin,
+        }
+    }
+
+    /// Which of the discs at `pos` rank `me` holds: those of its region and
+    /// those within [`width`](Self::width) of it.
+    pub fn keeps(&self, pos: &[Vec2], me: usize) -> Vec<bool> {
+        let mine = &self.regions.regions[me];
+        pos.iter()
+            .map(|&q| self.regions.owner(q) == me || mine.distance(q) <= self.width)
+            .collect()
+    }
+}
+
 /// Where a disc of a new part comes from.
 #[derive(Clone, Copy)]
 enum Src {
@@ -134,30 +174,15 @@ impl Decomposed {
     pub fn new(whole: &Granular, comm: Arc<dyn Comm>) -> Decomposed {
         let p = &whole.particles;
         let n = p.len();
-        let regions = Subdomains::bisect(&sample(&p.pos, n), comm.size());
+        let cut = Cut::new(&p.pos, p.max_radius(), whole.grid.skin, comm.size());
         let me = comm.rank();
-        // since the last rebuild the discs moved by up to half the skin
-        // each: partners listed then are within reach + skin now
-        let width = reach(p.max_radius(), whole.grid.skin) + whole.grid.skin;
-        let owner: Vec<usize> = p.pos.iter().map(|&q| regions.owner(q)).collect();
-        let local: Vec<u32> = (0..n as u32)
-            .filter(|&s| {
-                owner[s as usize] == me || regions.regions[me].distance(p.pos[s as usize]) <= width
-            })
-            .collect();
-        let mut new_of_old = vec![GONE; n];
-        for (k, &s) in local.iter().enumerate() {
-            new_of_old[s as usize] = k as u32;
-        }
+        let keep = cut.keeps(&p.pos, me);
+        let local: Vec<u32> = (0..n as u32).filter(|&s| keep[s as usize]).collect();
+        drop(keep);
         let sources: Vec<Src> = local.iter().map(|&s| Src::Old(s)).collect();
-        let mut particles = take_discs(p, &sources, &[], n);
-        for (k, &s) in local.iter().enumerate() {
-            if owner[s as usize] != me {
-                particles.fixity[k] |= GHOST;
-            }
-        }
+        let mut particles = Particles::default();
+        regather(&mut particles, Some(p), &sources, &[], n);
         let mut part = whole.with_discs(particles);
-        part.grid.reorder_every = 0;
         part.grid.stale = whole.grid.stale;
         part.max_disp = whole.max_disp;
         if whole.grid.ref_pos.len() == n {
@@ -166,19 +191,62 @@ impl Decomposed {
                 .map(|&s| whole.grid.ref_pos[s as usize])
                 .collect();
         }
+        let keys = local.iter().map(|&s| s as u64).collect();
+        let mut d = Decomposed::start(part, keys, cut, whole.grid.reorder_every, comm);
         if whole.contacts.first.len() == n + 1 {
+            let mut new_of_old = vec![GONE; n];
+            for (k, &s) in local.iter().enumerate() {
+                new_of_old[s as usize] = k as u32;
+            }
+            let regions = &d.regions;
+            let mine = |s: u32| regions.owner(p.pos[s as usize]) == me;
             let mut list = whole.contacts.clone();
-            let mine = |s: u32| owner[s as usize] == me;
             list.remap(&new_of_old, local.len(), &[], &[], |i, j| {
                 mine(i) || mine(j)
             });
+            let part = &mut d.part;
             list.walls
                 .retain(|w| part.particles.fixity[w.disc as usize] & GHOST == 0);
             list.wall_buf = vec![Default::default(); list.walls.len()];
             list.finish(&part.particles);
             part.contacts = list;
         }
-        let follows = whole
+        d
+    }
+
+    /// This rank's share of a fresh assembly built in parts: `built` holds
+    /// the discs `cut` [keeps](Cut::keeps) for this rank (their ids those
+    /// of the whole, which are also their keys: the whole's slots), with
+    /// the whole's walls, laws and clock, no contact list yet. Bitwise the
+    /// share [`new`](Self::new) takes of the whole.
+    /// `built` is left without discs.
+    pub fn from_part(built: &mut Granular, cut: Cut, comm: Arc<dyn Comm>) -> Decomposed {
+        let particles = std::mem::take(&mut built.particles);
+        let keys = particles.id.iter().map(|&i| i as u64).collect();
+        let mut part = built.with_discs(particles);
+        part.grid.stale = built.grid.stale;
+        part.max_disp = built.max_disp;
+        Decomposed::start(part, keys, cut, built.grid.reorder_every, comm)
+    }
+
+    /// The share of `part` (discs with their `keys`, in key order, owned
+    /// or not), the ghosts flagged and indexed.
+    fn start(
+        mut part: Granular,
+        key: Vec<u64>,
+        cut: Cut,
+        reorder_every: usize,
+        comm: Arc<dyn Comm>,
+    ) -> Decomposed {
+        let me = comm.rank();
+        let p = &mut part.particles;
+        for s in 0..p.len() {
+            if cut.regions.owner(p.pos[s]) != me {
+                p.fixity[s] |= GHOST;
+            }
+        }
+        part.grid.reorder_every = 0;
+        let follows = part
             .walls
             .iter()
             .map(|w| w.motion.follows_state())
@@ -186,11 +254,11 @@ impl Decomposed {
         let mut d = Decomposed {
             part,
             comm,
-            key: local.iter().map(|&s| s as u64).collect(),
-            regions,
-            n_total: n,
-            max_radius: p.max_radius(),
-            reorder_every: whole.grid.reorder_every,
+            key,
+            regions: cut.regions,
+            n_total: cut.n_total,
+            max_radius: cut.max_radius,
+            reorder_every,
             balance_threshold: 0.1,
             imbalance: 0.0,
             recuts: 0,
@@ -201,9 +269,58 @@ impl Decomposed {
             halo_recv: Vec::new(),
             follows,
         };
-        d.index_halo(width);
+        d.index_halo(cut.width);
         d.imbalance = d.measure_imbalance(&d.owned_counts());
         d
+    }
+
+    /// The whole assembly's critical step and time-step warning
+    /// ([`Granular::critical_step`], [`Granular::dt_warning`]) with the
+    /// disc–body laws `bodies`, collective: from the discs that decide it
+    /// (each rank's lightest, the first of each material, its first
+    /// three), merged in key order as the whole's slots.
+    pub fn critical_step(
+        &self,
+        bodies: &[crate::dem::contact::ContactLaw],
+    ) -> (crate::dem::critical::Critical, Option<String>) {
+        let p = &self.part.particles;
+        let owned: Vec<usize> = (0..p.len()).filter(|&s| p.fixity[s] & GHOST == 0).collect();
+        let mut pick: Vec<usize> = owned.iter().copied().take(3).collect();
+        let lightest = owned
+            .iter()
+            .min_by(|&&a, &&b| p.mass[a].total_cmp(&p.mass[b]));
+        pick.extend(lightest);
+        let mut seen = vec![false; self.part.materials.len()];
+        for &s in &owned {
+            if !std::mem::replace(&mut seen[p.material[s] as usize], true) {
+                pick.push(s);
+            }
+        }
+        let mut b = Pack::default();
+        for &s in &pick {
+            b.u64(self.key[s]);
+            b.f64(p.mass[s]);
+            b.f64(p.radius[s]);
+            b.u16(p.material[s]);
+        }
+        let mut all: Vec<(u64, f64, f64, u16)> = Vec::new();
+        for b in self.comm.all_gather(&b.0) {
+            let mut u = Unpack(&b);
+            while !u.is_empty() {
+                all.push((u.u64(), u.f64(), u.f64(), u.u16()));
+            }
+        }
+        all.sort_by_key(|e| e.0);
+        all.dedup_by_key(|e| e.0);
+        let few = Particles {
+            pos: vec![Vec2::ZERO; all.len()],
+            mass: all.iter().map(|e| e.1).collect(),
+            radius: all.iter().map(|e| e.2).collect(),
+            material: all.iter().map(|e| e.3).collect(),
+            ..Particles::default()
+        };
+        let g = self.part.with_discs(few);
+        (g.critical_step(bodies), g.dt_warning(bodies))
     }
 
     /// Sum the totals of every wall over the ranks each step, not only of
@@ -654,8 +771,11 @@ impl Decomposed {
         self.histories_in += pair_recs.iter().filter(live).count();
         self.histories_in += wall_recs.iter().filter(live).count();
         keep.sort_unstable_by_key(|e| e.0);
+        // the old part's columns are replaced one at a time: what is read
+        // of it afterwards is kept aside
+        let (old_slots, old_fixity) = (p.slot.clone(), p.fixity.clone());
         // old slot → new slot, also for a disc that arrives again
-        let old_slot = |id: u32| p.slot.get(id as usize).copied().unwrap_or(GONE);
+        let old_slot = |id: u32| old_slots.get(id as usize).copied().unwrap_or(GONE);
         let mut new_of_old = vec![GONE; n];
         for (k, &(_, src, _)) in keep.iter().enumerate() {
             let old = match src {
@@ -667,13 +787,14 @@ impl Decomposed {
             }
         }
         let sources: Vec<Src> = keep.iter().map(|e| e.1).collect();
-        let mut np = take_discs(p, &sources, &records, self.n_total);
+        let mut np = std::mem::take(&mut self.part.particles);
+        regather(&mut np, None, &sources, &records, self.n_total);
         for (k, e) in keep.iter().enumerate() {
             np.fixity[k] = (np.fixity[k] & !GHOST) | if e.2 { 0 } else { GHOST };
         }
         // the histories: the old list (pairs with a disc owned here) and
         // what the arriving discs bring (unless this rank had the pair)
-        let was_owned = |s: u32| s != GONE && p.fixity[s as usize] & GHOST == 0;
+        let was_owned = |s: u32| s != GONE && old_fixity[s as usize] & GHOST == 0;
         let slot_now = |id: u32| np.slot.get(id as usize).copied().unwrap_or(GONE);
         let mut extra: Vec<(u32, u32, f64, f64)> = pair_recs
             .iter()
@@ -697,7 +818,7 @@ impl Decomposed {
                 })
             })
             .collect();
-        let ghost_old = |s: u32| p.fixity[s as usize] & GHOST != 0;
+        let ghost_old = |s: u32| old_fixity[s as usize] & GHOST != 0;
         let mut list = std::mem::take(&mut self.part.contacts);
         list.remap(&new_of_old, np.len(), &extra, &extra_walls, |i, j| {
             !(ghost_old(i) && ghost_old(j))
@@ -838,7 +959,8 @@ impl Decomposed {
         };
         let records: Vec<Record> = discs.into_iter().map(|d| d.0).collect();
         let sources: Vec<Src> = (0..records.len() as u32).map(Src::Got).collect();
-        let particles = take_discs(&Particles::default(), &sources, &records, self.n_total);
+        let mut particles = Particles::default();
+        regather(&mut particles, None, &sources, &records, self.n_total);
         drop(records);
         let p = &particles;
         let state = GranularState {
@@ -918,46 +1040,59 @@ fn sample(pos: &[Vec2], n: usize) -> Vec<Vec2> {
         .collect()
 }
 
-/// Discs for a new part: each from a slot of `p` or a received record;
-/// `slot` sized for the `n_total` ids of the whole assembly.
-fn take_discs(p: &Particles, sources: &[Src], got: &[Record], n_total: usize) -> Particles {
+/// The discs of a new part into `p`: each from a slot of `old` (of `p`
+/// itself when `None`, whose columns are then replaced one at a time, so
+/// that the old and new parts are never whole together) or a received
+/// record; `slot` sized for the `n_total` ids of the whole assembly.
+fn regather(
+    p: &mut Particles,
+    old: Option<&Particles>,
+    sources: &[Src],
+    got: &[Record],
+    n_total: usize,
+) {
     fn col<T: Copy>(
+        dst: &mut Vec<T>,
+        old: Option<&Vec<T>>,
         sources: &[Src],
-        old: &[T],
         got: &[Record],
         f: impl Fn(&Record) -> T,
-    ) -> Vec<T> {
-        sources
+    ) {
+        let mine = std::mem::take(dst);
+        let old = old.unwrap_or(&mine);
+        *dst = sources
             .iter()
             .map(|s| match *s {
                 Src::Old(k) => old[k as usize],
                 Src::Got(k) => f(&got[k as usize]),
             })
-            .collect()
+            .collect();
     }
-    let id = col(sources, &p.id, got, |r| r.id);
-    let mut slot = vec![GONE; n_total];
-    for (k, &i) in id.iter().enumerate() {
-        slot[i as usize] = k as u32;
-    }
-    Particles {
-        pos: col(sources, &p.pos, got, |r| r.pos),
-        vel: col(sources, &p.vel, got, |r| r.vel),
-        theta: col(sources, &p.theta, got, |r| r.theta),
-        omega: col(sources, &p.omega, got, |r| r.omega),
-        radius: col(sources, &p.radius, got, |r| r.radius),
-        mass: col(sources, &p.mass, got, |r| r.mass),
-        inertia: col(sources, &p.inertia, got, |r| r.inertia),
-        inv_mass: col(sources, &p.inv_mass, got, |r| r.inv_mass),
-        inv_inertia: col(sources, &p.inv_inertia, got, |r| r.inv_inertia),
-        force: col(sources, &p.force, got, |r| r.force),
-        torque: col(sources, &p.torque, got, |r| r.torque),
-        fixity: col(sources, &p.fixity, got, |r| r.fixity),
-        material: col(sources, &p.material, got, |r| r.material),
-        // clumped assemblies are not decomposed
-        clump: vec![crate::dem::clumps::NO_CLUMP; id.len()],
-        id,
-        slot,
+    let (s, g) = (sources, got);
+    col(&mut p.id, old.map(|o| &o.id), s, g, |r| r.id);
+    col(&mut p.pos, old.map(|o| &o.pos), s, g, |r| r.pos);
+    col(&mut p.vel, old.map(|o| &o.vel), s, g, |r| r.vel);
+    col(&mut p.theta, old.map(|o| &o.theta), s, g, |r| r.theta);
+    col(&mut p.omega, old.map(|o| &o.omega), s, g, |r| r.omega);
+    col(&mut p.radius, old.map(|o| &o.radius), s, g, |r| r.radius);
+    col(&mut p.mass, old.map(|o| &o.mass), s, g, |r| r.mass);
+    col(&mut p.inertia, old.map(|o| &o.inertia), s, g, |r| r.inertia);
+    col(&mut p.inv_mass, old.map(|o| &o.inv_mass), s, g, |r| {
+        r.inv_mass
+    });
+    let inv_inertia = old.map(|o| &o.inv_inertia);
+    col(&mut p.inv_inertia, inv_inertia, s, g, |r| r.inv_inertia);
+    col(&mut p.force, old.map(|o| &o.force), s, g, |r| r.force);
+    col(&mut p.torque, old.map(|o| &o.torque), s, g, |r| r.torque);
+    col(&mut p.fixity, old.map(|o| &o.fixity), s, g, |r| r.fixity);
+    col(&mut p.material, old.map(|o| &o.material), s, g, |r| {
+        r.material
+    });
+    // clumped assemblies are not decomposed
+    p.clump = vec![crate::dem::clumps::NO_CLUMP; p.id.len()];
+    p.slot = vec![GONE; n_total];
+    for (k, &i) in p.id.iter().enumerate() {
+        p.slot[i as usize] = k as u32;
     }
 }
 

@@ -33,13 +33,17 @@ unsafe impl Send for Inner {}
 
 impl Mpi {
     /// Initialise MPI; `None` when it already was in this process, or
-    /// when the library cannot give serialised thread support.
+    /// when the library cannot give serialised thread support. On several
+    /// ranks a panic then aborts the job ([`abort_on_panic`]).
     pub fn init() -> Option<Mpi> {
         let (universe, level) = mpi::initialize_with_threading(Threading::Serialized)?;
         if level < Threading::Serialized {
             return None;
         }
         let world = universe.world();
+        if world.size() > 1 {
+            abort_on_panic();
+        }
         Some(Mpi {
             rank: world.rank() as usize,
             size: world.size() as usize,
@@ -59,6 +63,21 @@ impl Mpi {
         traffic.seconds += t0.elapsed().as_secs_f64();
         r
     }
+}
+
+/// Make a panic end the whole job: the panic is printed (the default hook),
+/// then every rank is stopped (`MPI_Abort`). Without it the panicking rank
+/// would unwind into `MPI_Finalize` while the others wait for it in a
+/// collective, and the job would hang.
+fn abort_on_panic() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        default(info);
+        if !mpi::environment::is_finalized() {
+            // the code Rust gives a process that panicked
+            SimpleCommunicator::world().abort(101);
+        }
+    }));
 }
 
 /// MPI counts and displacements are `i32`: a buffer of 2 GiB or more to

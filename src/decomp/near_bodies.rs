@@ -28,7 +28,7 @@
 //! [`Continuum::path_correction`]).
 
 use super::comm::{Pack, Unpack};
-use super::{Decomposed, Src, pack_disc, take_discs, unpack_disc};
+use super::{Decomposed, Src, pack_disc, regather, unpack_disc};
 use crate::continuum::Continuum;
 use crate::coupling::{BodyContact, CoupledModel, DiscStep, set_contacts_on_discs};
 use crate::dem::Granular;
@@ -126,7 +126,8 @@ impl NearBodies {
         }
         own.sort_unstable_by_key(|e| e.0);
         let sources: Vec<Src> = own.iter().map(|e| e.1).collect();
-        let mut np = take_discs(p, &sources, &records, self.d.total());
+        let mut np = crate::dem::particles::Particles::default();
+        regather(&mut np, Some(p), &sources, &records, self.d.total());
         np.fixity.iter_mut().for_each(|f| *f &= !GHOST);
         g.particles = np;
         // the slots changed: the coupling's candidate lists are refreshed

@@ -261,7 +261,9 @@ impl Granular {
         let mut particles = particles;
         particles.shrink_to_fit();
         let skin = 0.1 * particles.max_radius().max(f64::MIN_POSITIVE);
-        let mut start = vec![Vec2::ZERO; particles.len()];
+        // by id: a part of an assembly holds some of the whole's ids
+        let ids = particles.id.iter().map(|&i| i as usize + 1).max();
+        let mut start = vec![Vec2::ZERO; ids.unwrap_or(0).max(particles.len())];
         for (s, &id) in particles.id.iter().enumerate() {
             start[id as usize] = particles.pos[s];
         }
@@ -355,6 +357,18 @@ impl Granular {
         let mut g = self.with_discs(particles);
         g.start.clone_from(&self.start);
         g
+    }
+
+    /// The start positions by id (for
+    /// [`displacement`](Self::displacement)): a part of an assembly built
+    /// alone takes its whole's.
+    pub fn set_start(&mut self, by_id: Vec<Vec2>) {
+        self.start = by_id;
+    }
+
+    /// Position of disc `id` when the assembly was made.
+    pub fn start_position(&self, id: usize) -> Vec2 {
+        self.start[id]
     }
 
     /// Displacement of the disc in `slot` since the assembly was made (for a

@@ -126,11 +126,17 @@ impl Particles {
         self.slot.try_reserve_exact(n)
     }
 
-    /// Append a disc of radius `r`, density `rho` and thickness `t` at rest.
-    /// Mass `m = ρ π r² t`, inertia `I = m r²/2`.
-    pub fn push(&mut self, pos: Vec2, r: f64, rho: f64, thickness: f64, material: u16) {
+    /// Mass `m = ρ π r² t` and moment of inertia `I = m r²/2` of a disc of
+    /// radius `r`, density `rho` and thickness `thickness`.
+    pub fn mass_of(r: f64, rho: f64, thickness: f64) -> (f64, f64) {
         let m = rho * std::f64::consts::PI * r * r * thickness;
-        let inertia = 0.5 * m * r * r;
+        (m, 0.5 * m * r * r)
+    }
+
+    /// Append a disc of radius `r`, density `rho` and thickness `t` at rest
+    /// ([`mass_of`](Self::mass_of)).
+    pub fn push(&mut self, pos: Vec2, r: f64, rho: f64, thickness: f64, material: u16) {
+        let (m, inertia) = Self::mass_of(r, rho, thickness);
         let k = self.len() as u32;
         self.pos.push(pos);
         self.vel.push(Vec2::ZERO);

@@ -11,7 +11,7 @@ mod ranks;
 pub mod recap;
 mod session;
 
-use crate::decomp::{Comm, Solo};
+use crate::decomp::{Comm, Cut, Solo};
 use crate::model::{Model, ModelError, System};
 use crate::scenario::prepare::{Bed, PrepareError, prepare};
 use crate::scenario::{Scenario, ScenarioError, build};
@@ -251,9 +251,21 @@ pub fn run_on(
     // every rank prepares the same packing (it is deterministic)
     let bed = prepare_packing(sc, opts, opts.quiet || !root)?;
     let spin = progress::spinner("building the model", opts.quiet || !root);
-    let mut model = match &bed {
-        Some(b) => sc.build_prepared(&b.rows)?,
-        None => sc.build()?,
+    // a fresh granular run on ranks: each builds only the discs it holds
+    let cut = std::cell::RefCell::new(None);
+    let part = match ranks > 1 && opts.restart.is_none() {
+        true => sc.build_part(bed.as_ref().map(|b| &b.rows[..]), &|pos, max_r, skin| {
+            let c = Cut::new(pos, max_r, skin, ranks);
+            let keep = c.keeps(pos, comm.rank());
+            *cut.borrow_mut() = Some(c);
+            keep
+        })?,
+        false => None,
+    };
+    let mut model = match (part, &bed) {
+        (Some(m), _) => m,
+        (None, Some(b)) => sc.build_prepared(&b.rows)?,
+        (None, None) => sc.build()?,
     };
     let restart = match &opts.restart {
         Some(path) => {
@@ -284,7 +296,7 @@ pub fn run_on(
     let result = match model.system {
         System::Granular(ref g) if ranks > 1 => match ranks::discs_refusal(g) {
             Some(why) => Err(RunError::Ranks(why.into())),
-            None => ranks::run(run, model, comm),
+            None => ranks::run(run, model, comm, cut.into_inner()),
         },
         System::Continuum { .. } if ranks > 1 => Err(RunError::Ranks(format!(
             "a continuum scenario (bodies without discs) does not run on several ranks: run it with one process (not under mpirun -np {ranks})"

@@ -13,7 +13,7 @@ use super::granular::{Facts, columns, granular, summary_of};
 use super::progress::Progress;
 use super::session::{Ended, Outputs, checkpoint_due, due};
 use super::{Run, RunError};
-use crate::decomp::{Comm, Decomposed};
+use crate::decomp::{Comm, Cut, Decomposed};
 use crate::model::probe::{self, Share};
 use crate::model::{Model, System, stability};
 use crate::output::csv::write_discs_csv_by_ids;
@@ -120,21 +120,29 @@ pub(super) fn run(
     run: Run,
     mut model: Model,
     comm: Arc<dyn Comm>,
+    cut: Option<Cut>,
 ) -> Result<serde_json::Value, RunError> {
     let root = comm.rank() == 0;
     let steps = model.steps;
-    let warnings: Vec<String> = granular(&model).dt_warning(&[]).into_iter().collect();
+    // the whole's contact list is never built: each part builds its own
+    // (`Decomposed::prepare`)
+    let mut d = match (cut, &mut model.system) {
+        (Some(cut), System::Granular(g)) => Decomposed::from_part(g, cut, comm.clone()),
+        _ => Decomposed::new(granular(&model), comm.clone()),
+    };
+    // the critical step of the discs' constants (the same at the end)
+    let (crit, warning) = d.critical_step(&[]);
+    let warnings: Vec<String> = warning.into_iter().collect();
     if root && run.opts.warn {
         warnings.iter().for_each(|w| eprintln!("warning: {w}"));
     }
-    // the critical step of the discs' constants (the same at the end)
-    let crit = granular(&model).critical_step(&[]);
-    // the whole's contact list is never built: each part builds its own
-    // (`Decomposed::prepare`)
-    let mut d = Decomposed::new(granular(&model), comm.clone());
     let mut model = root.then(|| {
         if let System::Granular(g) = &mut model.system {
-            **g = g.with_same_discs(Default::default());
+            // the discs' start positions serve the frames' displacements
+            **g = match run.sc.output.vtk_every {
+                0 => g.with_discs(Default::default()),
+                _ => g.with_same_discs(Default::default()),
+            };
         }
         model
     });

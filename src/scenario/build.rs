@@ -322,10 +322,20 @@ pub fn body_laws(sc: &Scenario, mats: &[ContactLaw]) -> Vec<ContactLaw> {
 /// Build the assembly described by the scenario. `dt` is the scenario's,
 /// or [`DT_SAFETY`] × the critical step.
 pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
-    granular_with(sc, BuildFor::Run)
+    granular_with(sc, BuildFor::Run, None)
 }
 
-fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> {
+/// Which discs of the whole assembly a part of it holds: called with the
+/// whole's centres (in slot order), its largest radius and the search
+/// grid's skin, it returns a mask over those discs.
+pub type Select<'a> = &'a dyn Fn(&[Vec2], f64, f64) -> Vec<bool>;
+
+/// The assembly, or with `select` a part of it ([`part`]).
+fn granular_with(
+    sc: &Scenario,
+    purpose: BuildFor,
+    select: Option<Select>,
+) -> Result<Granular, Invalid> {
     let g = spec(sc)?;
     let mut rows = kept(sc, disc_rows(sc, purpose)?)?;
     // `check` does not prepare a packing: its discs are not where the
@@ -344,63 +354,43 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
     let (rows, groups) = super::clumps::clump_rows(sc, rows, removed)?;
     let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
-    let mut p = Particles::default();
-    p.try_reserve(rows.len()).map_err(|e| {
-        bad(
-            "granular.discs",
-            format!(
-                "cannot allocate the arrays of {} discs ({e}): more than this process may use",
-                rows.len()
-            ),
-        )
-    })?;
-    let v0 = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
-    for (k, r) in rows.iter().enumerate() {
-        let mi = match &r.material {
-            Some(name) => material_index(sc, name, "granular.discs")
-                .map_err(|e| bad("granular.discs", format!("disc {}: {}", k + 1, e.message)))?,
-            None => default_mat,
-        };
-        let m = &sc.material[mi as usize];
-        if m.density.is_nan() || m.density <= 0.0 {
-            return Err(bad(
-                "granular.discs",
-                format!("disc {}: material `{}` needs a density > 0", k + 1, m.name),
-            ));
+    // a part: the whole's columns that choose its discs and that the
+    // start-state checks read, made first; the discs' rows dropped then
+    let whole = match select {
+        Some(_) => {
+            let mut w = Particles::default();
+            for (k, r) in rows.iter().enumerate() {
+                let (mi, mass, _) = disc_of(sc, k, r, default_mat)?;
+                w.pos.push(r.pos);
+                w.radius.push(r.r);
+                w.mass.push(mass);
+                w.material.push(mi);
+            }
+            let n = rows.len() as u32;
+            w.id = (0..n).collect();
+            w.clump = vec![NO_CLUMP; n as usize];
+            Some(w)
         }
-        p.push(r.pos, r.r, m.density, g.thickness, mi);
-        p.vel[k] = v0;
-        let (mass, inertia) = (p.mass[k], p.inertia[k]);
-        if !(mass.is_finite() && mass > 0.0 && inertia.is_finite() && inertia > 0.0) {
-            // blame the factor farthest from 1 (in orders of magnitude)
-            let disc = match &g.discs {
-                DiscsSpec::Inline(_) => format!("granular.discs.{k}"),
-                DiscsSpec::Table(_) => "granular.discs".to_string(),
-            };
-            let density = format!("material.{mi}.density");
-            let suspects = [
-                (m.density.ln().abs(), density.as_str()),
-                ((r.r * r.r).ln().abs(), disc.as_str()),
-                (g.thickness.ln().abs(), "granular.thickness"),
-            ];
-            let (_, at) = suspects.iter().fold(
-                (f64::NEG_INFINITY, "granular.thickness"),
-                |best, &(v, f)| {
-                    if v > best.0 { (v, f) } else { best }
-                },
+        None => None,
+    };
+    let v0 = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
+    // a part's discs are made at the end, from the whole's columns
+    let mut p = Particles::default();
+    if whole.is_none() {
+        reserve(&mut p, rows.len())?;
+        for (k, r) in rows.iter().enumerate() {
+            let (mi, ..) = disc_of(sc, k, r, default_mat)?;
+            p.push(
+                r.pos,
+                r.r,
+                sc.material[mi as usize].density,
+                g.thickness,
+                mi,
             );
-            return Err(bad(
-                at,
-                format!(
-                    "disc {}: its mass ρπr²t = {mass:e} and moment of inertia m r²/2 = {inertia:e} must be finite and > 0 (ρ = {:e}, r = {:e}, t = {:e})",
-                    k + 1,
-                    m.density,
-                    r.r,
-                    g.thickness
-                ),
-            ));
+            p.vel[k] = v0;
         }
     }
+    drop(rows);
     let mut clumps = Clumps::default();
     for (i, m) in groups.iter().enumerate() {
         // before the assembly is made: its start positions are the clumps'
@@ -412,7 +402,7 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
             bad(&at, e)
         })?;
     }
-    let walls = super::granular::walls(sc, &p.pos)?;
+    let walls = super::granular::walls(sc, whole.as_ref().map_or(&p.pos, |w| &w.pos))?;
     let mut gr = Granular::new(p, mats, walls, 1.0);
     gr.clumps = clumps;
     gr.damping = body;
@@ -423,9 +413,15 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
         gr.bonds.law = law;
         gr.bonds.rule = Some(rule);
     }
+    // a part's time step and checks are those of the whole; its start
+    // positions are the whole's (set at the end)
+    let mut whole = whole.map(|w| gr.with_discs(w));
     gr.dt = match sc.simulation.dt {
         Some(dt) => dt,
-        None => DT_SAFETY * gr.critical_step(&body_laws(sc, &gr.materials)).dt,
+        None => {
+            let g = whole.as_ref().unwrap_or(&gr);
+            DT_SAFETY * g.critical_step(&body_laws(sc, &gr.materials)).dt
+        }
     };
     if !gr.dt.is_finite() || gr.dt <= 0.0 {
         return Err(bad(
@@ -433,11 +429,131 @@ fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> 
             "cannot choose a time step: give simulation.dt (no contact stiffness to derive it from)",
         ));
     }
-    super::granular::check_wall_speeds(sc, &gr)?;
+    if let Some(w) = whole.as_mut() {
+        w.dt = gr.dt;
+    }
+    super::granular::check_wall_speeds(sc, whole.as_ref().unwrap_or(&gr))?;
     if let Some(s) = g.skin {
         gr.set_skin(s);
     }
+    if let (Some(w), Some(select)) = (whole, select) {
+        start_state(sc, &w, purpose)?;
+        let mut w = w.particles;
+        // the checks' columns are done with: the part is made without them
+        (w.mass, w.id, w.clump) = Default::default();
+        let max_r = w.max_radius();
+        let skin = g.skin.unwrap_or(default_skin(max_r));
+        gr.set_skin(skin);
+        let keep = select(&w.pos, max_r, skin);
+        gr.particles = part_of(sc, (&w.pos, &w.radius, &w.material), &keep, v0)?;
+        gr.set_start(w.pos);
+    }
     Ok(gr)
+}
+
+/// `p` with room for `n` discs, or the error that they do not fit.
+fn reserve(p: &mut Particles, n: usize) -> Result<(), Invalid> {
+    p.try_reserve(n).map_err(|e| {
+        bad(
+            "granular.discs",
+            format!(
+                "cannot allocate the arrays of {n} discs ({e}): more than this process may use"
+            ),
+        )
+    })
+}
+
+/// The discs `keep` holds of the whole's centres, radii and materials,
+/// with the whole's ids, at velocity `v0`.
+fn part_of(
+    sc: &Scenario,
+    (pos, radius, material): (&[Vec2], &[f64], &[u16]),
+    keep: &[bool],
+    v0: Vec2,
+) -> Result<Particles, Invalid> {
+    let thickness = spec(sc)?.thickness;
+    let mut p = Particles::default();
+    reserve(&mut p, keep.iter().filter(|&&k| k).count())?;
+    for k in (0..keep.len()).filter(|&k| keep[k]) {
+        let mi = material[k];
+        p.push(
+            pos[k],
+            radius[k],
+            sc.material[mi as usize].density,
+            thickness,
+            mi,
+        );
+        let last = p.len() - 1;
+        p.vel[last] = v0;
+        // the whole's numbering
+        p.id[last] = k as u32;
+    }
+    p.slot = vec![u32::MAX; keep.len()];
+    for (s, &id) in p.id.iter().enumerate() {
+        p.slot[id as usize] = s as u32;
+    }
+    Ok(p)
+}
+
+/// The material of disc `k` (row `r`; its own or the section's
+/// `default_mat`) and its mass and moment of inertia, which must be finite
+/// and positive.
+fn disc_of(
+    sc: &Scenario,
+    k: usize,
+    r: &DiscRow,
+    default_mat: u16,
+) -> Result<(u16, f64, f64), Invalid> {
+    let g = spec(sc)?;
+    let mi = match &r.material {
+        Some(name) => material_index(sc, name, "granular.discs")
+            .map_err(|e| bad("granular.discs", format!("disc {}: {}", k + 1, e.message)))?,
+        None => default_mat,
+    };
+    let m = &sc.material[mi as usize];
+    if m.density.is_nan() || m.density <= 0.0 {
+        return Err(bad(
+            "granular.discs",
+            format!("disc {}: material `{}` needs a density > 0", k + 1, m.name),
+        ));
+    }
+    let (mass, inertia) = Particles::mass_of(r.r, m.density, g.thickness);
+    if mass.is_finite() && mass > 0.0 && inertia.is_finite() && inertia > 0.0 {
+        return Ok((mi, mass, inertia));
+    }
+    // blame the factor farthest from 1 (in orders of magnitude)
+    let disc = match &g.discs {
+        DiscsSpec::Inline(_) => format!("granular.discs.{k}"),
+        DiscsSpec::Table(_) => "granular.discs".to_string(),
+    };
+    let density = format!("material.{mi}.density");
+    let suspects = [
+        (m.density.ln().abs(), density.as_str()),
+        ((r.r * r.r).ln().abs(), disc.as_str()),
+        (g.thickness.ln().abs(), "granular.thickness"),
+    ];
+    let (_, at) = suspects.iter().fold(
+        (f64::NEG_INFINITY, "granular.thickness"),
+        |best, &(v, f)| {
+            if v > best.0 { (v, f) } else { best }
+        },
+    );
+    Err(bad(
+        at,
+        format!(
+            "disc {}: its mass ρπr²t = {mass:e} and moment of inertia m r²/2 = {inertia:e} must be finite and > 0 (ρ = {:e}, r = {:e}, t = {:e})",
+            k + 1,
+            m.density,
+            r.r,
+            g.thickness
+        ),
+    ))
+}
+
+/// The search grid's skin of discs of largest radius `max_r` when the
+/// scenario gives none ([`Granular::new`]'s).
+fn default_skin(max_r: f64) -> f64 {
+    0.1 * max_r.max(f64::MIN_POSITIVE)
 }
 
 /// Number of steps: `simulation.steps`, or `end_time / dt` rounded.
@@ -497,7 +613,7 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
     // the scheme is chosen with the discs as generated (the preparation
     // moves them, it does not change their masses or radii): a scenario
     // `run` would refuse is refused before any preparation, as `check` does
-    let granular = granular_with(sc, BuildFor::Check)?;
+    let granular = granular_with(sc, BuildFor::Check, None)?;
     let substeps = sc.simulation.substeps.fixed().unwrap_or(1).max(1);
     let body_dt = granular.dt * substeps as f64;
     let mode = match sc.simulation.contact_solve {
@@ -587,7 +703,7 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
     // the discs of the run: prepared (here or by the caller), with those a
     // body placed after the preparation overlaps removed
     if purpose != BuildFor::Check && preparation(sc).is_some() {
-        m.granular = granular_with(sc, purpose)?;
+        m.granular = granular_with(sc, purpose, None)?;
     }
     Ok(m)
 }
@@ -646,7 +762,7 @@ pub fn model_with(sc: &Scenario, purpose: BuildFor) -> Result<Model, Invalid> {
             }
         }
         super::Kind::Granular => {
-            let g = granular_with(sc, purpose)?;
+            let g = granular_with(sc, purpose, None)?;
             Model {
                 dt: g.dt,
                 steps: steps_of(sc, g.dt),
@@ -672,6 +788,32 @@ pub fn model_with(sc: &Scenario, purpose: BuildFor) -> Result<Model, Invalid> {
     }
     probes(sc, &model)?;
     Ok(model)
+}
+
+/// A part of a granular scenario's model: the discs that `select` keeps of
+/// the whole assembly (their ids those of the whole), with the whole's
+/// walls, laws and time step, every check of the start state made on the
+/// whole; its start positions are the whole's (by id). The whole's
+/// `Particles` are never made: the peak is the part's plus a few columns
+/// of the whole (centres, radii, masses, materials). `None` for what is
+/// not a plain granular scenario (bodies, bonds, clumps).
+pub fn part(sc: &Scenario, purpose: BuildFor, select: Select) -> Result<Option<Model>, Invalid> {
+    if super::kind(sc) != super::Kind::Granular || sc.bonds.is_some() || sc.clumps.is_some() {
+        return Ok(None);
+    }
+    check_memory(sc)?;
+    let g = granular_with(sc, purpose, Some(select))?;
+    let model = Model {
+        dt: g.dt,
+        steps: steps_of(sc, g.dt),
+        system: System::Granular(Box::new(g)),
+        step: 0,
+    };
+    if let Some((path, message)) = super::body::absurd_motion(sc, model.steps, model.dt) {
+        return Err(bad(&path, message));
+    }
+    probes(sc, &model)?;
+    Ok(Some(model))
 }
 
 /// Bytes per disc assumed by [`memory_estimate`]: the disc arrays (≈ 125
@@ -1282,7 +1424,9 @@ pub fn overlapped(sc: &Scenario, rows: &[DiscRow]) -> Vec<(usize, Vec<usize>)> {
 /// `check` a prepared packing's discs are those before the preparation,
 /// so the count is known only for other disc sources).
 pub fn removed_discs(sc: &Scenario, purpose: BuildFor) -> Result<Vec<(String, usize)>, Invalid> {
-    if sc.granular.is_none() {
+    let removes =
+        |b: &super::body::BodySpec| b.overlapping_discs == super::body::OverlappingDiscs::Remove;
+    if sc.granular.is_none() || !sc.body.iter().any(removes) {
         return Ok(Vec::new());
     }
     let rows = kept(sc, disc_rows(sc, purpose)?)?;
@@ -1443,7 +1587,8 @@ fn granular_probe(
     k: usize,
     coupled: bool,
 ) -> Result<Probe, Invalid> {
-    let n = g.particles.len();
+    // the ids of the whole assembly (a part holds some of them)
+    let n = g.particles.slot.len().max(g.particles.len());
     let disc = |d: usize, field: &str| {
         (d >= 1 && d <= n).then(|| d - 1).ok_or_else(|| {
             bad(
@@ -1479,10 +1624,15 @@ fn granular_probe(
             }
         } else if has(DISC_QUANTITIES) || (coupled && (q == "ux" || q == "uy")) {
             let id = disc(pr.disc.unwrap_or(0), "disc")?;
+            let p = &g.particles;
             Probe::Disc {
                 id,
                 quantity: q.to_string(),
-                x0: g.particles.pos[g.slot(id)],
+                // a part of the assembly may not hold the disc
+                x0: match p.slot.get(id).map(|&s| s as usize) {
+                    Some(s) if s < p.len() => p.pos[s],
+                    _ => g.start_position(id),
+                },
             }
         } else {
             return Err(bad(

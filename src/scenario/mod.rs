@@ -635,6 +635,23 @@ impl Scenario {
         build::model_with(self, build::BuildFor::Prepared(bed)).map_err(|p| self.located(vec![p]))
     }
 
+    /// A rank's part of the model of a granular scenario (no bodies,
+    /// bonds or clumps; `None` otherwise): only the discs `select` keeps of
+    /// the whole assembly are made ([`build::part`]); `bed` the discs of
+    /// its packing's preparation, if it has one.
+    pub fn build_part(
+        &self,
+        bed: Option<&[crate::dem::packing::DiscRow]>,
+        select: build::Select,
+    ) -> Result<Option<crate::model::Model>, ScenarioError> {
+        let problems = self.validate();
+        if !problems.is_empty() {
+            return Err(self.located(problems));
+        }
+        let purpose = bed.map_or(build::BuildFor::Run, build::BuildFor::Prepared);
+        build::part(self, purpose, select).map_err(|p| self.located(vec![p]))
+    }
+
     /// The `[[probe]]`s bound to their targets in `model` (built from this
     /// scenario), in file order.
     pub fn probes(
