@@ -322,22 +322,22 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
             "the exact step takes one DEM step per body step (got substeps = {n}); use substeps = 1 or \"auto\", or another coupling"
         ))),
         (Some(Scheme::Compliant), n) => {
-            let why = match n {
-                Some(_) => "named by the scenario".to_string(),
+            let (n, why) = match n {
+                Some(n) => (n, "named by the scenario".to_string()),
                 None => {
                     // the bodies' frequency at the longest body step the
                     // automatic choice would examine
-                    let long = CANDIDATES
-                        .into_iter()
-                        .find(|&k| omega_dt * k as f64 <= PREDICTED_MAX_OMEGA_H);
-                    let (g, omega) = split(gains(m, long.unwrap_or(2))?);
+                    let long = (CANDIDATES.into_iter())
+                        .find(|&k| omega_dt * k as f64 <= PREDICTED_MAX_OMEGA_H)
+                        .unwrap_or(2);
+                    let (g, omega) = split(gains(m, long)?);
                     body_dt = omega * dt;
-                    examined.push((long.unwrap_or(2), g));
+                    examined.push((long, g));
                     let n = compliant_n(body_dt);
-                    format!("named by the scenario; {}", compliant_why(n, body_dt))
+                    let why = format!("named by the scenario; {}", compliant_why(n, body_dt));
+                    (n, why)
                 }
             };
-            let n = n.unwrap_or_else(|| compliant_n(body_dt));
             Ok(Ok(choice(
                 Scheme::Compliant,
                 n,
