@@ -212,6 +212,17 @@ const KRYLOV: usize = 40;
 const RESTARTS: usize = 25;
 const GMRES_RTOL: f64 = 1e-13;
 
+/// When [`Solver::line_search`] counts a contact that crossed zero overlap
+/// (the jump of its dashpot force) as settled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Touch {
+    /// With the full Newton step: every other contact then solves the
+    /// affine system of its regime exactly.
+    FullStep,
+    /// With a damped step too (after [`UNDAMPED`] iterations).
+    Any,
+}
+
 /// Why a contact solve did not converge.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Unsolved {
@@ -400,7 +411,11 @@ impl Solver {
             }
             // the compliance of a whole body step makes the contacts
             // strongly coupled: damped steps from the first
-            let touch = iter > UNDAMPED;
+            let touch = if iter > UNDAMPED {
+                Touch::Any
+            } else {
+                Touch::FullStep
+            };
             // the residual at the present iterate is −R's (its squares)
             let phi = self.r[..m].iter().map(|r| r.dot(*r)).sum::<f64>();
             if self.line_search(
@@ -466,7 +481,7 @@ impl Solver {
                     &mut Compliance::Dense(&dense),
                     out,
                     &d,
-                    (true, None),
+                    (Touch::Any, None),
                 );
                 self.s = dense;
                 settled
@@ -514,7 +529,7 @@ impl Solver {
             let settled = if iter <= UNDAMPED {
                 settle(&mut self.w, contacts, out, |k| d[k])
             } else {
-                self.line_search(contacts, base, free, s, out, &d, (true, None))
+                self.line_search(contacts, base, free, s, out, &d, (Touch::Any, None))
             };
             self.d = d;
             if settled {
@@ -532,11 +547,12 @@ impl Solver {
     /// contact laws can swap regimes back and forth without end; halving
     /// them settles the cycle.
     ///
-    /// With `touch`, a contact that opened or closed within its own step's
-    /// reach of zero overlap (`|δ| ≤ t |d·n|`) counts as settled: with a
-    /// normal dashpot the force jumps at `δ = 0` (from 0 to `c_n δ̇`), and
-    /// a contact just touching has no exact solution on either side of the
-    /// jump — the step ends with it on the side the last iterate found.
+    /// A contact that opened or closed within its own step's reach of zero
+    /// overlap (`|δ| ≤ t |d·n|`) counts as settled — with the full step
+    /// only, or also with a damped one ([`Touch`]): with a normal dashpot
+    /// the force jumps at `δ = 0` (from 0 to `c_n δ̇`), and a contact just
+    /// touching has no exact solution on either side of the jump — the
+    /// step ends with it on the side the last iterate found.
     /// `phi`: the squared residual at the present iterate, if known.
     #[allow(clippy::too_many_arguments)]
     fn line_search(
@@ -547,7 +563,7 @@ impl Solver {
         s: &mut Compliance,
         out: &mut [Eval],
         d: &[Vec2],
-        (touch, phi): (bool, Option<f64>),
+        (touch, phi): (Touch, Option<f64>),
     ) -> bool {
         let m = contacts.len();
         for v in [&mut self.t, &mut self.st, &mut self.scratch] {
@@ -583,8 +599,7 @@ impl Solver {
                 let mut flips = false;
                 let same = (trial.iter().zip(out.iter()).zip(contacts.iter().zip(d))).all(
                     |((a, b), (c, d))| {
-                        let flip = touch
-                            && (a.regime == 0) != (b.regime == 0)
+                        let flip = (a.regime == 0) != (b.regime == 0)
                             && a.overlap.abs() <= step * d.dot(c.n).abs();
                         flips |= flip;
                         a.regime == b.regime || flip
@@ -599,7 +614,7 @@ impl Solver {
                     .map(|k| (free[k] - base[k]).dot(free[k] - base[k]) + self.w[k].dot(self.w[k]))
                     .sum();
                 self.last = (now, scale);
-                return ((step == 1.0 || flips) && same)
+                return ((step == 1.0 || (flips && touch == Touch::Any)) && same)
                     || now <= RESIDUAL_TOL * RESIDUAL_TOL * scale;
             }
             step *= 0.5;

@@ -882,6 +882,12 @@ impl CoupledModel {
         }
     }
 
+    /// Whether the last step ended a body step (the bodies' states change
+    /// only then; the exact step: every step).
+    pub fn at_body_step(&self) -> bool {
+        self.sub == 0
+    }
+
     /// The sub-cycled scheme: more than one DEM step per body step, the
     /// boundary on its predicted path (not the staggered transfer).
     pub fn path_scheme(&self) -> bool {

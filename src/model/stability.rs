@@ -41,13 +41,16 @@ impl std::fmt::Display for Instability {
 pub const MAX_RADII_PER_STEP: f64 = 1.0;
 
 /// Check the present state of `model` (one pass over the discs' velocities
-/// and the bodies' Newmark vectors: cheap next to a step).
+/// and, after a body step, the bodies' Newmark vectors: cheap next to a
+/// step).
 pub fn check(model: &Model) -> Result<(), Instability> {
     let culprit = match &model.system {
         System::Continuum { bodies, .. } => bodies.iter().find_map(|b| body_culprit(b.view())),
         System::Granular(g) => disc_culprit(g),
-        System::Coupled(m) => disc_culprit(&m.granular)
-            .or_else(|| (0..m.bodies.len()).find_map(|i| body_culprit(super::coupled_body(m, i)))),
+        System::Coupled(m) => disc_culprit(&m.granular).or_else(|| {
+            let bodies = if m.at_body_step() { m.bodies.len() } else { 0 };
+            (0..bodies).find_map(|i| body_culprit(super::coupled_body(m, i)))
+        }),
     };
     let Some((culprit, symptom)) = culprit else {
         return Ok(());
