@@ -635,6 +635,17 @@ fn dense_block(s: &[f64], k: usize, l: usize) -> [f64; 4] {
 /// `y = S x` for a dense row-major `S` (2m × 2m); rows with four partial
 /// sums (vectorisable, fixed order).
 fn dense_mul(s: &[f64], x: &[Vec2], y: &mut [Vec2]) {
+    dense_mul_rows(s, x, 0..x.len(), y);
+}
+
+/// [`dense_mul`] at the unknowns `rows` only (each `y_k` the same as the
+/// whole product's); the other entries of `y` are left as they are.
+pub fn dense_mul_rows(
+    s: &[f64],
+    x: &[Vec2],
+    rows: impl IntoIterator<Item = usize>,
+    y: &mut [Vec2],
+) {
     let m2 = 2 * x.len();
     let xs: Vec<f64> = x.iter().flat_map(|v| [v.x, v.y]).collect();
     let dot = |row: &[f64]| {
@@ -652,8 +663,8 @@ fn dense_mul(s: &[f64], x: &[Vec2], y: &mut [Vec2]) {
         }
         t
     };
-    for (k, yk) in y.iter_mut().enumerate() {
-        *yk = Vec2::new(
+    for k in rows {
+        y[k] = Vec2::new(
             dot(&s[2 * k * m2..(2 * k + 1) * m2]),
             dot(&s[(2 * k + 1) * m2..(2 * k + 2) * m2]),
         );

@@ -19,7 +19,7 @@
 //! * the body takes the forces, the discs get their opposite at the next
 //!   step: both sides see the same force at the same time level.
 
-use crate::continuum::compliance::Compliance;
+use crate::continuum::compliance::{Compliance, dense_mul_rows};
 use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::geom::Vec2;
 use crate::sparse::gauss_solve;
@@ -349,12 +349,16 @@ impl Solver {
         // the closed contacts and their Jacobians of the factored matrix
         let mut factored: (Vec<usize>, Vec<[f64; 4]>) = (vec![usize::MAX], Vec::new());
         for iter in 1..=self.newton_cap() {
-            // −R = −(w + base − free − S g)
-            for (t, e) in self.t.iter_mut().zip(out.iter()) {
-                *t = e.g;
+            // −R = −(w + base − free − S g); after the first iteration `st`
+            // holds S g of the present iterate (the line search's last
+            // residual)
+            if iter == 1 {
+                for (t, e) in self.t.iter_mut().zip(out.iter()) {
+                    *t = e.g;
+                }
+                Compliance::Dense(s).mul(&self.t, &mut self.st);
+                self.products += 1;
             }
-            Compliance::Dense(s).mul(&self.t, &mut self.st);
-            self.products += 1;
             for k in 0..m {
                 self.r[k] = -(self.w[k] + base[k] - free[k] - self.st[k]);
             }
@@ -403,9 +407,15 @@ impl Solver {
                 let d = Vec2::new(self.rhs[2 * i], self.rhs[2 * i + 1]);
                 self.t[k] = apply2(&out[k].jac, d);
             }
-            Compliance::Dense(s).mul(&self.t, &mut self.st);
+            let open = (0..m).filter(|&k| out[k].regime == 0);
+            dense_mul_rows(s, &self.t, open, &mut self.st);
             self.products += 1;
-            let mut d: Vec<Vec2> = (0..m).map(|k| self.r[k] + self.st[k]).collect();
+            let mut d: Vec<Vec2> = (0..m)
+                .map(|k| match out[k].regime {
+                    0 => self.r[k] + self.st[k],
+                    _ => Vec2::ZERO,
+                })
+                .collect();
             for (i, &k) in closed.iter().enumerate() {
                 d[k] = Vec2::new(self.rhs[2 * i], self.rhs[2 * i + 1]);
             }
