@@ -511,6 +511,13 @@ pub trait ContactBody: Send + Sync + 'static {
         }
         Ok(())
     }
+    /// Whether the step's solution waits for a solve of the body's own
+    /// that [`add_point_forces`](Self::add_point_forces) folds in (an EFG
+    /// body's refinement on moving edges): then the contact forces'
+    /// response is solved for, not summed from kept columns.
+    fn solve_pending(&self) -> bool {
+        false
+    }
     /// `F[i] += c · g` over `row = [(DOF, c)]` for the next step (a
     /// generalised force booked as a load).
     fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64);
@@ -843,14 +850,36 @@ impl<B: ContactBody> WithBoundary<B> {
     /// points (point forces and chain loads), committed; the boundary and
     /// its prediction refreshed.
     fn take_step(&mut self, delta: &[Vec2]) -> Result<(), SolveError> {
-        self.body
-            .add_point_forces(&self.point_fs, delta)
-            .map_err(|e| self.solve_error(e))?;
+        if !self.add_kept_response(delta) {
+            self.body
+                .add_point_forces(&self.point_fs, delta)
+                .map_err(|e| self.solve_error(e))?;
+        }
         add_chain_loads(&mut self.body, &self.rows, delta);
         self.body.commit().map_err(|e| self.solve_error(e))?;
         self.refresh();
         self.pre = None;
         Ok(())
+    }
+
+    /// The response to the loads `delta` on the chain points added to the
+    /// pending solution from the kept columns `A⁻¹ φ_b`
+    /// ([`ChainCompliance::add_response`]) instead of a solve, when the
+    /// body has no solve of its own pending, every loaded point's column is
+    /// kept, and their sum costs less than the solve (`2k` columns of `n`
+    /// entries against the factor's entries); whether it was.
+    fn add_kept_response(&mut self, delta: &[Vec2]) -> bool {
+        let loads: Vec<(usize, Vec2)> = (delta.iter().copied().enumerate())
+            .filter(|(_, f)| *f != Vec2::ZERO)
+            .collect();
+        if self.body.solve_pending() {
+            return false;
+        }
+        let Some(nm) = self.body.newmark_mut() else {
+            return false;
+        };
+        loads.len() * nm.n() <= nm.factor_nnz()
+            && self.chain_s.add_response(&loads, nm.solution_mut())
     }
 
     /// The body's step under its present loads (pending in the integrator).

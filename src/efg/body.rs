@@ -583,6 +583,13 @@ impl EfgBody {
         self.newmark.as_mut().ok_or(EfgError::NotStarted)
     }
 
+    /// Whether the predicted `U₊` waits for its refinement's solve
+    /// ([`add_point_forces`](Self::add_point_forces) or
+    /// [`commit`](Self::commit) does it).
+    pub fn refinement_pending(&self) -> bool {
+        self.refine_pending
+    }
+
     /// After [`predict`](Self::predict): `U₊ += A⁻¹ (Φᵀ f + r)`, the
     /// generalised forces `f[k]` on the functional pairs `rows[2k]`,
     /// `rows[2k + 1]` and the pending refinement residual

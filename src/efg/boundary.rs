@@ -251,6 +251,9 @@ impl ContactBody for EfgBody {
     fn add_point_forces(&mut self, rows: &[Vec<(usize, f64)>], f: &[Vec2]) -> Result<(), EfgError> {
         EfgBody::add_point_forces(self, rows, f)
     }
+    fn solve_pending(&self) -> bool {
+        self.refinement_pending()
+    }
     fn add_dof_loads(&mut self, row: &[(usize, f64)], g: f64) {
         add_dof_load(&mut self.f_point, row, g);
     }
