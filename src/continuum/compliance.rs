@@ -638,8 +638,10 @@ fn dense_mul(s: &[f64], x: &[Vec2], y: &mut [Vec2]) {
     dense_mul_rows(s, x, 0..x.len(), y);
 }
 
-/// [`dense_mul`] at the unknowns `rows` only (each `y_k` the same as the
-/// whole product's); the other entries of `y` are left as they are.
+/// `y = S x` for a dense row-major `S` at the unknowns `rows` only (each
+/// `y_k` the same as the whole product's: rows with four partial sums,
+/// vectorisable, fixed order); the other entries of `y` are left as they
+/// are.
 pub fn dense_mul_rows(
     s: &[f64],
     x: &[Vec2],

@@ -704,8 +704,8 @@ impl CoupledModel {
     /// that does not give way. Each body step ends with the last DEM
     /// step's loads, at which the body then is exactly where the discs
     /// last saw it (`Y(1) + S (L − L_held)`). Cost: two body solves per
-    /// body step and a contact solve over the chain points' compliance per
-    /// DEM step; with n = 1 it is the exact step with the contact forces
+    /// body step (or one, [`Continuum::end_path`] summing kept columns)
+    /// and a contact solve over the chain points' compliance per DEM step; with n = 1 it is the exact step with the contact forces
     /// shared by the segment ends.
     fn step_compliant(&mut self, discs: &mut dyn DiscStep) -> Result<(), CouplingError> {
         // a body step's prediction does not depend on the discs' step:

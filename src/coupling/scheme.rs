@@ -14,8 +14,9 @@
 //! * **compliant** (n DEM steps per body step): the boundary on that path
 //!   plus its response, through the body step's compliance, to the change
 //!   of the contact forces, solved with the contacts in every DEM step:
-//!   stable whatever `Γ`; two body solves per body step and a contact
-//!   solve per DEM step over the chain points' compliance. It sees the
+//!   stable whatever `Γ`; two body solves per body step (one for a body
+//!   without moving edges) and a contact solve per DEM step over the
+//!   chain points' compliance. It sees the
 //!   body's response to the contacts as quasi-static within a body step,
 //!   so the body step must not be long against the contacts' own period.
 //!
