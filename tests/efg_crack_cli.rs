@@ -136,6 +136,14 @@ fn bad_cracks_are_located() {
         "at least 2",
     );
     bad(
+        "crack-tiny",
+        pts,
+        "points = [[0.0, 1.0], [1.0e-300, 1.0]]",
+        11,
+        "body[0].crack[0].points",
+        "coincide",
+    );
+    bad(
         "crack-spacing",
         "spacing = 0.125",
         "spacing = 0.9",

@@ -83,11 +83,22 @@ impl Crack {
 }
 
 /// Validate `cracks` in `domain`: each crack has ≥ 2 finite, distinct
-/// points, does not cross itself, another crack or the boundary, its inner
+/// points (further apart than 10⁻⁹ of the body's size), does not cross itself, another crack or the boundary, its inner
 /// vertices are strictly inside Ω, and each end is a tip or a mouth (at
 /// least one tip). Returns each crack's two ends.
 pub fn check(domain: &Domain, cracks: &[Crack]) -> Result<Vec<[End; 2]>, CrackError> {
     let mut out = Vec::with_capacity(cracks.len());
+    let corners = (domain.loops.iter()).flat_map(|lp| (0..lp.len()).map(|s| lp.segment(s).0));
+    let (lo, hi) = corners.fold(
+        (Vec2::new(f64::MAX, f64::MAX), Vec2::new(f64::MIN, f64::MIN)),
+        |(lo, hi), p| {
+            (
+                Vec2::new(lo.x.min(p.x), lo.y.min(p.y)),
+                Vec2::new(hi.x.max(p.x), hi.y.max(p.y)),
+            )
+        },
+    );
+    let size = (hi - lo).norm();
     for (k, c) in cracks.iter().enumerate() {
         let err = |message: String| CrackError { crack: k, message };
         let n = c.points.len();
@@ -102,8 +113,13 @@ pub fn check(domain: &Domain, cracks: &[Crack]) -> Result<Vec<[End; 2]>, CrackEr
         {
             return Err(err(format!("point {i} ({}, {}) is not finite", p.x, p.y)));
         }
-        if let Some(i) = (0..n - 1).find(|&i| c.points[i] == c.points[i + 1]) {
-            return Err(err(format!("points {i} and {} coincide", i + 1)));
+        // closer than a 10⁻⁹ of the body's size: no node resolves the piece
+        let tiny = 1e-9 * size;
+        if let Some(i) = (0..n - 1).find(|&i| (c.points[i + 1] - c.points[i]).norm() <= tiny) {
+            return Err(err(format!(
+                "points {i} and {} coincide (closer than 1e-9 × the body's size, {tiny:e})",
+                i + 1
+            )));
         }
         for i in 0..n - 1 {
             let (a, b) = c.piece(i);

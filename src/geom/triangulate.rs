@@ -27,6 +27,14 @@ pub fn triangulate(
         .iter()
         .map(|p| spade::mitigate_underflow(Point2::new(p.x, p.y)))
         .collect();
+    // an edge whose ends coincide (a crack or side shorter than the
+    // coordinates resolve) is no constraint: spade would panic on it
+    if let Some(&[a, _]) = constraints.iter().find(|&&[a, b]| verts[a] == verts[b]) {
+        return Err(TriangulationError(format!(
+            "a constrained edge (a crack or an outline side) has zero length at ({:e}, {:e})",
+            points[a].x, points[a].y
+        )));
+    }
     let cdt =
         ConstrainedDelaunayTriangulation::<Point2<f64>>::bulk_load_cdt(verts, constraints.to_vec())
             .map_err(|e| {
