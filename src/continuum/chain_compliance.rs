@@ -23,6 +23,10 @@ use rayon::prelude::*;
 /// depend on the number of threads).
 const BLOCK: usize = 8;
 
+/// A new column: the chain points' responses and (within [`FULL_BYTES`])
+/// the DOF responses.
+type Column = (Vec<f64>, Vec<f64>);
+
 /// Memory for the DOF responses `A⁻¹ φ_b` of every chain point of a body
 /// (bytes): a body whose would need more keeps only the chain points'
 /// responses.
@@ -84,9 +88,9 @@ impl ChainCompliance {
         // decided by the sizes alone, not by the columns made so far: a run
         // restarted from a checkpoint takes the same path
         let keep = 2 * dofs * n * std::mem::size_of::<f64>() <= FULL_BYTES;
-        let cols: Vec<(Vec<f64>, Vec<f64>)> = new
+        let cols: Vec<Column> = new
             .par_chunks(BLOCK)
-            .map(|chunk| -> Result<Vec<(Vec<f64>, Vec<f64>)>, SparseError> {
+            .map(|chunk| -> Result<Vec<Column>, SparseError> {
                 let k = 2 * chunk.len();
                 let mut rhs = vec![0.0; dofs * k];
                 for (c, &b) in chunk.iter().enumerate() {
