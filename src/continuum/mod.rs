@@ -869,15 +869,15 @@ impl<B: ContactBody> WithBoundary<B> {
     /// kept, and their sum costs less than the solve (`2k` columns of `n`
     /// entries against the factor's entries); whether it was.
     fn add_kept_response(&mut self, delta: &[Vec2]) -> bool {
-        let loads: Vec<(usize, Vec2)> = (delta.iter().copied().enumerate())
-            .filter(|(_, f)| *f != Vec2::ZERO)
-            .collect();
         if self.body.solve_pending() {
             return false;
         }
         let Some(nm) = self.body.newmark_mut() else {
             return false;
         };
+        let loads: Vec<(usize, Vec2)> = (delta.iter().copied().enumerate())
+            .filter(|(_, f)| *f != Vec2::ZERO)
+            .collect();
         loads.len() * nm.n() <= nm.factor_nnz()
             && self.chain_s.add_response(&loads, nm.solution_mut())
     }

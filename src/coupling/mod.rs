@@ -705,8 +705,9 @@ impl CoupledModel {
     /// step's loads, at which the body then is exactly where the discs
     /// last saw it (`Y(1) + S (L − L_held)`). Cost: two body solves per
     /// body step (or one, [`Continuum::end_path`] summing kept columns)
-    /// and a contact solve over the chain points' compliance per DEM step; with n = 1 it is the exact step with the contact forces
-    /// shared by the segment ends.
+    /// and a contact solve over the chain points' compliance per DEM step;
+    /// with n = 1 it is the exact step with the contact forces shared by
+    /// the segment ends.
     fn step_compliant(&mut self, discs: &mut dyn DiscStep) -> Result<(), CouplingError> {
         // a body step's prediction does not depend on the discs' step:
         // once primed, the two run side by side (as in the exact step)

@@ -16,9 +16,9 @@
 //!   of the contact forces, solved with the contacts in every DEM step:
 //!   stable whatever `Γ`; two body solves per body step (one for a body
 //!   without moving edges) and a contact solve per DEM step over the
-//!   chain points' compliance. It sees the
-//!   body's response to the contacts as quasi-static within a body step,
-//!   so the body step must not be long against the contacts' own period.
+//!   chain points' compliance. It sees the body's response to the
+//!   contacts as quasi-static within a body step, so the body step must
+//!   not be long against the contacts' own period.
 //!
 //! The choice uses three numbers: `Γ(n)` per body for the predicted scheme
 //! (one factorization and a few dozen solves per candidate n); `ω_c h`,
