@@ -288,7 +288,9 @@ pub struct Solver {
 impl Solver {
     /// Solve `u = u_free + S g(u − u_base)` for the contact forces `g` on
     /// the body (semi-smooth Newton over the piecewise-affine contact laws;
-    /// exact once the regimes settle). Writes the evaluations at the
+    /// exact once the regimes settle), starting from the body's free
+    /// increment `u_free − u_base` (the regimes there are usually those of
+    /// the solution: one Newton step). Writes the evaluations at the
     /// solution; returns the number of Newton iterations.
     ///
     /// Up to `DENSE_MAX` (48) contacts the Newton matrix `I − S J` is formed
@@ -308,10 +310,13 @@ impl Solver {
         let m = contacts.len();
         self.products = 0;
         self.last = (f64::INFINITY, 0.0);
-        out.clear();
-        out.extend(contacts.iter().map(|c| c.eval(Vec2::ZERO)));
+        // start from the body's free increment (no contact force): the
+        // regimes there are those of the solution unless the contacts move
+        // the body much — usually one Newton step
         self.w.clear();
-        self.w.resize(m, Vec2::ZERO);
+        self.w.extend(free.iter().zip(base).map(|(f, b)| *f - *b));
+        out.clear();
+        out.extend(contacts.iter().zip(&self.w).map(|(c, w)| c.eval(*w)));
         if m <= DENSE_MAX {
             s.dense(&mut self.s);
             self.dense_newton(contacts, base, free, out)
