@@ -51,6 +51,15 @@ pub struct BoundaryGreen {
     significant: usize,
     /// End in `dofs` of each batch of [`extend`](Self::extend) so far.
     batch_end: Vec<u32>,
+    /// Unique to this `G` and its extent ([`next_id`]): a [`PointRows`]
+    /// keeps what it gathered from the same `G` on the same DOFs.
+    id: u64,
+}
+
+/// A number no `G` had before.
+fn next_id() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 /// Entries of `G` below `ε √(G_aa G_bb)` are left out of the products `S x`.
@@ -74,6 +83,7 @@ impl BoundaryGreen {
             root_diag: Vec::new(),
             significant: 0,
             batch_end: Vec::new(),
+            id: next_id(),
         }
     }
 
@@ -219,6 +229,7 @@ impl BoundaryGreen {
             }
         }
         self.g = g;
+        self.id = next_id();
         self.find_significant();
         self.batch_end.push(total as u32);
         Ok(())
@@ -266,11 +277,19 @@ pub struct PointRows {
     /// Scratch of the products: nodal forces and displacements on `act`.
     q: Vec<f64>,
     z: Vec<f64>,
-    /// The significant entries of `G` on the touched DOFs (rows in local
-    /// numbering, CSR), gathered at the first product of a step.
+    /// The significant entries of `G` on the touched DOFs, upper triangle
+    /// (`G` is symmetric): per column in local numbering its rows up to the
+    /// diagonal (CSC), gathered at the first product of a step.
     ga_start: Vec<u32>,
-    ga_col: Vec<u32>,
+    ga_row: Vec<u32>,
     ga_val: Vec<f64>,
+    /// Columns of the products' second part ([`SYM_PARTS`]): from here on
+    /// (`usize::MAX`: one part), and its output.
+    ga_split: usize,
+    z2: Vec<f64>,
+    /// The `G` ([`BoundaryGreen::id`]) and touched DOFs the gathered
+    /// entries are of: a step on the same DOFs keeps them.
+    ga_of: (u64, Vec<u32>),
     /// Local position of every DOF of `B` ([`NONE`] if not touched), set
     /// by [`PointRows::set`].
     map: Vec<u32>,
@@ -290,6 +309,10 @@ pub struct PointRows {
 /// Products `S x` a contact solve typically needs (for the choice of
 /// [`PointRows::set`]).
 const PRODUCTS: f64 = 8.0;
+
+/// Entries of `G`'s upper triangle from which the products `S x` run in two
+/// parts (on two threads when there are two).
+const SYM_PARTS: usize = 1 << 15;
 
 impl PointRows {
     /// Map the functionals `rows[c] = [(DOF, coefficient)]` (pairs) onto
@@ -326,14 +349,16 @@ impl PointRows {
         let act = &self.act;
         self.q.resize(act.len(), 0.0);
         self.z.resize(act.len(), 0.0);
-        self.ga_start.clear();
+        if (green.id, act) != (self.ga_of.0, &self.ga_of.1) {
+            self.ga_start.clear();
+        }
         // S by columns costs a gather of n_act² and 2m·r·(n_act + 2m)
         // multiply-adds, then 4m² a product; the products over G cost a
-        // gather and nnz(G_act) each
+        // gather of its upper triangle and a read of it each
         let (m2, na) = (rows.len() as f64, self.act.len() as f64);
         let r = self.entries.len() as f64 / m2.max(1.0);
         let form = na * na + m2 * r * (na + m2) + PRODUCTS * m2 * m2;
-        let over_g = (PRODUCTS + 1.0) * na * na * green.significant_fraction();
+        let over_g = (PRODUCTS + 1.0) * 0.5 * na * na * green.significant_fraction();
         self.s.clear();
         self.formed = form < over_g;
     }
@@ -480,30 +505,41 @@ impl PointRows {
         s.extend_from_slice(&self.s);
     }
 
-    /// Gather the significant entries of `G` between the touched DOFs.
+    /// Gather the significant entries of `G` between the touched DOFs, the
+    /// upper triangle by columns; the columns are cut in two parts of about
+    /// equal entries once there are [`SYM_PARTS`] of them.
     fn gather(&mut self, green: &BoundaryGreen) {
         self.ga_start.clear();
-        self.ga_col.clear();
+        self.ga_row.clear();
         self.ga_val.clear();
         self.ga_start.push(0);
         let nb = green.len();
-        for &b in &self.act {
+        for (lb, &b) in self.act.iter().enumerate() {
             let col = &green.g[b as usize * nb..(b as usize + 1) * nb];
-            for (l, &a) in self.act.iter().enumerate() {
+            for (l, &a) in self.act[..=lb].iter().enumerate() {
                 if green.is_significant(col, a as usize, b as usize) {
-                    self.ga_col.push(l as u32);
+                    self.ga_row.push(l as u32);
                     self.ga_val.push(col[a as usize]);
                 }
             }
-            self.ga_start.push(self.ga_col.len() as u32);
+            self.ga_start.push(self.ga_row.len() as u32);
         }
+        self.ga_of.0 = green.id;
+        self.ga_of.1.clone_from(&self.act);
+        let half = self.ga_val.len() as u32 / 2;
+        self.ga_split = if self.ga_val.len() >= SYM_PARTS {
+            self.ga_start.partition_point(|&e| e < half)
+        } else {
+            usize::MAX
+        };
     }
 
     /// `y = S x` for generalised forces `x[k]` on the unknowns:
     /// `Φ G (Φᵀ x)` over the touched DOFs. The first product of a step
-    /// gathers the significant entries of `G` on the touched DOFs (once);
-    /// each output entry is then one sparse dot product in a fixed order
-    /// (bitwise independent of the thread count).
+    /// gathers the significant entries of `G`'s upper triangle on the
+    /// touched DOFs (once); each product then reads them once, in a fixed
+    /// order and a fixed cut in parts (bitwise independent of the thread
+    /// count).
     pub fn mul(&mut self, green: &BoundaryGreen, x: &[Vec2], y: &mut [Vec2]) {
         if self.formed && self.s.is_empty() {
             self.form(green);
@@ -527,21 +563,19 @@ impl PointRows {
                 }
             }
         }
-        let (st, col, val, q) = (&self.ga_start, &self.ga_col, &self.ga_val, &self.q);
-        let row = |a: usize| -> f64 {
-            let (s, e) = (st[a] as usize, st[a + 1] as usize);
-            sparse_dot(&col[s..e], &val[s..e], q)
-        };
-        if val.len() >= 1 << 16 {
-            self.z
-                .par_iter_mut()
-                .enumerate()
-                .with_min_len(32)
-                .for_each(|(a, z)| *z = row(a));
-        } else {
-            for a in 0..na {
-                self.z[a] = row(a);
+        let (st, rows, val, q) = (&self.ga_start, &self.ga_row, &self.ga_val, &self.q);
+        let part =
+            |cols: std::ops::Range<usize>, z: &mut [f64]| sym_columns(st, rows, val, q, cols, z);
+        if self.ga_split < na {
+            // two parts on any number of threads, added in order
+            self.z2.resize(na, 0.0);
+            let (z, z2, split) = (&mut self.z, &mut self.z2, self.ga_split);
+            rayon::join(|| part(0..split, z), || part(split..na, z2));
+            for (a, b) in z.iter_mut().zip(z2.iter()) {
+                *a += *b;
             }
+        } else {
+            part(0..na, &mut self.z);
         }
         let dotz = |c: usize| -> f64 {
             let mut u = 0.0;
@@ -604,20 +638,32 @@ impl Compliance<'_> {
 /// `Σ vals[i] q[cols[i]]` in four interleaved partial sums (a fixed order:
 /// the same for any thread count), so that the additions do not wait on
 /// one another.
-fn sparse_dot(cols: &[u32], vals: &[f64], q: &[f64]) -> f64 {
-    let mut acc = [0.0; 4];
-    let (cc, vc) = (cols.chunks_exact(4), vals.chunks_exact(4));
-    let (cr, vr) = (cc.remainder(), vc.remainder());
-    for (c, v) in cc.zip(vc) {
-        for i in 0..4 {
-            acc[i] += v[i] * q[c[i] as usize];
+/// `z = G_c q`, `G_c` the columns `cols` of a symmetric `G` and their
+/// transposes, from its upper triangle (CSC, each column's rows ascending
+/// up to the diagonal): every stored entry read once, for its column and
+/// for its row.
+fn sym_columns(
+    start: &[u32],
+    rows: &[u32],
+    vals: &[f64],
+    q: &[f64],
+    cols: std::ops::Range<usize>,
+    z: &mut [f64],
+) {
+    z.iter_mut().for_each(|v| *v = 0.0);
+    for b in cols {
+        let (s, e) = (start[b] as usize, start[b + 1] as usize);
+        let qb = q[b];
+        let mut dot = 0.0;
+        for (&a, &g) in rows[s..e].iter().zip(&vals[s..e]) {
+            let a = a as usize;
+            z[a] += g * qb;
+            if a != b {
+                dot += g * q[a];
+            }
         }
+        z[b] += dot;
     }
-    let mut t = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-    for (c, v) in cr.iter().zip(vr) {
-        t += v * q[*c as usize];
-    }
-    t
 }
 
 /// The 2 × 2 block `S_kl` (row-major) of a dense row-major `S` (2m × 2m).
@@ -820,5 +866,66 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Products over a large `G` (its upper triangle cut in two parts)
+    /// against solves with the factor, bitwise the same on 1 and 2 threads.
+    #[test]
+    fn products_over_a_large_green_matrix_match_solves_on_any_threads() {
+        let n = 2400;
+        let a = lap(n);
+        let mut f = Cholesky::factor(&a).unwrap();
+        let mut g = BoundaryGreen::new(n, vec![false; n]);
+        g.extend(0..n as u32 / 2, &f).unwrap();
+        // 300 points, each row over four nodes with weights summing to 1
+        let m = 300;
+        let rows: Vec<Vec<(usize, f64)>> = (0..2 * m)
+            .map(|c| {
+                let (k, axis) = (c / 2, c % 2);
+                let w = [0.1, 0.4, 0.3, 0.2];
+                (0..4).map(|j| (2 * (4 * k + j) + axis, w[j])).collect()
+            })
+            .collect();
+        let x: Vec<Vec2> = (0..m)
+            .map(|k| Vec2::new((k as f64 * 0.37).sin(), (k as f64 * 0.11).cos()))
+            .collect();
+        // reference: y = Φ A⁻¹ Φᵀ x by a solve
+        let mut load = vec![0.0; n];
+        for (c, row) in rows.iter().enumerate() {
+            let xc = if c % 2 == 0 { x[c / 2].x } else { x[c / 2].y };
+            for &(i, w) in row {
+                load[i] += w * xc;
+            }
+        }
+        f.solve_in_place(&mut load);
+        let want: Vec<f64> = (rows.iter())
+            .map(|row| row.iter().map(|&(i, w)| w * load[i]).sum())
+            .collect();
+        let product = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut pr = PointRows::default();
+            pr.set(&rows, &g);
+            pr.formed = false;
+            let mut y = vec![Vec2::ZERO; m];
+            pool.install(|| pr.mul(&g, &x, &mut y));
+            assert!(pr.ga_split < pr.act.len(), "two parts");
+            // the next step on the same DOFs keeps the gathered entries
+            pr.set(&rows, &g);
+            assert!(!pr.ga_start.is_empty());
+            let mut again = vec![Vec2::ZERO; m];
+            pool.install(|| pr.mul(&g, &x, &mut again));
+            assert_eq!(y, again);
+            y
+        };
+        let y1 = product(1);
+        let scale = want.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        for (k, v) in y1.iter().enumerate() {
+            assert!((v.x - want[2 * k]).abs() < 1e-12 * scale, "{k} x");
+            assert!((v.y - want[2 * k + 1]).abs() < 1e-12 * scale, "{k} y");
+        }
+        assert_eq!(y1, product(2));
     }
 }
