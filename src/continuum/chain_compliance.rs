@@ -57,11 +57,6 @@ impl ChainCompliance {
         }
     }
 
-    /// Number of columns computed (for the memory report).
-    pub fn computed(&self) -> usize {
-        self.cols.iter().filter(|c| !c.is_empty()).count()
-    }
-
     /// Compute the columns of the chain points `points` not known yet:
     /// `A⁻¹ φ_b` for both directions by `factor` (no load on `imposed`
     /// DOFs), read at every chain point through `rows` (chain points in

@@ -695,7 +695,7 @@ pub fn dense_mul_rows(
     y: &mut [Vec2],
 ) {
     let m2 = 2 * x.len();
-    let xs: Vec<f64> = x.iter().flat_map(|v| [v.x, v.y]).collect();
+    let xs = crate::geom::flat(x);
     let dot = |row: &[f64]| {
         let mut acc = [0.0; 4];
         let (ca, cb) = (row.chunks_exact(4), xs.chunks_exact(4));

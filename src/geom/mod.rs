@@ -21,6 +21,14 @@ pub struct Vec2 {
     pub y: f64,
 }
 
+/// A `[Vec2]` as its `[x0, y0, x1, y1, …]` components (no copy).
+pub fn flat(v: &[Vec2]) -> &[f64] {
+    // SAFETY: `Vec2` is `repr(C)` with two `f64` fields and no padding:
+    // `n` of them are `2n` `f64`s at the same address and alignment,
+    // borrowed for the same lifetime.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<f64>(), 2 * v.len()) }
+}
+
 impl Vec2 {
     /// The zero vector / origin.
     pub const ZERO: Vec2 = Vec2 { x: 0.0, y: 0.0 };
@@ -136,6 +144,13 @@ pub fn closest_on_segment(p: Vec2, a: Vec2, b: Vec2) -> (f64, Vec2) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_slice_of_vectors_is_its_components() {
+        let v = [Vec2::new(1.0, -2.0), Vec2::new(3.5, 4.0)];
+        assert_eq!(flat(&v), &[1.0, -2.0, 3.5, 4.0]);
+        assert!(flat(&[]).is_empty());
+    }
 
     #[test]
     fn closest_point_interior_and_ends() {
