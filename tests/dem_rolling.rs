@@ -163,11 +163,17 @@ fn coupled_hash(src: &str) -> u64 {
 /// order switched back to the previous slot's (a one-line change of
 /// `strip_order`), this code still gives the old hashes
 /// (0xd72d4e5bb189b4c9, 0x91e0b02f06fa44ed): the order is the only change.
+/// The EFG one was pinned a third time when the exact step's contact
+/// solve began its Newton iterations at the body's free increment instead
+/// of at zero (another iterate, the same solution to the solver's
+/// tolerance): with the start set back to zero (a one-line change in
+/// `coupling::implicit::Solver::solve`) this code still gives the previous
+/// hash, 0x50b25af8a6a50ca7.
 const GOLDEN: [(&str, u64); 4] = [
     ("packing, dashpots", 0xcc1218a967bdc7d2),
     ("packing, local damping", 0x907486789dd4bd99),
     ("nine discs rigid, test 1", 0xb9c022c14b04f4f1),
-    ("nine discs EFG, test 1", 0x50b25af8a6a50ca7),
+    ("nine discs EFG, test 1", 0xfa0f4d4c4c0d0fa9),
 ];
 
 #[test]

@@ -323,21 +323,21 @@ fn tutorial_step_3_footing() {
     );
     page.quote("averages 216 N", "216", h.mean("reaction", 0.0, 0.15));
     page.quote("266 N between", "266", h.mean("reaction", 0.15, 0.25));
-    page.quote("624 N over 0.1–0.4 s", "624", h.mean("reaction", 0.1, 0.4));
+    page.quote("605 N over 0.1–0.4 s", "605", h.mean("reaction", 0.1, 0.4));
     page.quote(
-        "peaks at 1372 N",
-        "1372",
+        "peaks at 1342 N",
+        "1342",
         s["peak_contact_force"].as_f64().unwrap(),
     );
     page.quote(
-        "1372 N at t = 0.326 s",
-        "0.326",
+        "1342 N at t = 0.328 s",
+        "0.328",
         s["peak_contact_time"].as_f64().unwrap(),
     );
-    page.quote("reaction ends at 219 N", "219", h.last("reaction"));
-    page.quote("`W_ext` = 9.37 J", "9.37", h.last("W_ext"));
-    page.quote("`E_diss` = 9.14 J", "9.14", h.last("E_diss"));
-    page.quote("`E_contact` = 0.22 J", "0.22", h.last("E_contact"));
+    page.quote("reaction ends at 176 N", "176", h.last("reaction"));
+    page.quote("`W_ext` = 9.03 J", "9.03", h.last("W_ext"));
+    page.quote("`E_diss` = 8.84 J", "8.84", h.last("E_diss"));
+    page.quote("`E_contact` = 0.19 J", "0.19", h.last("E_contact"));
     page.finish();
 }
 
