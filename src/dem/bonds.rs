@@ -55,7 +55,7 @@
 //! the list (`Bonds::refresh`, after the discs are renumbered or the
 //! list changes): the bonds *held* in the slot order of their discs, in
 //! rows over the smaller slot like the contact list — only what a step
-//! reads (`Held`, 24 bytes), with their forces beside them in that
+//! reads (`Held`, 80 bytes of constants), with their forces beside them in that
 //! orientation. The contact sweep steps them block by block (a block's
 //! bonds just before its discs, from the state before the step, two at a
 //! time in SIMD lanes with the scalar operations; a bond whose second
@@ -404,33 +404,19 @@ pub fn strengths(law: &BondLaw, a: u32, b: u32) -> (f64, f64) {
 
 /// A bond as the contact sweep holds it: in the row of the smaller of its
 /// two slots `i < j` (rows by `i`, `j` ascending, as the contact list).
-/// Only what a step reads (24 bytes, read and never written by a step,
-/// made once when the bonds are held): the slots, the bond's radius and
-/// its strengths rounded down to `f32` for the test of
-/// [`Held::intact`] — its constants ([`Consts`]) are computed in the
-/// step from the radii, fewer bytes to stream through memory than to
-/// store them. Its forces are held beside it ([`Bonds::held_f`]), its
-/// exact strengths and index in the list apart ([`Bonds::held_s`],
-/// [`Bonds::held_key`]), read only when it may break.
+/// Only what a step reads: the bond's constants (80 bytes, read and never
+/// written by a step, made once when the bonds are held); its forces are
+/// held beside it ([`Bonds::held_f`]), its radius and index in the list
+/// apart ([`Bonds::held_r`], [`Bonds::held_key`]), read only when it
+/// breaks. Every constant is the value the step's formula would compute
+/// first (`k̄_n A` before `k̄_n A v_n Δt`, the arms' ratios before
+/// `d r_i/(r_i + r_j)`), so the step is bitwise the one that computes
+/// them every time — without its divisions.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Held {
     /// Slots of the first and the second disc.
     pub i: u32,
     pub j: u32,
-    /// The bond's radius R̄.
-    r: f64,
-    /// Tensile strength σ_c and shear strength τ_c (or cohesion c),
-    /// rounded down: what the intact test compares with.
-    tensile: f32,
-    shear: f32,
-}
-
-/// A bond's constants in a step, from its radius R̄ and the radii of its
-/// discs: every one the value the step's formula computes first (`k̄_n A`
-/// before `k̄_n A v_n Δt`, the arms' ratios before `d r_i/(r_i + r_j)`),
-/// so the step is bitwise the one that computes the formulas in place.
-#[derive(Debug, Clone, Copy)]
-struct Consts {
     /// The arms over the distance: `r_i/(r_i + r_j)`, `r_j/(r_i + r_j)`.
     ci: f64,
     cj: f64,
@@ -438,36 +424,13 @@ struct Consts {
     kn_a: f64,
     ks_a: f64,
     kn_i: f64,
+    /// Tensile strength σ_c.
+    tensile: f64,
+    /// Shear strength τ_c (or cohesion c).
+    shear: f64,
     /// `1/A` and `R̄/I`: the stresses as products ([`Held::intact`]).
     inv_a: f64,
     r_over_i: f64,
-}
-
-impl Consts {
-    /// The constants of a bond of radius `r` between discs of radii
-    /// `ri`, `rj` through `thickness` (the lanes compute the same with the
-    /// same operations: `bonds::lanes`).
-    #[inline(always)]
-    fn new(r: f64, (ri, rj): (f64, f64), law: &BondLaw, thickness: f64) -> Consts {
-        let (a, inertia) = section(r, thickness);
-        let rs = ri + rj;
-        Consts {
-            ci: ri / rs,
-            cj: rj / rs,
-            kn_a: law.kn * a,
-            ks_a: law.ks * a,
-            kn_i: law.kn * inertia,
-            inv_a: 1.0 / a,
-            r_over_i: r / inertia,
-        }
-    }
-}
-
-/// `x` rounded down to an `f32` (NaN stays NaN): a strength the intact
-/// test may use in its place.
-fn f32_below(x: f64) -> f32 {
-    let f = x as f32;
-    if f as f64 > x { f.next_down() } else { f }
 }
 
 /// A held bond's forces in the orientation of its slots — normal from i
@@ -495,22 +458,37 @@ pub(super) struct Break {
 
 impl Held {
     /// The bond of radius `radius` and strengths `(σ_c, τ_c or c)` between
-    /// slots `(i, j)`.
-    pub(super) fn new((i, j): (u32, u32), radius: f64, (tensile, shear): (f64, f64)) -> Held {
+    /// slots `(i, j)` (radii `(ri, rj)`), through `thickness`.
+    pub(super) fn new(
+        (i, j): (u32, u32),
+        radius: f64,
+        (tensile, shear): (f64, f64),
+        (ri, rj): (f64, f64),
+        law: &BondLaw,
+        thickness: f64,
+    ) -> Held {
+        let (a, inertia) = section(radius, thickness);
+        let rs = ri + rj;
         Held {
             i,
             j,
-            r: radius,
-            tensile: f32_below(tensile),
-            shear: f32_below(shear),
+            ci: ri / rs,
+            cj: rj / rs,
+            kn_a: law.kn * a,
+            ks_a: law.ks * a,
+            kn_i: law.kn * inertia,
+            tensile,
+            shear,
+            inv_a: 1.0 / a,
+            r_over_i: radius / inertia,
         }
     }
 
-    /// One step of the bond held at `w` (exact strengths `strength[w]`)
-    /// between discs `si` (slot i) and `sj`, with forces `f`, from the
-    /// state before the step: its forces updated ([`bond_step`]) and what
-    /// it does to the two discs — nothing, with the [`Break`], when the
-    /// updated forces reach its strength ([`breaks`]).
+    /// One step of the bond held at `w` (radius `radius`) between discs
+    /// `si` (slot i) and `sj`, with forces `f`, from the state before the
+    /// step: its forces updated ([`bond_step`]) and what it does to the
+    /// two discs — nothing, with the [`Break`], when the updated forces
+    /// reach its strength ([`breaks`]).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     pub(super) fn step(
@@ -520,24 +498,22 @@ impl Held {
         si: &Side,
         sj: &Side,
         law: &BondLaw,
-        strength: &[(f64, f64)],
+        radius: &[f64],
         thickness: f64,
         dt: f64,
     ) -> (BondForce, Option<Break>) {
         let old = *f;
-        let c = Consts::new(self.r, (si.radius, sj.radius), law, thickness);
-        let (bf, n, la) = bond_step(si, sj, &c, dt, f);
-        if self.intact(&c, law, *f) {
+        let (bf, n, la) = bond_step(si, sj, self, dt, f);
+        if self.intact(law, *f) {
             return (bf, None);
         }
-        self.breakage(w, old, *f, strength[w], (si.pos, n, la), law, thickness)
+        self.breakage(w, old, *f, radius[w], (si.pos, n, la), law, thickness)
             .map_or((bf, None), |b| (BondForce::default(), Some(b)))
     }
 
-    /// The bond's breakage, if its new forces `new` reach its exact
-    /// strengths `(σ_c, τ_c or c)` ([`breaks`]); `old`: its forces before
-    /// the step, `(x_i, n, l_i)` the centre of disc i, the normal and the
-    /// arm of i.
+    /// The bond's breakage, if its new forces `new` reach its strength
+    /// ([`breaks`]); `old`: its forces before the step, `(x_i, n, l_i)`
+    /// the centre of disc i, the normal and the arm of i.
     #[cold]
     #[inline(never)]
     #[allow(clippy::too_many_arguments)]
@@ -546,13 +522,13 @@ impl Held {
         w: usize,
         old: HeldForces,
         new: HeldForces,
-        (tensile, shear): (f64, f64),
+        radius: f64,
         (xi, n, la): (Vec2, Vec2, f64),
         law: &BondLaw,
         thickness: f64,
     ) -> Option<Break> {
-        let sec = section(self.r, thickness);
-        let mode = breaks(law, new, self.r, sec, tensile, shear)?;
+        let sec = section(radius, thickness);
+        let mode = breaks(law, new, radius, sec, self.tensile, self.shear)?;
         Some(Break {
             w: w as u32,
             mode,
@@ -567,21 +543,19 @@ impl Held {
     /// few ulps of its quotients, so with a margin of `16ε` of the terms
     /// `true` means that [`breaks`] finds the bond intact — without its
     /// divisions, which would cost more than the rest of the bond's step.
-    /// The strengths are the held ones, rounded down: the test is only
-    /// the safer for it.
     #[inline(always)]
-    fn intact(&self, c: &Consts, law: &BondLaw, (fn_, fs, m): HeldForces) -> bool {
+    fn intact(&self, law: &BondLaw, (fn_, fs, m): HeldForces) -> bool {
         const TOL: f64 = 16.0 * f64::EPSILON;
-        let (sn, sm) = (-fn_ * c.inv_a, m.abs() * c.r_over_i);
-        let tau = fs.abs() * c.inv_a;
+        let (sn, sm) = (-fn_ * self.inv_a, m.abs() * self.r_over_i);
+        let tau = fs.abs() * self.inv_a;
         let friction = match law.shear {
             ShearStrength::Fixed(_) => 0.0,
-            ShearStrength::Coulomb { tan_phi, .. } => fn_ * c.inv_a * tan_phi,
+            ShearStrength::Coulomb { tan_phi, .. } => fn_ * self.inv_a * tan_phi,
         };
         // τ_c rounded once more: the relative margin on it (an infinite
         // strength stays infinite)
-        let tau_c = self.shear as f64 + friction;
-        sn + sm + TOL * (sn.abs() + sm) < self.tensile as f64
+        let tau_c = self.shear + friction;
+        sn + sm + TOL * (sn.abs() + sm) < self.tensile
             && tau + TOL * (tau + friction.abs()) < tau_c * (1.0 - TOL)
     }
 }
@@ -617,9 +591,8 @@ pub struct Bonds {
     pub(super) held: Vec<Held>,
     /// Their forces (in `held`'s order and orientation).
     pub(super) held_f: Vec<HeldForces>,
-    /// Their exact strengths `(σ_c, τ_c or c)` (read when a bond may
-    /// break).
-    pub(super) held_s: Vec<(f64, f64)>,
+    /// Their radii R̄ (read when a bond breaks).
+    pub(super) held_r: Vec<f64>,
     /// Index in the list of each held bond, and whether its slot i is the
     /// bond's b.
     held_key: Vec<(u32, bool)>,
@@ -748,16 +721,18 @@ impl Bonds {
         }
         self.held.clear();
         self.held_f.clear();
-        self.held_s.clear();
+        self.held_r.clear();
         self.held_key.clear();
         self.at.clear();
         self.at.resize(l.len(), (0, false));
         for (w, &k) in order.iter().enumerate() {
             let k = k as usize;
             let (i, j, flip) = ends(k);
+            let radii = (p.radius[i as usize], p.radius[j as usize]);
             let strengths = (l.tensile[k], l.shear[k]);
-            self.held.push(Held::new((i, j), l.radius[k], strengths));
-            self.held_s.push(strengths);
+            let h = Held::new((i, j), l.radius[k], strengths, radii, &self.law, thickness);
+            self.held.push(h);
+            self.held_r.push(l.radius[k]);
             self.held_f
                 .push(flipped((l.fn_[k], l.fs[k], l.moment[k]), flip));
             self.held_key.push((k as u32, flip));
@@ -773,7 +748,7 @@ impl Bonds {
     /// Step the cross bonds (second disc in a later block) from the state
     /// before the step into `cross_buf`; returns those that broke.
     pub(super) fn step_cross(&mut self, p: &Particles, thickness: f64, dt: f64) -> Vec<Break> {
-        let (held, held_f, held_s, law) = (&self.held, &self.held_f, &self.held_s, &self.law);
+        let (held, held_f, held_r, law) = (&self.held, &self.held_f, &self.held_r, &self.law);
         self.cross
             .pairs
             .par_iter()
@@ -783,7 +758,7 @@ impl Bonds {
                 let (w, mut f) = (w as usize, held_f[w as usize]);
                 let h = &held[w];
                 let (si, sj) = (side(p, i as usize), side(p, h.j as usize));
-                let (bf, brk) = h.step(w, &mut f, &si, &sj, law, held_s, thickness, dt);
+                let (bf, brk) = h.step(w, &mut f, &si, &sj, law, held_r, thickness, dt);
                 *out = (bf, f);
                 brk
             })
@@ -943,7 +918,7 @@ impl Bonds {
             + l.broken.capacity() * std::mem::size_of::<BrokenBond>()
             + self.held.capacity() * std::mem::size_of::<Held>()
             + self.held_f.capacity() * std::mem::size_of::<HeldForces>()
-            + self.held_s.capacity() * 16
+            + self.held_r.capacity() * 8
             + (self.held_key.capacity() + self.at.capacity()) * 8
             + self.row.capacity() * 4
             + self.cross.heap_bytes()
@@ -951,7 +926,7 @@ impl Bonds {
     }
 }
 
-/// One bond with constants `h` between discs `si` and `sj`, in that orientation (normal
+/// One bond `h` between discs `si` and `sj`, in that orientation (normal
 /// n from i to j, `M` the moment on i): update its forces `(F_n, F_s, M)`
 /// by the increments of the step (module docs). Returns what it does to
 /// the two discs, n and the lever arm `l_i`.
@@ -959,7 +934,7 @@ impl Bonds {
 fn bond_step(
     si: &Side,
     sj: &Side,
-    h: &Consts,
+    h: &Held,
     dt: f64,
     (fn_, fs, m): &mut (f64, f64, f64),
 ) -> (BondForce, Vec2, f64) {

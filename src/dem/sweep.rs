@@ -115,12 +115,10 @@ struct Ctx<'a> {
     bond_cross: &'a CrossIndex,
     /// What each cross bond does and its new forces.
     bond_cross_buf: &'a [(BondForce, HeldForces)],
-    /// The exact strengths of each held bond (read when one may break).
-    bond_strength: &'a [(f64, f64)],
+    /// The radius of each held bond (read when one breaks).
+    bond_radius: &'a [f64],
     /// Evaluate inner pairs four at a time ([`lanes4`]).
     four_lanes: bool,
-    /// Step bonds four at a time (AVX2).
-    four_bonds: bool,
 }
 
 /// The discs `lo..lo + pos.len()` with their pairs (as first disc) and
@@ -389,15 +387,11 @@ impl Granular {
             thickness: self.thickness,
             bond_cross: &self.bonds.cross,
             bond_cross_buf: &self.bonds.cross_buf,
-            bond_strength: &self.bonds.held_s,
+            bond_radius: &self.bonds.held_r,
             #[cfg(target_arch = "x86_64")]
             four_lanes: lanes4::available(),
             #[cfg(not(target_arch = "x86_64"))]
             four_lanes: false,
-            #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-            four_bonds: bonded && super::bonds::lanes::four_available(),
-            #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
-            four_bonds: false,
         };
         let p = &mut self.particles;
         let ref_pos: &[Vec2] = if ADVANCE && self.grid.ref_pos.len() == n {
@@ -902,43 +896,6 @@ fn bond_block(
     blk: usize,
     lo: usize,
     kin: Kin,
-    held: (&[Held], &mut [HeldForces]),
-    acc: &mut [(Vec2, f64)],
-    acc_b: &mut [f64],
-    ctx: &Ctx,
-) -> Vec<Break> {
-    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-    if ctx.four_bonds {
-        // SAFETY: the processor has AVX2 (`four_available`).
-        return unsafe { bond_block_avx2(blk, lo, kin, held, acc, acc_b, ctx) };
-    }
-    bond_block_in::<false>(blk, lo, kin, held, acc, acc_b, ctx)
-}
-
-/// [`bond_block`] with the bonds four at a time.
-///
-/// # Safety
-/// The processor must have AVX2.
-#[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-#[target_feature(enable = "avx2")]
-unsafe fn bond_block_avx2(
-    blk: usize,
-    lo: usize,
-    kin: Kin,
-    held: (&[Held], &mut [HeldForces]),
-    acc: &mut [(Vec2, f64)],
-    acc_b: &mut [f64],
-    ctx: &Ctx,
-) -> Vec<Break> {
-    bond_block_in::<true>(blk, lo, kin, held, acc, acc_b, ctx)
-}
-
-/// [`bond_block`], the bonds `FOUR` at a time (AVX2, the caller's) or two.
-#[inline(always)]
-fn bond_block_in<const FOUR: bool>(
-    blk: usize,
-    lo: usize,
-    kin: Kin,
     (held, held_f): (&[Held], &mut [HeldForces]),
     acc: &mut [(Vec2, f64)],
     acc_b: &mut [f64],
@@ -958,29 +915,27 @@ fn bond_block_in<const FOUR: bool>(
     let w0 = ctx.bond_row[lo] as usize;
     let mut broken = vec![];
     let held_f = &mut held_f[..held.len()];
-    // (taken and put back rather than borrowed in a closure: the loop
-    // stays in this function, with its processor features)
-    let mut out = BOND_OUT.take();
-    out.resize(BOND_CHUNK, BondForce::default());
-    // in chunks that stay in the L1 cache between the two passes
-    for c in (0..held.len()).step_by(BOND_CHUNK) {
-        let e = held.len().min(c + BOND_CHUNK);
-        let (h, out) = (&held[c..e], &mut out[..e - c]);
-        let at = (lo, w0 + c, &mut ck);
-        bond_forces::<FOUR>(kin, (h, &mut held_f[c..e]), out, at, &mut broken, ctx);
-        // what a bond of disc d and disc j does, in bond order: j's
-        // part (an inner bond's; a cross bond's was added above), then d's
-        for (h, bf) in h.iter().zip(out.iter()) {
-            let (d, j) = (h.i as usize - lo, h.j as usize - lo);
-            if j < n {
-                acc[j].0 -= bf.f;
-                acc_b[j] += bf.mb;
+    BOND_OUT.with_borrow_mut(|out| {
+        out.resize(BOND_CHUNK, BondForce::default());
+        // in chunks that stay in the L1 cache between the two passes
+        for c in (0..held.len()).step_by(BOND_CHUNK) {
+            let e = held.len().min(c + BOND_CHUNK);
+            let (h, out) = (&held[c..e], &mut out[..e - c]);
+            let at = (lo, w0 + c, &mut ck);
+            bond_forces(kin, (h, &mut held_f[c..e]), out, at, &mut broken, ctx);
+            // what a bond of disc d and disc j does, in bond order: j's
+            // part (an inner bond's; a cross bond's was added above), then d's
+            for (h, bf) in h.iter().zip(out.iter()) {
+                let (d, j) = (h.i as usize - lo, h.j as usize - lo);
+                if j < n {
+                    acc[j].0 -= bf.f;
+                    acc_b[j] += bf.mb;
+                }
+                acc[d].0 += bf.f;
+                acc_b[d] += bf.ma;
             }
-            acc[d].0 += bf.f;
-            acc_b[d] += bf.ma;
         }
-    }
-    BOND_OUT.set(out);
+    });
     broken
 }
 
@@ -992,7 +947,7 @@ const BOND_CHUNK: usize = 256;
 /// `held` starts among all held bonds, `ck`: the next cross bond. The
 /// bonds that broke are added to `broken`.
 #[inline(always)]
-fn bond_forces<const FOUR: bool>(
+fn bond_forces(
     kin: Kin,
     (held, held_f): (&[Held], &mut [HeldForces]),
     out: &mut [BondForce],
@@ -1002,7 +957,7 @@ fn bond_forces<const FOUR: bool>(
 ) {
     let n = kin.pos.len();
     let law = &ctx.bond_law;
-    let (t, dt, rad) = (ctx.thickness, ctx.bond_dt, ctx.bond_strength);
+    let (t, dt, rad) = (ctx.thickness, ctx.bond_dt, ctx.bond_radius);
     let ends = |h: &Held| (h.i as usize - lo, h.j as usize - lo);
     let mut w = 0;
     while w < held.len() {
@@ -1015,41 +970,6 @@ fn bond_forces<const FOUR: bool>(
             w += 1;
             continue;
         }
-        // four inner bonds side by side (all from the state before the step)
-        #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-        if FOUR
-            && let Some(h4) = held
-                .get(w..w + 4)
-                .filter(|h| h.iter().all(|h| (h.j as usize) < lo + n))
-        {
-            let s = |l: usize| sides(kin, h4[l].i as usize - lo, h4[l].j as usize - lo);
-            let (s0, s1, s2, s3) = (s(0), s(1), s(2), s(3));
-            // SAFETY: FOUR runs in an AVX2 function (`bond_block_avx2`).
-            let four = unsafe {
-                super::bonds::lanes::step4(
-                    [&h4[0], &h4[1], &h4[2], &h4[3]],
-                    &mut held_f[w..w + 4],
-                    [s0.0, s1.0, s2.0, s3.0],
-                    [s0.1, s1.1, s2.1, s3.1],
-                    (law, t),
-                    dt,
-                    &mut out[w..w + 4],
-                )
-            };
-            if let Some(intact) = four {
-                // a bond that may break: the scalar step
-                for l in (0..4).filter(|l| intact & (1 << l) == 0) {
-                    let (d, j) = ends(&held[w + l]);
-                    let (si, sj) = sides(kin, d, j);
-                    let f = &mut held_f[w + l];
-                    let (bf, brk) = held[w + l].step(w0 + w + l, f, &si, &sj, law, rad, t, dt);
-                    broken.extend(brk);
-                    out[w + l] = bf;
-                }
-                w += 4;
-                continue;
-            }
-        }
         // two inner bonds side by side (all from the state before the step)
         #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
         if let Some(h2) = held.get(w + 1).filter(|h| (h.j as usize) < lo + n) {
@@ -1061,7 +981,7 @@ fn bond_forces<const FOUR: bool>(
                 &mut held_f[w..w + 2],
                 [si, si2],
                 [sj, sj2],
-                (law, t),
+                law,
                 dt,
                 &mut out[w..w + 2],
             );
