@@ -635,9 +635,6 @@ impl Compliance<'_> {
     }
 }
 
-/// `Σ vals[i] q[cols[i]]` in four interleaved partial sums (a fixed order:
-/// the same for any thread count), so that the additions do not wait on
-/// one another.
 /// `z = G_c q`, `G_c` the columns `cols` of a symmetric `G` and their
 /// transposes, from its upper triangle (CSC, each column's rows ascending
 /// up to the diagonal): every stored entry read once, for its column and
