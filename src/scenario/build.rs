@@ -511,7 +511,7 @@ fn granular_with(
         let skin = g.skin.unwrap_or(default_skin(max_r));
         gr.set_skin(skin);
         let keep = select(&w.pos, max_r, skin);
-        gr.particles = part_of(sc, (&w.pos, &w.radius, &w.material), &keep, v0)?;
+        gr.particles = part_of(sc, &mut w, &keep, v0)?;
         gr.set_start(w.pos);
     }
     Ok(gr)
@@ -553,30 +553,38 @@ fn reserve(p: &mut Particles, n: usize) -> Result<(), Invalid> {
     })
 }
 
-/// The discs `keep` holds of the whole's centres, radii and materials,
-/// with the whole's ids, at velocity `v0`.
+/// The discs `keep` holds of the whole `w` (centres, radii, materials),
+/// with the whole's ids, at velocity `v0`. The whole's radii and
+/// materials are cut down to the kept discs first (its centres stay: they
+/// are the start positions).
 fn part_of(
     sc: &Scenario,
-    (pos, radius, material): (&[Vec2], &[f64], &[u16]),
+    w: &mut Particles,
     keep: &[bool],
     v0: Vec2,
 ) -> Result<Particles, Invalid> {
+    fn kept_only<T>(v: &mut Vec<T>, keep: &[bool]) {
+        let mut k = keep.iter();
+        v.retain(|_| k.next().is_some_and(|&k| k));
+        v.shrink_to_fit();
+    }
+    kept_only(&mut w.radius, keep);
+    kept_only(&mut w.material, keep);
     let thickness = spec(sc)?.thickness;
     let mut p = Particles::default();
-    reserve(&mut p, keep.iter().filter(|&&k| k).count())?;
-    for k in (0..keep.len()).filter(|&k| keep[k]) {
-        let mi = material[k];
+    reserve(&mut p, w.radius.len())?;
+    for (j, k) in (0..keep.len()).filter(|&k| keep[k]).enumerate() {
+        let mi = w.material[j];
         p.push(
-            pos[k],
-            radius[k],
+            w.pos[k],
+            w.radius[j],
             sc.material[mi as usize].density,
             thickness,
             mi,
         );
-        let last = p.len() - 1;
-        p.vel[last] = v0;
+        p.vel[j] = v0;
         // the whole's numbering
-        p.id[last] = k as u32;
+        p.id[j] = k as u32;
     }
     p.slot = vec![u32::MAX; keep.len()];
     for (s, &id) in p.id.iter().enumerate() {
