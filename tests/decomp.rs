@@ -681,17 +681,46 @@ fn coupled_compliant_scheme_on_ranks_is_bitwise_the_whole() {
 }
 
 /// A rank's part built alone (`Scenario::build_part`: only the discs the
-/// cut keeps are made) is bitwise the share `Decomposed::new` takes of
-/// the whole built on every rank: the same discs with the same ids, keys,
-/// constants and ghost flags, the same time step, the whole's critical
-/// step; and it holds fewer discs than the whole.
+/// cut keeps are made, the whole never listed as rows) is bitwise the
+/// share `Decomposed::new` takes of the whole built on every rank: the
+/// same discs with the same ids, keys, constants and ghost flags, the
+/// same time step, the whole's critical step; and on several ranks it
+/// holds fewer discs than the whole. On 1–4 ranks, for a generated
+/// packing, the same inside a `keep` circle, and discs given as rows.
 #[test]
 fn a_part_built_alone_is_the_share_of_the_whole() {
-    let src = settling(1200);
-    let sc = scenario::parse(&src, "t.toml").unwrap();
-    let whole = build(&src);
+    let generated = settling(1200);
+    let circle = generated.replace(
+        "material = \"sand\"\n",
+        "material = \"sand\"\nkeep = { centre = [0.1, 0.15], radius = 0.12 }\n",
+    );
+    assert_ne!(circle, generated);
+    let whole = build(&generated);
+    let rows: Vec<String> = (whole.particles.pos.iter().zip(&whole.particles.radius))
+        .map(|(q, r)| format!("[{:?}, {:?}, {r:?}]", q.x, q.y))
+        .collect();
+    let start = generated.find("discs = {").unwrap();
+    let end = start + generated[start..].find('\n').unwrap();
+    let inline = format!(
+        "{}discs = [{}]{}",
+        &generated[..start],
+        rows.join(", "),
+        &generated[end..]
+    );
+    for src in [generated, circle, inline] {
+        for ranks in 1..=4 {
+            part_alone_is_the_share(&src, ranks);
+        }
+    }
+}
+
+/// [`a_part_built_alone_is_the_share_of_the_whole`] for scenario `src` on
+/// `ranks` ranks.
+fn part_alone_is_the_share(src: &str, ranks: usize) {
+    let sc = scenario::parse(src, "t.toml").unwrap();
+    let whole = build(src);
     let crit = whole.critical_step(&[]);
-    for ranks in [2, 3] {
+    {
         std::thread::scope(|s| {
             for c in Threads::group(ranks) {
                 let (sc, whole, crit) = (&sc, &whole, &crit);
@@ -714,7 +743,7 @@ fn a_part_built_alone_is_the_share_of_the_whole() {
                     let cut = cut.into_inner().unwrap();
                     let alone = Decomposed::from_part(&mut g, cut, comm);
                     let (a, b) = (&share.part.particles, &alone.part.particles);
-                    assert!(b.len() < whole.particles.len());
+                    assert!(ranks == 1 || b.len() < whole.particles.len());
                     assert_eq!(share.keys(), alone.keys());
                     assert_eq!(a.id, b.id);
                     assert_eq!(a.slot, b.slot);

@@ -166,6 +166,78 @@ struct Record {
     material: u16,
 }
 
+/// What a rank receives at a migration: discs, and the pair histories
+/// `(id, id, shear, rolling)` and wall histories `(id, wall, shear,
+/// rolling)` of those it will own.
+struct Arrivals {
+    records: Vec<Record>,
+    pairs: Vec<(u32, u32, f64, f64)>,
+    walls: Vec<(u32, u32, f64, f64)>,
+}
+
+impl Arrivals {
+    /// The buffers `got` from every rank (`me`'s own is empty).
+    fn unpack(got: &[Vec<u8>], me: usize) -> Arrivals {
+        let mut a = Arrivals {
+            records: Vec::new(),
+            pairs: Vec::new(),
+            walls: Vec::new(),
+        };
+        for (r, b) in got.iter().enumerate() {
+            if r == me || b.is_empty() {
+                continue;
+            }
+            let mut u = Unpack(b);
+            for _ in 0..u.u32() {
+                a.records.push(unpack_disc(&mut u));
+            }
+            for _ in 0..u.u32() {
+                let (i, j) = (u.u32(), u.u32());
+                a.pairs.push((i, j, u.f64(), u.f64()));
+            }
+            for _ in 0..u.u32() {
+                let (d, w) = (u.u32(), u.u32());
+                a.walls.push((d, w, u.f64(), u.f64()));
+            }
+        }
+        a
+    }
+}
+
+/// The pair histories `pairs` and wall histories `walls` (by disc ids)
+/// that arrived, in the slots of `p` (those of discs it holds), the pairs
+/// sorted and once each.
+#[allow(clippy::type_complexity)]
+fn arriving_histories(
+    p: &Particles,
+    pairs: &[(u32, u32, f64, f64)],
+    walls: &[(u32, u32, f64, f64)],
+) -> (Vec<(u32, u32, f64, f64)>, Vec<WallPair>) {
+    let slot_now = |id: u32| p.slot.get(id as usize).copied().unwrap_or(GONE);
+    let mut extra: Vec<(u32, u32, f64, f64)> = pairs
+        .iter()
+        .filter_map(|&(a, b, fs, mr)| {
+            let (sa, sb) = (slot_now(a), slot_now(b));
+            (sa != GONE && sb != GONE).then_some((sa, sb, fs, mr))
+        })
+        .collect();
+    extra.sort_unstable_by_key(|e| (e.0.min(e.1), e.0.max(e.1)));
+    extra.dedup_by_key(|e| (e.0.min(e.1), e.0.max(e.1)));
+    let extra_walls = walls
+        .iter()
+        .filter_map(|&(d, wall, fs, mr)| {
+            let s = slot_now(d);
+            (s != GONE).then_some(WallPair {
+                disc: s,
+                wall,
+                fs,
+                mr,
+            })
+        })
+        .collect();
+    (extra, extra_walls)
+}
+
 impl Decomposed {
     /// This rank's share of `whole` (an assembly every rank built the
     /// same, fresh or restored from a state): regions cut from its discs,
@@ -655,8 +727,79 @@ impl Decomposed {
     /// Send each owned disc to its owner (with its pair and wall
     /// histories) and to the ranks that need it as a ghost; rebuild the
     /// part's discs in key order from what stays and what arrives, with
-    /// the contact list moved onto them.
+    /// the contact list moved onto them. Beyond the part, a rank holds
+    /// a few bytes per disc while it does (its new order, the old ghost
+    /// flags, one column of the part being replaced).
     fn migrate(&mut self, width: f64) {
+        let me = self.comm.rank();
+        let (send, mut keep) = self.outgoing(width);
+        let got = self.comm.all_to_all(send);
+        let arrived = Arrivals::unpack(&got, me);
+        drop(got);
+        keep.extend((0..arrived.records.len() as u32).map(Src::Got));
+        self.arrivals += arrived.records.iter().filter(|r| r.owned).count();
+        let live = |e: &&(u32, u32, f64, f64)| e.2 != 0.0 || e.3 != 0.0;
+        self.histories_in += arrived.pairs.iter().filter(live).count();
+        self.histories_in += arrived.walls.iter().filter(live).count();
+        // the new order: by key (a disc has one key, and one entry here)
+        let records = &arrived.records;
+        let key_of = |s: &Src| match *s {
+            Src::Old(k) => self.key[k as usize],
+            Src::Got(g) => records[g as usize].key,
+        };
+        keep.sort_unstable_by_key(key_of);
+        let key: Vec<u64> = keep.iter().map(key_of).collect();
+        self.key = key;
+        // what is read of the old part after its columns are replaced
+        let p = &self.part.particles;
+        let old_slot = |id: u32| p.slot.get(id as usize).copied().unwrap_or(GONE);
+        // a disc that arrives again (it was a ghost here): its old slot
+        let again: Vec<(u32, u32)> = (keep.iter().enumerate())
+            .filter_map(|(k, src)| match *src {
+                Src::Got(g) => Some((old_slot(records[g as usize].id), k as u32)),
+                Src::Old(_) => None,
+            })
+            .filter(|e| e.0 != GONE)
+            .collect();
+        // the arriving pair histories, unless this rank had the pair
+        let was_owned = |s: u32| s != GONE && p.fixity[s as usize] & GHOST == 0;
+        let pair_recs: Vec<(u32, u32, f64, f64)> = (arrived.pairs.iter())
+            .filter(|(a, b, _, _)| !was_owned(old_slot(*a)) && !was_owned(old_slot(*b)))
+            .copied()
+            .collect();
+        let old_fixity = p.fixity.clone();
+        let mut np = std::mem::take(&mut self.part.particles);
+        regather(&mut np, None, &keep, records, self.n_total);
+        // a disc is owned here when its centre is in this rank's region
+        for (f, &q) in np.fixity.iter_mut().zip(&np.pos) {
+            *f &= !GHOST;
+            if self.regions.owner(q) != me {
+                *f |= GHOST;
+            }
+        }
+        // old slot → new slot
+        let mut new_of_old = vec![GONE; old_fixity.len()];
+        for (k, src) in keep.iter().enumerate() {
+            if let Src::Old(s) = *src {
+                new_of_old[s as usize] = k as u32;
+            }
+        }
+        drop(keep);
+        again.iter().for_each(|&(s, k)| new_of_old[s as usize] = k);
+        let mut list = std::mem::take(&mut self.part.contacts);
+        let (extra, extra_walls) = arriving_histories(&np, &pair_recs, &arrived.walls);
+        let ghost_old = |s: u32| old_fixity[s as usize] & GHOST != 0;
+        list.remap(&new_of_old, np.len(), &extra, &extra_walls, |i, j| {
+            !(ghost_old(i) && ghost_old(j))
+        });
+        self.part.particles = np;
+        self.part.contacts = list;
+    }
+
+    /// What this rank sends at a migration (a buffer per rank: the discs,
+    /// then the pair and wall histories of those that change owner) and
+    /// the slots of the discs it keeps, owned or as ghosts.
+    fn outgoing(&self, width: f64) -> (Vec<Vec<u8>>, Vec<Src>) {
         let me = self.comm.rank();
         let size = self.comm.size();
         let p = &self.part.particles;
@@ -665,7 +808,7 @@ impl Decomposed {
         let mut counts = vec![0u32; size];
         // per old slot: the new owner (owned discs), else GONE
         let mut dest = vec![GONE; n];
-        let mut keep: Vec<(u64, Src, bool)> = Vec::new();
+        let mut keep: Vec<Src> = Vec::new();
         let mut near = Vec::new();
         for (s, dest) in dest.iter_mut().enumerate() {
             if p.fixity[s] & GHOST != 0 {
@@ -675,22 +818,43 @@ impl Decomposed {
             *dest = o as u32;
             self.regions.near(p.pos[s], o, width, &mut near);
             if o == me {
-                keep.push((self.key[s], Src::Old(s as u32), true));
+                keep.push(Src::Old(s as u32));
             } else {
                 pack_disc(&mut discs[o], p, s, self.key[s], true);
                 counts[o] += 1;
             }
             for &r in &near {
                 if r == me {
-                    keep.push((self.key[s], Src::Old(s as u32), false));
+                    keep.push(Src::Old(s as u32));
                 } else {
                     pack_disc(&mut discs[r], p, s, self.key[s], false);
                     counts[r] += 1;
                 }
             }
         }
-        // the histories of the discs that move: every pair and wall pair
-        // of theirs, to their new owner
+        let (pairs, walls) = self.moving_histories(&dest);
+        let send = (0..size)
+            .map(|r| {
+                if r == me {
+                    return Vec::new();
+                }
+                let mut b = Pack::default();
+                b.u32(counts[r]);
+                b.0.extend_from_slice(&discs[r].0);
+                b.0.extend_from_slice(&pairs[r].0);
+                b.0.extend_from_slice(&walls[r].0);
+                b.0
+            })
+            .collect();
+        (send, keep)
+    }
+
+    /// The histories of the discs that move (`dest`: the new owner of each
+    /// slot, [`GONE`] for a ghost): every pair and wall pair of theirs, for
+    /// their new owner, each buffer led by its count.
+    fn moving_histories(&self, dest: &[u32]) -> (Vec<Pack>, Vec<Pack>) {
+        let (me, size) = (self.comm.rank(), self.comm.size());
+        let p = &self.part.particles;
         let mut pairs: Vec<Pack> = (0..size).map(|_| Pack::default()).collect();
         let mut npairs = vec![0u32; size];
         let c = &self.part.contacts;
@@ -725,107 +889,15 @@ impl Decomposed {
                 nwalls[o as usize] += 1;
             }
         }
-        let send: Vec<Vec<u8>> = (0..size)
-            .map(|r| {
-                if r == me {
-                    return Vec::new();
-                }
-                let mut b = Pack::default();
-                b.u32(counts[r]);
-                b.0.extend_from_slice(&discs[r].0);
-                b.u32(npairs[r]);
-                b.0.extend_from_slice(&pairs[r].0);
-                b.u32(nwalls[r]);
-                b.0.extend_from_slice(&walls[r].0);
-                b.0
-            })
-            .collect();
-        drop((discs, pairs, walls));
-        let got = self.comm.all_to_all(send);
-        // what arrived
-        let mut records = Vec::new();
-        let mut pair_recs: Vec<(u32, u32, f64, f64)> = Vec::new();
-        let mut wall_recs: Vec<(u32, u32, f64, f64)> = Vec::new();
-        for (r, b) in got.iter().enumerate() {
-            if r == me || b.is_empty() {
-                continue;
-            }
-            let mut u = Unpack(b);
-            for _ in 0..u.u32() {
-                records.push(unpack_disc(&mut u));
-            }
-            for _ in 0..u.u32() {
-                let (a, bb) = (u.u32(), u.u32());
-                pair_recs.push((a, bb, u.f64(), u.f64()));
-            }
-            for _ in 0..u.u32() {
-                let (d, w) = (u.u32(), u.u32());
-                wall_recs.push((d, w, u.f64(), u.f64()));
-            }
-        }
-        for (k, r) in records.iter().enumerate() {
-            keep.push((r.key, Src::Got(k as u32), r.owned));
-        }
-        self.arrivals += records.iter().filter(|r| r.owned).count();
-        let live = |e: &&(u32, u32, f64, f64)| e.2 != 0.0 || e.3 != 0.0;
-        self.histories_in += pair_recs.iter().filter(live).count();
-        self.histories_in += wall_recs.iter().filter(live).count();
-        keep.sort_unstable_by_key(|e| e.0);
-        // the old part's columns are replaced one at a time: what is read
-        // of it afterwards is kept aside
-        let (old_slots, old_fixity) = (p.slot.clone(), p.fixity.clone());
-        // old slot → new slot, also for a disc that arrives again
-        let old_slot = |id: u32| old_slots.get(id as usize).copied().unwrap_or(GONE);
-        let mut new_of_old = vec![GONE; n];
-        for (k, &(_, src, _)) in keep.iter().enumerate() {
-            let old = match src {
-                Src::Old(s) => s,
-                Src::Got(g) => old_slot(records[g as usize].id),
-            };
-            if old != GONE {
-                new_of_old[old as usize] = k as u32;
-            }
-        }
-        let sources: Vec<Src> = keep.iter().map(|e| e.1).collect();
-        let mut np = std::mem::take(&mut self.part.particles);
-        regather(&mut np, None, &sources, &records, self.n_total);
-        for (k, e) in keep.iter().enumerate() {
-            np.fixity[k] = (np.fixity[k] & !GHOST) | if e.2 { 0 } else { GHOST };
-        }
-        // the histories: the old list (pairs with a disc owned here) and
-        // what the arriving discs bring (unless this rank had the pair)
-        let was_owned = |s: u32| s != GONE && old_fixity[s as usize] & GHOST == 0;
-        let slot_now = |id: u32| np.slot.get(id as usize).copied().unwrap_or(GONE);
-        let mut extra: Vec<(u32, u32, f64, f64)> = pair_recs
-            .iter()
-            .filter(|(a, b, _, _)| !was_owned(old_slot(*a)) && !was_owned(old_slot(*b)))
-            .filter_map(|&(a, b, fs, mr)| {
-                let (sa, sb) = (slot_now(a), slot_now(b));
-                (sa != GONE && sb != GONE).then_some((sa, sb, fs, mr))
-            })
-            .collect();
-        extra.sort_unstable_by_key(|e| (e.0.min(e.1), e.0.max(e.1)));
-        extra.dedup_by_key(|e| (e.0.min(e.1), e.0.max(e.1)));
-        let extra_walls: Vec<WallPair> = wall_recs
-            .iter()
-            .filter_map(|&(d, wall, fs, mr)| {
-                let s = slot_now(d);
-                (s != GONE).then_some(WallPair {
-                    disc: s,
-                    wall,
-                    fs,
-                    mr,
-                })
-            })
-            .collect();
-        let ghost_old = |s: u32| old_fixity[s as usize] & GHOST != 0;
-        let mut list = std::mem::take(&mut self.part.contacts);
-        list.remap(&new_of_old, np.len(), &extra, &extra_walls, |i, j| {
-            !(ghost_old(i) && ghost_old(j))
-        });
-        self.key = keep.iter().map(|e| e.0).collect();
-        self.part.particles = np;
-        self.part.contacts = list;
+        let led = |count: u32, body: Pack| {
+            let mut b = Pack::default();
+            b.u32(count);
+            b.0.extend_from_slice(&body.0);
+            b
+        };
+        let pairs = pairs.into_iter().zip(npairs).map(|(b, c)| led(c, b));
+        let walls = walls.into_iter().zip(nwalls).map(|(b, c)| led(c, b));
+        (pairs.collect(), walls.collect())
     }
 
     /// The undivided assembly as it would be now, assembled on rank 0
@@ -1089,8 +1161,11 @@ fn regather(
         r.material
     });
     // clumped assemblies are not decomposed
-    p.clump = vec![crate::dem::clumps::NO_CLUMP; p.id.len()];
-    p.slot = vec![GONE; n_total];
+    // in place: the old part's are not kept beside the new ones
+    p.clump.clear();
+    p.clump.resize(p.id.len(), crate::dem::clumps::NO_CLUMP);
+    p.slot.clear();
+    p.slot.resize(n_total, GONE);
     for (k, &i) in p.id.iter().enumerate() {
         p.slot[i as usize] = k as u32;
     }

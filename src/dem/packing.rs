@@ -64,12 +64,39 @@ pub fn lattice_packing(
     lattice: Lattice,
     lo: Vec2,
     hi: Vec2,
-    (r_min, r_max): (f64, f64),
+    radii: (f64, f64),
     count: Option<usize>,
     gap: f64,
     jitter: f64,
     seed: u64,
 ) -> Result<Vec<DiscRow>, String> {
+    let mut out = Vec::new();
+    let mut put = |pos, r| {
+        out.push(DiscRow {
+            pos,
+            r,
+            material: None,
+        })
+    };
+    lattice_each(lattice, lo, hi, radii, count, gap, jitter, seed, &mut put)?;
+    Ok(out)
+}
+
+/// The discs of [`lattice_packing`] handed to `put` (centre, radius) one
+/// at a time in its order, without a list of them: the same discs,
+/// bitwise. Returns how many there are.
+#[allow(clippy::too_many_arguments)]
+pub fn lattice_each(
+    lattice: Lattice,
+    lo: Vec2,
+    hi: Vec2,
+    (r_min, r_max): (f64, f64),
+    count: Option<usize>,
+    gap: f64,
+    jitter: f64,
+    seed: u64,
+    put: &mut dyn FnMut(Vec2, f64),
+) -> Result<usize, String> {
     let s = 2.0 * r_max * (1.0 + gap);
     let (w, h) = (hi.x - lo.x, hi.y - lo.y);
     if w < 2.0 * r_max || h < 2.0 * r_max {
@@ -87,7 +114,7 @@ pub fn lattice_packing(
     // `usize` counts (the rows are only walked up to `count`)
     let ny = (((h - s) / row_dy).floor() as usize).saturating_add(1);
     let mut rng = oorandom::Rand64::new(seed as u128);
-    let mut out = Vec::new();
+    let mut made = 0;
     let want = count.unwrap_or(usize::MAX);
     'rows: for j in 0..ny {
         let shift = if lattice == Lattice::Hex && j % 2 == 1 {
@@ -97,7 +124,7 @@ pub fn lattice_packing(
         };
         let nx = (((w - s - shift) / s).floor() + 1.0).max(0.0) as usize;
         for i in 0..nx {
-            if out.len() >= want {
+            if made >= want {
                 break 'rows;
             }
             let centre = Vec2::new(
@@ -117,22 +144,18 @@ pub fn lattice_packing(
             } else {
                 Vec2::ZERO
             };
-            out.push(DiscRow {
-                pos: centre + offset,
-                r,
-                material: None,
-            });
+            put(centre + offset, r);
+            made += 1;
         }
     }
     if let Some(c) = count
-        && out.len() < c
+        && made < c
     {
         return Err(format!(
-            "the box holds only {} discs of radius ≤ {r_max} at this spacing, {c} requested",
-            out.len()
+            "the box holds only {made} discs of radius ≤ {r_max} at this spacing, {c} requested"
         ));
     }
-    Ok(out)
+    Ok(made)
 }
 
 /// Watches a preparation: called after every step with the steps done;

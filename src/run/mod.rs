@@ -281,6 +281,17 @@ pub fn run_on(
         .as_ref()
         .map_or(build::BuildFor::Run, |b| build::BuildFor::Prepared(&b.rows));
     let removed = build::removed_discs(sc, purpose).map_err(|p| sc.located(vec![p]))?;
+    // the bed's discs are in the model now: the summary counts them
+    let bed = bed.map(|b| {
+        let discs = b.rows.len();
+        (
+            discs,
+            Bed {
+                rows: Vec::new(),
+                ..b
+            },
+        )
+    });
     let probes = sc.probes(&model)?;
     let last_step = std::cell::Cell::new(model.step);
     let run = Run {
@@ -405,8 +416,9 @@ struct Run<'a> {
     restart: Option<Checkpoint>,
     /// The last step taken (for the summary of a run that fails).
     last_step: &'a std::cell::Cell<usize>,
-    /// The prepared packing, if the scenario has one.
-    bed: Option<Bed>,
+    /// The prepared packing, if the scenario has one: its disc count, and
+    /// the bed without its discs (built into the model).
+    bed: Option<(usize, Bed)>,
     /// Discs removed for each body with `overlapping_discs = "remove"`.
     removed: Vec<(String, usize)>,
 }
@@ -432,11 +444,11 @@ impl Run<'_> {
             })
             .collect::<serde_json::Map<_, _>>()
             .into();
-        if let (Some(b), Some(p)) = (&self.bed, build::preparation(self.sc)) {
+        if let (Some((discs, b)), Some(p)) = (&self.bed, build::preparation(self.sc)) {
             summary["preparation"] = json!({
                 "method": p.what(),
                 "steps": p.steps,
-                "discs": b.rows.len(),
+                "discs": discs,
                 "cache_read": b.read_from,
                 "cache_written": b.written_to,
                 "cache_error": b.cache_error,

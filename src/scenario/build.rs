@@ -22,7 +22,8 @@ use crate::coupling::scheme::{self, Scheme};
 use crate::dem::clumps::{Clumps, NO_CLUMP};
 use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::dem::packing::{
-    DiscRow, Lattice, grow_in_box, lattice_capacity, lattice_packing, overlapping_pairs,
+    DiscRow, Lattice, grow_in_box, lattice_capacity, lattice_each, lattice_packing,
+    overlapping_pairs,
 };
 use crate::dem::particles::Particles;
 use crate::dem::{BodyDamping, DT_WARN, Granular};
@@ -244,23 +245,8 @@ fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> 
 /// any preparation: on their lattice (`loose`, and a deposit's start), or
 /// a growth's random centres with the final radii.
 pub(super) fn loose_rows(sc: &Scenario, t: &DiscsTable) -> Result<Vec<DiscRow>, Invalid> {
-    let kind = t
-        .generate
-        .ok_or_else(|| bad("granular.discs", "nothing to generate"))?;
-    let [a, b] = t
-        .region
-        .ok_or_else(|| bad("granular.discs", "`box` is missing"))?;
-    let radius = t
-        .radius
-        .ok_or_else(|| bad("granular.discs", "`radius` is missing"))?
-        .range();
-    let (lat, gap, jitter) = match kind {
-        Generator::Square => (Lattice::Square, 0.0, t.jitter.unwrap_or(0.0)),
-        Generator::Hex => (Lattice::Hex, 0.0, t.jitter.unwrap_or(0.0)),
-        Generator::Random => (Lattice::Hex, 0.1, t.jitter.unwrap_or(1.0)),
-    };
-    let (lo, hi) = (Vec2::from(a), Vec2::from(b));
-    if kind == Generator::Random && t.method == Packing::Grow {
+    let l = lattice_of(t)?;
+    if t.generate == Some(Generator::Random) && t.method == Packing::Grow {
         let count = t
             .count
             .ok_or_else(|| bad("granular.discs", "`method = \"grow\"` needs `count`"))?;
@@ -268,9 +254,9 @@ pub(super) fn loose_rows(sc: &Scenario, t: &DiscsTable) -> Result<Vec<DiscRow>, 
         let (law, density) = settle_law(sc, t)?;
         let thickness = spec(sc)?.thickness;
         return grow_in_box(
-            lo,
-            hi,
-            radius,
+            l.lo,
+            l.hi,
+            l.radius,
             count,
             t.seed,
             0,
@@ -281,8 +267,109 @@ pub(super) fn loose_rows(sc: &Scenario, t: &DiscsTable) -> Result<Vec<DiscRow>, 
         )
         .map_err(|e| bad("granular.discs", e));
     }
-    lattice_packing(lat, lo, hi, radius, t.count, gap, jitter, t.seed)
+    let (lat, gap, jitter) = (l.lattice, l.gap, l.jitter);
+    lattice_packing(lat, l.lo, l.hi, l.radius, t.count, gap, jitter, t.seed)
         .map_err(|e| bad("granular.discs", e))
+}
+
+/// Where a generator places its discs: lattice, box, radii, and the gap
+/// and jitter of its sites.
+struct LatticeArgs {
+    lattice: Lattice,
+    lo: Vec2,
+    hi: Vec2,
+    radius: (f64, f64),
+    gap: f64,
+    jitter: f64,
+}
+
+/// The lattice of the generated packing `t`.
+fn lattice_of(t: &DiscsTable) -> Result<LatticeArgs, Invalid> {
+    let kind = t
+        .generate
+        .ok_or_else(|| bad("granular.discs", "nothing to generate"))?;
+    let [a, b] = t
+        .region
+        .ok_or_else(|| bad("granular.discs", "`box` is missing"))?;
+    let radius = t
+        .radius
+        .ok_or_else(|| bad("granular.discs", "`radius` is missing"))?
+        .range();
+    let (lattice, gap, jitter) = match kind {
+        Generator::Square => (Lattice::Square, 0.0, t.jitter.unwrap_or(0.0)),
+        Generator::Hex => (Lattice::Hex, 0.0, t.jitter.unwrap_or(0.0)),
+        Generator::Random => (Lattice::Hex, 0.1, t.jitter.unwrap_or(1.0)),
+    };
+    Ok(LatticeArgs {
+        lattice,
+        lo: Vec2::from(a),
+        hi: Vec2::from(b),
+        radius,
+        gap,
+        jitter,
+    })
+}
+
+/// The whole assembly's columns that choose a part and check its start
+/// state (centres, radii, masses, materials; plain ids, no clumps), made
+/// disc by disc from the scenario's discs inside `[granular] keep`: a
+/// packing used as generated is never listed as rows, a prepared bed is
+/// read where it is. As [`disc_rows`] and [`kept`] with [`disc_of`].
+fn whole_columns(sc: &Scenario, purpose: BuildFor, default_mat: u16) -> Result<Particles, Invalid> {
+    let keep = spec(sc)?.keep;
+    let mut w = Particles::default();
+    let (mut seen, mut failed) = (0usize, None);
+    let mut put = |r: &DiscRow| {
+        seen += 1;
+        if failed.is_some() || keep.is_some_and(|k| !k.holds(r.pos, r.r)) {
+            return;
+        }
+        match disc_of(sc, w.pos.len(), r, default_mat) {
+            Ok((mi, mass, _)) => {
+                w.pos.push(r.pos);
+                w.radius.push(r.r);
+                w.mass.push(mass);
+                w.material.push(mi);
+            }
+            Err(e) => failed = Some(e),
+        }
+    };
+    let generated = match &spec(sc)?.discs {
+        DiscsSpec::Table(t) if t.csv.is_none() && preparation(sc).is_none() => Some(t),
+        _ => None,
+    };
+    match (generated, purpose) {
+        (Some(t), _) => {
+            let l = lattice_of(t)?;
+            let mut each = |pos, r| {
+                put(&DiscRow {
+                    pos,
+                    r,
+                    material: None,
+                })
+            };
+            let (lat, radius, count) = (l.lattice, l.radius, t.count);
+            lattice_each(
+                lat, l.lo, l.hi, radius, count, l.gap, l.jitter, t.seed, &mut each,
+            )
+            .map_err(|e| bad("granular.discs", e))?;
+        }
+        (None, BuildFor::Prepared(rows)) if preparation(sc).is_some() => rows.iter().for_each(put),
+        (None, _) => disc_rows(sc, purpose)?.iter().for_each(put),
+    }
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    if w.pos.is_empty() && seen > 0 && keep.is_some() {
+        return Err(bad(
+            "granular.keep",
+            format!("none of the {seen} discs lies inside the circle"),
+        ));
+    }
+    let n = w.pos.len();
+    w.id = (0..n as u32).collect();
+    w.clump = vec![NO_CLUMP; n];
+    Ok(w)
 }
 
 /// The discs of `rows` inside `[granular] keep` (all without it), in
@@ -337,42 +424,21 @@ fn granular_with(
     select: Option<Select>,
 ) -> Result<Granular, Invalid> {
     let g = spec(sc)?;
-    let mut rows = kept(sc, disc_rows(sc, purpose)?)?;
-    // `check` does not prepare a packing: its discs are not where the
-    // bodies will find them
-    let unprepared = purpose == BuildFor::Check && preparation(sc).is_some();
-    let gone: std::collections::HashSet<usize> = overlapped(sc, &rows)
-        .into_iter()
-        .flat_map(|(_, r)| r)
-        .collect();
-    let removed = !gone.is_empty() && !unprepared;
-    if removed {
-        rows = (rows.into_iter().enumerate())
-            .filter_map(|(k, r)| (!gone.contains(&k)).then_some(r))
-            .collect();
-    }
-    let (rows, groups) = super::clumps::clump_rows(sc, rows, removed)?;
+    // a part: the whole's columns that choose its discs and that the
+    // start-state checks read, without the whole's rows
+    let (rows, groups, whole) = match select {
+        Some(_) => {
+            let default_mat = material_index(sc, &g.material, "granular.material")?;
+            let whole = whole_columns(sc, purpose, default_mat)?;
+            (Vec::new(), Vec::new(), Some(whole))
+        }
+        None => {
+            let (rows, groups) = assembly_rows(sc, purpose)?;
+            (rows, groups, None)
+        }
+    };
     let default_mat = material_index(sc, &g.material, "granular.material")?;
     let (mats, body) = laws(sc, &g.damping);
-    // a part: the whole's columns that choose its discs and that the
-    // start-state checks read, made first; the discs' rows dropped then
-    let whole = match select {
-        Some(_) => {
-            let mut w = Particles::default();
-            for (k, r) in rows.iter().enumerate() {
-                let (mi, mass, _) = disc_of(sc, k, r, default_mat)?;
-                w.pos.push(r.pos);
-                w.radius.push(r.r);
-                w.mass.push(mass);
-                w.material.push(mi);
-            }
-            let n = rows.len() as u32;
-            w.id = (0..n).collect();
-            w.clump = vec![NO_CLUMP; n as usize];
-            Some(w)
-        }
-        None => None,
-    };
     let v0 = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
     // a part's discs are made at the end, from the whole's columns
     let mut p = Particles::default();
@@ -445,10 +511,34 @@ fn granular_with(
         let skin = g.skin.unwrap_or(default_skin(max_r));
         gr.set_skin(skin);
         let keep = select(&w.pos, max_r, skin);
-        gr.particles = part_of(sc, (&w.pos, &w.radius, &w.material), &keep, v0)?;
+        gr.particles = part_of(sc, &mut w, &keep, v0)?;
         gr.set_start(w.pos);
     }
     Ok(gr)
+}
+
+/// The discs of the assembly as rows (those inside `[granular] keep`,
+/// without those a body removes) and its clumps' members.
+#[allow(clippy::type_complexity)]
+fn assembly_rows(
+    sc: &Scenario,
+    purpose: BuildFor,
+) -> Result<(Vec<DiscRow>, Vec<Vec<usize>>), Invalid> {
+    let mut rows = kept(sc, disc_rows(sc, purpose)?)?;
+    // `check` does not prepare a packing: its discs are not where the
+    // bodies will find them
+    let unprepared = purpose == BuildFor::Check && preparation(sc).is_some();
+    let gone: std::collections::HashSet<usize> = overlapped(sc, &rows)
+        .into_iter()
+        .flat_map(|(_, r)| r)
+        .collect();
+    let removed = !gone.is_empty() && !unprepared;
+    if removed {
+        rows = (rows.into_iter().enumerate())
+            .filter_map(|(k, r)| (!gone.contains(&k)).then_some(r))
+            .collect();
+    }
+    super::clumps::clump_rows(sc, rows, removed)
 }
 
 /// `p` with room for `n` discs, or the error that they do not fit.
@@ -463,30 +553,38 @@ fn reserve(p: &mut Particles, n: usize) -> Result<(), Invalid> {
     })
 }
 
-/// The discs `keep` holds of the whole's centres, radii and materials,
-/// with the whole's ids, at velocity `v0`.
+/// The discs `keep` holds of the whole `w` (centres, radii, materials),
+/// with the whole's ids, at velocity `v0`. The whole's radii and
+/// materials are cut down to the kept discs first (its centres stay: they
+/// are the start positions).
 fn part_of(
     sc: &Scenario,
-    (pos, radius, material): (&[Vec2], &[f64], &[u16]),
+    w: &mut Particles,
     keep: &[bool],
     v0: Vec2,
 ) -> Result<Particles, Invalid> {
+    fn kept_only<T>(v: &mut Vec<T>, keep: &[bool]) {
+        let mut k = keep.iter();
+        v.retain(|_| k.next().is_some_and(|&k| k));
+        v.shrink_to_fit();
+    }
+    kept_only(&mut w.radius, keep);
+    kept_only(&mut w.material, keep);
     let thickness = spec(sc)?.thickness;
     let mut p = Particles::default();
-    reserve(&mut p, keep.iter().filter(|&&k| k).count())?;
-    for k in (0..keep.len()).filter(|&k| keep[k]) {
-        let mi = material[k];
+    reserve(&mut p, w.radius.len())?;
+    for (j, k) in (0..keep.len()).filter(|&k| keep[k]).enumerate() {
+        let mi = w.material[j];
         p.push(
-            pos[k],
-            radius[k],
+            w.pos[k],
+            w.radius[j],
             sc.material[mi as usize].density,
             thickness,
             mi,
         );
-        let last = p.len() - 1;
-        p.vel[last] = v0;
+        p.vel[j] = v0;
         // the whole's numbering
-        p.id[last] = k as u32;
+        p.id[j] = k as u32;
     }
     p.slot = vec![u32::MAX; keep.len()];
     for (s, &id) in p.id.iter().enumerate() {
