@@ -142,6 +142,10 @@ fn as_one_process(
 ) -> (Vec<(PathBuf, Vec<u8>)>, Vec<serde_json::Value>) {
     efgdem(dir, "one", 0, 1);
     let want = files(&dir.join("one"));
+    let read = |out: &str| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(dir.join(out).join("summary.json")).unwrap()).unwrap()
+    };
+    let one = read("one");
     // granular runs: every disc is owned by one rank
     let discs = dir.join("one/discs_final.csv");
     let n = discs.exists().then(|| common::csv(&discs).1.len() as u64);
@@ -155,11 +159,15 @@ fn as_one_process(
                 &want,
                 &format!("{ranks} ranks × {threads} threads"),
             );
-            let s: serde_json::Value = serde_json::from_slice(
-                &std::fs::read(dir.join(&out).join("summary.json")).unwrap(),
-            )
-            .unwrap();
+            let s = read(&out);
             assert_eq!(s["status"], "completed");
+            // the summary's physics as one process's: the probes' extremes,
+            // the preparation (its cache read or written aside)
+            assert_eq!(s["probes"], one["probes"], "{ranks} ranks: probes");
+            for key in ["method", "steps", "discs"] {
+                let p = &s["preparation"][key];
+                assert_eq!(p, &one["preparation"][key], "{ranks} ranks: {key}");
+            }
             if ranks > 1 {
                 assert_eq!(s["ranks"]["count"], ranks);
                 let per = s["ranks"]["per_rank"].as_array().unwrap();

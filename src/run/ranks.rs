@@ -470,7 +470,8 @@ fn drive_granular(
     Ok((ended, wall_s, start))
 }
 
-/// Rank 0's end of the run: `summary.json` (`output_seconds`: from `t0`,
+/// Rank 0's end of the run: `summary.json` with what one process writes
+/// (the probes' extremes, the preparation; `output_seconds`: from `t0`,
 /// the start of the end's outputs, to the summary; the peak memory per
 /// disc of the whole assembly's `discs`).
 fn finish(
@@ -481,6 +482,7 @@ fn finish(
     run: &Run,
 ) -> Result<serde_json::Value, RunError> {
     let out = &run.opts.out_dir;
+    run.annotate(&mut s)?;
     ended.record(&mut s, model);
     if let Some(peak) = s["peak_memory_bytes"].as_f64() {
         s["peak_bytes_per_disc"] = json!(peak / discs.max(1) as f64);
