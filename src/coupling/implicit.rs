@@ -310,9 +310,6 @@ impl Solver {
         let m = contacts.len();
         self.products = 0;
         self.last = (f64::INFINITY, 0.0);
-        // start from the body's free increment (no contact force): the
-        // regimes there are those of the solution unless the contacts move
-        // the body much — usually one Newton step
         self.w.clear();
         self.w.extend(free.iter().zip(base).map(|(f, b)| *f - *b));
         out.clear();

@@ -83,21 +83,13 @@ impl Crack {
 }
 
 /// Validate `cracks` in `domain`: each crack has ≥ 2 finite, distinct
-/// points (further apart than 10⁻⁹ of the body's size), does not cross itself, another crack or the boundary, its inner
-/// vertices are strictly inside Ω, and each end is a tip or a mouth (at
-/// least one tip). Returns each crack's two ends.
+/// points (further apart than 10⁻⁹ of the body's size), does not cross
+/// itself, another crack or the boundary, its inner vertices are strictly
+/// inside Ω, and each end is a tip or a mouth (at least one tip). Returns
+/// each crack's two ends.
 pub fn check(domain: &Domain, cracks: &[Crack]) -> Result<Vec<[End; 2]>, CrackError> {
     let mut out = Vec::with_capacity(cracks.len());
-    let corners = (domain.loops.iter()).flat_map(|lp| (0..lp.len()).map(|s| lp.segment(s).0));
-    let (lo, hi) = corners.fold(
-        (Vec2::new(f64::MAX, f64::MAX), Vec2::new(f64::MIN, f64::MIN)),
-        |(lo, hi), p| {
-            (
-                Vec2::new(lo.x.min(p.x), lo.y.min(p.y)),
-                Vec2::new(hi.x.max(p.x), hi.y.max(p.y)),
-            )
-        },
-    );
+    let (lo, hi) = domain.bounds();
     let size = (hi - lo).norm();
     for (k, c) in cracks.iter().enumerate() {
         let err = |message: String| CrackError { crack: k, message };
