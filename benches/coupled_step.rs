@@ -22,7 +22,13 @@ fn bench(c: &mut Criterion) {
                 .build()
                 .unwrap();
             g.bench_function(format!("threads_{threads}"), |b| {
-                b.iter(|| pool.install(|| (0..STEPS).for_each(|_| m.step().expect("step"))))
+                // as `efgdem run` steps between outputs
+                b.iter(|| {
+                    pool.install(|| {
+                        (0..STEPS).for_each(|_| m.step_deferring().expect("step"));
+                        m.settle().expect("settle")
+                    })
+                })
             });
         }
         g.finish();

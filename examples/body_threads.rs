@@ -11,7 +11,10 @@
 //! cargo run --release --example body_threads -- footing 20 --steps 200 --reps 3  # sub-cycled
 //! ```
 //! The footing case also prints the split of its steps (DEM, transfer,
-//! contact solve, body) per thread count.
+//! contact solve, body) per thread count. It steps as `efgdem run` does
+//! between outputs (an exact step's body end done beside the next step's
+//! discs, `CoupledModel::step_deferring`); `--settled` completes every
+//! step before the next, as `Model::step` does.
 
 #[path = "../benches/common/body_setup.rs"]
 mod body_setup;
@@ -87,10 +90,17 @@ fn main() {
         "footing" => {
             let substeps = size.max(1);
             let mut m = body_setup::footing(substeps, arg(&args, "--warm", 1000));
+            // as `efgdem run` steps between outputs (`--settled`: every
+            // step's bodies complete before it returns, as `Model::step`)
+            let settled = args.iter().any(|a| a == "--settled");
             let mut split = [efgdem::coupling::StepTiming::default(); 2];
             let ms = interleaved(steps.next_multiple_of(substeps), reps, |k| {
                 let before = m.timing;
-                m.step().expect("step");
+                if settled {
+                    m.step().expect("step");
+                } else {
+                    m.step_deferring().expect("step");
+                }
                 let t = &mut split[k];
                 t.dem += m.timing.dem - before.dem;
                 t.transfer += m.timing.transfer - before.transfer;
@@ -115,6 +125,8 @@ fn main() {
                 );
             }
         }
-        _ => eprintln!("usage: body_threads plate [N] | footing [substeps] [--steps S] [--reps R]"),
+        _ => eprintln!(
+            "usage: body_threads plate [N] | footing [substeps] [--steps S] [--reps R] [--settled]"
+        ),
     }
 }

@@ -383,14 +383,19 @@ impl Inner {
     fn steps_for(&mut self, n: usize, left: usize) -> Result<usize, efgdem::model::ModelError> {
         let Inner { model, pool, .. } = self;
         let t0 = Instant::now();
+        // the bodies are read only after the call: their ends may wait for
+        // the next step (`Model::step_deferring`), settled before returning
         let done = pool.install(|| {
             let mut k = 0;
-            while k < n && (k == 0 || t0.elapsed() < SLICE) {
-                set_store_forces(model, k + 1 == left);
-                model.step()?;
-                k += 1;
-            }
-            Ok::<_, efgdem::model::ModelError>(k)
+            let r = (|| {
+                while k < n && (k == 0 || t0.elapsed() < SLICE) {
+                    set_store_forces(model, k + 1 == left);
+                    model.step_deferring()?;
+                    k += 1;
+                }
+                Ok(())
+            })();
+            r.and(model.settle()).map(|()| k)
         })?;
         self.check_buffers();
         Ok(done)
@@ -403,14 +408,17 @@ impl Inner {
         let t0 = Instant::now();
         let n = pool.install(|| {
             let mut n = 0;
-            while model.time() + 0.5 * model.dt < t && (n == 0 || t0.elapsed() < SLICE) {
-                // the last steps store the disc forces (2.5 dt: rounding of t)
-                set_store_forces(model, model.time() + 2.5 * model.dt >= t);
-                model.step()?;
-                n += 1;
-            }
+            let r = (|| {
+                while model.time() + 0.5 * model.dt < t && (n == 0 || t0.elapsed() < SLICE) {
+                    // the last steps store the disc forces (2.5 dt: rounding of t)
+                    set_store_forces(model, model.time() + 2.5 * model.dt >= t);
+                    model.step_deferring()?;
+                    n += 1;
+                }
+                Ok(())
+            })();
             set_store_forces(model, true);
-            Ok::<_, efgdem::model::ModelError>(n)
+            r.and(model.settle()).map(|()| n)
         })?;
         self.check_buffers();
         Ok(n)

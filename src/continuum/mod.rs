@@ -356,6 +356,10 @@ pub trait Continuum: Send {
     fn growth_due(&self) -> bool {
         false
     }
+    /// Whether the body's cracks can grow at all ([`grow`](Self::grow)).
+    fn grows(&self) -> bool {
+        false
+    }
     /// Add `e` to the energy its crack growth took
     /// ([`BodyEnergies::fracture`]); a body without cracks ignores it.
     fn book_fracture(&mut self, e: f64) {
@@ -536,6 +540,10 @@ pub trait ContactBody: Send + Sync + 'static {
     }
     /// As [`Continuum::growth_due`].
     fn growth_due(&self) -> bool {
+        false
+    }
+    /// As [`Continuum::grows`].
+    fn grows(&self) -> bool {
         false
     }
     /// As [`Continuum::book_fracture`].
@@ -1222,6 +1230,9 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     }
     fn growth_due(&self) -> bool {
         self.body.growth_due()
+    }
+    fn grows(&self) -> bool {
+        self.body.grows()
     }
     fn book_fracture(&mut self, e: f64) {
         self.body.book_fracture(e);

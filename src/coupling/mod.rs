@@ -58,7 +58,7 @@ pub mod segments;
 pub mod state;
 pub mod workers;
 
-use crate::continuum::{BoundaryChain, Continuum};
+use crate::continuum::{BoundaryChain, Continuum, SolveError};
 use crate::dem::Granular;
 use crate::dem::contact::{self, ContactLaw, Side, effective_mass};
 use crate::dem::particles::Particles;
@@ -175,6 +175,14 @@ pub struct CoupledModel {
     /// only the discs near the bodies (a decomposed run, [`DiscStep`]):
     /// the segment grids are then binned as the whole's are.
     pub radius_bound: Option<f64>,
+    /// Exact step taken with [`step_deferring`](CoupledModel::step_deferring):
+    /// per body, the contact forces whose response
+    /// ([`Continuum::finish_step`]) is still to be added — the bodies are at
+    /// the previous step until [`settle`](CoupledModel::settle) or the next
+    /// step adds it.
+    pending: Vec<(usize, Vec<Vec2>)>,
+    /// The present step may leave its bodies' ends pending.
+    defer: bool,
 }
 
 /// How the coupling steps the discs. [`Whole`]: the assembly held in
@@ -432,6 +440,8 @@ impl CoupledModel {
             fallback: None,
             notices: Vec::new(),
             radius_bound: None,
+            pending: Vec::new(),
+            defer: false,
         }
     }
 
@@ -455,10 +465,39 @@ impl CoupledModel {
         self.step_with(&mut Whole)
     }
 
+    /// [`step`](Self::step), except that an exact step may leave the end of
+    /// its body step — the response to the contact forces, one solve per
+    /// body, and the commit — pending: the next step does it beside the
+    /// discs' step, on another thread (the same arithmetic, so the same
+    /// results). Until then the bodies hold the previous step's state; call
+    /// [`settle`](Self::settle) before reading them.
+    pub fn step_deferring(&mut self) -> Result<(), CouplingError> {
+        self.defer = true;
+        let r = self.step_with(&mut Whole);
+        self.defer = false;
+        r
+    }
+
+    /// Whether every body holds the present step ([`step_deferring`](Self::step_deferring)).
+    pub fn is_settled(&self) -> bool {
+        self.pending.is_empty()
+    }
+
+    /// End the body steps left pending by [`step_deferring`](Self::step_deferring).
+    pub fn settle(&mut self) -> Result<(), CouplingError> {
+        let t = Instant::now();
+        let r = finish_pending(&mut self.bodies, &mut self.pending);
+        self.timing.body += t.elapsed().as_secs_f64();
+        Ok(r?)
+    }
+
     /// [`step`](Self::step) with the discs stepped by `discs`. The
     /// predicted and staggered schemes step the discs in phases and need
     /// [`Whole`].
     pub fn step_with(&mut self, discs: &mut dyn DiscStep) -> Result<(), CouplingError> {
+        if !(self.is_settled() || self.substeps == 1 && !self.staggered && !self.compliant) {
+            self.settle()?;
+        }
         if self.compliant {
             return self.step_compliant(discs);
         }
@@ -496,6 +535,7 @@ impl CoupledModel {
             let t0 = Instant::now();
             self.timing.dem += (t0 - t).as_secs_f64();
             if !self.primed {
+                self.settle()?;
                 self.implicit_contacts(false)?;
                 self.primed = true;
             }
@@ -506,12 +546,13 @@ impl CoupledModel {
         })?;
         let t1 = Instant::now();
         let (granular, bodies) = (&mut self.granular, &mut self.bodies);
-        let contacts = &self.contacts;
+        let (contacts, pending) = (&self.contacts, &mut self.pending);
         let ((), predicted) = rayon::join(
             || discs.step(granular, contacts),
             || {
                 let t = Instant::now();
-                let r = bodies.iter_mut().try_for_each(|b| b.predict_step());
+                let r = finish_pending(bodies, pending)
+                    .and_then(|()| bodies.iter_mut().try_for_each(|b| b.predict_step()));
                 (r, t.elapsed().as_secs_f64())
             },
         );
@@ -1006,7 +1047,9 @@ impl CoupledModel {
             }
             w.forces.clear();
             w.forces.extend(w.evals.iter().map(|e| e.g));
-            if advance {
+            if advance && self.defer && !body.grows() {
+                self.pending.push((b, w.forces.clone()));
+            } else if advance {
                 let tb = Instant::now();
                 body.finish_step(&w.forces)?;
                 body_time += tb.elapsed().as_secs_f64();
@@ -1214,6 +1257,18 @@ impl CoupledModel {
         }
         e
     }
+}
+
+/// End the pending body steps ([`CoupledModel::step_deferring`]), in body
+/// order.
+fn finish_pending(
+    bodies: &mut [Box<dyn Continuum>],
+    pending: &mut Vec<(usize, Vec<Vec2>)>,
+) -> Result<(), SolveError> {
+    for (b, forces) in pending.drain(..) {
+        bodies[b].finish_step(&forces)?;
+    }
+    Ok(())
 }
 
 /// A sub-cycled body stops the run ([`CouplingError::Subcycling`]) once

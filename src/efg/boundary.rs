@@ -270,6 +270,9 @@ impl ContactBody for EfgBody {
     fn growth_due(&self) -> bool {
         EfgBody::growth_due(self)
     }
+    fn grows(&self) -> bool {
+        self.spec.fracture.is_some()
+    }
     fn book_fracture(&mut self, e: f64) {
         self.fracture_energy += e;
     }

@@ -100,6 +100,19 @@ impl Model {
     /// per step); an instability is [`ModelError::Unstable`] with a
     /// diagnosis and a suggested time step.
     pub fn step(&mut self) -> Result<(), ModelError> {
+        let r = self.step_deferring();
+        r.and(self.settle())
+    }
+
+    /// [`step`](Self::step) for a driver that reads no body before the
+    /// next step (e.g. between two outputs): an exact coupled step may leave
+    /// the end of its body step (one solve per body and the commit) to the
+    /// next step, which does it beside the discs' step on another thread
+    /// ([`CoupledModel::step_deferring`]) — the same arithmetic, so the same
+    /// results. The bodies hold the previous step's state until then or
+    /// until [`settle`](Self::settle); the stability check of the bodies
+    /// waits for it too.
+    pub fn step_deferring(&mut self) -> Result<(), ModelError> {
         let r = match &mut self.system {
             System::Continuum { dynamic: false, .. } => return Err(ModelError::Static),
             System::Continuum { bodies, .. } => bodies
@@ -110,12 +123,25 @@ impl Model {
                 g.step();
                 Ok(())
             }
-            System::Coupled(m) => m.step().map_err(ModelError::from),
+            System::Coupled(m) => m.step_deferring().map_err(ModelError::from),
         };
         self.step += 1;
         // the inner checks only see non-finite discs: diagnose here
         stability::check(self).map_err(|e| ModelError::Unstable(Box::new(e)))?;
         r
+    }
+
+    /// End the body steps [`step_deferring`](Self::step_deferring) left
+    /// pending, and check the bodies' state; nothing to do otherwise.
+    pub fn settle(&mut self) -> Result<(), ModelError> {
+        let System::Coupled(m) = &mut self.system else {
+            return Ok(());
+        };
+        if m.is_settled() {
+            return Ok(());
+        }
+        m.settle()?;
+        stability::check(self).map_err(|e| ModelError::Unstable(Box::new(e)))
     }
 
     /// Warnings since the last call: e.g. an automatically chosen

@@ -48,7 +48,11 @@ pub fn check(model: &Model) -> Result<(), Instability> {
         System::Continuum { bodies, .. } => bodies.iter().find_map(|b| body_culprit(b.view())),
         System::Granular(g) => disc_culprit(g),
         System::Coupled(m) => disc_culprit(&m.granular).or_else(|| {
-            let bodies = if m.at_body_step() { m.bodies.len() } else { 0 };
+            let bodies = if m.at_body_step() && m.is_settled() {
+                m.bodies.len()
+            } else {
+                0
+            };
             (0..bodies).find_map(|i| body_culprit(super::coupled_body(m, i)))
         }),
     };

@@ -125,8 +125,17 @@ impl ModelState {
 
 impl Model {
     /// Everything that changes while the model steps ([`ModelState`]).
-    /// Call between steps.
+    /// Call between steps, with the bodies settled: after
+    /// [`step_deferring`](Model::step_deferring), call
+    /// [`settle`](Model::settle) first (a state without the pending body
+    /// ends would not continue the run; asserted).
     pub fn save_state(&self) -> ModelState {
+        if let System::Coupled(m) = &self.system {
+            assert!(
+                m.is_settled(),
+                "save_state after step_deferring: call Model::settle first"
+            );
+        }
         let system = match &self.system {
             System::Continuum { bodies, .. } => {
                 SystemState::Continuum(bodies.iter().map(|b| b.save_state()).collect())

@@ -156,7 +156,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
             }
             let mut session = Session::new(&run, &model);
             let ended = loop {
-                if let Some(end) = session.step(&mut model)? {
+                if let Some(end) = session.step(&mut model, false)? {
                     break end;
                 }
                 let step = model.step;
@@ -166,7 +166,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<Value, RunError> {
                 if due(step, vtk_every, steps) {
                     out.frames.write(&model)?;
                 }
-                if let Some(end) = session.after_step(&model, &mut out, &ext)? {
+                if let Some(end) = session.after_step(&mut model, &mut out, &ext)? {
                     break end;
                 }
             };

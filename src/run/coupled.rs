@@ -1,6 +1,6 @@
 //! Driver for coupled scenarios (bodies and discs): `efgdem run` / `check`.
 
-use super::session::{Outputs, Session, due};
+use super::session::{Outputs, Session, checkpoint_due, due};
 use super::{Run, RunError};
 use crate::continuum::Edge;
 use crate::coupling::energy::WorkMeter;
@@ -482,12 +482,17 @@ pub(super) fn run(run: Run, mut model: Model, comm: Arc<dyn Comm>) -> Result<Val
             let out = out.as_mut().expect("one rank writes");
             let mut session = Session::new(&run, &model);
             let ended = loop {
-                if let Some(end) = session.step(&mut model)? {
+                // nothing reads the bodies after a step without outputs
+                let next = model.step + 1;
+                let defer = !(due(next, sc.output.every, steps)
+                    || due(next, vtk_every, steps)
+                    || checkpoint_due(next, run.opts.checkpoint_every, steps));
+                if let Some(end) = session.step(&mut model, defer)? {
                     break end;
                 }
                 r.meter.after_step(&coupled(&model).granular);
                 output(&model, &mut r, out)?;
-                if let Some(end) = session.after_step(&model, out, &r)? {
+                if let Some(end) = session.after_step(&mut model, out, &r)? {
                     break end;
                 }
             };

@@ -52,7 +52,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
         if let System::Granular(g) = &mut model.system {
             g.store_forces = due(next, vtk_every, steps);
         }
-        if let Some(end) = session.step(&mut model)? {
+        if let Some(end) = session.step(&mut model, false)? {
             break end;
         }
         let step = model.step;
@@ -63,7 +63,7 @@ pub(super) fn run(run: Run, mut model: Model) -> Result<serde_json::Value, RunEr
             outputs.frames.write(&model)?;
         }
         // the model is the whole state of a granular run
-        if let Some(end) = session.after_step(&model, &mut outputs, &())? {
+        if let Some(end) = session.after_step(&mut model, &mut outputs, &())? {
             break end;
         }
     };

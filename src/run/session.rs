@@ -275,12 +275,20 @@ impl<'a> Session<'a> {
     }
 
     /// Take the next step; `Some` if the run ends instead (all steps done,
-    /// or the step made the state unphysical).
-    pub fn step(&mut self, model: &mut Model) -> Result<Option<Ended>, RunError> {
+    /// or the step made the state unphysical). `defer`: nothing reads the
+    /// bodies after this step, so an exact coupled step may leave their ends
+    /// to the next step ([`Model::step_deferring`]); a step that ends the
+    /// run never does.
+    pub fn step(&mut self, model: &mut Model, defer: bool) -> Result<Option<Ended>, RunError> {
         if model.step >= model.steps {
             return Ok(Some(Ended::Completed));
         }
-        let r = model.step();
+        let r = if defer && model.step + 1 < model.steps {
+            model.step_deferring()
+        } else {
+            model.step()
+        };
+        let r = if r.is_err() { r.and(model.settle()) } else { r };
         self.run.last_step.set(model.step);
         for n in model.take_notices() {
             self.progress.warn(&format!("warning: {n}"));
@@ -299,7 +307,7 @@ impl<'a> Session<'a> {
     /// outputs complete.
     pub fn after_step(
         &mut self,
-        model: &Model,
+        model: &mut Model,
         out: &mut Outputs,
         driver: &impl Serialize,
     ) -> Result<Option<Ended>, RunError> {
@@ -307,6 +315,10 @@ impl<'a> Session<'a> {
         let opts = self.run.opts;
         let signal = opts.stop.as_ref().map_or(0, |s| s.load(Ordering::Relaxed));
         if signal != 0 || checkpoint_due(model.step, opts.checkpoint_every, model.steps) {
+            // a step left pending (the signal came after it) ends first
+            if let Err(e) = model.settle() {
+                return Ok(Some(Ended::Failed(Box::new(e))));
+            }
             out.hist.flush()?;
             Checkpoint::new(
                 self.run.sc,
