@@ -9,6 +9,7 @@
 //! cargo run --release --example body_threads -- plate 201 --steps 5 --reps 3
 //! cargo run --release --example body_threads -- footing 1 --steps 200 --reps 3   # exact step
 //! cargo run --release --example body_threads -- footing 20 --steps 200 --reps 3  # sub-cycled
+//! cargo run --release --example body_threads -- footing auto --steps 200 --reps 3 # the automatic choice
 //! ```
 //! The footing case also prints the split of its steps (DEM, transfer,
 //! contact solve, body) per thread count. It steps as `efgdem run` does
@@ -88,8 +89,19 @@ fn main() {
             report(&interleaved(steps, reps, |_| b.advance().expect("step")));
         }
         "footing" => {
-            let substeps = size.max(1);
-            let mut m = body_setup::footing(substeps, arg(&args, "--warm", 1000));
+            // `footing auto`: the automatic choice
+            let auto = args.get(2).is_some_and(|a| a == "auto");
+            let mut m = body_setup::footing(
+                if auto { 0 } else { size.max(1) },
+                arg(&args, "--warm", 1000),
+            );
+            let substeps = m.substeps;
+            if let Some(c) = &m.choice {
+                println!("scheme: {} × {} ({})", c.scheme.name(), c.substeps, c.why);
+            }
+            if let Some(f) = &m.fallback {
+                println!("fell back to the exact step: {f:?}");
+            }
             // as `efgdem run` steps between outputs (`--settled`: every
             // step's bodies complete before it returns, as `Model::step`)
             let settled = args.iter().any(|a| a == "--settled");
@@ -126,7 +138,7 @@ fn main() {
             }
         }
         _ => eprintln!(
-            "usage: body_threads plate [N] | footing [substeps] [--steps S] [--reps R] [--settled]"
+            "usage: body_threads plate [N] | footing [substeps | auto] [--steps S] [--reps R] [--settled]"
         ),
     }
 }

@@ -9,8 +9,9 @@
 //!   EFG 61 × 21 nodes (2 562 DOFs), its top edge driven down at 0.1 m/s
 //!   into a bed of 20 000 discs (r = 4 mm, hexagonal lattice under
 //!   gravity, k_n = 5·10⁷, k_s = 2.5·10⁷, μ = 0.5, normal dashpot at 20 %
-//!   of critical), Δt = 10⁻⁵ s; one coupled step, exact (`substeps = 1`)
-//!   or sub-cycled.
+//!   of critical), Δt = 10⁻⁵ s; one coupled step, exact (`substeps = 1`),
+//!   sub-cycled, or as the automatic choice takes it (`substeps = 0`: no
+//!   key).
 #![allow(dead_code)]
 
 use efgdem::coupling::CoupledModel;
@@ -46,10 +47,14 @@ traction = [0.0, -1.0e6]
     b
 }
 
-/// The coupled footing with `substeps` DEM steps per body step, its
-/// bottom starting 1 % of a radius into the top row of discs, after `warm`
+/// The coupled footing with `substeps` DEM steps per body step (0: the
+/// automatic choice of scheme and substeps), its bottom starting 1 % of a radius into the top row of discs, after `warm`
 /// steps.
 pub fn footing(substeps: usize, warm: usize) -> CoupledModel {
+    let substeps = match substeps {
+        0 => String::new(),
+        n => format!("substeps = {n}"),
+    };
     let (r, width) = (0.004, 1.6);
     let depth = 100.0 * 3f64.sqrt() * r;
     let bed = format!(
@@ -57,7 +62,7 @@ pub fn footing(substeps: usize, warm: usize) -> CoupledModel {
 [simulation]
 dt = 1.0e-5
 steps = 1
-substeps = {substeps}
+{substeps}
 gravity = [0.0, -9.81]
 
 [[material]]
