@@ -100,7 +100,7 @@ fn main() {
                 println!("scheme: {} × {} ({})", c.scheme.name(), c.substeps, c.why);
             }
             if let Some(f) = &m.fallback {
-                println!("fell back to the exact step: {f:?}");
+                println!("fell back: {f:?}");
             }
             // as `efgdem run` steps between outputs (`--settled`: every
             // step's bodies complete before it returns, as `Model::step`)

@@ -397,12 +397,12 @@ pub trait Continuum: Send {
     fn set_step(&mut self, _h: f64) -> Result<(), SolveError> {
         self.set_compliant()
     }
-    /// Go on, from the present state, with steps of `dt` that are
-    /// `1/factor` of the present step (the Newmark matrix factored again,
-    /// the state and the time kept, the step count scaled; neither
-    /// sub-cycled scheme after it): a sub-cycled body falling back to the
-    /// exact step. A body that cannot says so.
-    fn retime(&mut self, _dt: f64, _factor: usize) -> Result<(), SolveError> {
+    /// Go on, from the present state, with steps of `dt`, `scale.0` of
+    /// them per `scale.1` present steps (the Newmark matrix factored again,
+    /// the state and the time kept, the step count scaled; no sub-cycled
+    /// scheme after it until it is set again): a sub-cycled body falling
+    /// back to shorter body steps. A body that cannot says so.
+    fn retime(&mut self, _dt: f64, _scale: (usize, usize)) -> Result<(), SolveError> {
         self.set_compliant()
     }
     /// The gain with which the contacts, acting together, feed back on
@@ -488,10 +488,10 @@ pub trait ContactBody: Send + Sync + 'static {
     /// Start (or, before the first step, start again) the time stepping
     /// with the step `dt`: the Newmark matrix factored for it.
     fn start_dynamic(&mut self, dt: f64) -> Result<(), Self::Error>;
-    /// Go on with steps of `dt`, `factor` of them per present step: the
-    /// Newmark matrix factored for it, the state kept
-    /// ([`Continuum::retime`]).
-    fn retime(&mut self, dt: f64, factor: usize) -> Result<(), Self::Error>;
+    /// Go on with steps of `dt`, `scale.0` of them per `scale.1` present
+    /// steps: the Newmark matrix factored for it, the state kept
+    /// ([`Continuum::retime`], [`rescaled_step`]).
+    fn retime(&mut self, dt: f64, scale: (usize, usize)) -> Result<(), Self::Error>;
     /// Nodal displacement, velocity, acceleration.
     fn state(&self) -> &State;
     /// `F += Φᵀ f` for the next step.
@@ -1245,9 +1245,9 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
         self.chain_s = ChainCompliance::new(self.held_resp.len());
         Ok(())
     }
-    fn retime(&mut self, dt: f64, factor: usize) -> Result<(), SolveError> {
+    fn retime(&mut self, dt: f64, scale: (usize, usize)) -> Result<(), SolveError> {
         self.body
-            .retime(dt, factor)
+            .retime(dt, scale)
             .map_err(|e| self.solve_error(e))?;
         self.green = None;
         self.chain_s = ChainCompliance::new(self.held_resp.len());
@@ -1667,9 +1667,25 @@ impl<B: ContactBody> Continuum for WithBoundary<B> {
     }
 }
 
+/// A body's step count after [`Continuum::retime`] to `scale.0` steps per
+/// `scale.1` present ones (the time `step · dt` kept), or `None` when the
+/// present time is not a whole number of the new steps.
+pub fn rescaled_step(step: usize, scale: (usize, usize)) -> Option<usize> {
+    let n = step.checked_mul(scale.0)?;
+    (scale.1 > 0 && n.is_multiple_of(scale.1)).then(|| n / scale.1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_retimed_body_keeps_its_time_in_whole_steps() {
+        assert_eq!(rescaled_step(100, (5, 1)), Some(500));
+        assert_eq!(rescaled_step(100, (5, 2)), Some(250));
+        assert_eq!(rescaled_step(101, (5, 2)), None);
+        assert_eq!(rescaled_step(0, (5, 3)), Some(0));
+    }
 
     /// All four edges make one closed chain (its ends one corner,
     /// [`BoundaryChain::is_closed`]); fewer make open ones.

@@ -234,14 +234,18 @@ pub fn set_contacts_on_discs(g: &mut Granular, contacts: &[BodyContact]) {
 }
 
 /// An automatically chosen sub-cycled scheme that created energy
-/// ([`MAX_CREATED`]), replaced by the exact step from a body step's end on.
+/// ([`MAX_CREATED`]), replaced from a body step's end on by the same
+/// scheme with at most half its substeps, or by the exact step
+/// ([`fallback_substeps`]).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Fallback {
     /// The scheme given up (`"predicted"` or `"compliant"`).
     pub from: String,
     /// Its DEM steps per body step.
     pub substeps: usize,
-    /// The DEM step from which the exact step is taken.
+    /// The DEM steps per body step taken on (1: the exact step).
+    pub to: usize,
+    /// The DEM step from which they are taken.
     pub step: usize,
     /// The time then.
     pub time: f64,
@@ -485,6 +489,9 @@ impl CoupledModel {
 
     /// End the body steps left pending by [`step_deferring`](Self::step_deferring).
     pub fn settle(&mut self) -> Result<(), CouplingError> {
+        if self.pending.is_empty() {
+            return Ok(());
+        }
         let t = Instant::now();
         let r = finish_pending(&mut self.bodies, &mut self.pending);
         self.timing.body += t.elapsed().as_secs_f64();
@@ -495,7 +502,8 @@ impl CoupledModel {
     /// predicted and staggered schemes step the discs in phases and need
     /// [`Whole`].
     pub fn step_with(&mut self, discs: &mut dyn DiscStep) -> Result<(), CouplingError> {
-        if !(self.is_settled() || self.substeps == 1 && !self.staggered && !self.compliant) {
+        // only the exact step ends a body step left pending itself
+        if self.compliant || self.staggered || self.substeps > 1 {
             self.settle()?;
         }
         if self.compliant {
@@ -632,14 +640,19 @@ impl CoupledModel {
                 let f = Fallback {
                     from: scheme.into(),
                     substeps: self.substeps,
+                    to: fallback_substeps(self.substeps, step),
                     step,
                     time,
                     body,
                     created,
                     exchanged,
                 };
+                let then = match f.to {
+                    1 => "the exact step is taken".to_string(),
+                    n => format!("the {} scheme goes on with {n} substeps", f.from),
+                };
                 self.notices.push(format!(
-                    "body `{}`: the automatically chosen {} scheme ({} substeps) created {:.3e} J, {:.2} % of the {:.3e} J the body exchanged with the discs, above {} % for {GUARD_STEPS} body steps in a row: the exact step is taken from step {} (t = {:.6} s) on",
+                    "body `{}`: the automatically chosen {} scheme ({} substeps) created {:.3e} J, {:.2} % of the {:.3e} J the body exchanged with the discs, above {} % for {GUARD_STEPS} body steps in a row: {then} from step {} (t = {:.6} s) on",
                     f.body,
                     f.from,
                     f.substeps,
@@ -656,21 +669,29 @@ impl CoupledModel {
         }
     }
 
-    /// Take the exact step from now on (at the end of a body step): every
-    /// body factored for the DEM step with its state kept
-    /// ([`Continuum::retime`]), the disc–body forces of the present state
-    /// evaluated again before the next step. `f` says why (kept in
-    /// [`CoupledModel::fallback`] and the saved state).
+    /// Take `f.to` DEM steps per body step from now on (at the end of a
+    /// body step; 1: the exact step): every body factored for its new step
+    /// with its state kept ([`Continuum::retime`]), the disc–body forces
+    /// of the present state evaluated again before the next step; the
+    /// scheme stays the one given up unless `f.to` is 1. `f` says why
+    /// (kept in [`CoupledModel::fallback`] and the saved state).
     pub fn fall_back(&mut self, f: Fallback) -> Result<(), CouplingError> {
-        let dt = self.granular.dt;
+        let to = f.to.clamp(1, self.substeps);
+        let h = self.granular.dt * to as f64;
         for b in &mut self.bodies {
-            b.retime(dt, self.substeps)?;
+            b.retime(h, (self.substeps, to))?;
         }
-        (self.substeps, self.factored, self.sub) = (1, 1, 0);
-        (self.compliant, self.staggered, self.primed) = (false, false, false);
+        (self.substeps, self.factored, self.sub) = (to, to, 0);
+        self.primed = false;
         self.over.clear();
+        if to == 1 {
+            (self.compliant, self.staggered) = (false, false);
+        } else if self.compliant {
+            self.set_compliant()?;
+        }
+        let scheme = self.scheme();
         if let Some(c) = &mut self.choice {
-            (c.scheme, c.substeps) = (scheme::Scheme::Exact, 1);
+            (c.scheme, c.substeps) = (scheme, to);
             c.fallback = Some(f.clone());
         }
         self.fallback = Some(f);
@@ -1259,6 +1280,17 @@ impl CoupledModel {
     }
 }
 
+/// The substeps an automatically chosen sub-cycled scheme with `n`
+/// substeps falls back to when its guard stops it at DEM step `step`:
+/// the most that are at most half of `n` and divide `step` (so that the
+/// bodies' step count stays whole); 1, the exact step, at the end.
+pub fn fallback_substeps(n: usize, step: usize) -> usize {
+    (1..=n / 2)
+        .rev()
+        .find(|d| step.is_multiple_of(*d))
+        .unwrap_or(1)
+}
+
 /// End the pending body steps ([`CoupledModel::step_deferring`]), in body
 /// order.
 fn finish_pending(
@@ -1448,4 +1480,30 @@ fn body_rolling(
         0.0
     };
     contact::rolling(law, r, fn_cap, p.omega[slot], c_r, mr, dt)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fallback_substeps;
+
+    /// At most half, dividing the steps taken, 1 (the exact step) at the end.
+    #[test]
+    fn a_fallback_takes_at_most_half_the_substeps_that_divide_the_steps() {
+        for (n, step, to) in [
+            (10, 1000, 5),
+            (5, 500, 2),
+            (6, 606, 3),
+            (6, 6 * 101 * 7, 3),
+            (5, 505, 1),
+            (4, 400, 2),
+            (2, 200, 1),
+            (3, 300, 1),
+        ] {
+            assert_eq!(
+                fallback_substeps(n, step),
+                to,
+                "{n} substeps at step {step}"
+            );
+        }
+    }
 }

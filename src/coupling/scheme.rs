@@ -95,8 +95,8 @@ pub struct Choice {
     /// Contacts the bodies' chains can carry at once: their length over
     /// the mean disc diameter ([`max_contacts`]).
     pub max_contacts: usize,
-    /// The sub-cycled scheme chosen first, given up for the exact step
-    /// during the run ([`CoupledModel::fall_back`]).
+    /// The last sub-cycled scheme given up during the run for fewer
+    /// substeps or the exact step ([`CoupledModel::fall_back`]).
     pub fallback: Option<super::Fallback>,
 }
 

@@ -66,14 +66,16 @@ impl CoupledModel {
                 s.bodies.len()
             )));
         }
-        match (&s.fallback, &self.fallback) {
-            // the run had fallen back to the exact step: so does this model
-            (Some(f), None) => self
+        // the run had fallen back to fewer substeps (or the exact step): so
+        // does this model, unless it has gone further
+        let to = |f: &Option<super::Fallback>| f.as_ref().map_or(usize::MAX, |f| f.to);
+        match (&s.fallback, to(&s.fallback).cmp(&to(&self.fallback))) {
+            (Some(f), std::cmp::Ordering::Less) => self
                 .fall_back(f.clone())
                 .map_err(|e| StateError::new(e.to_string()))?,
-            (None, Some(_)) => {
+            (_, std::cmp::Ordering::Greater) => {
                 return Err(StateError::new(
-                    "the saved state is of the sub-cycled scheme this model has given up for the exact step; restore it into a model built anew",
+                    "the saved state is of a sub-cycled scheme this model has given up for shorter body steps; restore it into a model built anew",
                 ));
             }
             _ => {}

@@ -506,16 +506,21 @@ impl EfgBody {
         Ok(())
     }
 
-    /// Go on from the present state with steps of `dt`, `factor` of them
-    /// per present step: `α₁M + α₄C + K̄` factored for `dt`, the state (its
+    /// Go on from the present state with steps of `dt`, `scale.0` of them
+    /// per `scale.1` present steps: `α₁M + α₄C + K̄` factored for `dt`, the state (its
     /// acceleration the last step's) and the time kept, the step count
     /// scaled so that the time is still `step · dt`.
-    pub fn retime(&mut self, dt: f64, factor: usize) -> Result<(), EfgError> {
+    pub fn retime(&mut self, dt: f64, scale: (usize, usize)) -> Result<(), EfgError> {
         crate::continuum::newmark::check_dynamic(dt, self.material.density, &self.name)
             .map_err(EfgError::Invalid)?;
         self.newmark.as_ref().ok_or(EfgError::NotStarted)?;
         self.params.dt = dt;
-        self.step *= factor;
+        self.step = crate::continuum::rescaled_step(self.step, scale).ok_or_else(|| {
+            EfgError::Invalid(format!(
+                "body `{}`: step {} is not a whole number of steps of {dt:e} s",
+                self.name, self.step
+            ))
+        })?;
         let (m, c) = self.mass_damping();
         self.newmark = Some(Newmark::new(m, c, self.ops.kbar(), self.params)?);
         Ok(())

@@ -233,8 +233,8 @@ impl ContactBody for EfgBody {
     fn start_dynamic(&mut self, dt: f64) -> Result<(), EfgError> {
         EfgBody::start_dynamic(self, dt)
     }
-    fn retime(&mut self, dt: f64, factor: usize) -> Result<(), EfgError> {
-        EfgBody::retime(self, dt, factor)
+    fn retime(&mut self, dt: f64, scale: (usize, usize)) -> Result<(), EfgError> {
+        EfgBody::retime(self, dt, scale)
     }
     fn state(&self) -> &State {
         &self.state

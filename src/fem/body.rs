@@ -671,16 +671,21 @@ impl FemBody {
         self.integrator(m, c)
     }
 
-    /// Go on from the present state with steps of `dt`, `factor` of them
-    /// per present step: `α₁M + α₄C + K` factored for `dt`, the state (its
+    /// Go on from the present state with steps of `dt`, `scale.0` of them
+    /// per `scale.1` present steps: `α₁M + α₄C + K` factored for `dt`, the state (its
     /// acceleration the last step's) and the time kept, the step count
     /// scaled so that the time is still `step · dt`.
-    pub fn retime(&mut self, dt: f64, factor: usize) -> Result<(), FemError> {
+    pub fn retime(&mut self, dt: f64, scale: (usize, usize)) -> Result<(), FemError> {
         crate::continuum::newmark::check_dynamic(dt, self.material.density, &self.name)
             .map_err(FemError::Invalid)?;
         self.newmark.as_ref().ok_or(FemError::NotStarted)?;
         self.params.dt = dt;
-        self.step *= factor;
+        self.step = crate::continuum::rescaled_step(self.step, scale).ok_or_else(|| {
+            FemError::Invalid(format!(
+                "body `{}`: step {} is not a whole number of steps of {dt:e} s",
+                self.name, self.step
+            ))
+        })?;
         let (m, c) = self.mass_damping();
         self.integrator(m, c)
     }

@@ -33,8 +33,8 @@ impl ContactBody for FemBody {
     fn start_dynamic(&mut self, dt: f64) -> Result<(), FemError> {
         FemBody::start_dynamic(self, dt)
     }
-    fn retime(&mut self, dt: f64, factor: usize) -> Result<(), FemError> {
-        FemBody::retime(self, dt, factor)
+    fn retime(&mut self, dt: f64, scale: (usize, usize)) -> Result<(), FemError> {
+        FemBody::retime(self, dt, scale)
     }
     fn state(&self) -> &State {
         &self.state

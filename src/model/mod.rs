@@ -145,7 +145,7 @@ impl Model {
     }
 
     /// Warnings since the last call: e.g. an automatically chosen
-    /// sub-cycled scheme given up for the exact step
+    /// sub-cycled scheme given up for fewer substeps or the exact step
     /// ([`crate::coupling::CoupledModel::fall_back`]).
     pub fn take_notices(&mut self) -> Vec<String> {
         match &mut self.system {

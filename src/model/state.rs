@@ -44,8 +44,9 @@ use crate::dem::state::GranularState;
 /// 7: the granular state keeps the parallel bonds;
 /// 8: the coupled state records the automatic scheme's fallback;
 /// 9: the granular state keeps the clumps;
-/// 10: EFG bodies keep their grown cracks and their faces' friction.)
-pub const STATE_FORMAT_VERSION: u32 = 10;
+/// 10: EFG bodies keep their grown cracks and their faces' friction;
+/// 11: the automatic scheme's fallback records the substeps taken on.)
+pub const STATE_FORMAT_VERSION: u32 = 11;
 
 /// The evolving state of a model ([module docs](self)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

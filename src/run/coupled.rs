@@ -677,7 +677,7 @@ fn scheme_lines(m: &CoupledModel) -> String {
         s += &format!(
             "  {} if a body's scheme creates more than {} % of the work it exchanges with the discs for {GUARD_STEPS} body steps in a row\n",
             if c.automatic {
-                "the run goes on with the exact step"
+                "the run goes on with at most half the substeps (then the exact step)"
             } else {
                 "a run stops"
             },
