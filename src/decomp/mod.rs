@@ -119,21 +119,36 @@ impl Cut {
     /// centres, in slot order), of largest radius `max_radius`, with the
     /// search grid's `skin`.
     pub fn new(pos: &[Vec2], max_radius: f64, skin: f64, ranks: usize) -> Cut {
+        Cut::from_sample(&sample(pos, pos.len()), pos.len(), max_radius, skin, ranks)
+    }
+
+    /// [`new`](Self::new) from the centres of the `n_total` discs whose
+    /// slot is a multiple of [`sample_stride`]`(n_total)`, in slot order:
+    /// the same regions, without the other centres.
+    pub fn from_sample(
+        sample: &[Vec2],
+        n_total: usize,
+        max_radius: f64,
+        skin: f64,
+        ranks: usize,
+    ) -> Cut {
         Cut {
-            regions: Subdomains::bisect(&sample(pos, pos.len()), ranks),
-            n_total: pos.len(),
+            regions: Subdomains::bisect(sample, ranks),
+            n_total,
             max_radius,
             width: reach(max_radius, skin) + skin,
         }
     }
 
-    /// Which of the discs at `pos` rank `me` holds: those of its region and
-    /// those within [`width`](Self::width) of it.
+    /// Which of the discs at `pos` rank `me` holds ([`holds`](Self::holds)).
     pub fn keeps(&self, pos: &[Vec2], me: usize) -> Vec<bool> {
-        let mine = &self.regions.regions[me];
-        pos.iter()
-            .map(|&q| self.regions.owner(q) == me || mine.distance(q) <= self.width)
-            .collect()
+        pos.iter().map(|&q| self.holds(q, me)).collect()
+    }
+
+    /// Whether rank `me` holds a disc at `q`: one of its region, or within
+    /// [`width`](Self::width) of it.
+    pub fn holds(&self, q: Vec2, me: usize) -> bool {
+        self.regions.owner(q) == me || self.regions.regions[me].distance(q) <= self.width
     }
 }
 
@@ -1104,12 +1119,15 @@ fn reach(max_radius: f64, skin: f64) -> f64 {
     2.0 * max_radius + skin
 }
 
-/// At most [`SAMPLE`] of the centres, evenly strided.
+/// The stride of the centres of `n` discs that cut the regions: at most
+/// [`SAMPLE`] of them, evenly strided from the first.
+pub fn sample_stride(n: usize) -> usize {
+    n.div_ceil(SAMPLE).max(1)
+}
+
+/// At most [`SAMPLE`] of the centres ([`sample_stride`]).
 fn sample(pos: &[Vec2], n: usize) -> Vec<Vec2> {
-    pos.iter()
-        .step_by(n.div_ceil(SAMPLE).max(1))
-        .copied()
-        .collect()
+    pos.iter().step_by(sample_stride(n)).copied().collect()
 }
 
 /// The discs of a new part into `p`: each from a slot of `old` (of `p`
