@@ -20,7 +20,7 @@ use crate::decomp::comm::{Pack, Unpack};
 use crate::decomp::{Comm, Cut, sample_stride};
 use crate::dem::Granular;
 use crate::dem::packing::{DiscRow, lattice_each, overlapping_pairs};
-use crate::dem::particles::Particles;
+use crate::dem::particles::{Particles, SlotIndex};
 use crate::geom::Vec2;
 use std::borrow::Cow;
 
@@ -131,7 +131,7 @@ impl Whole {
     fn add(&mut self, d: &Disc) {
         let e = (d.id, d.mass, d.r, d.material);
         self.n += 1;
-        self.sum = self.sum + d.pos;
+        self.sum += d.pos;
         self.max_r = self.max_r.max(d.r);
         let m = d.material as usize;
         if self.materials.len() <= m {
@@ -264,10 +264,7 @@ fn discs_of_part(
             p.id[j] = d.id as u32;
         }
     })?;
-    p.slot = vec![u32::MAX; cut.n_total];
-    for (s, &id) in p.id.iter().enumerate() {
-        p.slot[id as usize] = s as u32;
-    }
+    p.slot = SlotIndex::of_part(cut.n_total, &p.id);
     Ok((p, start))
 }
 
