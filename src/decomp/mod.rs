@@ -753,8 +753,10 @@ impl Decomposed {
             Src::Got(g) => records[g as usize].key,
         };
         keep.sort_unstable_by_key(key_of);
-        let key: Vec<u64> = keep.iter().map(key_of).collect();
-        self.key = key;
+        // the keys in their new order, in place
+        let taken = taken_slots(&keep, self.key.len());
+        gather_in_place(&mut self.key, &keep, records, |r| r.key, &taken);
+        drop(taken);
         // what is read of the old part after its columns are replaced
         let p = &self.part.particles;
         let old_slot = |id: u32| p.slot.get(id as usize).copied().unwrap_or(GONE);
@@ -1156,15 +1158,7 @@ fn regather(
     // place)
     let taken = match old {
         Some(_) => Vec::new(),
-        None => {
-            let mut t = vec![0u64; p.len().div_ceil(64)];
-            for s in sources {
-                if let Src::Old(k) = *s {
-                    t[k as usize / 64] |= 1 << (k % 64);
-                }
-            }
-            t
-        }
+        None => taken_slots(sources, p.len()),
     };
     let col = Col(&taken);
     let (s, g) = (sources, got);
@@ -1224,6 +1218,17 @@ impl Col<'_> {
             None => gather_in_place(dst, sources, got, f, self.0),
         }
     }
+}
+
+/// The old slots (of `n`) that some of `sources` takes, a bit each.
+fn taken_slots(sources: &[Src], n: usize) -> Vec<u64> {
+    let mut t = vec![0u64; n.div_ceil(64)];
+    for s in sources {
+        if let Src::Old(k) = *s {
+            t[k as usize / 64] |= 1 << (k % 64);
+        }
+    }
+    t
 }
 
 /// `v[j]` made the old `v[k]` for each `sources[j] = Old(k)` and
@@ -1403,12 +1408,7 @@ mod tests {
                     Src::Got(k) => got[k as usize].id,
                 })
                 .collect();
-            let mut taken = vec![0u64; n.div_ceil(64)];
-            for s in &sources {
-                if let Src::Old(k) = *s {
-                    taken[k as usize / 64] |= 1 << (k % 64);
-                }
-            }
+            let taken = taken_slots(&sources, n);
             let mut v = old.clone();
             gather_in_place(&mut v, &sources, &got, |r| r.id, &taken);
             assert_eq!(v, want, "{n} slots");

@@ -1636,7 +1636,8 @@ fn granular_probe(
                 x0: match p.slot.get(id).map(|&s| s as usize) {
                     Some(s) if s < p.len() => p.pos[s],
                     // a part may hold neither the disc nor the whole's
-                    // start positions (then no probe reads `x0`)
+                    // start positions (`x0` serves `ux`, `uy`: coupled
+                    // runs only, which are not built in parts)
                     _ => g.start_of(id).unwrap_or(Vec2::ZERO),
                 },
             }

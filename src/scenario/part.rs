@@ -171,7 +171,7 @@ type WallHits = Vec<(usize, Vec<(usize, f64)>)>;
 
 /// A rank's part of the assembly of `sc` and the ranks' regions (see the
 /// [module docs](self)); the whole's start positions are kept only where
-/// they serve (rank 0's frames, a displacement probe).
+/// they serve (rank 0's frames).
 pub(super) fn granular(
     sc: &Scenario,
     purpose: BuildFor,
@@ -269,14 +269,10 @@ fn discs_of_part(
 }
 
 /// Whether rank `me` keeps the whole's start positions: rank 0 when it
-/// writes frames (their displacements), every rank for a probe of a
-/// disc's displacement (the disc may come to any rank).
+/// writes frames (their displacements; a probe of a disc's displacement
+/// is one of a coupled run, which is not built in parts).
 fn wants_start(sc: &Scenario, me: usize) -> bool {
-    let displacement = sc
-        .probe
-        .iter()
-        .any(|p| p.disc.is_some() && matches!(p.quantity.as_str(), "ux" | "uy"));
-    displacement || (me == 0 && sc.output.vtk_every != 0)
+    me == 0 && sc.output.vtk_every != 0
 }
 
 /// The pairs of discs of the whole that overlap at the start (collective):
