@@ -23,6 +23,8 @@
 #   ONLY="1x1 2x1" DISCS=500000 examples/mpi_ranks_bench.sh   # chosen runs only
 #   ONLY="2x1 half" DISCS=500000 examples/mpi_ranks_bench.sh   # a rank's memory against one
 #                                   # process with its share of the discs (DISCS/2)
+#   ONLY="4x1 quarter" DISCS=1000000 examples/mpi_ranks_bench.sh   # the same for 4 ranks
+#                                   # (DISCS/4; `quarter` runs after the ranks)
 #
 # (MPIRUN_ARGS as above for a machine shared with other work: ranks
 # neither pinned to a core nor spinning while they wait)
@@ -44,6 +46,12 @@ hwidth=$(python3 -c "print(3340.0 * $half / 100000)")
 sed -e "s/^steps = .*/steps = $steps/" -e "s/^every = .*/every = $steps/" \
     -e "s/^vtk_every = .*/vtk_every = 0/" -e "s/count = 100000/count = $half/" \
     -e "s/3340\.0/$hwidth/g" examples/settle_100k.toml >"$tmp/half.toml"
+# and with a quarter: a rank's share of 4 ranks
+quarter=$((discs / 4))
+qwidth=$(python3 -c "print(3340.0 * $quarter / 100000)")
+sed -e "s/^steps = .*/steps = $steps/" -e "s/^every = .*/every = $steps/" \
+    -e "s/^vtk_every = .*/vtk_every = 0/" -e "s/count = 100000/count = $quarter/" \
+    -e "s/3340\.0/$qwidth/g" examples/settle_100k.toml >"$tmp/quarter.toml"
 
 run() { # name ranks threads [scenario]
     local out="$tmp/$1" t0 t1 toml="$tmp/${4:-bench}.toml"
@@ -97,6 +105,7 @@ done
 for n in 3 4; do
     want "${n}x1" && run "${n}x1" "$n" 1
 done
+want quarter && run quarter 1 1 quarter
 python3 - "$tmp/results" <<'PY'
 import statistics, sys
 runs = {}
@@ -120,4 +129,10 @@ if "half" in runs and "2x1" in runs:
         print(f"peak memory per rank ÷ half: rank {k} of 2 {statistics.median(p) / one:.2f}"
               f" (its peak {statistics.median(p) / 2**20:.0f} MiB ÷ {one / 2**20:.0f} MiB"
               f" of one process with half the discs; target ≤ 1.20)")
+if "quarter" in runs and "4x1" in runs:
+    one = statistics.median(r[2][0] for r in runs["quarter"])
+    for k, p in enumerate(zip(*(r[2] for r in runs["4x1"]))):
+        print(f"peak memory per rank ÷ quarter: rank {k} of 4 {statistics.median(p) / one:.2f}"
+              f" (its peak {statistics.median(p) / 2**20:.0f} MiB ÷ {one / 2**20:.0f} MiB"
+              f" of one process with a quarter of the discs; target ≤ 1.20)")
 PY

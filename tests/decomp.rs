@@ -714,6 +714,102 @@ fn a_part_built_alone_is_the_share_of_the_whole() {
     }
 }
 
+/// A bad start state is refused on 2–4 thread ranks, each rank building
+/// its part alone, with the message of one process (`file:line: field:
+/// message`): overlapping pairs in several regions (more than the five
+/// listed), a disc crossing a wall, a wall through a generated packing, a
+/// wall too fast for the smallest disc, a time step above the critical
+/// step.
+#[test]
+fn a_bad_start_is_refused_on_ranks_as_in_one_process() {
+    let generated = settling(1200);
+    let whole = build(&generated);
+    let p = &whole.particles;
+    // discs 2, 152, 302, … moved onto their neighbour, disc 900
+    // onto the floor
+    let rows = |crossing: bool| -> Vec<String> {
+        (0..p.len())
+            .map(|k| {
+                let mut q = p.pos[k];
+                if k % 150 == 1 {
+                    q = p.pos[k - 1] + efgdem::geom::Vec2::new(0.001, 0.0);
+                }
+                if crossing && k == 899 {
+                    q.y = 0.001;
+                }
+                format!("[{:?}, {:?}, {:?}]", q.x, q.y, p.radius[k])
+            })
+            .collect()
+    };
+    let start = generated.find("discs = {").unwrap();
+    let end = start + generated[start..].find('\n').unwrap();
+    let inline = |rows: Vec<String>| {
+        format!(
+            "{}discs = [{}]{}",
+            &generated[..start],
+            rows.join(", "),
+            &generated[end..]
+        )
+    };
+    let wall = "[[wall]]\nname = \"cutter\"\nfrom = [0.1, -0.05]\nto = [0.1, 0.35]\n";
+    let through = generated.replacen("[[wall]]", &format!("{wall}\n[[wall]]"), 1);
+    let fast = generated.replace("[simulation]\n", "[simulation]\ndt = 1.0e-3\n");
+    let cases = [
+        (
+            inline(rows(false)),
+            "granular.discs",
+            "pair(s) of discs overlap",
+        ),
+        (
+            inline(rows(true)),
+            "granular.discs",
+            "pair(s) of discs overlap",
+        ),
+        (through, "wall[0]", "cross wall `cutter`"),
+        (fast.clone(), "wall[3].servo.max_velocity", "would move"),
+        (
+            fast.replace("max_velocity = 0.5", "max_velocity = 0.001"),
+            "simulation.dt",
+            "is above",
+        ),
+    ];
+    for (k, (src, field, what)) in cases.iter().enumerate() {
+        let sc = scenario::parse(src, "t.toml").unwrap();
+        let dir = std::env::temp_dir().join(format!("efgdem-bad-{k}-{}", std::process::id()));
+        let mut opts = efgdem::run::RunOptions::new(dir.clone());
+        opts.quiet = true;
+        let one = sc.build().err().map(|e| e.to_string());
+        let one = one.unwrap_or_else(|| panic!("case {k} builds"));
+        assert!(
+            one.contains(&format!("{field}: ")) && one.contains(what),
+            "{one}"
+        );
+        for ranks in 2..=4 {
+            let errs: Vec<String> = std::thread::scope(|s| {
+                let runs: Vec<_> = Threads::group(ranks)
+                    .into_iter()
+                    .map(|c| {
+                        let (sc, opts) = (&sc, &opts);
+                        s.spawn(move || {
+                            let e = efgdem::run::run_on(sc, opts, Arc::new(c)).unwrap_err();
+                            assert_eq!(e.exit_code(), 2, "{e}");
+                            e.to_string()
+                        })
+                    })
+                    .collect();
+                runs.into_iter().map(|r| r.join().unwrap()).collect()
+            });
+            for e in errs {
+                assert!(
+                    e.contains(&one),
+                    "case {k}, {ranks} ranks: {e}\nvs one process: {one}"
+                );
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
 /// [`a_part_built_alone_is_the_share_of_the_whole`] for scenario `src` on
 /// `ranks` ranks.
 fn part_alone_is_the_share(src: &str, ranks: usize) {
@@ -726,21 +822,13 @@ fn part_alone_is_the_share(src: &str, ranks: usize) {
                 let (sc, whole, crit) = (&sc, &whole, &crit);
                 s.spawn(move || {
                     let comm: Arc<dyn Comm> = Arc::new(c);
-                    let me = comm.rank();
                     let share = Decomposed::new(whole, comm.clone());
-                    let cut = std::cell::RefCell::new(None);
-                    let model = sc
-                        .build_part(None, &|pos, max_r, skin| {
-                            let c = efgdem::decomp::Cut::new(pos, max_r, skin, ranks);
-                            let keep = c.keeps(pos, me);
-                            *cut.borrow_mut() = Some(c);
-                            keep
-                        })
+                    let (model, cut) = sc
+                        .build_part(None, &*comm)
                         .unwrap()
                         .expect("a granular scenario is built in parts");
                     let mut g = model.into_granular().unwrap();
                     assert_eq!(g.dt.to_bits(), whole.dt.to_bits());
-                    let cut = cut.into_inner().unwrap();
                     let alone = Decomposed::from_part(&mut g, cut, comm);
                     let (a, b) = (&share.part.particles, &alone.part.particles);
                     assert!(ranks == 1 || b.len() < whole.particles.len());

@@ -43,8 +43,8 @@ pub mod near_bodies;
 pub mod regions;
 
 use crate::dem::Granular;
-use crate::dem::broadphase::{GridSpec, WallPair, centre_bounds};
-use crate::dem::particles::{GHOST, Particles};
+use crate::dem::broadphase::{GridSpec, WallPair};
+use crate::dem::particles::{GHOST, Particles, SlotIndex};
 use crate::dem::state::{GranularState, WallPairState, WallState};
 use crate::geom::Vec2;
 pub use comm::{Comm, Solo, Threads, Traffic};
@@ -119,21 +119,36 @@ impl Cut {
     /// centres, in slot order), of largest radius `max_radius`, with the
     /// search grid's `skin`.
     pub fn new(pos: &[Vec2], max_radius: f64, skin: f64, ranks: usize) -> Cut {
+        Cut::from_sample(&sample(pos, pos.len()), pos.len(), max_radius, skin, ranks)
+    }
+
+    /// [`new`](Self::new) from the centres of the `n_total` discs whose
+    /// slot is a multiple of [`sample_stride`]`(n_total)`, in slot order:
+    /// the same regions, without the other centres.
+    pub fn from_sample(
+        sample: &[Vec2],
+        n_total: usize,
+        max_radius: f64,
+        skin: f64,
+        ranks: usize,
+    ) -> Cut {
         Cut {
-            regions: Subdomains::bisect(&sample(pos, pos.len()), ranks),
-            n_total: pos.len(),
+            regions: Subdomains::bisect(sample, ranks),
+            n_total,
             max_radius,
             width: reach(max_radius, skin) + skin,
         }
     }
 
-    /// Which of the discs at `pos` rank `me` holds: those of its region and
-    /// those within [`width`](Self::width) of it.
+    /// Which of the discs at `pos` rank `me` holds ([`holds`](Self::holds)).
     pub fn keeps(&self, pos: &[Vec2], me: usize) -> Vec<bool> {
-        let mine = &self.regions.regions[me];
-        pos.iter()
-            .map(|&q| self.regions.owner(q) == me || mine.distance(q) <= self.width)
-            .collect()
+        pos.iter().map(|&q| self.holds(q, me)).collect()
+    }
+
+    /// Whether rank `me` holds a disc at `q`: one of its region, or within
+    /// [`width`](Self::width) of it.
+    pub fn holds(&self, q: Vec2, me: usize) -> bool {
+        self.regions.owner(q) == me || self.regions.regions[me].distance(q) <= self.width
     }
 }
 
@@ -651,14 +666,7 @@ impl Decomposed {
         let skin = self.part.grid.skin;
         let width = reach(self.max_radius, skin);
         // counts and the box of the owned centres, from every rank
-        let (lo, hi) = {
-            let p = &self.part.particles;
-            let owned: Vec<Vec2> = (0..p.len())
-                .filter(|&s| p.fixity[s] & GHOST == 0)
-                .map(|s| p.pos[s])
-                .collect();
-            centre_bounds(&owned)
-        };
+        let (lo, hi) = owned_bounds(&self.part.particles);
         // and how many discs each region would own now
         let mut mine = vec![0u64; size];
         let p = &self.part.particles;
@@ -701,14 +709,11 @@ impl Decomposed {
     /// Cut the regions again from a sample of every rank's centres.
     fn recut(&mut self) {
         let p = &self.part.particles;
-        let owned: Vec<Vec2> = (0..p.len())
-            .filter(|&s| p.fixity[s] & GHOST == 0)
-            .map(|s| p.pos[s])
-            .collect();
+        let owned = (0..p.len()).filter(|&s| p.fixity[s] & GHOST == 0);
         let stride = self.n_total.div_ceil(SAMPLE * self.comm.size()).max(1);
         let mut b = Pack::default();
-        for q in owned.iter().step_by(stride) {
-            b.vec2(*q);
+        for s in owned.step_by(stride) {
+            b.vec2(p.pos[s]);
         }
         let mut pts = Vec::new();
         for b in self.comm.all_gather(&b.0) {
@@ -729,7 +734,7 @@ impl Decomposed {
     /// part's discs in key order from what stays and what arrives, with
     /// the contact list moved onto them. Beyond the part, a rank holds
     /// a few bytes per disc while it does (its new order, the old ghost
-    /// flags, one column of the part being replaced).
+    /// flags; the columns are rearranged in place).
     fn migrate(&mut self, width: f64) {
         let me = self.comm.rank();
         let (send, mut keep) = self.outgoing(width);
@@ -748,8 +753,10 @@ impl Decomposed {
             Src::Got(g) => records[g as usize].key,
         };
         keep.sort_unstable_by_key(key_of);
-        let key: Vec<u64> = keep.iter().map(key_of).collect();
-        self.key = key;
+        // the keys in their new order, in place
+        let taken = taken_slots(&keep, self.key.len());
+        gather_in_place(&mut self.key, &keep, records, |r| r.key, &taken);
+        drop(taken);
         // what is read of the old part after its columns are replaced
         let p = &self.part.particles;
         let old_slot = |id: u32| p.slot.get(id as usize).copied().unwrap_or(GONE);
@@ -1099,23 +1106,47 @@ impl Decomposed {
     }
 }
 
+/// The box of the finite centres of the discs `p` owns (not its ghosts),
+/// as [`centre_bounds`](crate::dem::broadphase::centre_bounds) of them,
+/// without a list of them.
+fn owned_bounds(p: &Particles) -> (Vec2, Vec2) {
+    let none = (
+        Vec2::new(f64::INFINITY, f64::INFINITY),
+        Vec2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+    );
+    (0..p.len())
+        .filter(|&s| p.fixity[s] & GHOST == 0)
+        .map(|s| p.pos[s])
+        .filter(|q| q.x.is_finite() && q.y.is_finite())
+        .fold(none, |(a, b), q| {
+            (
+                Vec2::new(a.x.min(q.x), a.y.min(q.y)),
+                Vec2::new(b.x.max(q.x), b.y.max(q.y)),
+            )
+        })
+}
+
 /// Reach of a disc: the largest centre distance of a listed pair.
 fn reach(max_radius: f64, skin: f64) -> f64 {
     2.0 * max_radius + skin
 }
 
-/// At most [`SAMPLE`] of the centres, evenly strided.
+/// The stride of the centres of `n` discs that cut the regions: at most
+/// [`SAMPLE`] of them, evenly strided from the first.
+pub fn sample_stride(n: usize) -> usize {
+    n.div_ceil(SAMPLE).max(1)
+}
+
+/// At most [`SAMPLE`] of the centres ([`sample_stride`]).
 fn sample(pos: &[Vec2], n: usize) -> Vec<Vec2> {
-    pos.iter()
-        .step_by(n.div_ceil(SAMPLE).max(1))
-        .copied()
-        .collect()
+    pos.iter().step_by(sample_stride(n)).copied().collect()
 }
 
 /// The discs of a new part into `p`: each from a slot of `old` (of `p`
-/// itself when `None`, whose columns are then replaced one at a time, so
-/// that the old and new parts are never whole together) or a received
-/// record; `slot` sized for the `n_total` ids of the whole assembly.
+/// itself when `None`, whose columns are then rearranged in place one at
+/// a time: no second column is made) or a received
+/// record; `slot` indexes the part's ids among the `n_total` of the whole
+/// assembly ([`SlotIndex::of_part`]).
 fn regather(
     p: &mut Particles,
     old: Option<&Particles>,
@@ -1123,52 +1154,141 @@ fn regather(
     got: &[Record],
     n_total: usize,
 ) {
-    fn col<T: Copy>(
-        dst: &mut Vec<T>,
-        old: Option<&Vec<T>>,
-        sources: &[Src],
-        got: &[Record],
-        f: impl Fn(&Record) -> T,
-    ) {
-        let mine = std::mem::take(dst);
-        let old = old.unwrap_or(&mine);
-        *dst = sources
-            .iter()
-            .map(|s| match *s {
-                Src::Old(k) => old[k as usize],
-                Src::Got(k) => f(&got[k as usize]),
-            })
-            .collect();
-    }
+    // the old slots some source takes (when the columns are replaced in
+    // place)
+    let taken = match old {
+        Some(_) => Vec::new(),
+        None => taken_slots(sources, p.len()),
+    };
+    let col = Col(&taken);
     let (s, g) = (sources, got);
-    col(&mut p.id, old.map(|o| &o.id), s, g, |r| r.id);
-    col(&mut p.pos, old.map(|o| &o.pos), s, g, |r| r.pos);
-    col(&mut p.vel, old.map(|o| &o.vel), s, g, |r| r.vel);
-    col(&mut p.theta, old.map(|o| &o.theta), s, g, |r| r.theta);
-    col(&mut p.omega, old.map(|o| &o.omega), s, g, |r| r.omega);
-    col(&mut p.radius, old.map(|o| &o.radius), s, g, |r| r.radius);
-    col(&mut p.mass, old.map(|o| &o.mass), s, g, |r| r.mass);
-    col(&mut p.inertia, old.map(|o| &o.inertia), s, g, |r| r.inertia);
-    col(&mut p.inv_mass, old.map(|o| &o.inv_mass), s, g, |r| {
+    col.put(&mut p.id, old.map(|o| &o.id), s, g, |r| r.id);
+    col.put(&mut p.pos, old.map(|o| &o.pos), s, g, |r| r.pos);
+    col.put(&mut p.vel, old.map(|o| &o.vel), s, g, |r| r.vel);
+    col.put(&mut p.theta, old.map(|o| &o.theta), s, g, |r| r.theta);
+    col.put(&mut p.omega, old.map(|o| &o.omega), s, g, |r| r.omega);
+    col.put(&mut p.radius, old.map(|o| &o.radius), s, g, |r| r.radius);
+    col.put(&mut p.mass, old.map(|o| &o.mass), s, g, |r| r.mass);
+    col.put(&mut p.inertia, old.map(|o| &o.inertia), s, g, |r| r.inertia);
+    col.put(&mut p.inv_mass, old.map(|o| &o.inv_mass), s, g, |r| {
         r.inv_mass
     });
     let inv_inertia = old.map(|o| &o.inv_inertia);
-    col(&mut p.inv_inertia, inv_inertia, s, g, |r| r.inv_inertia);
-    col(&mut p.force, old.map(|o| &o.force), s, g, |r| r.force);
-    col(&mut p.torque, old.map(|o| &o.torque), s, g, |r| r.torque);
-    col(&mut p.fixity, old.map(|o| &o.fixity), s, g, |r| r.fixity);
-    col(&mut p.material, old.map(|o| &o.material), s, g, |r| {
+    col.put(&mut p.inv_inertia, inv_inertia, s, g, |r| r.inv_inertia);
+    col.put(&mut p.force, old.map(|o| &o.force), s, g, |r| r.force);
+    col.put(&mut p.torque, old.map(|o| &o.torque), s, g, |r| r.torque);
+    col.put(&mut p.fixity, old.map(|o| &o.fixity), s, g, |r| r.fixity);
+    col.put(&mut p.material, old.map(|o| &o.material), s, g, |r| {
         r.material
     });
     // clumped assemblies are not decomposed
     // in place: the old part's are not kept beside the new ones
     p.clump.clear();
     p.clump.resize(p.id.len(), crate::dem::clumps::NO_CLUMP);
-    p.slot.clear();
-    p.slot.resize(n_total, GONE);
-    for (k, &i) in p.id.iter().enumerate() {
-        p.slot[i as usize] = k as u32;
+    // the ids of the part among those of the whole (the old index let go
+    // first)
+    p.slot = Default::default();
+    p.slot = SlotIndex::of_part(n_total, &p.id);
+}
+
+/// A column of a new part made from `sources` ([`regather`]): from the
+/// old part's column, or in place ([`gather_in_place`], the old slots
+/// some source takes marked in the bits held).
+struct Col<'a>(&'a [u64]);
+
+impl Col<'_> {
+    fn put<T: Copy + Default>(
+        &self,
+        dst: &mut Vec<T>,
+        old: Option<&Vec<T>>,
+        sources: &[Src],
+        got: &[Record],
+        f: impl Fn(&Record) -> T,
+    ) {
+        match old {
+            Some(old) => {
+                *dst = sources
+                    .iter()
+                    .map(|s| match *s {
+                        Src::Old(k) => old[k as usize],
+                        Src::Got(k) => f(&got[k as usize]),
+                    })
+                    .collect()
+            }
+            None => gather_in_place(dst, sources, got, f, self.0),
+        }
     }
+}
+
+/// The old slots (of `n`) that some of `sources` takes, a bit each.
+fn taken_slots(sources: &[Src], n: usize) -> Vec<u64> {
+    let mut t = vec![0u64; n.div_ceil(64)];
+    for s in sources {
+        if let Src::Old(k) = *s {
+            t[k as usize / 64] |= 1 << (k % 64);
+        }
+    }
+    t
+}
+
+/// `v[j]` made the old `v[k]` for each `sources[j] = Old(k)` and
+/// `f(got[g])` for each `Got(g)`, in place: no second column is made. The
+/// moves follow the map's chains (from a slot whose old content no
+/// source takes, `taken` marking those some source takes) and then its
+/// cycles (through one value held aside); the arrivals come last.
+fn gather_in_place<T: Copy + Default>(
+    v: &mut Vec<T>,
+    sources: &[Src],
+    got: &[Record],
+    f: impl Fn(&Record) -> T,
+    taken: &[u64],
+) {
+    let (n, m) = (v.len(), sources.len());
+    if m > n {
+        v.resize(m, T::default());
+    }
+    let from = |j: usize| match sources.get(j) {
+        Some(&Src::Old(k)) => Some(k as usize),
+        _ => None,
+    };
+    let bit = |b: &[u64], i: usize| (b[i / 64] >> (i % 64)) & 1 != 0;
+    let mut done = vec![0u64; m.div_ceil(64)];
+    for j in 0..m {
+        if (j < n && bit(taken, j)) || from(j).is_none() {
+            continue;
+        }
+        // a chain: each slot takes the next one's content, which its
+        // slot then no longer needs
+        let mut cur = j;
+        while let Some(k) = from(cur) {
+            v[cur] = v[k];
+            done[cur / 64] |= 1 << (cur % 64);
+            cur = k;
+        }
+    }
+    for j in 0..m {
+        if bit(&done, j) || from(j).is_none() {
+            continue;
+        }
+        // a cycle (every slot left is on one)
+        let first = v[j];
+        let mut cur = j;
+        while let Some(k) = from(cur) {
+            done[cur / 64] |= 1 << (cur % 64);
+            if k == j {
+                v[cur] = first;
+                break;
+            }
+            v[cur] = v[k];
+            cur = k;
+        }
+    }
+    for (j, s) in sources.iter().enumerate() {
+        if let Src::Got(g) = *s {
+            v[j] = f(&got[g as usize]);
+        }
+    }
+    v.truncate(m);
 }
 
 fn pack_disc(b: &mut Pack, p: &Particles, s: usize, key: u64, owned: bool) {
@@ -1237,4 +1357,61 @@ fn unpack_term(u: &mut Unpack) -> (u64, crate::dem::WallTerm) {
             cn,
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The in-place gather is the gather into a new column: chains, cycles,
+    /// a fixed point, arrivals, slots let go, a part that grows or
+    /// shrinks.
+    #[test]
+    fn a_column_gathered_in_place_is_the_gathered_column() {
+        let rec = |x: u32| Record {
+            id: x,
+            key: 0,
+            owned: true,
+            pos: Vec2::ZERO,
+            vel: Vec2::ZERO,
+            theta: 0.0,
+            omega: 0.0,
+            radius: 0.0,
+            mass: 0.0,
+            inertia: 0.0,
+            inv_mass: 0.0,
+            inv_inertia: 0.0,
+            force: Vec2::ZERO,
+            torque: 0.0,
+            fixity: 0,
+            material: 0,
+        };
+        let got: Vec<Record> = (100..110).map(rec).collect();
+        let (o, g) = (Src::Old, Src::Got);
+        let cases: Vec<(usize, Vec<Src>)> = vec![
+            // a cycle 0→1→2→0, a fixed point, a chain 4←5←6 from a free slot
+            (7, vec![o(1), o(2), o(0), o(3), o(5), o(6), g(0)]),
+            // grows: old slots move up, arrivals between them
+            (4, vec![g(0), o(0), o(1), g(1), o(2), o(3), g(2)]),
+            // shrinks: slots let go, the rest moves down, reversed
+            (8, vec![o(7), o(5), g(3), o(2), o(0)]),
+            (3, vec![g(0), g(1)]),
+            (0, vec![g(4), g(5)]),
+            (5, vec![]),
+        ];
+        for (n, sources) in cases {
+            let old: Vec<u32> = (0..n as u32).collect();
+            let want: Vec<u32> = sources
+                .iter()
+                .map(|s| match *s {
+                    Src::Old(k) => old[k as usize],
+                    Src::Got(k) => got[k as usize].id,
+                })
+                .collect();
+            let taken = taken_slots(&sources, n);
+            let mut v = old.clone();
+            gather_in_place(&mut v, &sources, &got, |r| r.id, &taken);
+            assert_eq!(v, want, "{n} slots");
+        }
+    }
 }

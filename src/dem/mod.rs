@@ -371,6 +371,12 @@ impl Granular {
         self.start[id]
     }
 
+    /// [`start_position`](Self::start_position), if the assembly holds it
+    /// (a part of an assembly built alone holds it only where it serves).
+    pub fn start_of(&self, id: usize) -> Option<Vec2> {
+        self.start.get(id).copied()
+    }
+
     /// Displacement of the disc in `slot` since the assembly was made (for a
     /// scenario: since t = 0, after any preparation).
     pub fn displacement(&self, slot: usize) -> Vec2 {

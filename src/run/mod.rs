@@ -11,7 +11,7 @@ mod ranks;
 pub mod recap;
 mod session;
 
-use crate::decomp::{Comm, Cut, Solo};
+use crate::decomp::{Comm, Solo};
 use crate::model::{Model, ModelError, System};
 use crate::scenario::prepare::{Bed, PrepareError, prepare};
 use crate::scenario::{Scenario, ScenarioError, build};
@@ -252,16 +252,11 @@ pub fn run_on(
     let bed = prepare_packing(sc, opts, opts.quiet || !root)?;
     let spin = progress::spinner("building the model", opts.quiet || !root);
     // a fresh granular run on ranks: each builds only the discs it holds
-    let cut = std::cell::RefCell::new(None);
     let part = match ranks > 1 && opts.restart.is_none() {
-        true => sc.build_part(bed.as_ref().map(|b| &b.rows[..]), &|pos, max_r, skin| {
-            let c = Cut::new(pos, max_r, skin, ranks);
-            let keep = c.keeps(pos, comm.rank());
-            *cut.borrow_mut() = Some(c);
-            keep
-        })?,
+        true => sc.build_part(bed.as_ref().map(|b| &b.rows[..]), &*comm)?,
         false => None,
     };
+    let (part, cut) = part.map_or((None, None), |(m, c)| (Some(m), Some(c)));
     let mut model = match (part, &bed) {
         (Some(m), _) => m,
         (None, Some(b)) => sc.build_prepared(&b.rows)?,
@@ -307,7 +302,7 @@ pub fn run_on(
     let result = match model.system {
         System::Granular(ref g) if ranks > 1 => match ranks::discs_refusal(g) {
             Some(why) => Err(RunError::Ranks(why.into())),
-            None => ranks::run(run, model, comm, cut.into_inner()),
+            None => ranks::run(run, model, comm, cut),
         },
         System::Continuum { .. } if ranks > 1 => Err(RunError::Ranks(format!(
             "a continuum scenario (bodies without discs) does not run on several ranks: run it with one process (not under mpirun -np {ranks})"

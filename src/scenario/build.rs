@@ -19,13 +19,14 @@ use crate::continuum::ComplianceMode;
 use crate::continuum::Continuum;
 use crate::coupling::CoupledModel;
 use crate::coupling::scheme::{self, Scheme};
+use crate::decomp::{Comm, Cut};
 use crate::dem::clumps::{Clumps, NO_CLUMP};
 use crate::dem::contact::{ContactLaw, SlipNormal};
 use crate::dem::packing::{
-    DiscRow, Lattice, grow_in_box, lattice_capacity, lattice_each, lattice_packing,
-    overlapping_pairs,
+    DiscRow, Lattice, grow_in_box, lattice_capacity, lattice_packing, overlapping_pairs,
 };
 use crate::dem::particles::Particles;
+use crate::dem::walls::Wall;
 use crate::dem::{BodyDamping, DT_WARN, Granular};
 use crate::efg::EfgBody;
 use crate::efg::boundary::EfgContinuum;
@@ -193,7 +194,7 @@ impl std::fmt::Display for Preparation {
 
 /// The discs the scenario describes (generating, preparing or reading
 /// them), before any is removed for a body.
-fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> {
+pub(super) fn disc_rows(sc: &Scenario, purpose: BuildFor) -> Result<Vec<DiscRow>, Invalid> {
     let g = spec(sc)?;
     let t = match &g.discs {
         DiscsSpec::Inline(rows) => {
@@ -274,17 +275,17 @@ pub(super) fn loose_rows(sc: &Scenario, t: &DiscsTable) -> Result<Vec<DiscRow>, 
 
 /// Where a generator places its discs: lattice, box, radii, and the gap
 /// and jitter of its sites.
-struct LatticeArgs {
-    lattice: Lattice,
-    lo: Vec2,
-    hi: Vec2,
-    radius: (f64, f64),
-    gap: f64,
-    jitter: f64,
+pub(super) struct LatticeArgs {
+    pub(super) lattice: Lattice,
+    pub(super) lo: Vec2,
+    pub(super) hi: Vec2,
+    pub(super) radius: (f64, f64),
+    pub(super) gap: f64,
+    pub(super) jitter: f64,
 }
 
 /// The lattice of the generated packing `t`.
-fn lattice_of(t: &DiscsTable) -> Result<LatticeArgs, Invalid> {
+pub(super) fn lattice_of(t: &DiscsTable) -> Result<LatticeArgs, Invalid> {
     let kind = t
         .generate
         .ok_or_else(|| bad("granular.discs", "nothing to generate"))?;
@@ -308,68 +309,6 @@ fn lattice_of(t: &DiscsTable) -> Result<LatticeArgs, Invalid> {
         gap,
         jitter,
     })
-}
-
-/// The whole assembly's columns that choose a part and check its start
-/// state (centres, radii, masses, materials; plain ids, no clumps), made
-/// disc by disc from the scenario's discs inside `[granular] keep`: a
-/// packing used as generated is never listed as rows, a prepared bed is
-/// read where it is. As [`disc_rows`] and [`kept`] with [`disc_of`].
-fn whole_columns(sc: &Scenario, purpose: BuildFor, default_mat: u16) -> Result<Particles, Invalid> {
-    let keep = spec(sc)?.keep;
-    let mut w = Particles::default();
-    let (mut seen, mut failed) = (0usize, None);
-    let mut put = |r: &DiscRow| {
-        seen += 1;
-        if failed.is_some() || keep.is_some_and(|k| !k.holds(r.pos, r.r)) {
-            return;
-        }
-        match disc_of(sc, w.pos.len(), r, default_mat) {
-            Ok((mi, mass, _)) => {
-                w.pos.push(r.pos);
-                w.radius.push(r.r);
-                w.mass.push(mass);
-                w.material.push(mi);
-            }
-            Err(e) => failed = Some(e),
-        }
-    };
-    let generated = match &spec(sc)?.discs {
-        DiscsSpec::Table(t) if t.csv.is_none() && preparation(sc).is_none() => Some(t),
-        _ => None,
-    };
-    match (generated, purpose) {
-        (Some(t), _) => {
-            let l = lattice_of(t)?;
-            let mut each = |pos, r| {
-                put(&DiscRow {
-                    pos,
-                    r,
-                    material: None,
-                })
-            };
-            let (lat, radius, count) = (l.lattice, l.radius, t.count);
-            lattice_each(
-                lat, l.lo, l.hi, radius, count, l.gap, l.jitter, t.seed, &mut each,
-            )
-            .map_err(|e| bad("granular.discs", e))?;
-        }
-        (None, BuildFor::Prepared(rows)) if preparation(sc).is_some() => rows.iter().for_each(put),
-        (None, _) => disc_rows(sc, purpose)?.iter().for_each(put),
-    }
-    if let Some(e) = failed {
-        return Err(e);
-    }
-    if w.pos.is_empty() && seen > 0 && keep.is_some() {
-        return Err(bad(
-            "granular.keep",
-            format!("none of the {seen} discs lies inside the circle"),
-        ));
-    }
-    let n = w.pos.len();
-    w.id = (0..n as u32).collect();
-    w.clump = vec![NO_CLUMP; n];
-    Ok(w)
 }
 
 /// The discs of `rows` inside `[granular] keep` (all without it), in
@@ -409,52 +348,27 @@ pub fn body_laws(sc: &Scenario, mats: &[ContactLaw]) -> Vec<ContactLaw> {
 /// Build the assembly described by the scenario. `dt` is the scenario's,
 /// or [`DT_SAFETY`] × the critical step.
 pub fn granular(sc: &Scenario) -> Result<Granular, Invalid> {
-    granular_with(sc, BuildFor::Run, None)
+    granular_with(sc, BuildFor::Run)
 }
 
-/// Which discs of the whole assembly a part of it holds: called with the
-/// whole's centres (in slot order), its largest radius and the search
-/// grid's skin, it returns a mask over those discs.
-pub type Select<'a> = &'a dyn Fn(&[Vec2], f64, f64) -> Vec<bool>;
-
-/// The assembly, or with `select` a part of it ([`part`]).
-fn granular_with(
-    sc: &Scenario,
-    purpose: BuildFor,
-    select: Option<Select>,
-) -> Result<Granular, Invalid> {
+/// The assembly for `purpose` ([`BuildFor`]).
+fn granular_with(sc: &Scenario, purpose: BuildFor) -> Result<Granular, Invalid> {
     let g = spec(sc)?;
-    // a part: the whole's columns that choose its discs and that the
-    // start-state checks read, without the whole's rows
-    let (rows, groups, whole) = match select {
-        Some(_) => {
-            let default_mat = material_index(sc, &g.material, "granular.material")?;
-            let whole = whole_columns(sc, purpose, default_mat)?;
-            (Vec::new(), Vec::new(), Some(whole))
-        }
-        None => {
-            let (rows, groups) = assembly_rows(sc, purpose)?;
-            (rows, groups, None)
-        }
-    };
+    let (rows, groups) = assembly_rows(sc, purpose)?;
     let default_mat = material_index(sc, &g.material, "granular.material")?;
-    let (mats, body) = laws(sc, &g.damping);
     let v0 = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
-    // a part's discs are made at the end, from the whole's columns
     let mut p = Particles::default();
-    if whole.is_none() {
-        reserve(&mut p, rows.len())?;
-        for (k, r) in rows.iter().enumerate() {
-            let (mi, ..) = disc_of(sc, k, r, default_mat)?;
-            p.push(
-                r.pos,
-                r.r,
-                sc.material[mi as usize].density,
-                g.thickness,
-                mi,
-            );
-            p.vel[k] = v0;
-        }
+    reserve(&mut p, rows.len())?;
+    for (k, r) in rows.iter().enumerate() {
+        let (mi, ..) = disc_of(sc, k, r, default_mat)?;
+        p.push(
+            r.pos,
+            r.r,
+            sc.material[mi as usize].density,
+            g.thickness,
+            mi,
+        );
+        p.vel[k] = v0;
     }
     drop(rows);
     let mut clumps = Clumps::default();
@@ -468,9 +382,24 @@ fn granular_with(
             bad(&at, e)
         })?;
     }
-    let walls = super::granular::walls(sc, whole.as_ref().map_or(&p.pos, |w| &w.pos))?;
-    let mut gr = Granular::new(p, mats, walls, 1.0);
+    let sum = p.pos.iter().fold(Vec2::ZERO, |s, &x| s + x);
+    let walls = super::granular::walls(sc, super::granular::centroid(sum, p.len()))?;
+    let mut gr = assembly(sc, p, walls)?;
     gr.clumps = clumps;
+    gr.dt = time_step(sc, &gr)?;
+    super::granular::check_wall_speeds(sc, &gr)?;
+    if let Some(s) = g.skin {
+        gr.set_skin(s);
+    }
+    Ok(gr)
+}
+
+/// The assembly of the discs `p` with the scenario's `walls`, contact
+/// laws, damping, gravity, thickness and bond law (no time step yet).
+pub(super) fn assembly(sc: &Scenario, p: Particles, walls: Vec<Wall>) -> Result<Granular, Invalid> {
+    let g = spec(sc)?;
+    let (mats, body) = laws(sc, &g.damping);
+    let mut gr = Granular::new(p, mats, walls, 1.0);
     gr.damping = body;
     gr.gravity = Vec2::from(sc.simulation.gravity);
     gr.thickness = g.thickness;
@@ -479,42 +408,24 @@ fn granular_with(
         gr.bonds.law = law;
         gr.bonds.rule = Some(rule);
     }
-    // a part's time step and checks are those of the whole; its start
-    // positions are the whole's (set at the end)
-    let mut whole = whole.map(|w| gr.with_discs(w));
-    gr.dt = match sc.simulation.dt {
+    Ok(gr)
+}
+
+/// The time step of the assembly whose discs are those of `g` (or those
+/// that decide its critical step): the scenario's, or [`DT_SAFETY`] × the
+/// critical step; an error if it is not finite and positive.
+pub(super) fn time_step(sc: &Scenario, g: &Granular) -> Result<f64, Invalid> {
+    let dt = match sc.simulation.dt {
         Some(dt) => dt,
-        None => {
-            let g = whole.as_ref().unwrap_or(&gr);
-            DT_SAFETY * g.critical_step(&body_laws(sc, &gr.materials)).dt
-        }
+        None => DT_SAFETY * g.critical_step(&body_laws(sc, &g.materials)).dt,
     };
-    if !gr.dt.is_finite() || gr.dt <= 0.0 {
+    if !dt.is_finite() || dt <= 0.0 {
         return Err(bad(
             "simulation.dt",
             "cannot choose a time step: give simulation.dt (no contact stiffness to derive it from)",
         ));
     }
-    if let Some(w) = whole.as_mut() {
-        w.dt = gr.dt;
-    }
-    super::granular::check_wall_speeds(sc, whole.as_ref().unwrap_or(&gr))?;
-    if let Some(s) = g.skin {
-        gr.set_skin(s);
-    }
-    if let (Some(w), Some(select)) = (whole, select) {
-        start_state(sc, &w, purpose)?;
-        let mut w = w.particles;
-        // the checks' columns are done with: the part is made without them
-        (w.mass, w.id, w.clump) = Default::default();
-        let max_r = w.max_radius();
-        let skin = g.skin.unwrap_or(default_skin(max_r));
-        gr.set_skin(skin);
-        let keep = select(&w.pos, max_r, skin);
-        gr.particles = part_of(sc, &mut w, &keep, v0)?;
-        gr.set_start(w.pos);
-    }
-    Ok(gr)
+    Ok(dt)
 }
 
 /// The discs of the assembly as rows (those inside `[granular] keep`,
@@ -542,7 +453,7 @@ fn assembly_rows(
 }
 
 /// `p` with room for `n` discs, or the error that they do not fit.
-fn reserve(p: &mut Particles, n: usize) -> Result<(), Invalid> {
+pub(super) fn reserve(p: &mut Particles, n: usize) -> Result<(), Invalid> {
     p.try_reserve(n).map_err(|e| {
         bad(
             "granular.discs",
@@ -553,50 +464,10 @@ fn reserve(p: &mut Particles, n: usize) -> Result<(), Invalid> {
     })
 }
 
-/// The discs `keep` holds of the whole `w` (centres, radii, materials),
-/// with the whole's ids, at velocity `v0`. The whole's radii and
-/// materials are cut down to the kept discs first (its centres stay: they
-/// are the start positions).
-fn part_of(
-    sc: &Scenario,
-    w: &mut Particles,
-    keep: &[bool],
-    v0: Vec2,
-) -> Result<Particles, Invalid> {
-    fn kept_only<T>(v: &mut Vec<T>, keep: &[bool]) {
-        let mut k = keep.iter();
-        v.retain(|_| k.next().is_some_and(|&k| k));
-        v.shrink_to_fit();
-    }
-    kept_only(&mut w.radius, keep);
-    kept_only(&mut w.material, keep);
-    let thickness = spec(sc)?.thickness;
-    let mut p = Particles::default();
-    reserve(&mut p, w.radius.len())?;
-    for (j, k) in (0..keep.len()).filter(|&k| keep[k]).enumerate() {
-        let mi = w.material[j];
-        p.push(
-            w.pos[k],
-            w.radius[j],
-            sc.material[mi as usize].density,
-            thickness,
-            mi,
-        );
-        p.vel[j] = v0;
-        // the whole's numbering
-        p.id[j] = k as u32;
-    }
-    p.slot = vec![u32::MAX; keep.len()];
-    for (s, &id) in p.id.iter().enumerate() {
-        p.slot[id as usize] = s as u32;
-    }
-    Ok(p)
-}
-
 /// The material of disc `k` (row `r`; its own or the section's
 /// `default_mat`) and its mass and moment of inertia, which must be finite
 /// and positive.
-fn disc_of(
+pub(super) fn disc_of(
     sc: &Scenario,
     k: usize,
     r: &DiscRow,
@@ -650,7 +521,7 @@ fn disc_of(
 
 /// The search grid's skin of discs of largest radius `max_r` when the
 /// scenario gives none ([`Granular::new`]'s).
-fn default_skin(max_r: f64) -> f64 {
+pub(super) fn default_skin(max_r: f64) -> f64 {
     0.1 * max_r.max(f64::MIN_POSITIVE)
 }
 
@@ -711,7 +582,7 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
     // the scheme is chosen with the discs as generated (the preparation
     // moves them, it does not change their masses or radii): a scenario
     // `run` would refuse is refused before any preparation, as `check` does
-    let granular = granular_with(sc, BuildFor::Check, None)?;
+    let granular = granular_with(sc, BuildFor::Check)?;
     let substeps = sc.simulation.substeps.fixed().unwrap_or(1).max(1);
     let body_dt = granular.dt * substeps as f64;
     let mode = match sc.simulation.contact_solve {
@@ -801,7 +672,7 @@ fn coupled(sc: &Scenario, purpose: BuildFor) -> Result<CoupledModel, Invalid> {
     // the discs of the run: prepared (here or by the caller), with those a
     // body placed after the preparation overlaps removed
     if purpose != BuildFor::Check && preparation(sc).is_some() {
-        m.granular = granular_with(sc, purpose, None)?;
+        m.granular = granular_with(sc, purpose)?;
     }
     Ok(m)
 }
@@ -860,7 +731,7 @@ pub fn model_with(sc: &Scenario, purpose: BuildFor) -> Result<Model, Invalid> {
             }
         }
         super::Kind::Granular => {
-            let g = granular_with(sc, purpose, None)?;
+            let g = granular_with(sc, purpose)?;
             Model {
                 dt: g.dt,
                 steps: steps_of(sc, g.dt),
@@ -888,19 +759,23 @@ pub fn model_with(sc: &Scenario, purpose: BuildFor) -> Result<Model, Invalid> {
     Ok(model)
 }
 
-/// A part of a granular scenario's model: the discs that `select` keeps of
+/// A rank's part of a granular scenario's model, with the regions of the
+/// ranks of `comm` (collective): the discs the cut keeps for this rank of
 /// the whole assembly (their ids those of the whole), with the whole's
-/// walls, laws and time step, every check of the start state made on the
-/// whole; its start positions are the whole's (by id). The whole's
-/// `Particles` are never made: the peak is the part's plus a few columns
-/// of the whole (centres, radii, masses, materials). `None` for what is
-/// not a plain granular scenario (bodies, bonds, clumps).
-pub fn part(sc: &Scenario, purpose: BuildFor, select: Select) -> Result<Option<Model>, Invalid> {
+/// walls, laws and time step and every check of the start state the whole
+/// would pass or fail ([`super::part`]). The whole assembly is never made.
+/// `None` for what is not a plain granular scenario (bodies, bonds,
+/// clumps).
+pub fn part(
+    sc: &Scenario,
+    purpose: BuildFor,
+    comm: &dyn Comm,
+) -> Result<Option<(Model, Cut)>, Invalid> {
     if super::kind(sc) != super::Kind::Granular || sc.bonds.is_some() || sc.clumps.is_some() {
         return Ok(None);
     }
     check_memory(sc)?;
-    let g = granular_with(sc, purpose, Some(select))?;
+    let (g, cut) = super::part::granular(sc, purpose, comm)?;
     let model = Model {
         dt: g.dt,
         steps: steps_of(sc, g.dt),
@@ -911,7 +786,7 @@ pub fn part(sc: &Scenario, purpose: BuildFor, select: Select) -> Result<Option<M
         return Err(bad(&path, message));
     }
     probes(sc, &model)?;
-    Ok(Some(model))
+    Ok(Some((model, cut)))
 }
 
 /// Bytes per disc assumed by [`memory_estimate`]: the disc arrays (≈ 125
@@ -1285,6 +1160,134 @@ pub const START_OVERLAP_TOL: f64 = 1e-3;
 /// checked against the bodies only, by `run`, once settled), and a time
 /// step above the DEM critical step.
 fn start_state(sc: &Scenario, g: &Granular, purpose: BuildFor) -> Result<(), Invalid> {
+    start_limits(sc, g)?;
+    let Some(settled) = overlap_checks(sc, purpose)? else {
+        return Ok(());
+    };
+    let p = &g.particles;
+    let tol = START_OVERLAP_TOL;
+    // a packing efgdem settled carries its weight on small overlaps with
+    // its neighbours and its box (walls on the box edges); the bodies were
+    // not there when it settled
+    let pairs = match settled {
+        true => Vec::new(),
+        false => overlapping_pairs(&p.pos, &p.radius, tol),
+    };
+    // the discs of a clump overlap by design
+    let pairs: Vec<_> = pairs
+        .into_iter()
+        .filter(|&(a, b, _)| p.clump[a] == NO_CLUMP || p.clump[a] != p.clump[b])
+        .map(|(a, b, d)| (p.id[a] as usize, p.id[b] as usize, d))
+        .collect();
+    if !pairs.is_empty() {
+        return Err(pairs_refusal(pairs.len(), &pairs[..pairs.len().min(5)]));
+    }
+    // discs whose overlap `overlap(centre, r)` with one wall or body is
+    // above the tolerance: (disc id, overlap)
+    let hits = |overlap: &dyn Fn(Vec2, f64) -> f64| -> Vec<(usize, f64)> {
+        (0..p.len())
+            .filter_map(|k| {
+                let d = overlap(p.pos[k], p.radius[k]);
+                (d > tol * p.radius[k]).then_some((p.id[k] as usize, d))
+            })
+            .collect()
+    };
+    for (wi, w) in g.walls.iter().enumerate().filter(|_| !settled) {
+        let found = hits(&|x, r| wall_overlap(w, x, r));
+        if !found.is_empty() {
+            return Err(wall_refusal(wi, &w.name, found.len(), &found));
+        }
+    }
+    for (bi, b) in sc.body.iter().enumerate() {
+        let found = hits(&body_overlap(b));
+        if !found.is_empty() {
+            let message = format!(
+                "{} disc(s) overlap body `{}` at the start: {}; set `overlapping_discs = \"remove\"` on the body to remove them, or move the body or the discs",
+                found.len(),
+                b.name,
+                listed(found.len(), &found)
+            );
+            return Err(bad(&format!("body.{bi}"), message));
+        }
+    }
+    Ok(())
+}
+
+/// How to mend discs that overlap at the start.
+const OVERLAP_HINT: &str =
+    "move them apart, or set `allow_overlap = true` in [granular] for a pre-stressed packing";
+
+/// How much a disc at `x` of radius `r` overlaps wall `w` (> 0: they do).
+pub(super) fn wall_overlap(w: &Wall, x: Vec2, r: f64) -> f64 {
+    r - (w.closest(x) - x).norm()
+}
+
+/// The first (up to five) of `total` discs `(id, overlap)` that overlap
+/// something, as a message lists them.
+fn listed(total: usize, first: &[(usize, f64)]) -> String {
+    let mut s: Vec<String> = first
+        .iter()
+        .take(5)
+        .map(|(id, d)| format!("disc {} (overlap {d:.3e})", id + 1))
+        .collect();
+    if total > 5 {
+        s.push(format!("and {} more", total - 5));
+    }
+    s.join(", ")
+}
+
+/// The refusal of `total` pairs of discs overlapping at the start, the
+/// first (up to five) of them `(id, id, overlap)` in `first`.
+pub(super) fn pairs_refusal(total: usize, first: &[(usize, usize, f64)]) -> Invalid {
+    let tol = START_OVERLAP_TOL;
+    let shown: Vec<String> = first
+        .iter()
+        .take(5)
+        .map(|&(a, b, d)| format!("discs {} and {} (overlap {d:.3e})", a + 1, b + 1))
+        .collect();
+    bad(
+        "granular.discs",
+        format!(
+            "{total} pair(s) of discs overlap at the start by more than {tol} of the smaller radius: {}{}; {OVERLAP_HINT}",
+            shown.join(", "),
+            if total > 5 { ", …" } else { "" }
+        ),
+    )
+}
+
+/// The refusal of `total` discs crossing wall `wi` (named `name`) at the
+/// start, the first of them `(id, overlap)` in `first`.
+pub(super) fn wall_refusal(wi: usize, name: &str, total: usize, first: &[(usize, f64)]) -> Invalid {
+    bad(
+        &format!("wall.{wi}"),
+        format!(
+            "{total} disc(s) cross wall `{name}` at the start: {}; {OVERLAP_HINT}",
+            listed(total, first)
+        ),
+    )
+}
+
+/// Which overlaps of the start state are checked: `None` none (the
+/// scenario allows them, or `check` does not settle its packing, whose
+/// discs are not where the run will start them), else whether the
+/// packing was settled by efgdem (its discs are then checked against the
+/// bodies only).
+pub(super) fn overlap_checks(sc: &Scenario, purpose: BuildFor) -> Result<Option<bool>, Invalid> {
+    let spec = spec(sc)?;
+    let settled = matches!(&spec.discs, DiscsSpec::Table(t)
+        if t.generate.is_some() && matches!(t.method, Packing::Deposit | Packing::Grow));
+    Ok(
+        match spec.allow_overlap || (settled && purpose == BuildFor::Check) {
+            true => None,
+            false => Some(settled),
+        },
+    )
+}
+
+/// The start state's limits on the time step: the critical step of the
+/// discs of `g` (or of those that decide it), a fall or an initial or
+/// wall velocity that crosses its smallest disc in one step.
+pub(super) fn start_limits(sc: &Scenario, g: &Granular) -> Result<(), Invalid> {
     let (mats, _) = laws(sc, &spec(sc)?.damping);
     let crit = g.critical_step(&body_laws(sc, &mats));
     if g.dt > crit.certain {
@@ -1367,103 +1370,6 @@ fn start_state(sc: &Scenario, g: &Granular, purpose: BuildFor) -> Result<(), Inv
                     fastest,
                 );
             }
-        }
-    }
-    let spec = spec(sc)?;
-    let settled = matches!(&spec.discs, DiscsSpec::Table(t)
-        if t.generate.is_some() && matches!(t.method, Packing::Deposit | Packing::Grow));
-    // `check` does not settle the packing: its discs are not where the run
-    // will start them
-    if spec.allow_overlap || (settled && purpose == BuildFor::Check) {
-        return Ok(());
-    }
-    let p = &g.particles;
-    let tol = START_OVERLAP_TOL;
-    let list = |v: &[(usize, f64)]| {
-        let mut s: Vec<String> = v
-            .iter()
-            .take(5)
-            .map(|(id, d)| format!("disc {} (overlap {d:.3e})", id + 1))
-            .collect();
-        if v.len() > 5 {
-            s.push(format!("and {} more", v.len() - 5));
-        }
-        s.join(", ")
-    };
-    let hint =
-        "move them apart, or set `allow_overlap = true` in [granular] for a pre-stressed packing";
-    // a packing efgdem settled carries its weight on small overlaps with
-    // its neighbours and its box (walls on the box edges); the bodies were
-    // not there when it settled
-    let pairs = match settled {
-        true => Vec::new(),
-        false => overlapping_pairs(&p.pos, &p.radius, tol),
-    };
-    // the discs of a clump overlap by design
-    let pairs: Vec<_> = pairs
-        .into_iter()
-        .filter(|&(a, b, _)| p.clump[a] == NO_CLUMP || p.clump[a] != p.clump[b])
-        .collect();
-    if !pairs.is_empty() {
-        let shown: Vec<String> = pairs
-            .iter()
-            .take(5)
-            .map(|&(a, b, d)| {
-                format!(
-                    "discs {} and {} (overlap {d:.3e})",
-                    p.id[a] + 1,
-                    p.id[b] + 1
-                )
-            })
-            .collect();
-        return Err(bad(
-            "granular.discs",
-            format!(
-                "{} pair(s) of discs overlap at the start by more than {tol} of the smaller radius: {}{}; {hint}",
-                pairs.len(),
-                shown.join(", "),
-                if pairs.len() > 5 { ", …" } else { "" }
-            ),
-        ));
-    }
-    // discs whose overlap `overlap(centre, r)` with one wall or body is
-    // above the tolerance: (disc id, overlap)
-    let hits = |overlap: &dyn Fn(Vec2, f64) -> f64| -> Vec<(usize, f64)> {
-        (0..p.len())
-            .filter_map(|k| {
-                let d = overlap(p.pos[k], p.radius[k]);
-                (d > tol * p.radius[k]).then_some((p.id[k] as usize, d))
-            })
-            .collect()
-    };
-    let refuse = |path: String, what: String, hits: Vec<(usize, f64)>| {
-        let message = format!(
-            "{} disc(s) {what} at the start: {}; {hint}",
-            hits.len(),
-            list(&hits)
-        );
-        Err(bad(&path, message))
-    };
-    for (wi, w) in g.walls.iter().enumerate().filter(|_| !settled) {
-        let found = hits(&|x, r| r - (w.closest(x) - x).norm());
-        if !found.is_empty() {
-            return refuse(
-                format!("wall.{wi}"),
-                format!("cross wall `{}`", w.name),
-                found,
-            );
-        }
-    }
-    for (bi, b) in sc.body.iter().enumerate() {
-        let found = hits(&body_overlap(b));
-        if !found.is_empty() {
-            let message = format!(
-                "{} disc(s) overlap body `{}` at the start: {}; set `overlapping_discs = \"remove\"` on the body to remove them, or move the body or the discs",
-                found.len(),
-                b.name,
-                list(&found)
-            );
-            return Err(bad(&format!("body.{bi}"), message));
         }
     }
     Ok(())
@@ -1729,7 +1635,10 @@ fn granular_probe(
                 // a part of the assembly may not hold the disc
                 x0: match p.slot.get(id).map(|&s| s as usize) {
                     Some(s) if s < p.len() => p.pos[s],
-                    _ => g.start_position(id),
+                    // a part may hold neither the disc nor the whole's
+                    // start positions (`x0` serves `ux`, `uy`: coupled
+                    // runs only, which are not built in parts)
+                    _ => g.start_of(id).unwrap_or(Vec2::ZERO),
                 },
             }
         } else {

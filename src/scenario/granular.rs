@@ -516,15 +516,20 @@ pub fn joined_ends(sc: &Scenario, i: usize) -> [Option<u32>; 2] {
     [on(a).map(|j| j as u32), on(b).map(|j| j as u32)]
 }
 
-/// The walls of the scenario, with their motions, inward normals (towards
-/// the centroid of `discs`, or the opposite wall of a strain-rate wall)
-/// and joined ends.
-pub fn walls(sc: &Scenario, discs: &[Vec2]) -> Result<Vec<Wall>, Invalid> {
-    let centroid = if discs.is_empty() {
+/// The centroid of `n` discs whose centres sum to `sum` (added in slot
+/// order from zero); the origin for none.
+pub fn centroid(sum: Vec2, n: usize) -> Vec2 {
+    if n == 0 {
         Vec2::ZERO
     } else {
-        discs.iter().fold(Vec2::ZERO, |s, &x| s + x) * (1.0 / discs.len() as f64)
-    };
+        sum * (1.0 / n as f64)
+    }
+}
+
+/// The walls of the scenario, with their motions, inward normals (towards
+/// the discs' `centroid` ([`centroid`]), or the opposite wall of a
+/// strain-rate wall) and joined ends.
+pub fn walls(sc: &Scenario, centroid: Vec2) -> Result<Vec<Wall>, Invalid> {
     let mut out = Vec::new();
     for (wi, w) in sc.wall.iter().enumerate() {
         let at = |f: &str| format!("wall.{wi}.{f}");

@@ -17,6 +17,7 @@ pub mod fill;
 pub mod generate;
 pub mod granular;
 pub mod measure;
+mod part;
 pub mod prepare;
 pub mod rect;
 
@@ -636,20 +637,21 @@ impl Scenario {
     }
 
     /// A rank's part of the model of a granular scenario (no bodies,
-    /// bonds or clumps; `None` otherwise): only the discs `select` keeps of
+    /// bonds or clumps; `None` otherwise) and the regions of the ranks of
+    /// `comm` (collective): only the discs the cut keeps for this rank of
     /// the whole assembly are made ([`build::part`]); `bed` the discs of
     /// its packing's preparation, if it has one.
     pub fn build_part(
         &self,
         bed: Option<&[crate::dem::packing::DiscRow]>,
-        select: build::Select,
-    ) -> Result<Option<crate::model::Model>, ScenarioError> {
+        comm: &dyn crate::decomp::Comm,
+    ) -> Result<Option<(crate::model::Model, crate::decomp::Cut)>, ScenarioError> {
         let problems = self.validate();
         if !problems.is_empty() {
             return Err(self.located(problems));
         }
         let purpose = bed.map_or(build::BuildFor::Run, build::BuildFor::Prepared);
-        build::part(self, purpose, select).map_err(|p| self.located(vec![p]))
+        build::part(self, purpose, comm).map_err(|p| self.located(vec![p]))
     }
 
     /// The `[[probe]]`s bound to their targets in `model` (built from this
