@@ -20,12 +20,16 @@
 //! twice.
 //!
 //! [`Clumps`] holds its clumps in *rows* that follow the slot order of
-//! their members (re-ordered after the discs are renumbered), so that the
-//! pass of a step goes through the members' disc data in the order in
-//! which they lie in memory, as the contact sweep does; a clump keeps its
-//! index (the one [`Particles::clump`] names, the files' clump number
-//! less one): `id[row]`, `row[id]`. Each clump's step depends on its own
-//! state and members only, so the rows' order changes no result.
+//! their members (re-ordered after the discs are renumbered): a fused
+//! step ([`Granular::step`](super::Granular::step)) steps the clumps whose
+//! members lie in one block of the contact sweep right after that block,
+//! their members' data still in the cache, going through the block's
+//! rows in order ([`ClumpRows::step_block`]), and the others after the
+//! sweep ([`Clumps::step_across`]). A clump keeps its index (the one
+//! [`Particles::clump`] names, the files' clump number less one):
+//! `id[row]`, `row[id]`. Each clump's step depends on its own state and
+//! members only, so neither the rows' order nor where it is stepped
+//! changes a result.
 
 use super::BodyDamping;
 use super::integrate;

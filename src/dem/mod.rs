@@ -536,9 +536,9 @@ impl Granular {
     /// every contact evaluated and every disc advanced in one sweep
     /// (`max_disp` set), every clump advanced under its members' forces
     /// and its members placed: in the sweep, after the block that holds
-    /// its members ([`clumps::ClumpRows::step_block`]), or after the sweep
-    /// when they lie in more than one block ([`Clumps::step_across`]). Returns whether
-    /// some disc failed the step check ([`step_check`](Self::step_check)).
+    /// its members, or after the sweep when they lie in more than one
+    /// block ([`Clumps::step_across`]). Returns whether some disc failed
+    /// the step check ([`step_check`](Self::step_check)).
     /// The walls' totals and motion follow: [`wall_totals`](Self::wall_totals)
     /// (or [`set_wall_totals`](Self::set_wall_totals)), then
     /// [`finish_step`](Self::finish_step).

@@ -416,7 +416,8 @@ impl Granular {
             gravity: self.gravity,
             damping: self.damping,
             dt: self.dt,
-            // a clump sums its members' stored forces after the sweep
+            // a clump sums its members' stored forces after their block
+            // (or after the sweep)
             store: !ADVANCE || self.store_forces || clumped,
             external: &self.external,
             max_v2,
