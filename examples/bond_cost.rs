@@ -1,13 +1,13 @@
 //! Cost per step of parallel bonds and of clumps against plain discs
 //! (docs/performance.md): the dense settled packing of the DEM benchmark
 //! (`benches/common/dem_setup.rs`, N discs under gravity in a box) stepped
-//! three ways — as it is, bonded (every pair closer than 5 % of the
+//! four ways — as it is, bonded (every pair closer than 5 % of the
 //! smaller radius, strong bonds that do not break) and with its discs
 //! joined two by two into clumps (each disc with a touching neighbour not
 //! yet in a clump), the same clumps made in a random order ("shuffled":
 //! the clumps of a scenario need not be listed in the order of their
 //! discs in space) — in interleaved rounds of 50 steps, so that the
-//! machine's load falls on all three alike. Prints the median over the
+//! machine's load falls on all alike. Prints the median over the
 //! rounds of each variant's time per step over the plain one's, in
 //! wall-clock time and in CPU time (the time the process ran: on a
 //! shared machine the steadier of the two), over all steps and over the
