@@ -1,11 +1,13 @@
 //! Cost per step of parallel bonds and of clumps against plain discs
 //! (docs/performance.md): the dense settled packing of the DEM benchmark
 //! (`benches/common/dem_setup.rs`, N discs under gravity in a box) stepped
-//! three ways — as it is, bonded (every pair closer than 5 % of the
+//! four ways — as it is, bonded (every pair closer than 5 % of the
 //! smaller radius, strong bonds that do not break) and with its discs
 //! joined two by two into clumps (each disc with a touching neighbour not
-//! yet in a clump) — in interleaved rounds of 50 steps, so that the
-//! machine's load falls on all three alike. Prints the median over the
+//! yet in a clump), the same clumps made in a random order ("shuffled":
+//! the clumps of a scenario need not be listed in the order of their
+//! discs in space) — in interleaved rounds of 50 steps, so that the
+//! machine's load falls on all alike. Prints the median over the
 //! rounds of each variant's time per step over the plain one's, in
 //! wall-clock time and in CPU time (the time the process ran: on a
 //! shared machine the steadier of the two), over all steps and over the
@@ -52,9 +54,17 @@ fn main() {
     });
     bonded.dt = plain.dt.min(0.15 * bonded.critical_dt());
     let mut clumped = plain.clone();
-    pair_up(&mut clumped);
+    pair_up(&mut clumped, false);
     clumped.dt = plain.dt.min(0.15 * clumped.critical_dt());
-    let mut runs = [("plain", plain), ("bonded", bonded), ("clumps", clumped)];
+    let mut shuffled = plain.clone();
+    pair_up(&mut shuffled, true);
+    shuffled.dt = clumped.dt;
+    let mut runs = [
+        ("plain", plain),
+        ("bonded", bonded),
+        ("clumps", clumped),
+        ("shuffled", shuffled),
+    ];
     // settle each into its own state (bonds made, lists built)
     for (_, g) in &mut runs {
         for _ in 0..200 {
@@ -110,7 +120,7 @@ fn main() {
     };
     for (k, (name, g)) in runs.iter().enumerate().skip(1) {
         println!(
-            "{name:>7}: × plain per step, median of {rounds} rounds (range): \
+            "{name:>8}: × plain per step, median of {rounds} rounds (range): \
              all steps: wall {}, CPU {}; without list rebuilds: wall {}, CPU {} \
              ({} rebuilds; plain {})",
             ratio(&all, k, false),
@@ -138,8 +148,9 @@ fn cpu_ns() -> u64 {
 }
 
 /// Join each disc with a touching neighbour not yet in a clump (in list
-/// order): clumps of two, as many discs as before.
-fn pair_up(g: &mut Granular) {
+/// order): clumps of two, as many discs as before; made in list order, or
+/// in a random (seeded) order with `shuffle`.
+fn pair_up(g: &mut Granular, shuffle: bool) {
     g.step(); // the contact list
     let p = &g.particles;
     let mut taken = vec![false; p.len()];
@@ -150,6 +161,12 @@ fn pair_up(g: &mut Granular) {
             taken[i] = true;
             taken[j] = true;
             pairs.push([p.id[i] as usize, p.id[j] as usize]);
+        }
+    }
+    if shuffle {
+        let mut rng = oorandom::Rand64::new(7);
+        for k in (1..pairs.len()).rev() {
+            pairs.swap(k, rng.rand_range(0..k as u64 + 1) as usize);
         }
     }
     for m in pairs {

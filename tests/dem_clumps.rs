@@ -284,9 +284,19 @@ fn an_undamped_clump_collision_conserves_energy_and_momenta() {
 /// (several rebuilds and renumberings), stepped `steps` times from `from`
 /// (or from the start).
 fn pile(steps: usize, from: Option<&efgdem::dem::state::GranularState>) -> Granular {
-    let rows: Vec<DiscRow> = (0..120)
+    pile_of(12, 10, steps, from)
+}
+
+/// [`pile`] of `nx × ny` discs.
+fn pile_of(
+    nx: usize,
+    ny: usize,
+    steps: usize,
+    from: Option<&efgdem::dem::state::GranularState>,
+) -> Granular {
+    let rows: Vec<DiscRow> = (0..nx * ny)
         .map(|k| DiscRow {
-            pos: Vec2::new(1.0 + 2.05 * (k % 12) as f64, 1.0 + 2.05 * (k / 12) as f64),
+            pos: Vec2::new(1.0 + 2.05 * (k % nx) as f64, 1.0 + 2.05 * (k / nx) as f64),
             r: 1.0,
             material: None,
         })
@@ -306,10 +316,11 @@ fn pile(steps: usize, from: Option<&efgdem::dem::state::GranularState>) -> Granu
             WallMotion::Fixed,
         )
     };
+    let (x, y) = (2.05 * nx as f64, 3.0 * ny as f64);
     let walls = vec![
-        w((0.0, 0.0), (24.6, 0.0)),
-        w((0.0, 0.0), (0.0, 30.0)),
-        w((24.6, 30.0), (24.6, 0.0)),
+        w((0.0, 0.0), (x, 0.0)),
+        w((0.0, 0.0), (0.0, y)),
+        w((x, y), (x, 0.0)),
     ];
     let law = ContactLaw {
         kn: 1e7,
@@ -374,6 +385,36 @@ fn a_clumped_step_is_the_phased_step() {
     assert!(a.grid.rebuilds > 1 && a.grid.rebuilds == b.grid.rebuilds);
     assert_eq!(bits(&a), bits(&b));
     assert_eq!(a.step, b.step);
+}
+
+/// The same with several blocks of the contact sweep (the clumps whose
+/// members lie in one block stepped after it, the others after the
+/// sweep), on 1 and 2 threads.
+#[test]
+fn a_clumped_step_over_blocks_is_the_phased_step_on_any_threads() {
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                let mut a = pile_of(40, 30, 0, None);
+                let mut b = a.clone();
+                for _ in 0..300 {
+                    a.step();
+                    b.prepare_contacts();
+                    b.compute_contact_forces();
+                    b.wall_totals();
+                    b.integrate();
+                    assert_eq!(a.max_disp.to_bits(), b.max_disp.to_bits());
+                }
+                assert!(a.grid.rebuilds > 1 && a.grid.rebuilds == b.grid.rebuilds);
+                assert_eq!(bits(&a), bits(&b));
+                assert!(a.particles.len() > 4 * a.contacts.block);
+                bits(&a)
+            })
+    };
+    assert_eq!(run(1), run(2));
 }
 
 /// Validation item 6 (clumps): 1 and 2 threads, and a run restarted from

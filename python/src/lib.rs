@@ -908,30 +908,27 @@ impl PyModel {
         let xy = |v: &[Vec2], y: bool| -> Vec<f64> {
             v.iter().map(|p| if y { p.y } else { p.x }).collect()
         };
+        let (pos, vel, force) = (c.by_id(&c.pos), c.by_id(&c.vel), c.by_id(&c.force));
         for (k, v) in [
-            ("x", xy(&c.pos, false)),
-            ("y", xy(&c.pos, true)),
-            ("vx", xy(&c.vel, false)),
-            ("vy", xy(&c.vel, true)),
-            ("theta", c.theta.clone()),
-            ("omega", c.omega.clone()),
-            ("mass", c.mass.clone()),
-            ("inertia", c.inertia.clone()),
-            ("fx", xy(&c.force, false)),
-            ("fy", xy(&c.force, true)),
-            ("torque", c.torque.clone()),
+            ("x", xy(&pos, false)),
+            ("y", xy(&pos, true)),
+            ("vx", xy(&vel, false)),
+            ("vy", xy(&vel, true)),
+            ("theta", c.by_id(&c.theta)),
+            ("omega", c.by_id(&c.omega)),
+            ("mass", c.by_id(&c.mass)),
+            ("inertia", c.by_id(&c.inertia)),
+            ("fx", xy(&force, false)),
+            ("fy", xy(&force, true)),
+            ("torque", c.by_id(&c.torque)),
         ] {
             out.set_item(k, v.into_pyarray(py))?;
         }
-        let first = if c.is_empty() {
-            vec![0]
-        } else {
-            c.first.clone()
-        };
+        let (first, members_index) = c.members_by_id();
         out.set_item("first", first.into_pyarray(py))?;
-        let members: Vec<u32> = c.members.iter().map(|k| k + 1).collect();
+        let members: Vec<u32> = members_index.iter().map(|k| k + 1).collect();
         out.set_item("members", members.into_pyarray(py))?;
-        out.set_item("members_index", c.members.clone().into_pyarray(py))?;
+        out.set_item("members_index", members_index.into_pyarray(py))?;
         Ok(out)
     }
 

@@ -18,6 +18,18 @@
 //! of its discs ([`union_shape`]: exact, from the arcs of the union's
 //! boundary), not the sum over the discs, which would count the overlaps
 //! twice.
+//!
+//! [`Clumps`] holds its clumps in *rows* that follow the slot order of
+//! their members (re-ordered after the discs are renumbered): a fused
+//! step ([`Granular::step`](super::Granular::step)) steps the clumps whose
+//! members lie in one block of the contact sweep right after that block,
+//! their members' data still in the cache, going through the block's
+//! rows in order ([`ClumpRows::step_block`]), and the others after the
+//! sweep ([`Clumps::step_across`]). A clump keeps its index (the one
+//! [`Particles::clump`] names, the files' clump number less one):
+//! `id[row]`, `row[id]`. Each clump's step depends on its own state and
+//! members only, so neither the rows' order nor where it is stepped
+//! changes a result.
 
 use super::BodyDamping;
 use super::integrate;
@@ -147,9 +159,14 @@ pub fn union_shape(discs: &[(Vec2, f64)]) -> UnionShape {
     }
 }
 
-/// The clumps of an assembly, and each one's rigid-body state.
+/// The clumps of an assembly, and each one's rigid-body state, by row
+/// (module docs; [`by_id`](Self::by_id) gives an array in clump order).
 #[derive(Debug, Clone, Default)]
 pub struct Clumps {
+    /// Index of the clump in each row.
+    pub id: Vec<u32>,
+    /// Row of each clump.
+    pub row: Vec<u32>,
     /// Centre of mass X.
     pub pos: Vec<Vec2>,
     /// Velocity at the half step.
@@ -166,9 +183,10 @@ pub struct Clumps {
     pub force: Vec<Vec2>,
     /// Resultant moment about X of the last step.
     pub torque: Vec<f64>,
-    /// Members of clump c: `members[first[c]..first[c + 1]]` (disc ids).
+    /// Members of the clump in row r: `members[first[r]..first[r + 1]]`
+    /// (disc ids).
     pub first: Vec<u32>,
-    /// Disc ids of the members, clump by clump.
+    /// Disc ids of the members, row by row.
     pub members: Vec<u32>,
     /// Each member's centre relative to X at θ = 0.
     pub offset: Vec<Vec2>,
@@ -178,6 +196,13 @@ pub struct Clumps {
     /// discs (empty: to be found again, [`invalidate`](Self::invalidate)).
     slots: Vec<u32>,
     n_slots: usize,
+    /// The lowest and the highest slot of each row's members.
+    lead: Vec<u32>,
+    last: Vec<u32>,
+    /// The rows whose members lie in more than one block of
+    /// `across_block` slots ([`prepare`](Self::prepare)).
+    across: Vec<u32>,
+    across_block: usize,
 }
 
 impl Clumps {
@@ -197,17 +222,115 @@ impl Clumps {
     }
 
     /// Each member's slot (as `members`), found again if invalidated or
-    /// the number of discs changed.
+    /// the number of discs changed, and the rows put in the slot order of
+    /// the members ([`follow_slots`](Self::follow_slots)).
     fn refresh_slots(&mut self, p: &Particles) {
         if self.slots.len() != self.members.len() || self.n_slots != p.len() {
             self.slots = self.members.iter().map(|&id| p.slot[id as usize]).collect();
             self.n_slots = p.len();
+            self.follow_slots();
         }
+    }
+
+    /// Order the rows by the lowest slot of their members (when they are
+    /// not in that order already): each clump's members then lie after
+    /// those of the row before, about where the last ones were.
+    fn follow_slots(&mut self) {
+        fn spans(c: &Clumps) -> (Vec<u32>, Vec<u32>) {
+            c.first
+                .windows(2)
+                .map(|w| {
+                    let s = &c.slots[w[0] as usize..w[1] as usize];
+                    let lo = s.iter().copied().min().unwrap_or(0);
+                    (lo, s.iter().copied().max().unwrap_or(0))
+                })
+                .unzip()
+        }
+        (self.lead, self.last) = spans(self);
+        if self.lead.is_sorted() {
+            return;
+        }
+        let mut order: Vec<u32> = (0..self.len() as u32).collect();
+        order.sort_unstable_by_key(|&r| self.lead[r as usize]);
+        self.permute(&order);
+        (self.lead, self.last) = spans(self);
+    }
+
+    /// Re-hold the rows: row r takes what row `order[r]` held.
+    fn permute(&mut self, order: &[u32]) {
+        fn apply<T: Copy>(v: &mut Vec<T>, order: &[u32]) {
+            *v = order.iter().map(|&o| v[o as usize]).collect();
+        }
+        apply(&mut self.id, order);
+        apply(&mut self.pos, order);
+        apply(&mut self.vel, order);
+        apply(&mut self.theta, order);
+        apply(&mut self.omega, order);
+        apply(&mut self.mass, order);
+        apply(&mut self.inertia, order);
+        apply(&mut self.force, order);
+        apply(&mut self.torque, order);
+        apply(&mut self.rot, order);
+        let held = self.slots.len() == self.members.len();
+        let (mut first, mut members, mut offset, mut slots) = (
+            Vec::with_capacity(self.first.len()),
+            Vec::with_capacity(self.members.len()),
+            Vec::with_capacity(self.members.len()),
+            Vec::with_capacity(self.slots.len()),
+        );
+        first.push(0);
+        for &o in order {
+            let m = self.first[o as usize] as usize..self.first[o as usize + 1] as usize;
+            members.extend_from_slice(&self.members[m.clone()]);
+            offset.extend_from_slice(&self.offset[m.clone()]);
+            if held {
+                slots.extend_from_slice(&self.slots[m]);
+            }
+            first.push(members.len() as u32);
+        }
+        (self.first, self.members, self.offset, self.slots) = (first, members, offset, slots);
+        for (r, &c) in self.id.iter().enumerate() {
+            self.row[c as usize] = r as u32;
+        }
+    }
+
+    /// Row of clump `c`.
+    pub fn row_of(&self, c: usize) -> usize {
+        self.row[c] as usize
+    }
+
+    /// `v`, one value per row, in clump order.
+    pub fn by_id<T: Copy>(&self, v: &[T]) -> Vec<T> {
+        self.row.iter().map(|&r| v[r as usize]).collect()
+    }
+
+    /// `v`, one value per clump in clump order, by row.
+    pub fn in_rows<T: Copy>(&self, v: &[T]) -> Vec<T> {
+        self.id.iter().map(|&c| v[c as usize]).collect()
+    }
+
+    /// `(first, members)` in clump order: clump c's members (disc ids)
+    /// are `members[first[c]..first[c + 1]]` (`first` is `[0]` without
+    /// clumps).
+    pub fn members_by_id(&self) -> (Vec<u32>, Vec<u32>) {
+        let mut first = Vec::with_capacity(self.len() + 1);
+        let mut members = Vec::with_capacity(self.members.len());
+        first.push(0);
+        for c in 0..self.len() {
+            members.extend_from_slice(self.members_of(c));
+            first.push(members.len() as u32);
+        }
+        (first, members)
     }
 
     /// Disc ids of clump `c`'s members.
     pub fn members_of(&self, c: usize) -> &[u32] {
-        &self.members[self.first[c] as usize..self.first[c + 1] as usize]
+        self.members_in(self.row_of(c))
+    }
+
+    /// Disc ids of the members of the clump in row `r`.
+    fn members_in(&self, r: usize) -> &[u32] {
+        &self.members[self.first[r] as usize..self.first[r + 1] as usize]
     }
 
     /// Join the discs `ids` (scenario numbers, 0-based) into a new clump:
@@ -282,6 +405,8 @@ impl Clumps {
             p.inv_inertia[s] = 1.0 / inertia;
         }
         self.first.push(self.members.len() as u32);
+        self.id.push(c as u32);
+        self.row.push(c as u32);
         self.pos.push(shape.centroid);
         self.vel.push(vel);
         self.theta.push(0.0);
@@ -292,7 +417,7 @@ impl Clumps {
         self.torque.push(0.0);
         self.rot.push((0.0, 1.0));
         self.invalidate();
-        self.place(c, p);
+        self.place(self.row_of(c), p);
         Ok(c)
     }
 
@@ -302,7 +427,8 @@ impl Clumps {
         self.rot = self.theta.iter().map(|t| t.sin_cos()).collect();
     }
 
-    /// Put clump `c`'s members where its rigid motion takes them.
+    /// Put the members of the clump in row `c` where its rigid motion
+    /// takes them.
     fn place(&self, c: usize, p: &mut Particles) {
         let (a, b) = (self.first[c] as usize, self.first[c + 1] as usize);
         for (&id, &o) in self.members[a..b].iter().zip(&self.offset[a..b]) {
@@ -315,7 +441,7 @@ impl Clumps {
         }
     }
 
-    /// Centre and velocity of the member of clump `c` at offset `o`
+    /// Centre and velocity of the member of the clump in row `c` at offset `o`
     /// ([`rigid_motion`]).
     #[inline(always)]
     fn member_motion(&self, c: usize, o: Vec2) -> (Vec2, Vec2) {
@@ -332,11 +458,11 @@ impl Clumps {
         }
     }
 
-    /// [`gather`](Self::gather) for clump `c`, in member order.
+    /// [`gather`](Self::gather) for the clump in row `c`, in member order.
     #[inline(always)]
     fn gathered(&self, c: usize, p: &Particles) -> (Vec2, f64) {
-        let slots = self.members_of(c).iter().map(|&id| p.slot[id as usize]);
-        member_sum(self.pos[c], slots, |k| p.pos[k], (&p.force, &p.torque))
+        let slots = self.members_in(c).iter().map(|&id| p.slot[id as usize]);
+        member_sum(self.pos[c], slots, |k| (p.pos[k], p.force[k], p.torque[k]))
     }
 
     /// Advance every clump by one step under its [`gather`](Self::gather)ed
@@ -346,26 +472,85 @@ impl Clumps {
         self.pass(p, false, &[], (g, damping, dt), f64::INFINITY);
     }
 
-    /// One step of every clump after a contact sweep that left its
-    /// members' forces in `particles.force`/`torque` and did not move
-    /// them: [`gather`](Self::gather) and [`advance`](Self::advance), the
-    /// same values. Returns the members' largest squared displacement
-    /// from `ref_pos` (0 when it is not one per disc) and whether a member
+    /// Make ready for a step in the contact sweep ([`rows`](Self::rows)
+    /// stepped block by block with [`ClumpRows::step_block`], then
+    /// [`step_across`](Self::step_across)) with blocks of `block` slots:
+    /// the member slots found, the rows in their order, the clumps whose
+    /// members lie in more than one block listed.
+    pub(super) fn prepare(&mut self, p: &Particles, block: usize) {
+        let fresh = self.slots.len() != self.members.len() || self.n_slots != p.len();
+        self.refresh_slots(p);
+        if fresh || self.across_block != block {
+            let b = block.max(1) as u32;
+            self.across = (0..self.len() as u32)
+                .filter(|&r| self.lead[r as usize] / b != self.last[r as usize] / b)
+                .collect();
+            self.across_block = block;
+        }
+    }
+
+    /// The rows for a step (after [`prepare`](Self::prepare)): the clumps
+    /// gather their members' forces, advance under them (gravity `g`,
+    /// `damping`, step `dt`) and check their members against `max_v2`.
+    pub(super) fn rows(
+        &mut self,
+        (g, damping, dt): (Vec2, BodyDamping, f64),
+        max_v2: f64,
+    ) -> ClumpRows<'_> {
+        ClumpRows {
+            pos: self.pos.as_mut_ptr(),
+            vel: self.vel.as_mut_ptr(),
+            theta: self.theta.as_mut_ptr(),
+            omega: self.omega.as_mut_ptr(),
+            rot: self.rot.as_mut_ptr(),
+            force: self.force.as_mut_ptr(),
+            torque: self.torque.as_mut_ptr(),
+            mass: &self.mass,
+            inertia: &self.inertia,
+            first: &self.first,
+            slots: &self.slots,
+            offset: &self.offset,
+            lead: &self.lead,
+            last: &self.last,
+            motion: (g, damping, dt),
+            max_v2,
+        }
+    }
+
+    /// The step of the clumps that the sweep's blocks left (members in
+    /// more than one block: [`prepare`](Self::prepare)), after the sweep
+    /// left their members' forces in `particles.force`/`torque`:
+    /// [`gather`](Self::gather) and [`advance`](Self::advance), the same
+    /// values. Returns the members' largest squared displacement from
+    /// `ref_pos` (0 when it is not one per disc) and whether a member
     /// failed the step check `v·v ≤ max_v2 r²` (or is not finite).
-    pub fn step(
+    pub fn step_across(
         &mut self,
         p: &mut Particles,
         ref_pos: &[Vec2],
         motion: (Vec2, BodyDamping, f64),
         max_v2: f64,
     ) -> (f64, bool) {
-        self.pass(p, true, ref_pos, motion, max_v2)
+        let across = std::mem::take(&mut self.across);
+        let out = {
+            let rows = self.rows(motion, max_v2);
+            let discs = Discs::whole(p, ref_pos);
+            across
+                .par_iter()
+                .with_min_len(256)
+                // SAFETY: each row once; its members are its own
+                // (`Discs`), at slots below the number of discs
+                .map(|&r| unsafe { rows.step_row(r as usize, true, &discs) })
+                .reduce(|| (0.0, false), |a, b| (a.0.max(b.0), a.1 || b.1))
+        };
+        self.across = across;
+        out
     }
 
     /// One pass over the clumps, in parallel: each one's members' forces
     /// summed (with `gather`, [`gathered`](Self::gathered)'s sums), the
-    /// clump advanced, its members placed and checked (as
-    /// [`step`](Self::step)), reading and writing its members at their
+    /// clump advanced, its members placed and checked
+    /// ([`ClumpRows::step_row`]), reading and writing its members at their
     /// slots, found once per slot order. Each clump works on its own state
     /// and members: the same on any number of threads.
     fn pass(
@@ -373,57 +558,17 @@ impl Clumps {
         p: &mut Particles,
         gather: bool,
         ref_pos: &[Vec2],
-        (g, damping, dt): (Vec2, BodyDamping, f64),
+        motion: (Vec2, BodyDamping, f64),
         max_v2: f64,
     ) -> (f64, bool) {
         self.refresh_slots(p);
-        let has_ref = ref_pos.len() == p.len();
-        let discs = MembersMut {
-            pos: p.pos.as_mut_ptr(),
-            vel: p.vel.as_mut_ptr(),
-            theta: p.theta.as_mut_ptr(),
-            omega: p.omega.as_mut_ptr(),
-        };
-        let (force, torque, radius) = (&p.force, &p.torque, &p.radius);
-        let (first, slots, offset) = (&self.first, &self.slots, &self.offset);
-        (
-            &mut self.pos,
-            &mut self.vel,
-            &mut self.theta,
-            &mut self.omega,
-            &mut self.rot,
-            &mut self.force,
-            &mut self.torque,
-            (&self.mass, &self.inertia),
-        )
+        let rows = self.rows(motion, max_v2);
+        let discs = Discs::whole(p, ref_pos);
+        (0..rows.mass.len())
             .into_par_iter()
-            .enumerate()
             .with_min_len(256)
-            .map(|(c, (x, v, th, w, rot, f, t, (&m, &i)))| {
-                let (a, b) = (first[c] as usize, first[c + 1] as usize);
-                let members = (&slots[a..b], &offset[a..b]);
-                if gather {
-                    // SAFETY: a slot below the number of discs
-                    // (`refresh_slots`), of this clump's member only.
-                    let at = |s: usize| unsafe { discs.pos(s) };
-                    (*f, *t) = member_sum(*x, members.0.iter().copied(), at, (force, torque));
-                }
-                integrate::advance(x, v, th, w, *f, *t, 1.0 / m, 1.0 / i, 0, g, damping, dt);
-                *rot = th.sin_cos();
-                let (mut m2, mut bad) = (0.0f64, false);
-                for (&s, &o) in members.0.iter().zip(members.1) {
-                    let s = s as usize;
-                    let (xm, vm) = rigid_motion(*x, *v, *w, *rot, o);
-                    // SAFETY: as above: no other clump reads or writes
-                    // this member's slot.
-                    unsafe { discs.set(s, xm, vm, *th, *w) };
-                    if has_ref {
-                        m2 = m2.max((xm - ref_pos[s]).norm2());
-                    }
-                    bad |= !integrate::passes_check(xm, vm, *w, radius[s], max_v2);
-                }
-                (m2, bad)
-            })
+            // SAFETY: as in `step_across`
+            .map(|r| unsafe { rows.step_row(r, gather, &discs) })
             .reduce(|| (0.0, false), |a, b| (a.0.max(b.0), a.1 || b.1))
     }
 
@@ -460,24 +605,26 @@ impl Clumps {
         (self.pos.capacity() * 3 + self.offset.capacity()) * size_of::<Vec2>()
             + self.theta.capacity() * 5 * size_of::<f64>()
             + (self.first.capacity() + self.members.capacity() + self.slots.capacity()) * 4
+            + (self.id.capacity() + self.row.capacity()) * 4
+            + (self.lead.capacity() + self.last.capacity() + self.across.capacity()) * 4
             + self.rot.capacity() * size_of::<(f64, f64)>()
     }
 }
 
-/// The force and the moment about `x` of the members in `slots`, at
-/// `pos(slot)`, in member order: what a clump at `x` receives.
+/// The force and the moment about `x` of the members in `slots`, whose
+/// position, force and moment are `at(slot)`, in member order: what a
+/// clump at `x` receives.
 #[inline(always)]
 fn member_sum(
     x: Vec2,
     slots: impl Iterator<Item = u32>,
-    pos: impl Fn(usize) -> Vec2,
-    (force, torque): (&[Vec2], &[f64]),
+    at: impl Fn(usize) -> (Vec2, Vec2, f64),
 ) -> (Vec2, f64) {
     let (mut f, mut t) = (Vec2::ZERO, 0.0);
     for s in slots {
-        let s = s as usize;
-        f += force[s];
-        t += torque[s] + (pos(s) - x).cross(force[s]);
+        let (pos, force, torque) = at(s as usize);
+        f += force;
+        t += torque + (pos - x).cross(force);
     }
     (f, t)
 }
@@ -491,47 +638,211 @@ fn rigid_motion(x: Vec2, v: Vec2, w: f64, (s, co): (f64, f64), o: Vec2) -> (Vec2
     (x + r, v + r.perp() * w)
 }
 
-/// The members' positions, velocities, rotations and spins, written by
-/// [`Clumps::pass`] clump by clump in parallel: a disc is a member of one
-/// clump at most ([`Clumps::add`]), so no two clumps touch the same slot.
-struct MembersMut {
+/// The clumps' rows for one step ([`Clumps::rows`]), each one stepped by
+/// [`step_row`](Self::step_row) on one thread: a clump's state is its
+/// row's alone.
+pub(super) struct ClumpRows<'a> {
     pos: *mut Vec2,
     vel: *mut Vec2,
     theta: *mut f64,
     omega: *mut f64,
+    rot: *mut (f64, f64),
+    force: *mut Vec2,
+    torque: *mut f64,
+    mass: &'a [f64],
+    inertia: &'a [f64],
+    first: &'a [u32],
+    slots: &'a [u32],
+    offset: &'a [Vec2],
+    lead: &'a [u32],
+    last: &'a [u32],
+    motion: (Vec2, BodyDamping, f64),
+    max_v2: f64,
 }
 
-impl MembersMut {
-    /// The position of the disc in slot `s`.
+impl ClumpRows<'_> {
+    /// Step the clump in row `r`: its members' forces summed (with
+    /// `gather`, in member order: [`member_sum`]), the clump advanced
+    /// ([`integrate::advance`]), its members placed
+    /// ([`rigid_motion`]) and checked. Returns the members' largest
+    /// squared displacement from their reference (0 without one) and
+    /// whether one failed the step check.
     ///
     /// # Safety
-    /// `s` is a slot of the discs, and no other thread writes it.
+    /// `r` is a row that no other thread steps, and `discs` holds its
+    /// members' slots, which no other thread touches meanwhile.
     #[inline(always)]
-    unsafe fn pos(&self, s: usize) -> Vec2 {
+    unsafe fn step_row(&self, r: usize, gather: bool, discs: &Discs) -> (f64, bool) {
+        let (a, b) = (self.first[r] as usize, self.first[r + 1] as usize);
+        let (slots, offset) = (&self.slots[a..b], &self.offset[a..b]);
+        let (g, damping, dt) = self.motion;
+        // SAFETY: row r is this thread's (the caller's promise)
+        let (x, v, th, w, rot, f, t) = unsafe {
+            (
+                &mut *self.pos.add(r),
+                &mut *self.vel.add(r),
+                &mut *self.theta.add(r),
+                &mut *self.omega.add(r),
+                &mut *self.rot.add(r),
+                &mut *self.force.add(r),
+                &mut *self.torque.add(r),
+            )
+        };
+        if gather {
+            // SAFETY: the members' slots are in `discs` (the caller's promise)
+            let at = |s: usize| unsafe { discs.loads(s) };
+            (*f, *t) = member_sum(*x, slots.iter().copied(), at);
+        }
+        let (inv_m, inv_i) = (1.0 / self.mass[r], 1.0 / self.inertia[r]);
+        integrate::advance(x, v, th, w, *f, *t, inv_m, inv_i, 0, g, damping, dt);
+        *rot = th.sin_cos();
+        let (mut m2, mut bad) = (0.0f64, false);
+        for (&s, &o) in slots.iter().zip(offset) {
+            let (xm, vm) = rigid_motion(*x, *v, *w, *rot, o);
+            // SAFETY: as above
+            let (d2, r) = unsafe { discs.set(s as usize, xm, vm, *th, *w) };
+            m2 = m2.max(d2);
+            bad |= !integrate::passes_check(xm, vm, *w, r, self.max_v2);
+        }
+        (m2, bad)
+    }
+
+    /// Step the clumps whose members all lie in the discs `discs` holds,
+    /// slots `lo..hi` (one block of the contact sweep, every disc of it
+    /// swept: their forces are complete and nothing reads their state any
+    /// more this step), as [`step_row`](Self::step_row) with the members'
+    /// forces gathered. The clumps with members in other blocks are left
+    /// to [`Clumps::step_across`].
+    ///
+    /// # Safety
+    /// No other thread touches the slots `lo..hi` meanwhile, and the
+    /// blocks of one step do not overlap (each row's lead slot is in one
+    /// block: its row is stepped once).
+    pub(super) unsafe fn step_block(&self, lo: usize, hi: usize, discs: &Discs) -> (f64, bool) {
+        let rows = self.lead.partition_point(|&s| (s as usize) < lo)
+            ..self.lead.partition_point(|&s| (s as usize) < hi);
+        let (mut m2, mut bad) = (0.0f64, false);
+        for r in rows.filter(|&r| (self.last[r] as usize) < hi) {
+            // SAFETY: the row's members are in lo..hi (the caller's promise)
+            let (d2, b) = unsafe { self.step_row(r, true, discs) };
+            m2 = m2.max(d2);
+            bad |= b;
+        }
+        (m2, bad)
+    }
+}
+
+// SAFETY: a row is stepped by one thread ([`ClumpRows::step_row`]).
+unsafe impl Sync for ClumpRows<'_> {}
+unsafe impl Send for ClumpRows<'_> {}
+
+/// The discs a clump's step reads and writes at their slots: all of them,
+/// or one block `lo..lo + n` of the contact sweep. A disc is a member of
+/// one clump at most ([`Clumps::add`]), so no two clumps touch the same
+/// slot.
+pub(super) struct Discs {
+    lo: usize,
+    n: usize,
+    pos: *mut Vec2,
+    vel: *mut Vec2,
+    theta: *mut f64,
+    omega: *mut f64,
+    force: *const Vec2,
+    torque: *const f64,
+    radius: *const f64,
+    /// Positions at the last list rebuild (null: no reference).
+    ref_pos: *const Vec2,
+}
+
+impl Discs {
+    /// All the discs of `p`, with the reference `ref_pos` if it has one
+    /// position per disc.
+    fn whole(p: &mut Particles, ref_pos: &[Vec2]) -> Discs {
+        let r = if ref_pos.len() == p.len() {
+            ref_pos.as_ptr()
+        } else {
+            std::ptr::null()
+        };
+        let n = p.len();
+        Discs::block(
+            0,
+            (&mut p.pos, &mut p.vel, &mut p.theta, &mut p.omega),
+            (&p.force[..n], &p.torque[..n], &p.radius[..n]),
+            r,
+        )
+    }
+
+    /// The discs `lo..lo + pos.len()`, whose arrays are the slices given
+    /// (all of that length), with the reference `ref_pos` (null: none).
+    pub(super) fn block(
+        lo: usize,
+        (pos, vel, theta, omega): (&mut [Vec2], &mut [Vec2], &mut [f64], &mut [f64]),
+        (force, torque, radius): (&[Vec2], &[f64], &[f64]),
+        ref_pos: *const Vec2,
+    ) -> Discs {
+        let n = pos.len();
+        assert!(
+            [vel.len(), force.len()]
+                .iter()
+                .chain(&[theta.len(), omega.len()])
+                .chain(&[torque.len(), radius.len()])
+                .all(|&l| l == n)
+        );
+        Discs {
+            lo,
+            n,
+            pos: pos.as_mut_ptr(),
+            vel: vel.as_mut_ptr(),
+            theta: theta.as_mut_ptr(),
+            omega: omega.as_mut_ptr(),
+            force: force.as_ptr(),
+            torque: torque.as_ptr(),
+            radius: radius.as_ptr(),
+            ref_pos,
+        }
+    }
+
+    /// Position, force and moment of the disc in slot `s`.
+    ///
+    /// # Safety
+    /// `s` is one of the slots held, and no other thread writes it.
+    #[inline(always)]
+    unsafe fn loads(&self, s: usize) -> (Vec2, Vec2, f64) {
+        let k = s - self.lo;
+        debug_assert!(k < self.n);
         // SAFETY: as the caller promises.
-        unsafe { *self.pos.add(s) }
+        unsafe { (*self.pos.add(k), *self.force.add(k), *self.torque.add(k)) }
     }
 
     /// Set the position, velocity, rotation and spin of the disc in slot
-    /// `s`.
+    /// `s`; returns its squared displacement from the reference (0
+    /// without one) and its radius.
     ///
     /// # Safety
-    /// `s` is a slot of the discs, and no other thread reads or writes it.
+    /// `s` is one of the slots held, and no other thread reads or writes it.
     #[inline(always)]
-    unsafe fn set(&self, s: usize, x: Vec2, v: Vec2, theta: f64, omega: f64) {
+    unsafe fn set(&self, s: usize, x: Vec2, v: Vec2, theta: f64, omega: f64) -> (f64, f64) {
+        let k = s - self.lo;
+        debug_assert!(k < self.n);
         // SAFETY: as the caller promises.
         unsafe {
-            *self.pos.add(s) = x;
-            *self.vel.add(s) = v;
-            *self.theta.add(s) = theta;
-            *self.omega.add(s) = omega;
+            *self.pos.add(k) = x;
+            *self.vel.add(k) = v;
+            *self.theta.add(k) = theta;
+            *self.omega.add(k) = omega;
+            let d2 = if self.ref_pos.is_null() {
+                0.0
+            } else {
+                (x - *self.ref_pos.add(k)).norm2()
+            };
+            (d2, *self.radius.add(k))
         }
     }
 }
 
-// SAFETY: the pointers are used by one clump per slot (see above).
-unsafe impl Sync for MembersMut {}
-unsafe impl Send for MembersMut {}
+// SAFETY: a slot is touched by the one clump it belongs to (see above).
+unsafe impl Sync for Discs {}
+unsafe impl Send for Discs {}
 
 /// How a template is scaled onto the disc it replaces
 /// ([`replace_with_template`]).

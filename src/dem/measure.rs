@@ -282,7 +282,7 @@ pub fn solid_area(g: &Granular, region: &Region) -> ExactSum {
                 .iter()
                 .map(|&id| p.mass[g.slot(id as usize)])
                 .sum();
-            c.mass[k] / discs
+            c.mass[c.row_of(k)] / discs
         })
         .collect();
     (0..p.len())
@@ -363,7 +363,7 @@ pub fn contact_sums(
     // the centre of the body disc k belongs to: a clump's, or its own
     let centre = |k: usize| match p.clump[k] {
         NO_CLUMP => p.pos[k],
-        c => g.clumps.pos[c as usize],
+        c => g.clumps.pos[g.clumps.row_of(c as usize)],
     };
     let mut sums = ContactSums::default();
     let mut add = |f: Vec2, l: Vec2, n: Vec2| {

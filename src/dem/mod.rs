@@ -540,9 +540,11 @@ impl Granular {
 
     /// The discs' part of [`step`](Self::step): the contact list prepared,
     /// every contact evaluated and every disc advanced in one sweep
-    /// (`max_disp` set), then every clump advanced under its members'
-    /// forces and its members placed ([`Clumps::step`]). Returns whether
-    /// some disc failed the step check ([`step_check`](Self::step_check)).
+    /// (`max_disp` set), every clump advanced under its members' forces
+    /// and its members placed: in the sweep, after the block that holds
+    /// its members, or after the sweep when they lie in more than one
+    /// block ([`Clumps::step_across`]). Returns whether some disc failed
+    /// the step check ([`step_check`](Self::step_check)).
     /// The walls' totals and motion follow: [`wall_totals`](Self::wall_totals)
     /// (or [`set_wall_totals`](Self::set_wall_totals)), then
     /// [`finish_step`](Self::finish_step).
@@ -551,7 +553,7 @@ impl Granular {
         let (mut max_disp, mut bad) = self.sweep::<true>();
         if !self.clumps.is_empty() {
             let max_v2 = self.check_v2();
-            let (d2, b) = self.clumps.step(
+            let (d2, b) = self.clumps.step_across(
                 &mut self.particles,
                 &self.grid.ref_pos,
                 (self.gravity, self.damping, self.dt),

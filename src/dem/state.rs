@@ -179,12 +179,12 @@ impl Granular {
             stale: self.grid.stale,
             bonds: self.bonds.list().into_owned(),
             clumps: ClumpState {
-                pos: self.clumps.pos.clone(),
-                vel: self.clumps.vel.clone(),
-                theta: self.clumps.theta.clone(),
-                omega: self.clumps.omega.clone(),
-                force: self.clumps.force.clone(),
-                torque: self.clumps.torque.clone(),
+                pos: self.clumps.by_id(&self.clumps.pos),
+                vel: self.clumps.by_id(&self.clumps.vel),
+                theta: self.clumps.by_id(&self.clumps.theta),
+                omega: self.clumps.by_id(&self.clumps.omega),
+                force: self.clumps.by_id(&self.clumps.force),
+                torque: self.clumps.by_id(&self.clumps.torque),
             },
         }
     }
@@ -240,12 +240,12 @@ impl Granular {
         self.bonds.replace_list(&s.bonds);
         let c = &mut self.clumps;
         c.invalidate();
-        c.pos.clone_from(&s.clumps.pos);
-        c.vel.clone_from(&s.clumps.vel);
-        c.theta.clone_from(&s.clumps.theta);
-        c.omega.clone_from(&s.clumps.omega);
-        c.force.clone_from(&s.clumps.force);
-        c.torque.clone_from(&s.clumps.torque);
+        c.pos = c.in_rows(&s.clumps.pos);
+        c.vel = c.in_rows(&s.clumps.vel);
+        c.theta = c.in_rows(&s.clumps.theta);
+        c.omega = c.in_rows(&s.clumps.omega);
+        c.force = c.in_rows(&s.clumps.force);
+        c.torque = c.in_rows(&s.clumps.torque);
         c.refresh_rotations();
         Ok(())
     }

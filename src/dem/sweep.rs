@@ -23,7 +23,7 @@
 
 use super::bonds::{BondForce, BondLaw, Break, Held, HeldForces};
 use super::broadphase::{ContactList, CrossIndex, WallPair};
-use super::clumps::NO_CLUMP;
+use super::clumps::{ClumpRows, Discs, NO_CLUMP};
 use super::contact::{self, ContactForce, ContactLaw, Side, effective_mass};
 use super::integrate;
 use super::particles::{GHOST, Particles};
@@ -119,6 +119,8 @@ struct Ctx<'a> {
     bond_radius: &'a [f64],
     /// Evaluate inner pairs four at a time ([`lanes4`]).
     four_lanes: bool,
+    /// The clumps, stepped after the block of their members (`ADVANCE`).
+    clumps: Option<ClumpRows<'a>>,
 }
 
 /// The discs `lo..lo + pos.len()` with their pairs (as first disc) and
@@ -157,6 +159,34 @@ struct Block<'a> {
 }
 
 impl<'a> Block<'a> {
+    /// The same block, borrowed.
+    fn reborrow(&mut self) -> Block<'_> {
+        Block {
+            lo: self.lo,
+            pos: self.pos,
+            vel: self.vel,
+            theta: self.theta,
+            omega: self.omega,
+            force: self.force,
+            torque: self.torque,
+            radius: self.radius,
+            inv_mass: self.inv_mass,
+            inv_inertia: self.inv_inertia,
+            fixity: self.fixity,
+            material: self.material,
+            ref_pos: self.ref_pos,
+            pairs: self.pairs,
+            sm: self.sm,
+            shear: self.shear,
+            roll: self.roll,
+            walls: self.walls,
+            wall_buf: self.wall_buf,
+            held: self.held,
+            held_f: self.held_f,
+            clump: self.clump,
+        }
+    }
+
     /// Split before disc slot `at` (absolute).
     fn split(self, at: usize, ctx: &Ctx) -> (Block<'a>, Block<'a>) {
         let k = at - self.lo;
@@ -329,6 +359,15 @@ impl Granular {
         } = &mut self.contacts;
         let nm = self.materials.len();
         let bonded = !self.bonds.list.is_empty();
+        // the clumps are stepped after the block of their members
+        let clumped = !self.clumps.is_empty();
+        let clumps = if ADVANCE && clumped {
+            self.clumps.prepare(&self.particles, *block);
+            let motion = (self.gravity, self.damping, self.dt);
+            Some(self.clumps.rows(motion, max_v2))
+        } else {
+            None
+        };
         if ROLL {
             // lists built before rolling was switched on start from zero
             roll.resize(pairs.len(), 0.0);
@@ -377,8 +416,9 @@ impl Granular {
             gravity: self.gravity,
             damping: self.damping,
             dt: self.dt,
-            // a clump sums its members' stored forces after the sweep
-            store: !ADVANCE || self.store_forces || !self.clumps.is_empty(),
+            // a clump sums its members' stored forces after their block
+            // (or after the sweep)
+            store: !ADVANCE || self.store_forces || clumped,
             external: &self.external,
             max_v2,
             bond_row: if bonded { &self.bonds.row } else { &[] },
@@ -392,6 +432,7 @@ impl Granular {
             four_lanes: lanes4::available(),
             #[cfg(not(target_arch = "x86_64"))]
             four_lanes: false,
+            clumps,
         };
         let p = &mut self.particles;
         let ref_pos: &[Vec2] = if ADVANCE && self.grid.ref_pos.len() == n {
@@ -429,11 +470,7 @@ impl Granular {
             } else {
                 &mut self.bonds.held_f
             },
-            clump: if self.clumps.is_empty() {
-                &[]
-            } else {
-                &p.clump
-            },
+            clump: if clumped { &p.clump } else { &[] },
         };
         let has_ref = !ref_pos.is_empty();
         let (max2, bad, broken) = sweep_blocks::<ADVANCE, ROLL>(0..n.div_ceil(*block), all, &ctx);
@@ -553,13 +590,32 @@ fn sweep_block<const ADVANCE: bool, const ROLL: bool>(
 ) -> (f64, bool, Vec<Break>) {
     let n = b.pos.len();
     let bonded = !ctx.bond_row.is_empty();
-    with_zeroed(&ACC, true, n, |acc| {
+    let mut b = b;
+    let (m2, bad, broken) = with_zeroed(&ACC, true, n, |acc| {
         with_zeroed(&ACC_ROLL, ROLL, n, |acc_r| {
             with_zeroed(&ACC_BOND, bonded, n, |acc_b| {
-                sweep_block_in::<ADVANCE, ROLL>(blk, b, acc, acc_r, acc_b, ctx)
+                sweep_block_in::<ADVANCE, ROLL>(blk, b.reborrow(), acc, acc_r, acc_b, ctx)
             })
         })
-    })
+    });
+    let Some(rows) = ctx.clumps.as_ref().filter(|_| ADVANCE) else {
+        return (m2, bad, broken);
+    };
+    let ref_pos = if b.ref_pos.is_empty() {
+        std::ptr::null()
+    } else {
+        b.ref_pos.as_ptr()
+    };
+    let discs = Discs::block(
+        b.lo,
+        (b.pos, b.vel, b.theta, b.omega),
+        (b.force, b.torque, b.radius),
+        ref_pos,
+    );
+    // SAFETY: the block's discs are this task's, all swept; the blocks of
+    // the sweep do not overlap
+    let (c2, c_bad) = unsafe { rows.step_block(b.lo, b.lo + n, &discs) };
+    (m2.max(c2), bad || c_bad, broken)
 }
 
 #[inline(never)]
