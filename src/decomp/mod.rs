@@ -1132,7 +1132,7 @@ fn reach(max_radius: f64, skin: f64) -> f64 {
 }
 
 /// The stride of the centres of `n` discs that cut the regions: at most
-/// [`SAMPLE`] of them, evenly strided from the first.
+/// `SAMPLE` (50 000) of them, evenly strided from the first.
 pub fn sample_stride(n: usize) -> usize {
     n.div_ceil(SAMPLE).max(1)
 }

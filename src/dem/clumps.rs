@@ -24,7 +24,7 @@
 //! step ([`Granular::step`](super::Granular::step)) steps the clumps whose
 //! members lie in one block of the contact sweep right after that block,
 //! their members' data still in the cache, going through the block's
-//! rows in order ([`ClumpRows::step_block`]), and the others after the
+//! rows in order, and the others after the
 //! sweep ([`Clumps::step_across`]). A clump keeps its index (the one
 //! [`Particles::clump`] names, the files' clump number less one):
 //! `id[row]`, `row[id]`. Each clump's step depends on its own state and
@@ -518,7 +518,7 @@ impl Clumps {
     }
 
     /// The step of the clumps that the sweep's blocks left (members in
-    /// more than one block: [`prepare`](Self::prepare)), after the sweep
+    /// more than one block), after the sweep
     /// left their members' forces in `particles.force`/`torque`:
     /// [`gather`](Self::gather) and [`advance`](Self::advance), the same
     /// values. Returns the members' largest squared displacement from

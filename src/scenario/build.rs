@@ -763,7 +763,7 @@ pub fn model_with(sc: &Scenario, purpose: BuildFor) -> Result<Model, Invalid> {
 /// ranks of `comm` (collective): the discs the cut keeps for this rank of
 /// the whole assembly (their ids those of the whole), with the whole's
 /// walls, laws and time step and every check of the start state the whole
-/// would pass or fail ([`super::part`]). The whole assembly is never made.
+/// would pass or fail (`scenario::part`). The whole assembly is never made.
 /// `None` for what is not a plain granular scenario (bodies, bonds,
 /// clumps).
 pub fn part(
