@@ -123,16 +123,12 @@ if "1x2" in runs and "2x1" in runs:
     steps = [a[0] / b[0] for a, b in pairs]
     whole = [b[1] / a[1] for a, b in pairs]
     print(f"2 ranks ÷ 2 threads, per round: steps {fmt(steps)}, whole run {fmt(whole)}")
-if "half" in runs and "2x1" in runs:
-    one = statistics.median(r[2][0] for r in runs["half"])
-    for k, p in enumerate(zip(*(r[2] for r in runs["2x1"]))):
-        print(f"peak memory per rank ÷ half: rank {k} of 2 {statistics.median(p) / one:.2f}"
+for share, ranks, what in [("half", 2, "half the discs"), ("quarter", 4, "a quarter of the discs")]:
+    if share not in runs or f"{ranks}x1" not in runs:
+        continue
+    one = statistics.median(r[2][0] for r in runs[share])
+    for k, p in enumerate(zip(*(r[2] for r in runs[f"{ranks}x1"]))):
+        print(f"peak memory per rank ÷ {share}: rank {k} of {ranks} {statistics.median(p) / one:.2f}"
               f" (its peak {statistics.median(p) / 2**20:.0f} MiB ÷ {one / 2**20:.0f} MiB"
-              f" of one process with half the discs; target ≤ 1.20)")
-if "quarter" in runs and "4x1" in runs:
-    one = statistics.median(r[2][0] for r in runs["quarter"])
-    for k, p in enumerate(zip(*(r[2] for r in runs["4x1"]))):
-        print(f"peak memory per rank ÷ quarter: rank {k} of 4 {statistics.median(p) / one:.2f}"
-              f" (its peak {statistics.median(p) / 2**20:.0f} MiB ÷ {one / 2**20:.0f} MiB"
-              f" of one process with a quarter of the discs; target ≤ 1.20)")
+              f" of one process with {what}; target ≤ 1.20)")
 PY
