@@ -242,6 +242,68 @@ fn fused_step_equals_public_phases() {
     assert!(a.touching().1 > 0, "exercise wall contacts");
 }
 
+/// Discs held out of the sweep and advanced after it with their external
+/// forces (`hold` / `release_held`, as the coupling does while it solves
+/// the disc–body contacts beside the sweep) take bitwise the fused step
+/// with those forces, on 1 and 2 threads, with `store_forces` off too.
+#[test]
+fn held_discs_take_the_fused_step_bitwise() {
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut a = settling_gas(10);
+            let mut b = a.clone();
+            (a.store_forces, b.store_forces) = (false, false);
+            let held: Vec<u32> = (0..800).step_by(7).collect();
+            for step in 0..400 {
+                // a force and moment on every third held disc, two on some
+                let ext = |g: &Granular| {
+                    let mut e = Vec::new();
+                    for (k, &s) in held.iter().enumerate().filter(|(k, _)| k % 3 == 0) {
+                        let s = s as usize;
+                        let f = Vec2::new((k as f64).sin(), -1.0) * (50.0 + step as f64);
+                        e.push((s, f, g.particles.pos[s] + Vec2::new(0.5, 0.0), 0.1));
+                        if k % 2 == 0 {
+                            e.push((s, -f * 0.5, g.particles.pos[s], 0.0));
+                        }
+                    }
+                    e
+                };
+                a.prepare_contacts();
+                a.set_external_with_moments(ext(&a));
+                a.step();
+                b.prepare_contacts();
+                b.hold(&held);
+                let bad = b.advance_discs();
+                b.set_external_with_moments(ext(&b));
+                let bad = b.release_held(&held) | bad;
+                b.wall_totals();
+                b.finish_step(!bad);
+            }
+            let bits = |g: &Granular| {
+                let p = &g.particles;
+                (p.pos.iter().chain(&p.vel))
+                    .flat_map(|v| [v.x.to_bits(), v.y.to_bits()])
+                    .chain(p.omega.iter().chain(&p.theta).map(|x| x.to_bits()))
+                    .chain(p.fixity.iter().map(|&f| f as u64))
+                    .chain([g.max_disp.to_bits()])
+                    .chain(
+                        g.walls
+                            .iter()
+                            .flat_map(|w| [w.force.x.to_bits(), w.force.y.to_bits()]),
+                    )
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&a), bits(&b), "{threads} threads");
+            assert_eq!(a.step_check(a.check_radii), b.step_check(b.check_radii));
+            assert!(a.particles.vel.iter().any(|v| v.y < -1.0), "the forces act");
+        });
+    }
+}
+
 /// The phases are safe to call in any state: forces before any rebuild,
 /// and after discs were added.
 #[test]

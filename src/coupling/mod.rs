@@ -183,6 +183,14 @@ pub struct CoupledModel {
     pending: Vec<(usize, Vec<Vec2>)>,
     /// The present step may leave its bodies' ends pending.
     defer: bool,
+    /// Compliant scheme, [`step_deferring`](CoupledModel::step_deferring):
+    /// the discs have taken the present step but its contact solve is
+    /// still to come; the next step solves it beside its disc sweep
+    /// ([`CoupledModel::settle`] before reading the contacts or bodies).
+    tail_pending: bool,
+    /// The discs near the bodies, copied for that solve (kept for its
+    /// buffers).
+    view: Option<Granular>,
 }
 
 /// How the coupling steps the discs. [`Whole`]: the assembly held in
@@ -446,6 +454,8 @@ impl CoupledModel {
             radius_bound: None,
             pending: Vec::new(),
             defer: false,
+            tail_pending: false,
+            view: None,
         }
     }
 
@@ -471,10 +481,11 @@ impl CoupledModel {
 
     /// [`step`](Self::step), except that an exact step may leave the end of
     /// its body step — the response to the contact forces, one solve per
-    /// body, and the commit — pending: the next step does it beside the
-    /// discs' step, on another thread (the same arithmetic, so the same
-    /// results). Until then the bodies hold the previous step's state; call
-    /// [`settle`](Self::settle) before reading them.
+    /// body, and the commit — pending, and a compliant step within a body
+    /// step its contact solve: the next step does it beside the discs'
+    /// step, on another thread (the same arithmetic, so the same results).
+    /// Until then the bodies (and the contacts) hold the previous step's
+    /// state; call [`settle`](Self::settle) before reading them.
     pub fn step_deferring(&mut self) -> Result<(), CouplingError> {
         self.defer = true;
         let r = self.step_with(&mut Whole);
@@ -484,11 +495,17 @@ impl CoupledModel {
 
     /// Whether every body holds the present step ([`step_deferring`](Self::step_deferring)).
     pub fn is_settled(&self) -> bool {
-        self.pending.is_empty()
+        self.pending.is_empty() && !self.tail_pending
     }
 
-    /// End the body steps left pending by [`step_deferring`](Self::step_deferring).
+    /// End what [`step_deferring`](Self::step_deferring) left pending.
     pub fn settle(&mut self) -> Result<(), CouplingError> {
+        self.settle_bodies()?;
+        self.settle_tail()
+    }
+
+    /// End the exact steps' pending body steps.
+    fn settle_bodies(&mut self) -> Result<(), CouplingError> {
         if self.pending.is_empty() {
             return Ok(());
         }
@@ -498,13 +515,25 @@ impl CoupledModel {
         Ok(r?)
     }
 
+    /// Solve the compliant step's pending contacts.
+    fn settle_tail(&mut self) -> Result<(), CouplingError> {
+        if !std::mem::take(&mut self.tail_pending) {
+            return Ok(());
+        }
+        workers::awake(|| self.compliant_tail())
+    }
+
     /// [`step`](Self::step) with the discs stepped by `discs`. The
     /// predicted and staggered schemes step the discs in phases and need
     /// [`Whole`].
     pub fn step_with(&mut self, discs: &mut dyn DiscStep) -> Result<(), CouplingError> {
-        // only the exact step ends a body step left pending itself
+        // only the exact step ends a body step left pending itself, and
+        // only the compliant one its contact solve
         if self.compliant || self.staggered || self.substeps > 1 {
-            self.settle()?;
+            self.settle_bodies()?;
+        }
+        if !self.compliant {
+            self.settle_tail()?;
         }
         if self.compliant {
             return self.step_compliant(discs);
@@ -771,6 +800,13 @@ impl CoupledModel {
     /// with n = 1 it is the exact step with the contact forces shared by
     /// the segment ends.
     fn step_compliant(&mut self, discs: &mut dyn DiscStep) -> Result<(), CouplingError> {
+        if std::mem::take(&mut self.tail_pending) {
+            // (`defer` is set by `step_deferring` alone, with `Whole`)
+            if self.defer {
+                return self.step_compliant_beside();
+            }
+            workers::awake(|| self.compliant_tail())?;
+        }
         // a body step's prediction does not depend on the discs' step:
         // once primed, the two run side by side (as in the exact step)
         let side_by_side = self.sub == 0 && self.primed;
@@ -810,28 +846,127 @@ impl CoupledModel {
         self.timing.body += tb;
         self.timing.dem += (t2.elapsed().as_secs_f64() - tb).max(0.0);
         begun?;
-        workers::awake(|| {
-            let t3 = Instant::now();
-            self.check_finite()?;
-            self.sub += 1;
-            let s = self.sub as f64 / self.substeps as f64;
+        self.end_compliant_step()
+    }
+
+    /// The rest of a compliant DEM step once the discs have taken it: its
+    /// contact solve ([`compliant_tail`](Self::compliant_tail)) now, or —
+    /// deferring, within a body step — beside the next step's sweep.
+    fn end_compliant_step(&mut self) -> Result<(), CouplingError> {
+        let beside = self.defer
+            && self.sub + 1 < self.substeps
+            && self.granular.clumps.is_empty()
+            && rayon::current_num_threads() > 1
+            && !self.bodies.iter().any(|b| b.grows());
+        if beside {
+            self.tail_pending = true;
+            return Ok(());
+        }
+        workers::awake(|| self.compliant_tail())
+    }
+
+    /// The compliant scheme after the discs' DEM step: the boundary to the
+    /// new fraction of the body step and the contacts solved there; at the
+    /// end of a body step, the body step's end and the energy guard.
+    fn compliant_tail(&mut self) -> Result<(), CouplingError> {
+        let t = Instant::now();
+        self.begin_tail()?;
+        self.compliant_solve(true)?;
+        self.timing.transfer += t.elapsed().as_secs_f64();
+        if self.sub == self.substeps {
+            let tb = Instant::now();
+            self.sub = 0;
+            self.set_contact_forces();
             for b in &mut self.bodies {
-                b.set_path(s);
+                b.end_path()?;
             }
-            self.compliant_contacts(true)?;
-            self.timing.transfer += t3.elapsed().as_secs_f64();
-            if self.sub == self.substeps {
-                let tb = Instant::now();
-                self.sub = 0;
-                self.set_contact_forces();
-                for b in &mut self.bodies {
-                    b.end_path()?;
-                }
-                self.timing.body += tb.elapsed().as_secs_f64();
-                self.guard()?;
-            }
-            Ok(())
-        })
+            self.timing.body += tb.elapsed().as_secs_f64();
+            self.guard()?;
+        }
+        Ok(())
+    }
+
+    /// [`compliant_tail`](Self::compliant_tail) up to the contact solve:
+    /// the discs near the bodies checked, the boundary to the new fraction,
+    /// the candidates (a pass over all discs now and then).
+    fn begin_tail(&mut self) -> Result<(), CouplingError> {
+        self.check_finite()?;
+        self.sub += 1;
+        let s = self.sub as f64 / self.substeps as f64;
+        for b in &mut self.bodies {
+            b.set_path(s);
+        }
+        self.compliant_grids();
+        Ok(())
+    }
+
+    /// A compliant step after one that left its contact solve pending
+    /// (within a body step): that solve runs on a copy of the discs near
+    /// the bodies beside this step's disc sweep, which holds those discs
+    /// ([`Granular::hold`]) and advances them once the solve's forces are
+    /// known — the same arithmetic in the same order, so bitwise the steps
+    /// taken in turn. Its own contact solve is left pending again, or
+    /// done, as [`end_compliant_step`](Self::end_compliant_step) decides.
+    fn step_compliant_beside(&mut self) -> Result<(), CouplingError> {
+        let t = Instant::now();
+        workers::awake(|| self.begin_tail())?;
+        let (mut whole, near) = self.enter_view();
+        let ids: Vec<u32> = near
+            .iter()
+            .map(|&s| whole.particles.id[s as usize])
+            .collect();
+        whole.prepare_contacts();
+        let mut held: Vec<u32> = ids.iter().map(|&i| whole.slot(i as usize) as u32).collect();
+        held.sort_unstable();
+        whole.hold(&held);
+        let t0 = Instant::now();
+        self.timing.transfer += (t0 - t).as_secs_f64();
+        let (bad, (solved, ts)) = rayon::join(
+            || whole.advance_discs(),
+            || {
+                let t = Instant::now();
+                let r = self.compliant_solve(true);
+                (r, t.elapsed().as_secs_f64())
+            },
+        );
+        self.timing.transfer += ts;
+        self.timing.dem += (t0.elapsed().as_secs_f64() - ts).max(0.0);
+        self.leave_view(whole, &near);
+        // the held discs advance with the forces (those of the last
+        // state if the solve failed: the run stops with its error)
+        let t1 = Instant::now();
+        set_contacts_on_discs(&mut self.granular, &self.contacts);
+        let bad = self.granular.release_held(&held) | bad;
+        self.granular.wall_totals();
+        self.granular.finish_step(!bad);
+        self.timing.dem += t1.elapsed().as_secs_f64();
+        solved?;
+        self.end_compliant_step()
+    }
+
+    /// Make `granular` a copy of the candidates' discs, in slot order (the
+    /// candidate lists renumbered into it), for a contact solve beside the
+    /// sweep; returns the whole assembly and the candidates' slots in it.
+    fn enter_view(&mut self) -> (Granular, Vec<u32>) {
+        let mut near: Vec<u32> = (self.near.iter().flatten())
+            .flat_map(|c| c.slots.iter().copied())
+            .collect();
+        near.sort_unstable();
+        near.dedup();
+        let g = &self.granular;
+        let mut view = (self.view.take()).unwrap_or_else(|| g.with_discs(Default::default()));
+        g.particles.select_into(&near, &mut view.particles);
+        (view.dt, view.step, view.time) = (g.dt, g.step, g.time);
+        let in_view = |s: &mut u32| *s = near.binary_search(s).map_or(u32::MAX, |k| k as u32);
+        (self.near.iter_mut().flatten()).for_each(|c| c.slots.iter_mut().for_each(in_view));
+        (std::mem::replace(&mut self.granular, view), near)
+    }
+
+    /// Undo [`enter_view`](Self::enter_view).
+    fn leave_view(&mut self, whole: Granular, near: &[u32]) {
+        self.view = Some(std::mem::replace(&mut self.granular, whole));
+        (self.near.iter_mut().flatten())
+            .for_each(|c| c.slots.iter_mut().for_each(|s| *s = near[*s as usize]));
     }
 
     /// The compliant scheme's contacts at the present fraction of the body
@@ -842,19 +977,31 @@ impl CoupledModel {
     /// `advance` false (before the first step) the forces of the present
     /// state, with the discs at rest relative to the body and no history.
     fn compliant_contacts(&mut self, advance: bool) -> Result<(), CouplingError> {
+        self.compliant_grids();
+        self.compliant_solve(advance)
+    }
+
+    /// The compliant scheme's grids and candidates: binned once per body
+    /// step, again if a boundary's response to the contacts outgrew the
+    /// allowance it was binned with.
+    fn compliant_grids(&mut self) {
+        let regrid = self.sub <= 1
+            || (self.bodies.iter())
+                .zip(&self.allow)
+                .any(|(b, a)| b.path_correction() > *a);
+        self.rebuild_grids(CANDIDATE_MARGIN, regrid);
+    }
+
+    /// [`compliant_contacts`](Self::compliant_contacts) on the candidates
+    /// found ([`compliant_grids`](Self::compliant_grids)); reads the discs
+    /// of `granular` through the candidate lists only.
+    fn compliant_solve(&mut self, advance: bool) -> Result<(), CouplingError> {
         let dt = self.granular.dt;
         let nm = self.granular.materials.len();
         let s = self.sub as f64 / self.substeps as f64;
         let ds = 1.0 / self.substeps as f64;
         let mut next = std::mem::take(&mut self.scratch);
         next.clear();
-        // binned once per body step, again if a boundary's response to the
-        // contacts outgrew the allowance it was binned with
-        let regrid = self.sub <= 1
-            || (self.bodies.iter())
-                .zip(&self.allow)
-                .any(|(b, a)| b.path_correction() > *a);
-        self.rebuild_grids(CANDIDATE_MARGIN, regrid);
         let w = &mut self.work;
         let p = &self.granular.particles;
         let mut solve_time = 0.0;

@@ -569,6 +569,68 @@ impl Granular {
         bad
     }
 
+    /// Hold the discs in `slots` out of the next
+    /// [`advance_discs`](Self::advance_discs): their contacts are summed
+    /// as usual but they are not advanced (the discs' neighbours read them
+    /// unmoved, as they would anyway); [`release_held`](Self::release_held)
+    /// advances them once forces computed beside the sweep are set. Not
+    /// for clumped assemblies (a clump sums its members in the sweep).
+    pub fn hold(&mut self, slots: &[u32]) {
+        assert!(self.clumps.is_empty(), "held discs in a clumped assembly");
+        for &s in slots {
+            self.particles.fixity[s as usize] |= particles::HELD;
+        }
+    }
+
+    /// Advance the discs held by [`hold`](Self::hold) (`slots`, ascending),
+    /// after [`advance_discs`](Self::advance_discs) and
+    /// [`set_external`](Self::set_external): each with the sums the sweep
+    /// left in `force`/`torque`, then its external forces in order — the
+    /// sweep's sums, so bitwise the step it would have taken there.
+    /// `max_disp` takes their displacements; returns whether one failed
+    /// the step check.
+    pub fn release_held(&mut self, slots: &[u32]) -> bool {
+        let max_v2 = self.check_v2();
+        let (g, damping, dt) = (self.gravity, self.damping, self.dt);
+        let p = &mut self.particles;
+        let ref_pos = &self.grid.ref_pos;
+        let has_ref = ref_pos.len() == p.len();
+        let ext = &self.external;
+        let (mut ek, mut m2, mut bad) = (0, 0.0f64, false);
+        for &s in slots {
+            let d = s as usize;
+            p.fixity[d] &= !particles::HELD;
+            let (mut sf, mut tq) = (p.force[d], p.torque[d]);
+            while ek < ext.len() && ext[ek].0 as usize == d {
+                sf += ext[ek].1;
+                tq += ext[ek].2;
+                ek += 1;
+            }
+            (p.force[d], p.torque[d]) = (sf, tq);
+            if p.fixity[d] & particles::GHOST != 0 {
+                continue;
+            }
+            let (x, v, th, w) = (
+                &mut p.pos[d],
+                &mut p.vel[d],
+                &mut p.theta[d],
+                &mut p.omega[d],
+            );
+            let (im, ii, fix) = (p.inv_mass[d], p.inv_inertia[d], p.fixity[d]);
+            integrate::advance(x, v, th, w, sf, tq, im, ii, fix, g, damping, dt);
+            if has_ref {
+                m2 = m2.max((*x - ref_pos[d]).norm2());
+            }
+            bad |= !integrate::passes_check(*x, *v, *w, p.radius[d], max_v2);
+        }
+        assert_eq!(ek, ext.len(), "an external force on a disc not held");
+        self.external.clear();
+        if has_ref {
+            self.max_disp = self.max_disp.max(m2.sqrt());
+        }
+        bad
+    }
+
     /// `(check_radii/Δt)²`, the speed bound of the per-step check
     /// ([`integrate::passes_check`]).
     pub(super) fn check_v2(&self) -> f64 {

@@ -21,6 +21,10 @@ pub const FIX_ROT: u8 = 4;
 /// the displacement and stability checks, has no wall contacts, and two
 /// ghosts are never paired.
 pub const GHOST: u8 = 8;
+/// Flag, set only within one step: the disc is *held* — its contacts are
+/// summed in the sweep but it is advanced after it, once forces still
+/// being computed beside the sweep are known ([`super::Granular::hold`]).
+pub const HELD: u8 = 16;
 
 /// The discs of a granular assembly.
 #[derive(Debug, Clone, Default)]
@@ -205,6 +209,32 @@ impl Particles {
             self.slot[id as usize] = k as u32;
         }
         new_of_old
+    }
+
+    /// Copy the discs in `slots` (in that order) into `out`, replacing its
+    /// discs: a view of a few discs (their slot index left empty, their
+    /// clump fields dropped). `out`'s buffers are reused.
+    pub fn select_into(&self, slots: &[u32], out: &mut Particles) {
+        fn pick<T: Copy>(from: &[T], slots: &[u32], to: &mut Vec<T>) {
+            to.clear();
+            to.extend(slots.iter().map(|&s| from[s as usize]));
+        }
+        pick(&self.pos, slots, &mut out.pos);
+        pick(&self.vel, slots, &mut out.vel);
+        pick(&self.theta, slots, &mut out.theta);
+        pick(&self.omega, slots, &mut out.omega);
+        pick(&self.radius, slots, &mut out.radius);
+        pick(&self.mass, slots, &mut out.mass);
+        pick(&self.inertia, slots, &mut out.inertia);
+        pick(&self.inv_mass, slots, &mut out.inv_mass);
+        pick(&self.inv_inertia, slots, &mut out.inv_inertia);
+        pick(&self.force, slots, &mut out.force);
+        pick(&self.torque, slots, &mut out.torque);
+        pick(&self.fixity, slots, &mut out.fixity);
+        pick(&self.material, slots, &mut out.material);
+        pick(&self.id, slots, &mut out.id);
+        out.slot = SlotIndex::default();
+        out.clump.clear();
     }
 
     /// Release the arrays' spare capacity (an assembly's discs are all

@@ -26,7 +26,7 @@ use super::broadphase::{ContactList, CrossIndex, WallPair};
 use super::clumps::{ClumpRows, Discs, NO_CLUMP};
 use super::contact::{self, ContactForce, ContactLaw, Side, effective_mass};
 use super::integrate;
-use super::particles::{GHOST, Particles};
+use super::particles::{GHOST, HELD, Particles};
 use super::walls::Wall;
 use super::{BodyDamping, Granular};
 use crate::geom::Vec2;
@@ -909,11 +909,14 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
             tq += ctx.external[ek].2;
             ek += 1;
         }
-        if ctx.store {
+        // a held disc's sums wait for the forces computed beside the
+        // sweep (`Granular::release_held` advances it)
+        if ctx.store || fixity[d] & HELD != 0 {
             force[d] = sf;
             torque[d] = tq;
         }
-        if ADVANCE && fixity[d] & GHOST == 0 && (clump.is_empty() || clump[d] == NO_CLUMP) {
+        if ADVANCE && fixity[d] & (GHOST | HELD) == 0 && (clump.is_empty() || clump[d] == NO_CLUMP)
+        {
             integrate::advance(
                 &mut pos[d],
                 &mut vel[d],
