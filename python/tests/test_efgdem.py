@@ -461,11 +461,17 @@ def test_save_and_restore_state_continue_bitwise(box_file):
     assert np.array_equal(views["pos"][np.argsort(views["index"])], a.disc_positions())
 
 
-def test_steps_in_one_call_equal_steps_one_call_each():
+@pytest.mark.parametrize("coupling", ["exact", "compliant"])
+def test_steps_in_one_call_equal_steps_one_call_each(coupling, tmp_path):
     """Within one `step(n)` or `run(until)` call an exact coupled step leaves
-    its body step's end to the next step (done beside the discs' step); a
-    call of one step ends it before returning: the same states, bitwise."""
-    footing = str(ROOT / "examples" / "hex_footing.toml")
+    its body step's end, and a compliant step within a body step its contact
+    solve, to the next step (done beside the discs' step); a call of one
+    step ends it before returning: the same states, bitwise."""
+    text = (ROOT / "examples" / "hex_footing.toml").read_text()
+    scheme = 'coupling = "exact"' if coupling == "exact" else 'coupling = "compliant"\nsubsteps = 4'
+    footing = tmp_path / "footing.toml"
+    footing.write_text(text.replace("[simulation]\n", f"[simulation]\n{scheme}\n", 1))
+    footing = str(footing)
     a = efgdem.Model.from_scenario(footing)
     a.step(1500)
     b = efgdem.Model.from_scenario(footing)
