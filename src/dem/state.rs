@@ -194,15 +194,16 @@ impl Granular {
     /// place: the arrays keep their buffers), their state and the contact
     /// list replaced. A state of another assembly (disc or wall count,
     /// rolling resistance, an inconsistent list) is refused and the
-    /// assembly left unchanged.
+    /// assembly left unchanged. A part of a larger assembly (its discs
+    /// indexed among the whole's ids, [`SlotIndex::of_part`]) takes the
+    /// state of the same part: its discs by id, its pairs and wall pairs
+    /// in its own slots.
+    ///
+    /// [`SlotIndex::of_part`]: super::particles::SlotIndex::of_part
     pub fn restore_state(&mut self, s: &GranularState) -> Result<(), StateError> {
-        self.check_state(s)?;
+        let order = self.check_state(s)?;
         let n = self.particles.len();
         // move each disc's constants to its saved slot
-        let order: Vec<u32> =
-            s.id.iter()
-                .map(|&id| self.particles.slot[id as usize])
-                .collect();
         let p = &mut self.particles;
         p.permute(&order);
         p.pos.copy_from_slice(&s.pos);
@@ -250,9 +251,10 @@ impl Granular {
         Ok(())
     }
 
-    /// Does `s` fit this assembly? (Sizes, the id permutation, sorted
-    /// pairs in range.)
-    fn check_state(&self, s: &GranularState) -> Result<(), StateError> {
+    /// Does `s` fit this assembly? (Sizes, the ids those of the discs
+    /// held, each once; sorted pairs in range.) The present slot of the
+    /// disc of each saved slot.
+    fn check_state(&self, s: &GranularState) -> Result<Vec<u32>, StateError> {
         let n = self.particles.len();
         let nw = self.walls.len();
         if s.id.len() != n {
@@ -279,13 +281,7 @@ impl Granular {
                 return Err(bad(format!("{len} saved disc {what} for {n} discs")));
             }
         }
-        let mut seen = vec![false; n];
-        for &id in &s.id {
-            let id = id as usize;
-            if id >= n || std::mem::replace(&mut seen[id], true) {
-                return Err(bad("the saved disc ids are not a permutation".into()));
-            }
-        }
+        let order = self.slots_of(&s.id)?;
         if s.rolling != self.contacts.rolling {
             return Err(bad(format!(
                 "the saved state was made {} rolling resistance, the model has {}",
@@ -338,6 +334,24 @@ impl Granular {
                 "the saved Verlet reference does not match the discs or walls".into(),
             ));
         }
-        Ok(())
+        Ok(order)
+    }
+
+    /// The present slot of each disc `ids`, if they are those the assembly
+    /// holds (all of the whole's, or a part's), each once.
+    fn slots_of(&self, ids: &[u32]) -> Result<Vec<u32>, StateError> {
+        let p = &self.particles;
+        let n = p.len();
+        let mut seen = vec![false; n];
+        ids.iter()
+            .map(|&id| match p.slot.get(id as usize) {
+                Some(&k) if (k as usize) < n && !std::mem::replace(&mut seen[k as usize], true) => {
+                    Ok(k)
+                }
+                _ => Err(bad(
+                    "the saved disc ids are not those of the discs held".into()
+                )),
+            })
+            .collect()
     }
 }
