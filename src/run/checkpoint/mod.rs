@@ -244,56 +244,24 @@ impl Opened {
     /// it), of a size that fits its header, of the scenario `sc`. The
     /// refusal's message.
     fn open(path: &Path, sc: &Scenario, crc: bool) -> Result<Opened, String> {
-        let damaged = |e: std::io::Error| format!("damaged checkpoint: {e}");
         let f = File::open(path).map_err(|e| e.to_string())?;
         let len = f.metadata().map_err(|e| e.to_string())?.len();
         let mut r = BufReader::with_capacity(1 << 20, f);
-        let mut lead = [0u8; LEAD as usize];
-        // a device or another file: its first bytes only
-        let got = read_up_to(&mut r, &mut lead).map_err(|e| e.to_string())?;
-        if got < 8 || lead[..8] != MAGIC[..] {
-            return Err("not an efgdem checkpoint".into());
-        }
-        if got < 12 || lead[8..12] != VERSION.to_le_bytes() {
-            let v = <[u8; 4]>::try_from(&lead[8..12])
-                .ok()
-                .filter(|_| got >= 12)
-                .map_or_else(|| "?".into(), |v| u32::from_le_bytes(v).to_string());
-            return Err(format!(
-                "checkpoint format {v} is not this efgdem's ({VERSION}), or the file is damaged; run the scenario afresh"
-            ));
-        }
+        let head_len = lead(&mut r)?;
         if crc {
             check_crc(path, len)?;
         }
         let short = || "damaged checkpoint: cut short".to_string();
-        if got < lead.len() {
-            return Err(short());
-        }
-        let head_len = u64::from_le_bytes(lead[12..].try_into().expect("8 bytes"));
-        if head_len > len.saturating_sub(LEAD + 4) {
-            return Err(short());
-        }
-        let mut head = vec![0u8; head_len as usize];
-        r.read_exact(&mut head).map_err(damaged)?;
-        let head: Head =
-            postcard::from_bytes(&head).map_err(|e| format!("damaged checkpoint: {e}"))?;
-        if head.scenario != fingerprint(sc) {
-            return Err(
-                "the scenario has changed since the checkpoint was written (only comments and layout may change, and not the discs' CSV file); run it afresh".into(),
-            );
-        }
+        let head_len = head_len
+            .filter(|&h| h <= len.saturating_sub(LEAD + 4))
+            .ok_or_else(short)?;
+        let (head, state) = read_head(&mut r, head_len, sc)?;
         let arrays = head.table.map_or(Some(0), |t| t.bytes());
         if arrays.and_then(|a| a.checked_add(LEAD + head_len + 4)) != Some(len) {
             return Err(
                 "damaged checkpoint: its size does not match its header (cut short or extended)"
                     .into(),
             );
-        }
-        let mut state =
-            ModelState::from_bytes(&head.model).map_err(|e| format!("damaged checkpoint: {e}"))?;
-        if granular_of(&mut state).is_some() != head.table.is_some() {
-            return Err("damaged checkpoint: its arrays do not match its model".into());
         }
         let base = LEAD + head_len;
         let arrays = head.table.map(|t| Arrays::new(r, base, base, t));
@@ -316,6 +284,50 @@ impl Opened {
             path: self.path,
         }
     }
+}
+
+/// The first bytes of a checkpoint: [`MAGIC`] and [`VERSION`] (else
+/// refused), then the header's length (`None` if the file ends before).
+fn lead(r: &mut impl Read) -> Result<Option<u64>, String> {
+    let mut lead = [0u8; LEAD as usize];
+    // a device or another file: its first bytes only
+    let got = read_up_to(r, &mut lead).map_err(|e| e.to_string())?;
+    if got < 8 || lead[..8] != MAGIC[..] {
+        return Err("not an efgdem checkpoint".into());
+    }
+    if got < 12 || lead[8..12] != VERSION.to_le_bytes() {
+        let v = match got {
+            12.. => u32::from_le_bytes(lead[8..12].try_into().expect("4 bytes")).to_string(),
+            _ => "?".into(),
+        };
+        return Err(format!(
+            "checkpoint format {v} is not this efgdem's ({VERSION}), or the file is damaged; run the scenario afresh"
+        ));
+    }
+    Ok((got == lead.len()).then(|| u64::from_le_bytes(lead[12..].try_into().expect("8 bytes"))))
+}
+
+/// The header of `head_len` bytes (no more than the file holds) and the
+/// model's state in it, of the scenario `sc` (else refused).
+fn read_head(
+    r: &mut impl Read,
+    head_len: u64,
+    sc: &Scenario,
+) -> Result<(Head, ModelState), String> {
+    let damaged = |e: &dyn std::fmt::Display| format!("damaged checkpoint: {e}");
+    let mut head = vec![0u8; head_len as usize];
+    r.read_exact(&mut head).map_err(|e| damaged(&e))?;
+    let head: Head = postcard::from_bytes(&head).map_err(|e| damaged(&e))?;
+    if head.scenario != fingerprint(sc) {
+        return Err(
+            "the scenario has changed since the checkpoint was written (only comments and layout may change, and not the discs' CSV file); run it afresh".into(),
+        );
+    }
+    let mut state = ModelState::from_bytes(&head.model).map_err(|e| damaged(&e))?;
+    if granular_of(&mut state).is_some() != head.table.is_some() {
+        return Err("damaged checkpoint: its arrays do not match its model".into());
+    }
+    Ok((head, state))
 }
 
 /// Read into `buf` until it is full or the file ends: the bytes read.
