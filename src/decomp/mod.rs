@@ -34,7 +34,9 @@
 //!   [`GranularState`] the undivided assembly would have (discs in slot
 //!   order, sorted pair list, histories, walls): outputs and checkpoints
 //!   are made from it, and a checkpoint restarts on any number of ranks
-//!   ([`Decomposed::new`] splits a whole assembly).
+//!   ([`Decomposed::new`] splits a whole assembly;
+//!   [`Decomposed::from_restored`] takes a part each rank restored
+//!   alone, the same share).
 
 pub mod comm;
 #[cfg(feature = "mpi")]

@@ -131,11 +131,12 @@ fn pairs_of(a: &mut Arrays<File>, h: &Held) -> std::io::Result<Option<(Vec<[u32;
     a.each(Col::Pairs, 0..m, |k, [i, j]: [u32; 2]| {
         ok &= i < j && (j as u64) < n && last < Some((i, j));
         last = Some((i, j));
-        if ok && (bit(&h.owned, i) || bit(&h.owned, j)) {
-            if let (Some(x), Some(y)) = (local(i), local(j)) {
-                pairs.push([x, y]);
-                ks.push(k as u32);
-            }
+        if ok
+            && (bit(&h.owned, i) || bit(&h.owned, j))
+            && let (Some(x), Some(y)) = (local(i), local(j))
+        {
+            pairs.push([x, y]);
+            ks.push(k as u32);
         }
     })?;
     Ok(ok.then_some((pairs, ks)))
