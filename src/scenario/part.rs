@@ -7,7 +7,9 @@
 //! wall, then the part's own discs. The checks of the start state are
 //! those of the whole, with the same outcome and message on every rank:
 //! the overlapping pairs are found on each part (a pair with a disc of the
-//! region lies within the part) and agreed over the ranks.
+//! region lies within the part) and agreed over the ranks. A rank that
+//! restarts from a checkpoint makes the first pass only
+//! ([`PartSkeleton`]), then the discs the checkpoint says it holds.
 
 use super::build::{
     BuildFor, START_OVERLAP_TOL, assembly, bad, default_skin, disc_of, disc_rows, lattice_of,
