@@ -201,8 +201,8 @@ impl Granular {
     ///
     /// [`SlotIndex::of_part`]: super::particles::SlotIndex::of_part
     pub fn restore_state(&mut self, s: &GranularState) -> Result<(), StateError> {
-        let order = self.check_state(s)?;
-        let n = self.particles.len();
+        let order = self.check_discs(s)?;
+        self.check_state(s)?;
         // move each disc's constants to its saved slot
         let p = &mut self.particles;
         p.permute(&order);
@@ -212,6 +212,24 @@ impl Granular {
         p.omega.copy_from_slice(&s.omega);
         p.force.copy_from_slice(&s.force);
         p.torque.copy_from_slice(&s.torque);
+        self.restore_rest(s);
+        Ok(())
+    }
+
+    /// [`restore_state`](Self::restore_state) of an assembly whose discs
+    /// are in their saved slots with their saved values already (a part
+    /// read from a checkpoint straight into place, without a second copy
+    /// of its discs): all but the discs' arrays of `s` (not read; empty).
+    pub fn restore_state_around_discs(&mut self, s: &GranularState) -> Result<(), StateError> {
+        self.check_state(s)?;
+        self.restore_rest(s);
+        Ok(())
+    }
+
+    /// [`restore_state`](Self::restore_state) after the discs: walls,
+    /// clock, contact list, Verlet bookkeeping, bonds, clumps.
+    fn restore_rest(&mut self, s: &GranularState) {
+        let n = self.particles.len();
         for (w, ws) in self.walls.iter_mut().zip(&s.walls) {
             (w.a, w.b, w.vel, w.force, w.integral) = (ws.a, ws.b, ws.vel, ws.force, ws.integral);
         }
@@ -248,25 +266,17 @@ impl Granular {
         c.force = c.in_rows(&s.clumps.force);
         c.torque = c.in_rows(&s.clumps.torque);
         c.refresh_rotations();
-        Ok(())
     }
 
-    /// Does `s` fit this assembly? (Sizes, the ids those of the discs
-    /// held, each once; sorted pairs in range.) The present slot of the
-    /// disc of each saved slot.
-    fn check_state(&self, s: &GranularState) -> Result<Vec<u32>, StateError> {
+    /// Do the discs of `s` fit this assembly? (Their count, the ids those
+    /// of the discs held, each once.) The present slot of the disc of
+    /// each saved slot.
+    fn check_discs(&self, s: &GranularState) -> Result<Vec<u32>, StateError> {
         let n = self.particles.len();
-        let nw = self.walls.len();
         if s.id.len() != n {
             return Err(bad(format!(
                 "the saved state has {} discs, the model {n}",
                 s.id.len()
-            )));
-        }
-        if s.walls.len() != nw {
-            return Err(bad(format!(
-                "the saved state has {} walls, the model {nw}",
-                s.walls.len()
             )));
         }
         for (what, len) in [
@@ -281,7 +291,20 @@ impl Granular {
                 return Err(bad(format!("{len} saved disc {what} for {n} discs")));
             }
         }
-        let order = self.slots_of(&s.id)?;
+        self.slots_of(&s.id)
+    }
+
+    /// Does the rest of `s` fit this assembly? (Sizes, sorted pairs in
+    /// range.)
+    fn check_state(&self, s: &GranularState) -> Result<(), StateError> {
+        let n = self.particles.len();
+        let nw = self.walls.len();
+        if s.walls.len() != nw {
+            return Err(bad(format!(
+                "the saved state has {} walls, the model {nw}",
+                s.walls.len()
+            )));
+        }
         if s.rolling != self.contacts.rolling {
             return Err(bad(format!(
                 "the saved state was made {} rolling resistance, the model has {}",
@@ -334,7 +357,7 @@ impl Granular {
                 "the saved Verlet reference does not match the discs or walls".into(),
             ));
         }
-        Ok(order)
+        Ok(())
     }
 
     /// The present slot of each disc `ids`, if they are those the assembly

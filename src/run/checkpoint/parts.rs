@@ -6,7 +6,7 @@
 //! with a disc of its region. The part is bitwise the share
 //! [`Decomposed::new`] takes of the whole restored on every rank.
 
-use super::layout::{Arrays, Col};
+use super::layout::{Arrays, Col, Raw};
 use super::{Checkpoint, Opened};
 use crate::decomp::{Comm, Cut, Decomposed, sample_stride};
 use crate::dem::Granular;
@@ -166,7 +166,9 @@ fn part_of(
     let System::Granular(g) = &sk.model.system else {
         unreachable!("a granular skeleton")
     };
-    let (cut, h) = held(a, sk, g.grid.skin, comm).map_err(damaged)?;
+    let (cut, mut h) = held(a, sk, g.grid.skin, comm).map_err(damaged)?;
+    let start = frames && comm.rank() == 0;
+    let (p, start) = discs_of(a, sk, &mut h, start)?;
     let (pairs, ks) = pairs_of(a, &h)
         .map_err(damaged)?
         .ok_or("damaged checkpoint: its pairs are not sorted or out of range")?;
@@ -175,15 +177,8 @@ fn part_of(
         .filter(|w| bit(&h.owned, w.disc))
         .filter_map(|w| local(w.disc).map(|disc| WallPairState { disc, ..*w }))
         .collect();
-    let t = a.table;
-    let s = &h.slots;
-    let part = GranularState {
-        id: a.pick(Col::Id, s).map_err(damaged)?,
-        vel: a.pick(Col::Vel, s).map_err(damaged)?,
-        theta: a.pick(Col::Theta, s).map_err(damaged)?,
-        omega: a.pick(Col::Omega, s).map_err(damaged)?,
-        force: a.pick(Col::Force, s).map_err(damaged)?,
-        torque: a.pick(Col::Torque, s).map_err(damaged)?,
+    let (t, s) = (a.table, &h.slots);
+    let rest = GranularState {
         ref_pos: match t.ref_pos {
             true => a.pick(Col::RefPos, s).map_err(damaged)?,
             false => Vec::new(),
@@ -193,21 +188,56 @@ fn part_of(
             true => a.pick(Col::Roll, &ks).map_err(damaged)?,
             false => Vec::new(),
         },
-        pos: h.pos,
         pairs,
         wall_pairs,
         ..whole.as_ref().clone()
     };
+    let mut g = g.with_discs(p);
+    g.restore_state_around_discs(&rest)
+        .map_err(|e| e.to_string())?;
     let keys = h.slots.iter().map(|&s| s as u64).collect();
-    let mut ids = part.id.clone();
-    ids.sort_unstable();
-    if ids.windows(2).any(|w| w[0] == w[1]) || ids.last().is_some_and(|&i| i as u64 >= n) {
+    Ok((g, keys, cut, start))
+}
+
+/// The discs `h` holds as the scenario makes them, in their saved order
+/// with their saved values read into place (`h.pos` taken); the whole's
+/// start positions if `start`.
+fn discs_of(
+    a: &mut Arrays<File>,
+    sk: &PartSkeleton,
+    h: &mut Held,
+    start: bool,
+) -> Result<(Particles, Vec<Vec2>), String> {
+    let damaged = |e: std::io::Error| format!("damaged checkpoint: {e}");
+    let ids: Vec<u32> = a.pick(Col::Id, &h.slots).map_err(damaged)?;
+    let mut sorted = ids.clone();
+    sorted.sort_unstable();
+    let n = sk.n_total as u64;
+    if sorted.windows(2).any(|w| w[0] == w[1]) || sorted.last().is_some_and(|&i| i as u64 >= n) {
         return Err("damaged checkpoint: the saved disc ids are not a permutation".into());
     }
-    let start = frames && comm.rank() == 0;
-    let (particles, start) = sk.discs(&ids, start).map_err(|e| e.to_string())?;
+    let (mut p, start) = sk.discs(&sorted, start).map_err(|e| e.to_string())?;
+    drop(sorted);
+    // each disc's constants to its saved slot, then its saved values
+    let order: Vec<u32> = ids.iter().map(|&id| p.slot[id as usize]).collect();
     drop(ids);
-    let mut g = g.with_discs(particles);
-    g.restore_state(&part).map_err(|e| e.to_string())?;
-    Ok((g, keys, cut, start))
+    p.permute(&order);
+    drop(order);
+    p.pos = std::mem::take(&mut h.pos);
+    let s = &h.slots;
+    fill(a, Col::Vel, s, &mut p.vel).map_err(damaged)?;
+    fill(a, Col::Theta, s, &mut p.theta).map_err(damaged)?;
+    fill(a, Col::Omega, s, &mut p.omega).map_err(damaged)?;
+    fill(a, Col::Force, s, &mut p.force).map_err(damaged)?;
+    fill(a, Col::Torque, s, &mut p.torque).map_err(damaged)?;
+    Ok((p, start))
+}
+
+/// `v[k]` the element of `c` at `slots[k]`, for each `k`.
+fn fill<T: Raw>(a: &mut Arrays<File>, c: Col, slots: &[u32], v: &mut [T]) -> std::io::Result<()> {
+    let mut k = 0;
+    a.each(c, slots.iter().map(|&s| s as usize), |_, x| {
+        v[k] = x;
+        k += 1;
+    })
 }
