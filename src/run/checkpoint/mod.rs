@@ -7,10 +7,11 @@
 //! is refused with its path rather than used.
 //!
 //! The discs' per-slot arrays and the pairs' arrays of a granular or
-//! coupled state are stored raw after a small header ([`layout`]), so that
-//! a run restarted on several ranks reads on each rank only the discs and
-//! pairs of its region ([`read_part`]); one process reads the file whole
-//! ([`Checkpoint::read`]).
+//! coupled state are stored raw after a small header (the `layout`
+//! module), so that a run restarted on several ranks reads on each rank
+//! only the discs and pairs of its region (`read_part`); one process
+//! reads the file whole (`Checkpoint::read`). The layout:
+//! `docs/reference/outputs.md`.
 
 mod layout;
 mod parts;
