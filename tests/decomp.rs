@@ -463,6 +463,41 @@ fn a_checkpoint_is_read_in_parts_and_a_damaged_one_refused_by_every_rank() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Two discs checkpointed by one process continue on 3 ranks (one rank
+/// holds none) as the uninterrupted run.
+#[test]
+fn a_restart_on_more_ranks_than_discs() {
+    let src = settling(2).replace("steps = 1\n", "steps = 300\n") + "[output]\nevery = 10\n";
+    let sc = scenario::parse(&src, "t.toml").unwrap_or_else(|e| panic!("{e}"));
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-few-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut opts = efgdem::run::RunOptions::new(dir.join("one"));
+    opts.quiet = true;
+    efgdem::run::run(&sc, &opts).unwrap();
+    let ck_opts = efgdem::run::RunOptions {
+        out_dir: dir.join("ck"),
+        checkpoint_every: 150,
+        ..opts.clone()
+    };
+    efgdem::run::run(&sc, &ck_opts).unwrap();
+    let restart = efgdem::run::RunOptions {
+        restart: Some(dir.join("ck/checkpoint.bin")),
+        checkpoint_every: 0,
+        ..ck_opts.clone()
+    };
+    std::thread::scope(|s| {
+        for c in Threads::group(3) {
+            let (sc, restart) = (&sc, &restart);
+            s.spawn(move || efgdem::run::run_on(sc, restart, Arc::new(c)).unwrap());
+        }
+    });
+    let read = |d: &str, f: &str| std::fs::read(dir.join(d).join(f)).unwrap();
+    for f in ["history.csv", "discs_final.csv"] {
+        assert!(read("one", f) == read("ck", f), "{f} differs");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A build without the `mpi` feature started as one of several MPI ranks
 /// (as mpirun sets its environment) refuses to run and says how to build
 /// with MPI, instead of N copies each running the whole scenario.
