@@ -25,6 +25,9 @@
 #                                   # process with its share of the discs (DISCS/2)
 #   ONLY="4x1 quarter" DISCS=1000000 examples/mpi_ranks_bench.sh   # the same for 4 ranks
 #                                   # (DISCS/4; `quarter` runs after the ranks)
+#   ONLY="4x1 4x1r" DISCS=1000000 examples/mpi_ranks_bench.sh   # a restart on 4 ranks
+#                                   # from a checkpoint (written half way by 4 ranks,
+#                                   # `4x1c`) against the fresh 4-rank start
 #
 # (MPIRUN_ARGS as above for a machine shared with other work: ranks
 # neither pinned to a core nor spinning while they wait)
@@ -53,15 +56,15 @@ sed -e "s/^steps = .*/steps = $steps/" -e "s/^every = .*/every = $steps/" \
     -e "s/^vtk_every = .*/vtk_every = 0/" -e "s/count = 100000/count = $quarter/" \
     -e "s/3340\.0/$qwidth/g" examples/settle_100k.toml >"$tmp/quarter.toml"
 
-run() { # name ranks threads [scenario]
-    local out="$tmp/$1" t0 t1 toml="$tmp/${4:-bench}.toml"
+run() { # name ranks threads [scenario [more arguments of `efgdem run`]]
+    local out="$tmp/${OUT:-$1}" t0 t1 toml="$tmp/${4:-bench}.toml" more=("${@:5}")
     t0=$(date +%s.%N)
     if [ "$2" -gt 1 ]; then
         # shellcheck disable=SC2086
         mpirun --oversubscribe ${MPIRUN_ARGS:-} -np "$2" "$bin" run "$toml" -o "$out" \
-            --threads "$3" -q --overwrite >/dev/null
+            --threads "$3" -q --overwrite "${more[@]}" >/dev/null
     else
-        "$bin" run "$toml" -o "$out" --threads "$3" -q --overwrite >/dev/null
+        "$bin" run "$toml" -o "$out" --threads "$3" -q --overwrite "${more[@]}" >/dev/null
     fi
     t1=$(date +%s.%N)
     if [ -n "${KEEP:-}" ]; then
@@ -106,6 +109,13 @@ for n in 3 4; do
     want "${n}x1" && run "${n}x1" "$n" 1
 done
 want quarter && run quarter 1 1 quarter
+# a restart on 4 ranks from a checkpoint written half way by 4 ranks
+# (`4x1c`), each rank reading only its part: its peak memory against the
+# fresh start's (`4x1`)
+if want 4x1r; then
+    run 4x1c 4 1 bench --checkpoint-every $((steps / 2))
+    OUT=4x1c run 4x1r 4 1 bench --restart "$tmp/4x1c/checkpoint.bin"
+fi
 python3 - "$tmp/results" <<'PY'
 import statistics, sys
 runs = {}
@@ -123,6 +133,11 @@ if "1x2" in runs and "2x1" in runs:
     steps = [a[0] / b[0] for a, b in pairs]
     whole = [b[1] / a[1] for a, b in pairs]
     print(f"2 ranks ÷ 2 threads, per round: steps {fmt(steps)}, whole run {fmt(whole)}")
+if "4x1r" in runs and "4x1" in runs:
+    for k, (r, f) in enumerate(zip(zip(*(r[2] for r in runs["4x1r"])), zip(*(r[2] for r in runs["4x1"])))):
+        r, f = statistics.median(r), statistics.median(f)
+        print(f"peak memory per rank, restart ÷ fresh start: rank {k} of 4 {r / f:.2f}"
+              f" ({r / 2**20:.0f} MiB ÷ {f / 2**20:.0f} MiB)")
 for share, ranks, what in [("half", 2, "half the discs"), ("quarter", 4, "a quarter of the discs")]:
     if share not in runs or f"{ranks}x1" not in runs:
         continue

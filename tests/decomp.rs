@@ -387,6 +387,117 @@ rectangle = [[0.05, 0.0], [0.15, 0.15]]
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A checkpoint written by one process continues on 3 ranks (each reads
+/// only its part of it) as the uninterrupted run; a damaged one (a bit
+/// flipped in the discs' arrays or in the header, cut short, extended) is
+/// refused by every rank with rank 0's message, none waiting for another.
+#[test]
+fn a_checkpoint_is_read_in_parts_and_a_damaged_one_refused_by_every_rank() {
+    let src = settling(600).replace("steps = 1\n", "steps = 600\n") + "[output]\nevery = 50\n";
+    let sc = scenario::parse(&src, "t.toml").unwrap_or_else(|e| panic!("{e}"));
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-ck-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut opts = efgdem::run::RunOptions::new(dir.join("one"));
+    opts.quiet = true;
+    efgdem::run::run(&sc, &opts).unwrap();
+    let ck_opts = efgdem::run::RunOptions {
+        out_dir: dir.join("ck"),
+        checkpoint_every: 300,
+        ..opts.clone()
+    };
+    efgdem::run::run(&sc, &ck_opts).unwrap();
+    let ck = dir.join("ck").join("checkpoint.bin");
+    let good = std::fs::read(&ck).unwrap();
+    let history = std::fs::read(dir.join("ck/history.csv")).unwrap();
+    let restart = efgdem::run::RunOptions {
+        restart: Some(ck.clone()),
+        checkpoint_every: 0,
+        ..ck_opts.clone()
+    };
+    let on = |ranks: usize| -> Vec<Result<serde_json::Value, efgdem::run::RunError>> {
+        std::thread::scope(|s| {
+            let runs: Vec<_> = (Threads::group(ranks).into_iter())
+                .map(|c| {
+                    let (sc, restart) = (&sc, &restart);
+                    s.spawn(move || efgdem::run::run_on(sc, restart, Arc::new(c)))
+                })
+                .collect();
+            runs.into_iter().map(|r| r.join().unwrap()).collect()
+        })
+    };
+    let n = good.len();
+    let flip = |at: usize| {
+        let mut b = good.clone();
+        b[at] ^= 0x10;
+        b
+    };
+    let damaged = [
+        ("a bit of the arrays", flip(n - 100)),
+        ("a bit of the header", flip(30)),
+        ("cut short", good[..n - 1000].to_vec()),
+        ("extended", [&good[..], &[0u8; 8]].concat()),
+    ];
+    for (what, bytes) in &damaged {
+        std::fs::write(&ck, bytes).unwrap();
+        let got = on(3);
+        let first = got[0].as_ref().unwrap_err().to_string();
+        println!("{what}: {first}");
+        assert!(first.contains("damaged checkpoint"), "{what}: {first}");
+        for (rank, r) in got.iter().enumerate() {
+            match r {
+                Err(e @ efgdem::run::RunError::Restart { .. }) => {
+                    assert_eq!(e.to_string(), first, "{what}: rank {rank}")
+                }
+                other => panic!("{what}: rank {rank}: {other:?}"),
+            }
+        }
+        // refused before anything was written
+        assert!(std::fs::read(dir.join("ck/history.csv")).unwrap() == history);
+    }
+    std::fs::write(&ck, &good).unwrap();
+    on(3).into_iter().for_each(|r| drop(r.unwrap()));
+    let read = |d: &str, f: &str| std::fs::read(dir.join(d).join(f)).unwrap();
+    for f in ["history.csv", "discs_final.csv"] {
+        assert!(read("one", f) == read("ck", f), "restart on 3: {f} differs");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Two discs checkpointed by one process continue on 3 ranks (one rank
+/// holds none) as the uninterrupted run.
+#[test]
+fn a_restart_on_more_ranks_than_discs() {
+    let src = settling(2).replace("steps = 1\n", "steps = 300\n") + "[output]\nevery = 10\n";
+    let sc = scenario::parse(&src, "t.toml").unwrap_or_else(|e| panic!("{e}"));
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-few-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut opts = efgdem::run::RunOptions::new(dir.join("one"));
+    opts.quiet = true;
+    efgdem::run::run(&sc, &opts).unwrap();
+    let ck_opts = efgdem::run::RunOptions {
+        out_dir: dir.join("ck"),
+        checkpoint_every: 150,
+        ..opts.clone()
+    };
+    efgdem::run::run(&sc, &ck_opts).unwrap();
+    let restart = efgdem::run::RunOptions {
+        restart: Some(dir.join("ck/checkpoint.bin")),
+        checkpoint_every: 0,
+        ..ck_opts.clone()
+    };
+    std::thread::scope(|s| {
+        for c in Threads::group(3) {
+            let (sc, restart) = (&sc, &restart);
+            s.spawn(move || efgdem::run::run_on(sc, restart, Arc::new(c)).unwrap());
+        }
+    });
+    let read = |d: &str, f: &str| std::fs::read(dir.join(d).join(f)).unwrap();
+    for f in ["history.csv", "discs_final.csv"] {
+        assert!(read("one", f) == read("ck", f), "{f} differs");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A build without the `mpi` feature started as one of several MPI ranks
 /// (as mpirun sets its environment) refuses to run and says how to build
 /// with MPI, instead of N copies each running the whole scenario.

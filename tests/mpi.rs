@@ -5,8 +5,9 @@
 //! discs settling under a servo lid with rolling resistance, discs that
 //! cross the regions' cuts again and again (a shaken column), a collapsing
 //! column that makes the regions be cut again, granular checkpoints
-//! written on 3 ranks and continued on 2 and the reverse, and a coupled
-//! footing with the exact and the compliant schemes. Run by `.ci/mpi`:
+//! written on 3 ranks and continued on 2 and the reverse (and one
+//! process's on 2), and a coupled footing with the exact and the
+//! compliant schemes. Run by `.ci/mpi`:
 //! `cargo test --release --features mpi --test mpi`.
 #![cfg(feature = "mpi")]
 
@@ -201,7 +202,8 @@ fn restarted(dir: &Path, want: &[(PathBuf, Vec<u8>)], at: usize, from: usize, to
 /// rolling resistance (`common::settling`), `steps` steps, [`OUTPUTS`]:
 /// the files of one process on 1, 2 and 3 ranks and on 2 ranks × 2
 /// threads; a checkpoint at half way written on 3 ranks continues on 2,
-/// and one written on 2 on 3, as the uninterrupted run. Returns the
+/// and one written on 2 on 3, and one of one process on 2, as the
+/// uninterrupted run. Returns the
 /// history of one process.
 fn settling_20000(tag: &str, steps: usize) -> common::Csv {
     let dir = workdir(tag, &(common::settling(20_000, steps, 1.2, 0.7) + OUTPUTS));
@@ -210,6 +212,8 @@ fn settling_20000(tag: &str, steps: usize) -> common::Csv {
     assert!(want.len() >= 4, "{want:?}");
     restarted(&dir, &want, steps / 2, 3, 2);
     restarted(&dir, &want, steps / 2, 2, 3);
+    // one process (0: without mpirun) to 2 ranks, each reading its part
+    restarted(&dir, &want, steps / 2, 0, 2);
     let hist = common::csv(&dir.join("one/history.csv"));
     let _ = std::fs::remove_dir_all(&dir);
     hist

@@ -34,7 +34,9 @@
 //!   [`GranularState`] the undivided assembly would have (discs in slot
 //!   order, sorted pair list, histories, walls): outputs and checkpoints
 //!   are made from it, and a checkpoint restarts on any number of ranks
-//!   ([`Decomposed::new`] splits a whole assembly).
+//!   ([`Decomposed::new`] splits a whole assembly;
+//!   [`Decomposed::from_restored`] takes a part each rank restored
+//!   alone, the same share).
 
 pub mod comm;
 #[cfg(feature = "mpi")]
@@ -314,6 +316,22 @@ impl Decomposed {
         part.grid.stale = built.grid.stale;
         part.max_disp = built.max_disp;
         Decomposed::start(part, keys, cut, built.grid.reorder_every, comm)
+    }
+
+    /// This rank's share of an assembly restored in parts: `part` holds
+    /// the discs `cut` [keeps](Cut::keeps) for this rank of a saved whole,
+    /// in its slot order (`keys`: their slots in it), restored with the
+    /// pairs that have a disc of this rank's region and the wall pairs of
+    /// those discs. Bitwise the share [`new`](Self::new) takes of the
+    /// whole restored.
+    pub fn from_restored(
+        part: Granular,
+        keys: Vec<u64>,
+        cut: Cut,
+        comm: Arc<dyn Comm>,
+    ) -> Decomposed {
+        let reorder_every = part.grid.reorder_every;
+        Decomposed::start(part, keys, cut, reorder_every, comm)
     }
 
     /// The share of `part` (discs with their `keys`, in key order, owned

@@ -194,15 +194,16 @@ impl Granular {
     /// place: the arrays keep their buffers), their state and the contact
     /// list replaced. A state of another assembly (disc or wall count,
     /// rolling resistance, an inconsistent list) is refused and the
-    /// assembly left unchanged.
+    /// assembly left unchanged. A part of a larger assembly (its discs
+    /// indexed among the whole's ids, [`SlotIndex::of_part`]) takes the
+    /// state of the same part: its discs by id, its pairs and wall pairs
+    /// in its own slots.
+    ///
+    /// [`SlotIndex::of_part`]: super::particles::SlotIndex::of_part
     pub fn restore_state(&mut self, s: &GranularState) -> Result<(), StateError> {
+        let order = self.check_discs(s)?;
         self.check_state(s)?;
-        let n = self.particles.len();
         // move each disc's constants to its saved slot
-        let order: Vec<u32> =
-            s.id.iter()
-                .map(|&id| self.particles.slot[id as usize])
-                .collect();
         let p = &mut self.particles;
         p.permute(&order);
         p.pos.copy_from_slice(&s.pos);
@@ -211,6 +212,24 @@ impl Granular {
         p.omega.copy_from_slice(&s.omega);
         p.force.copy_from_slice(&s.force);
         p.torque.copy_from_slice(&s.torque);
+        self.restore_rest(s);
+        Ok(())
+    }
+
+    /// [`restore_state`](Self::restore_state) of an assembly whose discs
+    /// are in their saved slots with their saved values already (a part
+    /// read from a checkpoint straight into place, without a second copy
+    /// of its discs): all but the discs' arrays of `s` (not read; empty).
+    pub fn restore_state_around_discs(&mut self, s: &GranularState) -> Result<(), StateError> {
+        self.check_state(s)?;
+        self.restore_rest(s);
+        Ok(())
+    }
+
+    /// [`restore_state`](Self::restore_state) after the discs: walls,
+    /// clock, contact list, Verlet bookkeeping, bonds, clumps.
+    fn restore_rest(&mut self, s: &GranularState) {
+        let n = self.particles.len();
         for (w, ws) in self.walls.iter_mut().zip(&s.walls) {
             (w.a, w.b, w.vel, w.force, w.integral) = (ws.a, ws.b, ws.vel, ws.force, ws.integral);
         }
@@ -247,24 +266,17 @@ impl Granular {
         c.force = c.in_rows(&s.clumps.force);
         c.torque = c.in_rows(&s.clumps.torque);
         c.refresh_rotations();
-        Ok(())
     }
 
-    /// Does `s` fit this assembly? (Sizes, the id permutation, sorted
-    /// pairs in range.)
-    fn check_state(&self, s: &GranularState) -> Result<(), StateError> {
+    /// Do the discs of `s` fit this assembly? (Their count, the ids those
+    /// of the discs held, each once.) The present slot of the disc of
+    /// each saved slot.
+    fn check_discs(&self, s: &GranularState) -> Result<Vec<u32>, StateError> {
         let n = self.particles.len();
-        let nw = self.walls.len();
         if s.id.len() != n {
             return Err(bad(format!(
                 "the saved state has {} discs, the model {n}",
                 s.id.len()
-            )));
-        }
-        if s.walls.len() != nw {
-            return Err(bad(format!(
-                "the saved state has {} walls, the model {nw}",
-                s.walls.len()
             )));
         }
         for (what, len) in [
@@ -279,12 +291,19 @@ impl Granular {
                 return Err(bad(format!("{len} saved disc {what} for {n} discs")));
             }
         }
-        let mut seen = vec![false; n];
-        for &id in &s.id {
-            let id = id as usize;
-            if id >= n || std::mem::replace(&mut seen[id], true) {
-                return Err(bad("the saved disc ids are not a permutation".into()));
-            }
+        self.slots_of(&s.id)
+    }
+
+    /// Does the rest of `s` fit this assembly? (Sizes, sorted pairs in
+    /// range.)
+    fn check_state(&self, s: &GranularState) -> Result<(), StateError> {
+        let n = self.particles.len();
+        let nw = self.walls.len();
+        if s.walls.len() != nw {
+            return Err(bad(format!(
+                "the saved state has {} walls, the model {nw}",
+                s.walls.len()
+            )));
         }
         if s.rolling != self.contacts.rolling {
             return Err(bad(format!(
@@ -339,5 +358,23 @@ impl Granular {
             ));
         }
         Ok(())
+    }
+
+    /// The present slot of each disc `ids`, if they are those the assembly
+    /// holds (all of the whole's, or a part's), each once.
+    fn slots_of(&self, ids: &[u32]) -> Result<Vec<u32>, StateError> {
+        let p = &self.particles;
+        let n = p.len();
+        let mut seen = vec![false; n];
+        ids.iter()
+            .map(|&id| match p.slot.get(id as usize) {
+                Some(&k) if (k as usize) < n && !std::mem::replace(&mut seen[k as usize], true) => {
+                    Ok(k)
+                }
+                _ => Err(bad(
+                    "the saved disc ids are not those of the discs held".into()
+                )),
+            })
+            .collect()
     }
 }

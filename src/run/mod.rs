@@ -251,25 +251,8 @@ pub fn run_on(
     // every rank prepares the same packing (it is deterministic)
     let bed = prepare_packing(sc, opts, opts.quiet || !root)?;
     let spin = progress::spinner("building the model", opts.quiet || !root);
-    // a fresh granular run on ranks: each builds only the discs it holds
-    let part = match ranks > 1 && opts.restart.is_none() {
-        true => sc.build_part(bed.as_ref().map(|b| &b.rows[..]), &*comm)?,
-        false => None,
-    };
-    let (part, cut) = part.map_or((None, None), |(m, c)| (Some(m), Some(c)));
-    let mut model = match (part, &bed) {
-        (Some(m), _) => m,
-        (None, Some(b)) => sc.build_prepared(&b.rows)?,
-        (None, None) => sc.build()?,
-    };
-    let restart = match &opts.restart {
-        Some(path) => {
-            let ck = Checkpoint::read(path, sc)?;
-            ck.restore(&mut model)?;
-            Some(ck)
-        }
-        None => None,
-    };
+    let rows = bed.as_ref().map(|b| &b.rows[..]);
+    let (model, start, restart) = build_model(sc, opts, rows, &comm)?;
     spin.finish_and_clear();
     let build_s = t0.elapsed().as_secs_f64();
     let purpose = bed
@@ -302,7 +285,7 @@ pub fn run_on(
     let result = match model.system {
         System::Granular(ref g) if ranks > 1 => match ranks::discs_refusal(g) {
             Some(why) => Err(RunError::Ranks(why.into())),
-            None => ranks::run(run, model, comm, cut),
+            None => ranks::run(run, model, comm, start),
         },
         System::Continuum { .. } if ranks > 1 => Err(RunError::Ranks(format!(
             "a continuum scenario (bodies without discs) does not run on several ranks: run it with one process (not under mpirun -np {ranks})"
@@ -322,6 +305,46 @@ pub fn run_on(
         let _ = crate::output::write_json(&opts.out_dir.join("summary.json"), &summary);
     }
     result
+}
+
+/// The model this rank runs (restored from `opts.restart`), how its
+/// discs are divided over the ranks, and the checkpoint: a granular run
+/// on several ranks builds (or restores) only the discs each rank holds;
+/// otherwise every rank builds (and restores) the whole.
+fn build_model(
+    sc: &Scenario,
+    opts: &RunOptions,
+    bed: Option<&[crate::dem::packing::DiscRow]>,
+    comm: &Arc<dyn Comm>,
+) -> Result<(Model, ranks::Start, Option<Checkpoint>), RunError> {
+    if comm.size() > 1 {
+        match &opts.restart {
+            None => {
+                if let Some((m, cut)) = sc.build_part(bed, &**comm)? {
+                    return Ok((m, ranks::Start::Fresh(cut), None));
+                }
+            }
+            Some(path) => {
+                if let Some(sk) = sc.part_skeleton(bed)? {
+                    let (m, d, ck) = checkpoint::read_part(path, sc, sk, comm.clone())?;
+                    return Ok((m, ranks::Start::Restored(Box::new(d)), Some(ck)));
+                }
+            }
+        }
+    }
+    let mut model = match bed {
+        Some(rows) => sc.build_prepared(rows)?,
+        None => sc.build()?,
+    };
+    let restart = match &opts.restart {
+        Some(path) => {
+            let mut ck = Checkpoint::read(path, sc)?;
+            ck.restore(&mut model)?;
+            Some(ck)
+        }
+        None => None,
+    };
+    Ok((model, ranks::Start::Whole, restart))
 }
 
 /// The scenario's packing preparation, if any: read from its cache, or

@@ -110,6 +110,16 @@ fn with_whole<T>(
     Some(r)
 }
 
+/// How a granular run on ranks gets its parts.
+pub(super) enum Start {
+    /// Each rank takes its share of the whole model it built or restored.
+    Whole,
+    /// Each rank built its part alone, of these regions.
+    Fresh(Cut),
+    /// Each rank restored its part alone from a checkpoint.
+    Restored(Box<Decomposed>),
+}
+
 /// Run a granular scenario divided over the ranks of `comm` (every rank
 /// calls it with the same scenario, options and freshly built or restored
 /// `model`). Rank 0 writes the outputs and returns the summary; the
@@ -120,14 +130,15 @@ pub(super) fn run(
     run: Run,
     mut model: Model,
     comm: Arc<dyn Comm>,
-    cut: Option<Cut>,
+    start: Start,
 ) -> Result<serde_json::Value, RunError> {
     let root = comm.rank() == 0;
     let steps = model.steps;
     // the whole's contact list is never built: each part builds its own
     // (`Decomposed::prepare`)
-    let mut d = match (cut, &mut model.system) {
-        (Some(cut), System::Granular(g)) => Decomposed::from_part(g, cut, comm.clone()),
+    let mut d = match (start, &mut model.system) {
+        (Start::Restored(d), _) => *d,
+        (Start::Fresh(cut), System::Granular(g)) => Decomposed::from_part(g, cut, comm.clone()),
         _ => Decomposed::new(granular(&model), comm.clone()),
     };
     // the critical step of the discs' constants (the same at the end)

@@ -771,11 +771,23 @@ pub fn part(
     purpose: BuildFor,
     comm: &dyn Comm,
 ) -> Result<Option<(Model, Cut)>, Invalid> {
-    if super::kind(sc) != super::Kind::Granular || sc.bonds.is_some() || sc.clumps.is_some() {
+    if !in_parts(sc) {
         return Ok(None);
     }
     check_memory(sc)?;
     let (g, cut) = super::part::granular(sc, purpose, comm)?;
+    Ok(Some((part_model(sc, g)?, cut)))
+}
+
+/// Whether `sc` is a plain granular scenario (no bodies, bonds or
+/// clumps), whose assembly is built in parts.
+pub fn in_parts(sc: &Scenario) -> bool {
+    super::kind(sc) == super::Kind::Granular && sc.bonds.is_none() && sc.clumps.is_none()
+}
+
+/// The model of a rank's part `g` (or of its assembly without discs),
+/// with the checks of the whole's model that need no discs.
+pub(super) fn part_model(sc: &Scenario, g: Granular) -> Result<Model, Invalid> {
     let model = Model {
         dt: g.dt,
         steps: steps_of(sc, g.dt),
@@ -786,7 +798,20 @@ pub fn part(
         return Err(bad(&path, message));
     }
     probes(sc, &model)?;
-    Ok(Some((model, cut)))
+    Ok(model)
+}
+
+/// [`super::part::PartSkeleton`] of `sc`: `None` for what is not a plain
+/// granular scenario.
+pub fn part_skeleton<'a>(
+    sc: &'a Scenario,
+    purpose: BuildFor<'a>,
+) -> Result<Option<super::part::PartSkeleton<'a>>, Invalid> {
+    if !in_parts(sc) {
+        return Ok(None);
+    }
+    check_memory(sc)?;
+    super::part::part_skeleton(sc, purpose).map(Some)
 }
 
 /// Bytes per disc assumed by [`memory_estimate`]: the disc arrays (≈ 125

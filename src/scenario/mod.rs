@@ -18,6 +18,7 @@ pub mod generate;
 pub mod granular;
 pub mod measure;
 mod part;
+pub use part::PartSkeleton;
 pub mod prepare;
 pub mod rect;
 
@@ -652,6 +653,23 @@ impl Scenario {
         }
         let purpose = bed.map_or(build::BuildFor::Run, build::BuildFor::Prepared);
         build::part(self, purpose, comm).map_err(|p| self.located(vec![p]))
+    }
+
+    /// What a rank restarting a granular scenario from a checkpoint
+    /// builds before it knows its discs ([`PartSkeleton`]: the model
+    /// without discs; then the discs it holds, by id); `None` for what
+    /// is not a plain granular scenario (bodies, bonds, clumps). `bed` as
+    /// for [`build_part`](Self::build_part).
+    pub fn part_skeleton<'a>(
+        &'a self,
+        bed: Option<&'a [crate::dem::packing::DiscRow]>,
+    ) -> Result<Option<PartSkeleton<'a>>, ScenarioError> {
+        let problems = self.validate();
+        if !problems.is_empty() {
+            return Err(self.located(problems));
+        }
+        let purpose = bed.map_or(build::BuildFor::Run, build::BuildFor::Prepared);
+        build::part_skeleton(self, purpose).map_err(|p| self.located(vec![p]))
     }
 
     /// The `[[probe]]`s bound to their targets in `model` (built from this

@@ -7,14 +7,16 @@
 //! wall, then the part's own discs. The checks of the start state are
 //! those of the whole, with the same outcome and message on every rank:
 //! the overlapping pairs are found on each part (a pair with a disc of the
-//! region lies within the part) and agreed over the ranks.
+//! region lies within the part) and agreed over the ranks. A rank that
+//! restarts from a checkpoint makes the first pass only
+//! ([`PartSkeleton`]), then the discs the checkpoint says it holds.
 
 use super::build::{
     BuildFor, START_OVERLAP_TOL, assembly, bad, default_skin, disc_of, disc_rows, lattice_of,
     material_index, overlap_checks, pairs_refusal, preparation, reserve, spec, start_limits,
     time_step, wall_overlap, wall_refusal,
 };
-use super::granular::{DiscsSpec, DiscsTable, centroid, check_wall_speeds, walls};
+use super::granular::{DiscsSpec, DiscsTable, GranularSpec, centroid, check_wall_speeds, walls};
 use super::{Invalid, Scenario};
 use crate::decomp::comm::{Pack, Unpack};
 use crate::decomp::{Comm, Cut, sample_stride};
@@ -169,18 +171,12 @@ impl Whole {
 /// Discs crossing each wall: how many, and the first five `(id, overlap)`.
 type WallHits = Vec<(usize, Vec<(usize, f64)>)>;
 
-/// A rank's part of the assembly of `sc` and the ranks' regions (see the
-/// [module docs](self)); the whole's start positions are kept only where
-/// they serve (rank 0's frames).
-pub(super) fn granular(
-    sc: &Scenario,
-    purpose: BuildFor,
-    comm: &dyn Comm,
-) -> Result<(Granular, Cut), Invalid> {
+/// The whole's first pass and the assembly without discs: walls, laws,
+/// time step (checked on the discs that decide it) and skin.
+fn skeleton(sc: &Scenario, src: &Source) -> Result<(Granular, Whole), Invalid> {
     let g = spec(sc)?;
-    let src = source(sc, purpose)?;
     let mut whole = Whole::default();
-    let seen = each(sc, &src, &mut |d| whole.add(d))?;
+    let seen = each(sc, src, &mut |d| whole.add(d))?;
     if whole.n == 0 && seen > 0 && g.keep.is_some() {
         return Err(bad(
             "granular.keep",
@@ -195,9 +191,22 @@ pub(super) fn granular(
     few.dt = gr.dt;
     check_wall_speeds(sc, &few)?;
     start_limits(sc, &few)?;
+    gr.set_skin(g.skin.unwrap_or(default_skin(whole.max_r)));
+    Ok((gr, whole))
+}
+
+/// A rank's part of the assembly of `sc` and the ranks' regions (see the
+/// [module docs](self)); the whole's start positions are kept only where
+/// they serve (rank 0's frames).
+pub(super) fn granular(
+    sc: &Scenario,
+    purpose: BuildFor,
+    comm: &dyn Comm,
+) -> Result<(Granular, Cut), Invalid> {
+    let src = source(sc, purpose)?;
+    let (mut gr, whole) = skeleton(sc, &src)?;
     let checks = overlap_checks(sc, purpose)?;
-    let skin = g.skin.unwrap_or(default_skin(whole.max_r));
-    gr.set_skin(skin);
+    let skin = gr.grid.skin;
     // the sample that cuts the regions, and the discs crossing a wall
     let stride = sample_stride(whole.n);
     let mut sample = Vec::with_capacity(whole.n.div_ceil(stride));
@@ -231,6 +240,95 @@ pub(super) fn granular(
     Ok((gr, cut))
 }
 
+/// What a rank restarting from a checkpoint builds of a granular
+/// scenario before it knows its discs ([`Scenario::part_skeleton`]): the
+/// assembly without discs, the whole's disc count and largest radius;
+/// then the discs it holds, by id ([`discs`](Self::discs)). The checks of
+/// the start state are not made again (the checkpoint's run passed them).
+pub struct PartSkeleton<'a> {
+    sc: &'a Scenario,
+    src: Source<'a>,
+    /// The model without discs (indexed among the whole's ids): walls,
+    /// laws, time step, skin, steps.
+    pub model: crate::model::Model,
+    /// Discs of the whole assembly.
+    pub n_total: usize,
+    /// Largest radius of the whole assembly.
+    pub max_radius: f64,
+}
+
+/// [`PartSkeleton`] of `sc` (a plain granular scenario).
+pub(super) fn part_skeleton<'a>(
+    sc: &'a Scenario,
+    purpose: BuildFor<'a>,
+) -> Result<PartSkeleton<'a>, Invalid> {
+    let src = source(sc, purpose)?;
+    let (mut gr, whole) = skeleton(sc, &src)?;
+    // the whole's ids, none held (the probes are bound to them)
+    gr.particles.slot = SlotIndex::of_part(whole.n, &[]);
+    let model = super::build::part_model(sc, gr)?;
+    Ok(PartSkeleton {
+        sc,
+        src,
+        model,
+        n_total: whole.n,
+        max_radius: whole.max_r,
+    })
+}
+
+impl PartSkeleton<'_> {
+    /// The discs `ids` (ascending, of the whole) as built, in id order,
+    /// at the scenario's velocity, indexed among the whole's; and the
+    /// whole's start positions by id if `start` (else none).
+    pub fn discs(
+        &self,
+        ids: &[u32],
+        start: bool,
+    ) -> Result<(Particles, Vec<Vec2>), super::ScenarioError> {
+        self.discs_by_id(ids, start)
+            .map_err(|e| self.sc.located(vec![e]))
+    }
+
+    fn discs_by_id(&self, ids: &[u32], start: bool) -> Result<(Particles, Vec<Vec2>), Invalid> {
+        let sc = self.sc;
+        let g = spec(sc)?;
+        let mut p = Particles::default();
+        reserve(&mut p, ids.len())?;
+        let mut all = Vec::new();
+        if start {
+            all.reserve_exact(self.n_total);
+        }
+        let mut next = ids.iter().copied().peekable();
+        each(sc, &self.src, &mut |d| {
+            if start {
+                all.push(d.pos);
+            }
+            if next.next_if_eq(&(d.id as u32)).is_some() {
+                put_disc(sc, g, &mut p, d);
+            }
+        })?;
+        if let Some(id) = next.next() {
+            return Err(bad(
+                "granular.discs",
+                format!("the scenario has no disc {id} (of the checkpoint)"),
+            ));
+        }
+        p.slot = SlotIndex::of_part(self.n_total, &p.id);
+        Ok((p, all))
+    }
+}
+
+/// Add disc `d` of the whole to the part `p` as the whole's build makes
+/// it, with the whole's id, at the scenario's velocity.
+fn put_disc(sc: &Scenario, g: &GranularSpec, p: &mut Particles, d: &Disc) {
+    let density = sc.material[d.material as usize].density;
+    p.push(d.pos, d.r, density, g.thickness, d.material);
+    let j = p.len() - 1;
+    p.vel[j] = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
+    // the whole's numbering
+    p.id[j] = d.id as u32;
+}
+
 /// The discs `cut` keeps for rank `me` (counted, then made), with the
 /// whole's ids, at the scenario's velocity; and the whole's start
 /// positions by id where they serve (else none).
@@ -245,7 +343,6 @@ fn discs_of_part(
     each(sc, src, &mut |d| held += cut.holds(d.pos, me) as usize)?;
     let mut p = Particles::default();
     reserve(&mut p, held)?;
-    let v0 = g.velocity.map(Vec2::from).unwrap_or(Vec2::ZERO);
     let mut start = Vec::new();
     let keep_start = wants_start(sc, me);
     if keep_start {
@@ -256,12 +353,7 @@ fn discs_of_part(
             start.push(d.pos);
         }
         if cut.holds(d.pos, me) {
-            let density = sc.material[d.material as usize].density;
-            p.push(d.pos, d.r, density, g.thickness, d.material);
-            let j = p.len() - 1;
-            p.vel[j] = v0;
-            // the whole's numbering
-            p.id[j] = d.id as u32;
+            put_disc(sc, g, &mut p, d);
         }
     })?;
     p.slot = SlotIndex::of_part(cut.n_total, &p.id);
