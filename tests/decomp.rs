@@ -387,25 +387,44 @@ rectangle = [[0.05, 0.0], [0.15, 0.15]]
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A checkpoint written by one process continues on 3 ranks (each reads
-/// only its part of it) as the uninterrupted run; a damaged one (a bit
-/// flipped in the discs' arrays or in the header, cut short, extended) is
-/// refused by every rank with rank 0's message, none waiting for another.
-#[test]
-fn a_checkpoint_is_read_in_parts_and_a_damaged_one_refused_by_every_rank() {
-    let src = settling(600).replace("steps = 1\n", "steps = 600\n") + "[output]\nevery = 50\n";
+/// `settling(discs)` run for `steps` in one process, uninterrupted into
+/// `one/` and with a checkpoint half way into `ck/` (rows every `every`
+/// steps), in a fresh directory named after `tag`: the scenario, the
+/// directory and the checkpointing run's options.
+fn checkpointed(
+    discs: usize,
+    steps: usize,
+    every: usize,
+    tag: &str,
+) -> (
+    scenario::Scenario,
+    std::path::PathBuf,
+    efgdem::run::RunOptions,
+) {
+    let src = settling(discs).replace("steps = 1\n", &format!("steps = {steps}\n"))
+        + &format!("[output]\nevery = {every}\n");
     let sc = scenario::parse(&src, "t.toml").unwrap_or_else(|e| panic!("{e}"));
-    let dir = std::env::temp_dir().join(format!("efgdem-decomp-ck-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("efgdem-decomp-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let mut opts = efgdem::run::RunOptions::new(dir.join("one"));
     opts.quiet = true;
     efgdem::run::run(&sc, &opts).unwrap();
     let ck_opts = efgdem::run::RunOptions {
         out_dir: dir.join("ck"),
-        checkpoint_every: 300,
-        ..opts.clone()
+        checkpoint_every: steps / 2,
+        ..opts
     };
     efgdem::run::run(&sc, &ck_opts).unwrap();
+    (sc, dir, ck_opts)
+}
+
+/// A checkpoint written by one process continues on 3 ranks (each reads
+/// only its part of it) as the uninterrupted run; a damaged one (a bit
+/// flipped in the discs' arrays or in the header, cut short, extended) is
+/// refused by every rank with rank 0's message, none waiting for another.
+#[test]
+fn a_checkpoint_is_read_in_parts_and_a_damaged_one_refused_by_every_rank() {
+    let (sc, dir, ck_opts) = checkpointed(600, 600, 50, "ck");
     let ck = dir.join("ck").join("checkpoint.bin");
     let good = std::fs::read(&ck).unwrap();
     let history = std::fs::read(dir.join("ck/history.csv")).unwrap();
@@ -467,19 +486,7 @@ fn a_checkpoint_is_read_in_parts_and_a_damaged_one_refused_by_every_rank() {
 /// holds none) as the uninterrupted run.
 #[test]
 fn a_restart_on_more_ranks_than_discs() {
-    let src = settling(2).replace("steps = 1\n", "steps = 300\n") + "[output]\nevery = 10\n";
-    let sc = scenario::parse(&src, "t.toml").unwrap_or_else(|e| panic!("{e}"));
-    let dir = std::env::temp_dir().join(format!("efgdem-decomp-few-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let mut opts = efgdem::run::RunOptions::new(dir.join("one"));
-    opts.quiet = true;
-    efgdem::run::run(&sc, &opts).unwrap();
-    let ck_opts = efgdem::run::RunOptions {
-        out_dir: dir.join("ck"),
-        checkpoint_every: 150,
-        ..opts.clone()
-    };
-    efgdem::run::run(&sc, &ck_opts).unwrap();
+    let (sc, dir, ck_opts) = checkpointed(2, 300, 10, "few");
     let restart = efgdem::run::RunOptions {
         restart: Some(dir.join("ck/checkpoint.bin")),
         checkpoint_every: 0,
