@@ -424,7 +424,7 @@ impl Clumps {
     /// `(sin θ, cos θ)` of every clump from its `theta` (after the clumps'
     /// state was set from a saved one; a step keeps them itself).
     pub(super) fn refresh_rotations(&mut self) {
-        self.rot = self.theta.iter().map(|&t| sin_cos(t)).collect();
+        self.rot = self.theta.iter().map(|t| t.sin_cos()).collect();
     }
 
     /// Put the members of the clump in row `c` where its rigid motion
@@ -638,64 +638,6 @@ fn rigid_motion(x: Vec2, v: Vec2, w: f64, (s, co): (f64, f64), o: Vec2) -> (Vec2
     (x + r, v + r.perp() * w)
 }
 
-/// `(sin x, cos x)`, within an ulp or so of the correctly rounded values
-/// (the kernels of fdlibm, as in the `libm` crate: `x` reduced by
-/// multiples of π/2 to `y₀ + y₁`, `|y₀| ≤ π/4`, two polynomials, the
-/// quadrant picked without branches), inlined: the turn of a clump each
-/// step. `|x| ≥ 10⁶`, infinite or NaN: [`libm::sincos`].
-#[inline(always)]
-pub(crate) fn sin_cos(x: f64) -> (f64, f64) {
-    // π/2 in two parts: the first of 33 bits (`n · PIO2_1` exact for
-    // |n| < 2²⁰), the second its remainder
-    const INV_PIO2: f64 = 6.36619772367581382433e-01;
-    const PIO2_1: f64 = 1.57079632673412561417e+00;
-    const PIO2_1T: f64 = 6.07710050650619224932e-11;
-    const TO_INT: f64 = 1.5 / f64::EPSILON;
-    const S: [f64; 6] = [
-        -1.66666666666666324348e-01,
-        8.33333333332248946124e-03,
-        -1.98412698298579493134e-04,
-        2.75573137070700676789e-06,
-        -2.50507602534068634195e-08,
-        1.58969099521155010221e-10,
-    ];
-    const C: [f64; 6] = [
-        4.16666666666666019037e-02,
-        -1.38888888888741095749e-03,
-        2.48015872894767294178e-05,
-        -2.75573143513906633035e-07,
-        2.08757232129817482790e-09,
-        -1.13596475577881948265e-11,
-    ];
-    if !(x.abs() < 1e6) {
-        return libm::sincos(x);
-    }
-    // n = rint(x/(π/2)) (round to nearest even) and y₀ + y₁ = x − n π/2
-    let f_n = (x * INV_PIO2 + TO_INT) - TO_INT;
-    let n = f_n as i64;
-    let r = x - f_n * PIO2_1;
-    let w = f_n * PIO2_1T;
-    let y0 = r - w;
-    let y1 = (r - y0) - w;
-    // fdlibm's __kernel_sin and __kernel_cos of y₀ + y₁
-    let z = y0 * y0;
-    let z2 = z * z;
-    let rs = S[1] + z * (S[2] + z * S[3]) + z * z2 * (S[4] + z * S[5]);
-    let v = z * y0;
-    let sin = y0 - ((z * (0.5 * y1 - v * rs) - y1) - v * S[0]);
-    let rc = z * (C[0] + z * (C[1] + z * C[2])) + z2 * z2 * (C[3] + z * (C[4] + z * C[5]));
-    let hz = 0.5 * z;
-    let one = 1.0 - hz;
-    let cos = one + (((1.0 - one) - hz) + (z * rc - y0 * y1));
-    // quadrant n mod 4: (s, c), (c, −s), (−s, −c), (−c, s)
-    let (a, b) = (sin.to_bits(), cos.to_bits());
-    let swap = (a ^ b) & (n as u64 & 1).wrapping_neg();
-    let (a, b) = (a ^ swap, b ^ swap);
-    let sign_s = (n as u64 & 2) << 62;
-    let sign_c = ((n as u64).wrapping_add(1) & 2) << 62;
-    (f64::from_bits(a ^ sign_s), f64::from_bits(b ^ sign_c))
-}
-
 /// The clumps' rows for one step ([`Clumps::rows`]), each one stepped by
 /// [`step_row`](Self::step_row) on one thread: a clump's state is its
 /// row's alone.
@@ -753,7 +695,7 @@ impl ClumpRows<'_> {
         }
         let (inv_m, inv_i) = (1.0 / self.mass[r], 1.0 / self.inertia[r]);
         integrate::advance(x, v, th, w, *f, *t, inv_m, inv_i, 0, g, damping, dt);
-        *rot = sin_cos(*th);
+        *rot = th.sin_cos();
         let (mut m2, mut bad) = (0.0f64, false);
         for (&s, &o) in slots.iter().zip(offset) {
             let (xm, vm) = rigid_motion(*x, *v, *w, *rot, o);
@@ -965,34 +907,6 @@ pub fn replace_with_template(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn sin_cos_is_within_an_ulp_or_two() {
-        // angles of either sign, small and up to 10⁶, around multiples of
-        // π/2 and beyond (the fallback)
-        let mut rng = oorandom::Rand64::new(11);
-        let mut xs: Vec<f64> = (0..200_000)
-            .map(|k| {
-                let e = rng.rand_float() * 16.0 - 9.0;
-                let x = 10f64.powf(e.min(5.99));
-                if k % 2 == 0 { x } else { -x }
-            })
-            .collect();
-        for k in -40..40 {
-            let q = k as f64 * std::f64::consts::FRAC_PI_2;
-            xs.extend([q, q.next_up(), q.next_down(), q + 1e-9, 2e6 + q]);
-        }
-        xs.extend([0.0, -0.0, 1e-300, 1e6, -1e6, 1e300]);
-        for x in xs {
-            let (s, c) = sin_cos(x);
-            let (s0, c0) = x.sin_cos();
-            // an ulp of 1 is 2.2e-16: absolute errors, the rotation's
-            assert!((s - s0).abs() <= 2.3e-16 && (c - c0).abs() <= 2.3e-16, "{x}");
-            assert!((s * s + c * c - 1.0).abs() <= 4.5e-16, "{x}");
-        }
-        assert!(sin_cos(f64::NAN).0.is_nan() && sin_cos(f64::INFINITY).1.is_nan());
-        assert_eq!(sin_cos(0.0), (0.0, 1.0));
-    }
 
     #[test]
     fn one_disc_is_a_disc() {
