@@ -601,11 +601,7 @@ impl Granular {
             let d = s as usize;
             p.fixity[d] &= !particles::HELD;
             let (mut sf, mut tq) = (p.force[d], p.torque[d]);
-            while ek < ext.len() && ext[ek].0 as usize == d {
-                sf += ext[ek].1;
-                tq += ext[ek].2;
-                ek += 1;
-            }
+            sweep::add_external(ext, &mut ek, d, &mut sf, &mut tq);
             (p.force[d], p.torque[d]) = (sf, tq);
             if p.fixity[d] & particles::GHOST != 0 {
                 continue;

@@ -904,11 +904,7 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         if bonded {
             tq += std::mem::take(&mut acc_b[d]);
         }
-        while ek < ctx.external.len() && ctx.external[ek].0 as usize == lo + d {
-            sf += ctx.external[ek].1;
-            tq += ctx.external[ek].2;
-            ek += 1;
-        }
+        add_external(ctx.external, &mut ek, lo + d, &mut sf, &mut tq);
         // a held disc's sums wait for the forces computed beside the
         // sweep (`Granular::release_held` advances it)
         if ctx.store || fixity[d] & HELD != 0 {
@@ -940,6 +936,24 @@ fn sweep_block_in<const ADVANCE: bool, const ROLL: bool>(
         }
     }
     (m2, bad, broken)
+}
+
+/// Add the external forces and moments of the disc in `slot` to `f` and
+/// `t`, in order: those of `ext` (sorted by slot) from `*k` on, `*k` moved
+/// past them.
+#[inline(always)]
+pub(super) fn add_external(
+    ext: &[(u32, Vec2, f64)],
+    k: &mut usize,
+    slot: usize,
+    f: &mut Vec2,
+    t: &mut f64,
+) {
+    while *k < ext.len() && ext[*k].0 as usize == slot {
+        *f += ext[*k].1;
+        *t += ext[*k].2;
+        *k += 1;
+    }
 }
 
 /// The bonds of block `blk` (discs `lo..`, their data in `kin`, their held

@@ -85,6 +85,13 @@ struct Held {
     owned: Vec<u64>,
 }
 
+impl Held {
+    /// The part's slot of the whole's slot `s`, if held.
+    fn local(&self, s: u32) -> Option<u32> {
+        self.slots.binary_search(&s).ok().map(|k| k as u32)
+    }
+}
+
 /// The regions cut from the saved positions at the sample stride (those
 /// [`Cut::new`] takes), and the discs `me` holds.
 fn held(
@@ -124,7 +131,6 @@ fn held(
 #[allow(clippy::type_complexity)]
 fn pairs_of(a: &mut Arrays<File>, h: &Held) -> std::io::Result<Option<(Vec<[u32; 2]>, Vec<u32>)>> {
     let n = a.table.discs;
-    let local = |s: u32| h.slots.binary_search(&s).ok().map(|k| k as u32);
     let (mut pairs, mut ks) = (Vec::new(), Vec::new());
     let (mut ok, mut last) = (true, None);
     let m = a.table.len(Col::Pairs);
@@ -133,7 +139,7 @@ fn pairs_of(a: &mut Arrays<File>, h: &Held) -> std::io::Result<Option<(Vec<[u32;
         last = Some((i, j));
         if ok
             && (bit(&h.owned, i) || bit(&h.owned, j))
-            && let (Some(x), Some(y)) = (local(i), local(j))
+            && let (Some(x), Some(y)) = (h.local(i), h.local(j))
         {
             pairs.push([x, y]);
             ks.push(k as u32);
@@ -172,10 +178,9 @@ fn part_of(
     let (pairs, ks) = pairs_of(a, &h)
         .map_err(damaged)?
         .ok_or("damaged checkpoint: its pairs are not sorted or out of range")?;
-    let local = |s: u32| h.slots.binary_search(&s).ok().map(|k| k as u32);
     let wall_pairs = (whole.wall_pairs.iter())
         .filter(|w| bit(&h.owned, w.disc))
-        .filter_map(|w| local(w.disc).map(|disc| WallPairState { disc, ..*w }))
+        .filter_map(|w| h.local(w.disc).map(|disc| WallPairState { disc, ..*w }))
         .collect();
     let (t, s) = (a.table, &h.slots);
     let rest = GranularState {
