@@ -1347,8 +1347,9 @@ impl CoupledModel {
     /// With `regrid` false the grids are kept (the sub-cycled scheme bins
     /// a chain once per body step, its reach and box grown by how far the
     /// chain moves on its path, so the grid holds every segment within
-    /// reach of a disc at any point of the path); the candidates are
-    /// updated all the same.
+    /// reach of a disc at any point of the path); with `regrid` true too
+    /// while the chain has moved less than the grid's skin ([`GRID_SKIN`],
+    /// [`SegmentGrid::bin`]). The candidates are updated all the same.
     fn rebuild_grids(&mut self, margin: f64, mut regrid: bool) {
         let g = &self.granular;
         let r_max = match self.r_max {
@@ -1387,9 +1388,7 @@ impl CoupledModel {
                     };
                     *allowance = allow;
                     let extent = body.path_extent() + allow;
-                    sg.rebuild(chain, reach + extent);
-                    let e = Vec2::new(extent, extent);
-                    (sg.chain_lo, sg.chain_hi) = (sg.chain_lo - e, sg.chain_hi + e);
+                    sg.bin(chain, reach + extent, extent, GRID_SKIN * r_max);
                 }
                 cand.update(
                     &g.particles,
@@ -1527,6 +1526,10 @@ fn closed_contacts(
         });
     }
 }
+
+/// The skin of the segment grids, in largest disc radii: a chain is binned
+/// again once its points have moved this far since it was binned.
+const GRID_SKIN: f64 = 0.1;
 
 /// Discs within `(1 + CANDIDATE_MARGIN) r` of a boundary enter the implicit
 /// contact solve (as open contacts unless the step closes them).

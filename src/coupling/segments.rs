@@ -1,7 +1,8 @@
-//! A uniform grid of the segments of one boundary chain, rebuilt every step
-//! from the chain's current points: a disc then tests only the segments in
-//! the cells around it instead of the whole chain (the transfer's cost
-//! grows with the contacts, not with contacts × boundary points).
+//! A uniform grid of the segments of one boundary chain, binned from the
+//! chain's points (again once they have moved more than a skin): a disc
+//! then tests only the segments in the cells around it instead of the whole
+//! chain (the transfer's cost grows with the contacts, not with contacts ×
+//! boundary points).
 
 use crate::continuum::BoundaryChain;
 use crate::geom::Vec2;
@@ -22,12 +23,43 @@ pub struct SegmentGrid {
     start: Vec<u32>,
     segs: Vec<u32>,
     count: Vec<u32>,
+    /// The chain's points when binned by [`bin`](Self::bin), and the reach
+    /// and the growth of the box it was binned with.
+    binned: Vec<Vec2>,
+    cover: (f64, f64),
 }
 
 impl SegmentGrid {
     /// Nothing binned yet.
     pub fn is_empty(&self) -> bool {
         self.nx == 0
+    }
+
+    /// A grid for `chain` with `reach` and its box (`chain_lo`, `chain_hi`)
+    /// grown by `grow`: the grid kept while the chain's points have moved
+    /// less than the `slack` it was binned with (a Verlet skin: the grid
+    /// then still holds every segment within `reach` of a disc, and the box
+    /// every point grown by `grow`), else binned anew with `slack` added
+    /// to both. Returns whether it was binned. The grid answers supersets
+    /// of the segments near a point, so contacts found through it do not
+    /// depend on when it was binned.
+    pub fn bin(&mut self, chain: &BoundaryChain, reach: f64, grow: f64, slack: f64) -> bool {
+        let pts = &chain.current;
+        if !self.is_empty() && self.binned.len() == pts.len() {
+            let moved = (pts.iter().zip(&self.binned))
+                .map(|(p, q)| (*p - *q).norm2())
+                .fold(0.0f64, f64::max)
+                .sqrt();
+            if moved + reach <= self.cover.0 && moved + grow <= self.cover.1 {
+                return false;
+            }
+        }
+        self.rebuild(chain, reach + slack);
+        let e = Vec2::new(grow + slack, grow + slack);
+        (self.chain_lo, self.chain_hi) = (self.chain_lo - e, self.chain_hi + e);
+        self.binned.clone_from(pts);
+        self.cover = (reach + slack, grow + slack);
+        true
     }
 
     /// Bin the segments of `chain`; a disc centre within `reach` of a
@@ -147,5 +179,52 @@ mod tests {
             found += a.is_some() as usize;
         }
         assert!(found > 100);
+    }
+
+    /// A grid kept while the chain moves within its skin finds what the
+    /// whole chain gives at the chain's new place; beyond the skin it is
+    /// binned again.
+    #[test]
+    fn a_grid_kept_within_its_skin_still_finds_every_contact() {
+        let wave = |shift: Vec2| {
+            let pts = (0..200).map(|i| {
+                let t = i as f64 * 0.05;
+                Vec2::new(t, 0.3 * (3.0 * t).sin()) + shift
+            });
+            BoundaryChain::new(pts.collect())
+        };
+        let (r, skin) = (0.07, 0.02);
+        let mut g = SegmentGrid::default();
+        assert!(g.bin(&wave(Vec2::ZERO), 2.0 * r, 0.0, skin));
+        // moved 0.019 < skin: kept, and still exact
+        let moved = wave(Vec2::new(0.011, -0.0155));
+        assert!(!g.bin(&moved, 2.0 * r, 0.0, skin));
+        let mut found = 0;
+        for k in 0..4000 {
+            let c = Vec2::new(
+                -0.5 + 11.0 * (k as f64 * 0.618).fract(),
+                -0.6 + 1.2 * (k as f64 * 0.377).fract(),
+            );
+            let a = detect(&moved, c, r);
+            let b = detect_near(&moved, c, r, g.near(c).iter().map(|&i| i as usize));
+            assert_eq!(a, b, "{c:?}");
+            found += a.is_some() as usize;
+        }
+        assert!(found > 100);
+        // the box still holds the moved points
+        let far = (Vec2::new(f64::MAX, f64::MAX), Vec2::new(f64::MIN, f64::MIN));
+        let (lo, hi) = moved.current.iter().fold(far, |(l, h), p| {
+            (
+                Vec2::new(l.x.min(p.x), l.y.min(p.y)),
+                Vec2::new(h.x.max(p.x), h.y.max(p.y)),
+            )
+        });
+        assert!(g.chain_lo.x <= lo.x && g.chain_lo.y <= lo.y);
+        assert!(g.chain_hi.x >= hi.x && g.chain_hi.y >= hi.y);
+        // beyond the skin, or asked for a reach beyond the skin: binned again
+        let away = wave(Vec2::new(0.0, 0.021));
+        assert!(g.bin(&away, 2.0 * r, 0.0, skin));
+        assert!(!g.bin(&away, 2.0 * r + 0.019, 0.0, skin));
+        assert!(g.bin(&away, 2.0 * r + 0.021, 0.0, skin));
     }
 }

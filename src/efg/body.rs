@@ -23,7 +23,7 @@ use crate::continuum::{
 };
 use crate::geom::Vec2;
 use crate::geom::crack::Crack;
-use crate::sparse::{Cholesky, RowSelection};
+use crate::sparse::{Cholesky, RowSelection, SymCsc};
 use std::time::Instant;
 
 /// Sizes and timings of a build, for `check` and summaries.
@@ -96,11 +96,12 @@ pub struct EfgBody {
     pub contact_force: Vec2,
     /// Scratch of [`refine_residual`](Self::refine_residual): loads without `F^α`, `U₊`, a
     /// work vector.
-    refine_work: [Vec<f64>; 3],
+    refine_work: [Vec<f64>; 5],
     /// The refinement residual of the present step awaits its solve (at
     /// [`commit`](Self::commit), or folded into the contact forces' solve).
     refine_pending: bool,
-    /// The penalty rows the refinement computes its residual on.
+    /// The penalty rows the refinement computes its residual on, with the
+    /// values of M, C (if any) and K on them.
     refine_rows: Option<RowSelection>,
     /// Work done on the body by the moving edges since t = 0.
     pub motion_work: f64,
@@ -502,6 +503,7 @@ impl EfgBody {
         )?;
         let nm = Newmark::new(m, c, kbar, self.params)?;
         self.newmark = Some(nm);
+        self.refine_rows = None;
         self.faces.refactored();
         Ok(())
     }
@@ -523,6 +525,7 @@ impl EfgBody {
         })?;
         let (m, c) = self.mass_damping();
         self.newmark = Some(Newmark::new(m, c, self.ops.kbar(), self.params)?);
+        self.refine_rows = None;
         Ok(())
     }
 
@@ -638,10 +641,13 @@ impl EfgBody {
                 .collect();
             dofs.sort_unstable();
             dofs.dedup();
-            RowSelection::new(&nm.mass.pattern, dofs)
+            let mats: Vec<&SymCsc> = [Some(&nm.mass), nm.damping.as_ref(), Some(&self.ops.k)]
+                .into_iter()
+                .flatten()
+                .collect();
+            RowSelection::new(&mats, dofs)
         });
-        debug_assert!(*nm.mass.pattern == *self.ops.k.pattern);
-        let [r, u1, tmp] = &mut self.refine_work;
+        let [r, u1, acc, vel, tmp] = &mut self.refine_work;
         u1.clear();
         u1.extend_from_slice(nm.solution());
         // r = F − M Ü₊ − C U̇₊ − K U₊ + springs on those rows (r holds F
@@ -652,18 +658,23 @@ impl EfgBody {
             tmp[i] = r[i];
         }
         std::mem::swap(r, tmp);
-        let rates = |i: usize| nm.rates(s.u[i], s.v[i], s.a[i], u1[i]);
+        let damped = nm.damping.is_some();
+        acc.clear();
+        vel.clear();
         tmp.clear();
-        tmp.extend((0..u1.len()).map(|i| -rates(i).1));
-        sel.mul_add(&nm.mass, tmp, r);
-        if let Some(c) = &nm.damping {
-            tmp.iter_mut()
-                .enumerate()
-                .for_each(|(i, t)| *t = -rates(i).0);
-            sel.mul_add(c, tmp, r);
+        for (i, u) in u1.iter().enumerate() {
+            let (v, a) = nm.rates(s.u[i], s.v[i], s.a[i], *u);
+            acc.push(-a);
+            if damped {
+                vel.push(-v);
+            }
+            tmp.push(-u);
         }
-        tmp.iter_mut().zip(u1.iter()).for_each(|(t, u)| *t = -u);
-        sel.mul_add(&self.ops.k, tmp, r);
+        if damped {
+            sel.mul_add(&[acc, vel, tmp], r);
+        } else {
+            sel.mul_add(&[acc, tmp], r);
+        }
         pen.add_spring_force(u1, When::Next, r);
         self.refine_pending = true;
         Ok(())

@@ -280,22 +280,30 @@ impl SymRows {
     }
 }
 
-/// Some rows of the symmetric matrices on one [`Pattern`] (both triangles
-/// gathered), for products `(A x)_i` on those rows only.
+/// Some rows of up to three symmetric matrices on one [`Pattern`] (both
+/// triangles gathered, their values copied side by side), for the sum of
+/// their products `Σ_m (A_m x_m)_i` on those rows only, in one pass.
 #[derive(Debug, Clone)]
 pub struct RowSelection {
     /// The selected rows, ascending.
     pub rows: Vec<usize>,
-    /// Per selected row `start[r]..start[r + 1]`: columns and the positions
-    /// of their values in the lower-triangle storage.
+    /// Per selected row `start[r]..start[r + 1]`: columns, and the
+    /// matrices' values at `[q · m ..][..m]`.
     start: Vec<usize>,
-    col: Vec<usize>,
-    at: Vec<usize>,
+    col: Vec<u32>,
+    val: Vec<f64>,
+    /// Number of matrices.
+    m: usize,
 }
 
 impl RowSelection {
-    /// Select `rows` (ascending, distinct) of matrices on `p`.
-    pub fn new(p: &Pattern, rows: Vec<usize>) -> Self {
+    /// Select `rows` (ascending, distinct) of the matrices `mats` (1 to 3,
+    /// all on the pattern of the first).
+    pub fn new(mats: &[&SymCsc], rows: Vec<usize>) -> Self {
+        let m = mats.len();
+        assert!((1..=3).contains(&m), "one to three matrices");
+        let p = &*mats[0].pattern;
+        assert!(mats.iter().all(|a| *a.pattern == *p), "one pattern");
         let mut sel = vec![usize::MAX; p.n];
         for (r, &i) in rows.iter().enumerate() {
             sel[i] = r;
@@ -313,11 +321,11 @@ impl RowSelection {
             }
         }
         let mut start = vec![0];
-        let (mut col, mut at) = (Vec::new(), Vec::new());
+        let (mut col, mut val) = (Vec::new(), Vec::new());
         for l in lists {
             for (j, k) in l {
-                col.push(j);
-                at.push(k);
+                col.push(j as u32);
+                val.extend(mats.iter().map(|a| a.values[k]));
             }
             start.push(col.len());
         }
@@ -325,19 +333,38 @@ impl RowSelection {
             rows,
             start,
             col,
-            at,
+            val,
+            m,
         }
     }
 
-    /// `y_i += (A x)_i` on the selected rows of `a` (a matrix on the
-    /// pattern the selection was made for).
-    pub fn mul_add(&self, a: &SymCsc, x: &[f64], y: &mut [f64]) {
+    /// `y_i += (A_1 x_1)_i`, then `+= (A_2 x_2)_i`, … on the selected rows
+    /// (`xs`: one vector per matrix, in the order given to
+    /// [`new`](Self::new)); each product summed from zero in the order of
+    /// the row's entries, so the result is bitwise that of the products
+    /// taken one after the other.
+    pub fn mul_add(&self, xs: &[&[f64]], y: &mut [f64]) {
+        assert_eq!(xs.len(), self.m, "one vector per matrix");
+        match self.m {
+            1 => self.mul_add_m::<1>(xs, y),
+            2 => self.mul_add_m::<2>(xs, y),
+            _ => self.mul_add_m::<3>(xs, y),
+        }
+    }
+
+    fn mul_add_m<const M: usize>(&self, xs: &[&[f64]], y: &mut [f64]) {
+        let xs: [&[f64]; M] = std::array::from_fn(|m| xs[m]);
         for (r, &i) in self.rows.iter().enumerate() {
-            let mut acc = 0.0;
+            let mut acc = [0.0; M];
             for q in self.start[r]..self.start[r + 1] {
-                acc += a.values[self.at[q]] * x[self.col[q]];
+                let (j, v) = (self.col[q] as usize, &self.val[q * M..q * M + M]);
+                for m in 0..M {
+                    acc[m] += v[m] * xs[m][j];
+                }
             }
-            y[i] += acc;
+            for a in acc {
+                y[i] += a;
+            }
         }
     }
 }
@@ -697,13 +724,25 @@ pub(crate) mod tests {
         let x: Vec<f64> = (0..9).map(|i| (i as f64 * 0.7).sin()).collect();
         let mut full = vec![0.0; 9];
         a.mul_add(&x, &mut full);
-        let sel = RowSelection::new(&a.pattern, vec![0, 4, 8]);
+        let sel = RowSelection::new(&[&a], vec![0, 4, 8]);
         let mut part = vec![0.0; 9];
-        sel.mul_add(&a, &x, &mut part);
+        sel.mul_add(&[&x], &mut part);
         for i in [0, 4, 8] {
             assert!((part[i] - full[i]).abs() < 1e-15);
         }
         assert_eq!(part[3], 0.0);
+        // three matrices in one pass: bitwise the three products in turn
+        let b = a.scaled(-0.3);
+        let x2: Vec<f64> = x.iter().map(|v| v * 1.7 + 0.1).collect();
+        let x3: Vec<f64> = x.iter().map(|v| v * v - 0.4).collect();
+        let three = RowSelection::new(&[&a, &b, &a], vec![0, 4, 8]);
+        let mut turn = vec![0.5; 9];
+        for (m, xm) in [(&a, &x), (&b, &x2), (&a, &x3)] {
+            RowSelection::new(&[m], vec![0, 4, 8]).mul_add(&[xm], &mut turn);
+        }
+        let mut fused = vec![0.5; 9];
+        three.mul_add(&[&x, &x2, &x3], &mut fused);
+        assert_eq!(turn, fused);
     }
 
     /// The solve split over the elimination tree equals faer's sequential
