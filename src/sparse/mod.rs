@@ -419,7 +419,7 @@ const ND_MIN: usize = 8_000;
 /// heuristic (which weighs the factorisation's cost, made once) prefers:
 /// the steps' solves read `L` twice each, and the supernodal solve's dense
 /// blocks read it faster than the simplicial one's entry-by-entry columns
-/// (an EFG footing of 2 576 unknowns, 467 k entries: ≈ 30 % less time per
+/// (an EFG footing of 2 576 unknowns, 220 k entries: ≈ 30 % less time per
 /// solve).
 const SUPERNODAL_MIN: usize = 100_000;
 
