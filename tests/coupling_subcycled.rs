@@ -225,6 +225,23 @@ fn check_reports_the_subcycling_gain() {
             ),
         "{text}"
     );
+    // docs/howto/choose-scheme-and-time-step.md shows this output
+    let page = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("docs/howto/choose-scheme-and-time-step.md"),
+    )
+    .unwrap();
+    let shown = page
+        .split("```text\n")
+        .find(|b| b.starts_with("coupled scheme: predicted with 50"))
+        .and_then(|b| b.split("```").next())
+        .expect("the page shows the output of `check`");
+    for line in shown.lines() {
+        assert!(
+            text.contains(line.trim()),
+            "the page shows {line:?}, `check` prints:\n{text}"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -259,8 +259,10 @@ fn integral_action_removes_the_servo_lag() {
         100.0 * pi,
         100.0 * p
     );
-    assert!(pi.abs() < 1e-3, "{pi}");
-    assert!(p > 5.0 * pi.abs() && p > 2e-3, "{p}");
+    // measured +0.0010 % with integral action, +7.49 % without (quoted
+    // in docs/scenario.md, "Integral action")
+    assert!(pi.abs() < 1e-4, "{pi}");
+    assert!(p > 5.0 * pi.abs() && p > 0.05, "{p}");
 }
 
 fn out_dir(tag: &str) -> PathBuf {

@@ -389,14 +389,17 @@ fn slam(mu: f64, steps: usize) -> (f64, f64, f64, usize) {
 #[test]
 fn slamming_faces_conserve_energy() {
     let (hi, lo, _, closings) = slam(0.0, 600);
-    assert!(closings >= 1000, "only {closings} closings");
+    // measured 6 377 (6 278 with friction); docs/howto/cracks.md says
+    // about 6 400
+    assert!(closings >= 6000, "only {closings} closings");
     assert!(
         hi < 1e-11 && lo > -1e-11,
         "energy drifts by {lo:e} .. {hi:e} of E(0) ({closings} closings)"
     );
     let (hi, lo, rise, closings) = slam(0.5, 600);
-    assert!(closings >= 1000, "only {closings} closings with friction");
+    assert!(closings >= 6000, "only {closings} closings with friction");
     assert!(hi < 1e-11, "friction creates {hi:e} of E(0)");
-    assert!(lo < -0.05, "friction dissipates only {lo:e} of E(0)");
+    // measured −13.3 % (docs/howto/cracks.md: 13 % dissipated)
+    assert!(lo < -0.12, "friction dissipates only {lo:e} of E(0)");
     assert!(rise < 5e-3, "one step gives back {rise:e} of E(0)");
 }

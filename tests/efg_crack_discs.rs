@@ -233,7 +233,8 @@ fn a_disc_in_an_open_edge_crack_is_pushed_out_as_by_a_rigid_wall() {
     let out = |_: &[Bounce], x: Vec2, v: Vec2| x.y > 1.05 && v.y > 0.0;
     let b = bounces(&mut m, out, 40000);
     eprintln!("{} bounces, out at {:?}", b.len(), disc(&m));
-    assert!(b.len() >= 8, "{} bounces", b.len());
+    // docs/howto/cracks.md: "bounces ten times from face to face"
+    assert!(b.len() >= 10, "{} bounces", b.len());
     for (k, n) in check_rigid(&m, &b).iter().enumerate() {
         // inside the crack, on the right face first, then face to face
         assert!(b[k].x0.y < 1.0, "inside the crack");

@@ -96,13 +96,15 @@ fn run(steps: usize, mu: &str) -> Seen {
 /// give, `p/κ`); `K_I` at the tip takes both signs (open and closed).
 fn check(steps: usize) {
     let s = run(steps, "0.0");
-    assert!(s.closings >= 100, "{s:?}");
+    // docs/howto/cracks.md: over 1 800 closings in the first 0.03 s
+    // (measured 1 833; 1 963 with friction)
+    assert!(s.closings >= 1800, "{s:?}");
     assert!(s.diss[0] > -0.01 * s.e0 && s.diss[1] < 0.01 * s.e0, "{s:?}");
     assert!((s.diss[3] - s.diss[2]).abs() < 1e-3 * s.e0, "{s:?}");
     assert!(s.overlap < 1e-3 * 0.01, "{s:?}");
     assert!(s.k1[0] < 0.0 && s.k1[1] > 0.0, "{s:?}");
     let s = run(steps, "0.3");
-    assert!(s.closings >= 100, "{s:?}");
+    assert!(s.closings >= 1800, "{s:?}");
     assert!(s.diss[0] > -0.01 * s.e0, "{s:?}");
     assert!(s.diss[3] > 0.05 * s.e0, "friction takes energy: {s:?}");
     assert!(s.overlap < 1e-3 * 0.01, "{s:?}");

@@ -124,7 +124,12 @@ fn free_vibration_paper_newmark_is_dissipative() {
         100.0 * (1.0 - mean),
         period(&r)
     );
-    assert!(mean < 0.95, "γ = 1.5 should damp visibly");
+    // the docs quote "about 18 % amplitude loss per period" (measured
+    // 18.4 %: ratio 0.816); 16–20 % is what they may round to
+    assert!(
+        (0.80..0.84).contains(&mean),
+        "γ = 1.5: amplitude ratio per period {mean}, the docs say about 0.82"
+    );
     let e_end = *r.energy.last().unwrap();
     assert!(e_end < 0.5 * r.energy[0]);
 }

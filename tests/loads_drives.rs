@@ -107,8 +107,11 @@ fn the_work_of_a_ramped_traction_is_exact_with_gamma_one_half() {
         // the static work ½ σ u A (A = 0.2 m² of edge face) is 0.1 J; the
         // undamped bar vibrates about it
         assert!(work > 0.05 && work < 0.25, "{method}: W = {work}");
+        // round-off: measured 5.8e-15 (EFG) and 1.0e-14 (FE) of W, as
+        // docs/scenario.md says (≈ 10⁻¹⁴); 1e-12 leaves room for another
+        // order of the sums, not for a booking error
         assert!(
-            worst <= 1e-6 * work,
+            worst <= 1e-12 * work,
             "{method}: E_diss {worst:e} of {work:e}"
         );
     }

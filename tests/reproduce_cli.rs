@@ -1,5 +1,6 @@
 //! `efgdem reproduce` end to end: every figure, data file and the report
-//! are written, and the report carries the numbers the README quotes;
+//! are written, and the report carries the numbers the Validation page
+//! quotes;
 //! the paper's values are shipped with their sources, every run behind a
 //! figure is saved, and the report's numbers come from the figures' data.
 
@@ -186,5 +187,60 @@ fn reproduce_writes_every_figure_and_the_report() {
         .map(|(_, v)| *v)
         .collect();
     assert_eq!(probes, ux);
+    validation_page_quotes_the_report(&report);
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The cells of the report's table row that starts with `start`.
+fn report_row<'a>(report: &'a str, start: &str) -> Vec<&'a str> {
+    let row = report.lines().find(|l| l.starts_with(start));
+    let row = row.unwrap_or_else(|| panic!("report has no row {start:?}"));
+    row.split(" | ").map(str::trim).collect()
+}
+
+/// A report cell as a number (`0.486 %` → 0.486).
+fn number(cell: &str) -> f64 {
+    let v = cell.trim_end_matches('%').trim().parse();
+    v.unwrap_or_else(|_| panic!("not a number: {cell:?}"))
+}
+
+/// docs/validation.md's section on the paper's examples quotes this
+/// report: Example 1 with the paper's Newmark parameters (the force
+/// reaching m g, the peak and its time, the fall-off and the centre
+/// passing the corner) and the nine-disc test's plates (the stiff ones'
+/// largest deviation from the all-rigid run, the soft one's).
+fn validation_page_quotes_the_report(report: &str) {
+    let page = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/validation.md");
+    let page = std::fs::read_to_string(page).unwrap();
+    let c = report_row(report, "| `ex1_newmark_1.5_0.8`");
+    let at = |i: usize| format!("{:.4}", number(c[i]));
+    let peak = format!("{:.1}", number(c[2]));
+    for quoted in [
+        format!("| {} s |", at(1)),
+        format!("{peak} N at {} s", at(3)),
+        format!("{} s (the centre passes the corner at {} s)", at(4), at(5)),
+    ] {
+        assert!(
+            page.contains(&quoted),
+            "docs/validation.md does not quote the report's {quoted:?}"
+        );
+    }
+    let relative = |test: u32, plate: &str| {
+        number(report_row(report, &format!("| {test} | EFG, E = {plate} |"))[5])
+    };
+    let stiff = [1, 2]
+        .iter()
+        .flat_map(|&t| ["2.1e14", "2.1e13"].map(|e| relative(t, e)))
+        .fold(0.0f64, f64::max);
+    assert!(
+        stiff <= 0.72 && page.contains("(within 0.72 % of the all-rigid run)"),
+        "stiff plates: {stiff} %"
+    );
+    for t in [1, 2] {
+        let soft = relative(t, "1.0e10");
+        assert!(
+            soft.round() == 48.0 && page.contains("by up to 48 %"),
+            "soft plate, test {t}: {soft} %"
+        );
+    }
 }

@@ -424,6 +424,42 @@ mod tests {
         assert!((i - 200.0 * 0.1 * 0.5e-3).abs() < 1e-12 && v > i);
     }
 
+    /// The servo against held discs (its contacts a spring K and a
+    /// dashpot C on the wall's speed) settles on its target
+    /// with the automatic gain, with and without integral action, for
+    /// `2C/(K Δt)` up to 50, α ≤ 1 and β up to 0.99 (docs/scenario.md,
+    /// "Integral action"): the force error falls below 1e-6 of its start.
+    #[test]
+    fn servo_settles_against_springs_and_dashpots() {
+        let (k, dt, target) = (1.0e6, 1.0e-5, 1.0);
+        for alpha in [0.1, 0.5, 1.0] {
+            for beta in [0.0, 0.1, 0.5, 0.99] {
+                for ratio in [0.0, 1.0, 10.0, 50.0] {
+                    let c = 0.5 * ratio * k * dt;
+                    let s = Servo {
+                        stress: 1.0,
+                        gain: None,
+                        relaxation: alpha,
+                        max_velocity: f64::MAX,
+                        integral: beta,
+                    };
+                    // overlap, the wall's outward speed, the integral
+                    let (mut d, mut u, mut i, mut e) = (0.0, 0.0, 0.0, 0.0);
+                    for _ in 0..40_000 {
+                        d -= u * dt;
+                        let f = k * d - c * u;
+                        e = f - target;
+                        (u, i) = s.speed_integral(f, target, k, c, dt, i);
+                    }
+                    assert!(
+                        e.abs() < 1e-6 * target,
+                        "α {alpha}, β {beta}, 2C/(KΔt) {ratio}: {e}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn phases_follow_the_step() {
         let servo = WallMotion::Servo(Servo {
