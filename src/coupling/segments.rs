@@ -153,6 +153,23 @@ mod tests {
     use super::*;
     use crate::coupling::interface::{detect, detect_near};
 
+    /// Discs of radius `r` spread over the chain's region find through `g`
+    /// the contact the whole chain gives (and over a hundred find one).
+    fn finds_what_the_chain_gives(chain: &BoundaryChain, g: &SegmentGrid, r: f64) {
+        let mut found = 0;
+        for k in 0..4000 {
+            let c = Vec2::new(
+                -0.5 + 11.0 * (k as f64 * 0.618).fract(),
+                -0.6 + 1.2 * (k as f64 * 0.377).fract(),
+            );
+            let a = detect(chain, c, r);
+            let b = detect_near(chain, c, r, g.near(c).iter().map(|&i| i as usize));
+            assert_eq!(a, b, "{c:?}");
+            found += a.is_some() as usize;
+        }
+        assert!(found > 100);
+    }
+
     /// Every disc finds through the grid the contact the whole chain gives.
     #[test]
     fn grid_detection_equals_whole_chain_detection() {
@@ -167,18 +184,7 @@ mod tests {
         let r = 0.07;
         let mut g = SegmentGrid::default();
         g.rebuild(&chain, 2.0 * r);
-        let mut found = 0;
-        for k in 0..4000 {
-            let c = Vec2::new(
-                -0.5 + 11.0 * (k as f64 * 0.618).fract(),
-                -0.6 + 1.2 * (k as f64 * 0.377).fract(),
-            );
-            let a = detect(&chain, c, r);
-            let b = detect_near(&chain, c, r, g.near(c).iter().map(|&i| i as usize));
-            assert_eq!(a, b, "{c:?}");
-            found += a.is_some() as usize;
-        }
-        assert!(found > 100);
+        finds_what_the_chain_gives(&chain, &g, r);
     }
 
     /// A grid kept while the chain moves within its skin finds what the
@@ -199,18 +205,7 @@ mod tests {
         // moved 0.019 < skin: kept, and still exact
         let moved = wave(Vec2::new(0.011, -0.0155));
         assert!(!g.bin(&moved, 2.0 * r, 0.0, skin));
-        let mut found = 0;
-        for k in 0..4000 {
-            let c = Vec2::new(
-                -0.5 + 11.0 * (k as f64 * 0.618).fract(),
-                -0.6 + 1.2 * (k as f64 * 0.377).fract(),
-            );
-            let a = detect(&moved, c, r);
-            let b = detect_near(&moved, c, r, g.near(c).iter().map(|&i| i as usize));
-            assert_eq!(a, b, "{c:?}");
-            found += a.is_some() as usize;
-        }
-        assert!(found > 100);
+        finds_what_the_chain_gives(&moved, &g, r);
         // the box still holds the moved points
         let far = (Vec2::new(f64::MAX, f64::MAX), Vec2::new(f64::MIN, f64::MIN));
         let (lo, hi) = moved.current.iter().fold(far, |(l, h), p| {
