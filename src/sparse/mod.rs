@@ -466,7 +466,7 @@ fn analyse(p: &Pattern) -> Result<SymbolicCholesky<usize>, SparseError> {
 /// Sparse Cholesky `A = LLᵀ` (AMD or nested-dissection ordering, whichever
 /// leaves the smaller factor; faer's supernodal
 /// or simplicial kernel as it sees fit, supernodal from
-/// [`SUPERNODAL_MIN`] entries). The solve workspace is allocated
+/// 100 000 entries, `SUPERNODAL_MIN`). The solve workspace is allocated
 /// once, so [`Cholesky::solve_in_place`] does not allocate.
 pub struct Cholesky {
     symbolic: Arc<SymbolicCholesky<usize>>,
