@@ -65,7 +65,7 @@ impl SegmentGrid {
     /// Bin the segments of `chain`; a disc centre within `reach` of a
     /// segment finds it in its own cell. Cells of about `reach`, at most a
     /// few per segment.
-    pub fn rebuild(&mut self, chain: &BoundaryChain, reach: f64) {
+    fn rebuild(&mut self, chain: &BoundaryChain, reach: f64) {
         let pts = &chain.current;
         let nseg = chain.segments();
         let (mut lo, mut hi) = (Vec2::new(f64::MAX, f64::MAX), Vec2::new(f64::MIN, f64::MIN));

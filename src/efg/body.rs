@@ -94,8 +94,9 @@ pub struct EfgBody {
     /// the coupling before each step; what a servo with `measure =
     /// "contacts"` measures).
     pub contact_force: Vec2,
-    /// Scratch of [`refine_residual`](Self::refine_residual): loads without `F^α`, `U₊`, a
-    /// work vector.
+    /// Scratch of [`refine_residual`](Self::refine_residual): the residual
+    /// (loads without `F^α` on entry), `U₊`, `−Ü₊`, `−U̇₊` (damped bodies),
+    /// `−U₊`.
     refine_work: [Vec<f64>; 5],
     /// The refinement residual of the present step awaits its solve (at
     /// [`commit`](Self::commit), or folded into the contact forces' solve).
