@@ -1,17 +1,22 @@
 //! The measured map behind the automatic choice of the coupled scheme
 //! (docs/howto/choose-scheme-and-time-step.md): an EFG footing driven at
 //! 5 cm/s into a hexagonal bed of 446 discs (r = 5 mm, k_n = k_s = 10⁷
-//! N/m, undamped, frictionless: the energy account's only dissipation is
-//! numerical), for several Young's moduli, each scheme and substep count
-//! forced (past the build's safety rules). Per run: the predicted
+//! N/m; undamped and frictionless unless asked: the energy account's only
+//! dissipation is then numerical), for several Young's moduli, each
+//! scheme and substep count forced (past the build's safety rules). Per run: the predicted
 //! scheme's collective gain Γ and ω_c h at that body step, the largest
 //! |E_diss| over the work at the body steps (the whole coupled system's
 //! energy error), what the sub-cycled scheme's own account says it created
 //! against the work it exchanged, and the footing's mean reaction over the
 //! push (0.015–0.045 s) against the exact step's.
 //!
-//!     cargo run --release --example scheme_map -- [E,...] [n,...] [schemes]
+//!     cargo run --release --example scheme_map -- [E,...] [n,...] [schemes] [ζ] [friction]
 //!     cargo run --release --example scheme_map -- 1e8,1e9,2e9,3e9,1e10 5,10,20,50 predicted,compliant
+//!     cargo run --release --example scheme_map -- 1e8,5e8,1e9,2e9,1e10 29,36,43,50,58 compliant 0.05 0.5
+//!
+//! `ζ`: a normal dashpot at that fraction of critical on every contact
+//! (`damping = { kind = "critical-ratio" }`; the column of |E_diss| then
+//! holds what it dissipates); `friction`: the discs' friction coefficient.
 
 use efgdem::coupling::energy::WorkMeter;
 use efgdem::coupling::scheme::{self, Choice, Scheme};
@@ -24,11 +29,25 @@ const FOOTING: &str = include_str!("hex_footing.toml");
 
 /// One run: (|E_diss|/W at body steps, created/exchanged, mean reaction,
 /// Γ, ω_c h), or the error that stopped it.
-fn run(e: f64, scheme: Scheme, n: usize) -> Result<(f64, f64, f64, f64, f64), String> {
-    let src = FOOTING.replace("E = 2.0e9", &format!("E = {e:e}")).replace(
+fn run(
+    e: f64,
+    (zeta, mu): (f64, f64),
+    scheme: Scheme,
+    n: usize,
+) -> Result<(f64, f64, f64, f64, f64), String> {
+    let mut src = FOOTING.replace("E = 2.0e9", &format!("E = {e:e}")).replace(
         "end_time = 0.05\n",
         "end_time = 0.05\ncoupling = \"exact\"\n",
     );
+    src = src.replace("friction = 0.0\n", &format!("friction = {mu}\n"));
+    if zeta > 0.0 {
+        src = src.replace(
+            "radius = 0.005 }\n",
+            &format!(
+                "radius = 0.005 }}\ndamping = {{ kind = \"critical-ratio\", zeta = {zeta} }}\n"
+            ),
+        );
+    }
     let mut m: Model = parse(&src, "map.toml")
         .map_err(|e| e.to_string())?
         .build()
@@ -97,12 +116,15 @@ fn main() {
             _ => panic!("schemes: predicted, compliant"),
         })
         .collect();
+    let zeta: f64 = args.get(4).map_or(0.0, |z| z.parse().expect("zeta"));
+    let mu: f64 = args.get(5).map_or(0.0, |z| z.parse().expect("friction"));
+    let zeta = (zeta, mu);
     println!(
         "| E (Pa) | scheme | n | Γ | ω_c h | max \\|E_diss\\|/W | created / exchanged | mean reaction vs exact |"
     );
     println!("|---|---|---|---|---|---|---|---|");
     for &e in &moduli {
-        let exact = run(e, Scheme::Exact, 1).expect("the exact step runs");
+        let exact = run(e, zeta, Scheme::Exact, 1).expect("the exact step runs");
         println!(
             "| {e:e} | exact | 1 | — | {:.2} | {:.2} % | — | {:.0} N |",
             exact.4,
@@ -111,7 +133,7 @@ fn main() {
         );
         for &s in &schemes {
             for &n in &ns {
-                match run(e, s, n) {
+                match run(e, zeta, s, n) {
                     Ok((d, c, f, g, w)) => println!(
                         "| {e:e} | {} | {n} | {g:.3} | {w:.2} | {:.2} % | {:.2} % | {:+.2} % |",
                         s.name(),

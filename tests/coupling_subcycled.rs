@@ -375,6 +375,65 @@ fn the_automatic_scheme_keeps_the_energy_and_the_reaction_of_the_exact_step() {
     }
 }
 
+/// On a bed whose contacts carry a normal dashpot (ζ = 0.05 of critical,
+/// the least the choice counts as damped, frictionless; and ζ = 0.2 with
+/// friction 0.5, as `examples/soft_footing.toml`), the automatic scheme
+/// takes the compliant body steps of a footing soft enough (E = 20 MPa)
+/// that its own collective mode does not bound them up to `ω_c h` = 4,
+/// twice the undamped bound: its own account of the energy it created stays
+/// within 1 % of the work the footing exchanged, and the mean reaction
+/// over the push within 1 % of the exact step's.
+#[test]
+fn the_automatic_scheme_takes_longer_body_steps_on_damped_contacts() {
+    for (zeta, friction) in [("0.05", "0.0"), ("0.2", "0.5")] {
+        let damped = |exact| {
+            let src = wide("2.0e7", exact)
+                .replace(
+                    "radius = 0.005 }\n",
+                    &format!(
+                        "radius = 0.005 }}\ndamping = {{ kind = \"critical-ratio\", zeta = {zeta} }}\n"
+                    ),
+                )
+                .replace("friction = 0.0\n", &format!("friction = {friction}\n"));
+            assert!(
+                src.contains("critical-ratio") && src.contains(&format!("friction = {friction}\n"))
+            );
+            src
+        };
+        let mut m: Model = parse(&damped(false), "damped.toml")
+            .unwrap()
+            .build()
+            .unwrap();
+        let choice = m.coupled().unwrap().choice.clone().unwrap();
+        assert!(
+            choice.automatic && choice.scheme == Scheme::Compliant,
+            "{}",
+            choice.why
+        );
+        assert!(choice.body_omega_dt < choice.omega_dt, "{}", choice.why);
+        assert_eq!(
+            choice.substeps,
+            (4.0 / choice.omega_dt).floor() as usize,
+            "{}",
+            choice.why
+        );
+        assert!(choice.why.contains("damped at ζ = "), "{}", choice.why);
+        let (_, _, f) = energy_error_of(&mut m);
+        let (created, exchanged) = m.coupled().unwrap().subcycling_energy();
+        let (_, _, f1) = energy_error(&damped(true));
+        println!(
+            "ζ = {zeta}, friction {friction}: compliant × {}: created {created:.3e} of {exchanged:.3e} exchanged; reaction {f:.1} vs exact {f1:.1} N/m",
+            choice.substeps
+        );
+        assert!(exchanged > 1.0, "the drive works: {exchanged}");
+        assert!(
+            created.abs() <= 0.01 * exchanged,
+            "{created} of {exchanged}"
+        );
+        assert!((f - f1).abs() <= 0.01 * f1.abs(), "reaction {f} vs {f1}");
+    }
+}
+
 /// The unstable run of [`the_energy_guard_stops_model_step`] with its
 /// scheme marked as chosen automatically: each time the guard catches it,
 /// the model goes on with at most half the substeps (10 → 5 → 2 here,

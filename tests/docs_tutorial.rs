@@ -352,7 +352,7 @@ fn tutorial_plate_with_a_hole_check() {
         "1200 discs",
         "377 nodes, 754 DOFs, 1 contact chain(s) with 320 segments",
         "7949 steps",
-        "compliant with 7 DEM step(s) per body step",
+        "compliant with 14 DEM step(s) per body step",
     ] {
         assert!(
             check.contains(quoted),

@@ -145,15 +145,34 @@ fn predicted_rule() -> String {
     format!("Γ ≤ {PREDICTED_MAX_GAIN} with ω_c h ≤ {PREDICTED_MAX_OMEGA_H}")
 }
 
-/// The compliant scheme takes body steps up to `ω_c h` = this. Measured
-/// (`examples/scheme_map.rs`, the undamped, frictionless bed: the hardest
-/// case, nothing dissipates the contacts' oscillation): at E = 0.1 and
-/// 2 GPa the energy created stays within 0.3 % of the work exchanged up to
-/// `ω_c h` = 2.08, and is 16 % at 2.98. The same bound holds for `ω_b h`,
-/// the bodies' collective mode: the 10 GPa footing of
+/// The compliant scheme takes body steps up to `ω_c h` = this when a
+/// disc–body contact law has no normal dashpot (or a weaker one than
+/// [`COMPLIANT_DAMPED_ZETA`]). Measured (`examples/scheme_map.rs`, the
+/// undamped bed, where nothing dissipates the contacts' oscillation): at
+/// E = 0.1–10 GPa the energy created stays within 0.2 % of the work
+/// exchanged up to `ω_c h` = 2.01 on a frictionless bed (0.6–1.1 % with
+/// friction 0.5), while a body step near half the contacts' period
+/// resonates (16 % at `ω_c h` = 2.98, 4.3 % at 3.47 with friction). The
+/// same bound holds for `ω_b h`, the bodies' collective mode, damped or
+/// not (the body rings on its own): the 10 GPa footing of
 /// `examples/soft_footing.toml` (ω_b Δt = 0.68) created 2.5 % at
 /// `ω_b h` = 4.1, 0.84 % at 2.0 and 0.16 % at 1.35.
 pub const COMPLIANT_MAX_OMEGA_H: f64 = 2.0;
+
+/// The compliant scheme's longest body step against the contacts' own
+/// period, in `ω_c h`, when every disc–body contact law has a normal
+/// dashpot of at least [`COMPLIANT_DAMPED_ZETA`] of critical
+/// ([`contact_zeta`]): the dashpot damps the resonance of a body step near
+/// half the contacts' period. Measured (`examples/scheme_map.rs` with
+/// `ζ` = 0.05, 0.1, 0.2, friction 0 and 0.5, E = 0.1–10 GPa): at most
+/// 0.51 % of the work exchanged created up to `ω_c h` = 4.02, and the
+/// mean reaction within 1.2 % of the exact step's (0.6 % at 5.55).
+pub const COMPLIANT_DAMPED_OMEGA_H: f64 = 4.0;
+
+/// The normal dashpot, as a fraction of critical, from which the
+/// contacts count as damped ([`COMPLIANT_DAMPED_OMEGA_H`]): the least
+/// the measured map examined.
+pub const COMPLIANT_DAMPED_ZETA: f64 = 0.05;
 
 /// The choice keeps the exact step for assemblies of fewer discs than
 /// this: their DEM step costs little, and the exact step resolves each
@@ -198,6 +217,38 @@ pub fn contact_omega(m: &CoupledModel) -> f64 {
         (kn / mass).sqrt()
     } else {
         0.0
+    }
+}
+
+/// The least damping ratio of the disc–body contact laws' normal
+/// dashpots: `ζ_n`, plus `β_n ω / 2` of a stiffness-proportional one at
+/// the heaviest disc's `ω = √(k_n/m)` (its least); 0 without laws.
+pub fn contact_zeta(m: &CoupledModel) -> f64 {
+    let p = &m.granular.particles;
+    let heaviest = p.mass.iter().fold(0.0f64, |a, &b| a.max(b));
+    let zeta = |l: &crate::dem::contact::ContactLaw| {
+        let omega = if heaviest > 0.0 {
+            (l.kn / heaviest).sqrt()
+        } else {
+            0.0
+        };
+        l.zeta_n + 0.5 * l.beta_n * omega
+    };
+    let least = (m.body_laws.iter())
+        .filter(|l| l.kn > 0.0)
+        .map(zeta)
+        .fold(f64::INFINITY, f64::min);
+    if least.is_finite() { least } else { 0.0 }
+}
+
+/// The compliant scheme's bound on `ω_c h`: [`COMPLIANT_DAMPED_OMEGA_H`]
+/// when the disc–body contacts are damped ([`contact_zeta`] at least
+/// [`COMPLIANT_DAMPED_ZETA`]), else [`COMPLIANT_MAX_OMEGA_H`].
+pub fn compliant_contact_bound(zeta: f64) -> f64 {
+    if zeta >= COMPLIANT_DAMPED_ZETA {
+        COMPLIANT_DAMPED_OMEGA_H
+    } else {
+        COMPLIANT_MAX_OMEGA_H
     }
 }
 
@@ -258,23 +309,34 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
     let contacts = max_contacts(m);
     // the compliant scheme's longest body step: the contacts' and the
     // bodies' own periods resolved (`body_dt`: ω_b Δt)
-    let compliant_n = |body_dt: f64| {
-        let fastest = omega_dt.max(body_dt);
-        let n = if fastest > 0.0 {
-            (COMPLIANT_MAX_OMEGA_H / fastest).floor()
+    // the contacts' bound on ω_c h, and the body steps each bound allows
+    let zeta = contact_zeta(m);
+    let contact_h = compliant_contact_bound(zeta);
+    let within = |bound: f64, w: f64| {
+        if w > 0.0 {
+            (bound / w).floor()
         } else {
             CANDIDATES[0] as f64
-        };
+        }
+    };
+    let by_contacts = within(contact_h, omega_dt);
+    let compliant_n = |body_dt: f64| {
+        let n = by_contacts.min(within(COMPLIANT_MAX_OMEGA_H, body_dt));
         (n.min(CANDIDATES[0] as f64) as usize).max(1)
     };
+    let damped = if contact_h > COMPLIANT_MAX_OMEGA_H {
+        format!("the disc–body contacts damped at ζ = {zeta:.3} ≥ {COMPLIANT_DAMPED_ZETA}")
+    } else {
+        format!("the disc–body contacts' ζ = {zeta:.3} < {COMPLIANT_DAMPED_ZETA}: undamped")
+    };
     let compliant_why = |n: usize, body_dt: f64| {
-        if body_dt > omega_dt {
+        if within(COMPLIANT_MAX_OMEGA_H, body_dt) < by_contacts {
             format!(
                 "{n} is the largest with ω_b h ≤ {COMPLIANT_MAX_OMEGA_H}, ω_b the bodies' collective-mode frequency (ω_b Δt = {body_dt:.3}; the contacts' ω_c Δt = {omega_dt:.3})"
             )
         } else {
             format!(
-                "{n} is the largest with ω_c h ≤ {COMPLIANT_MAX_OMEGA_H} (ω_c Δt = {omega_dt:.3}; the bodies' ω_b Δt = {body_dt:.3})"
+                "{n} is the largest with ω_c h ≤ {contact_h} (ω_c Δt = {omega_dt:.3}, {damped}; the bodies' ω_b Δt = {body_dt:.3})"
             )
         }
     };
@@ -472,13 +534,18 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
                     choice(Scheme::Compliant, nc, examined, body_dt, true, why)
                 }
                 _ if nc < 2 => {
-                    let (what, fastest) = if body_dt > omega_dt {
-                        ("the bodies' collective mode", body_dt)
-                    } else {
-                        ("the contacts' own period", omega_dt)
-                    };
+                    let (what, fastest, bound) =
+                        if within(COMPLIANT_MAX_OMEGA_H, body_dt) < by_contacts {
+                            (
+                                "the bodies' collective mode",
+                                body_dt,
+                                COMPLIANT_MAX_OMEGA_H,
+                            )
+                        } else {
+                            ("the contacts' own period", omega_dt, contact_h)
+                        };
                     let why = format!(
-                        "exact: {what} is resolved by few DEM steps (ω Δt = {fastest:.3}: a body step of 2 would reach ω h = {:.2} > {COMPLIANT_MAX_OMEGA_H}) and the predicted scheme is not safe ({})",
+                        "exact: {what} is resolved by few DEM steps (ω Δt = {fastest:.3}: a body step of 2 would reach ω h = {:.2} > {bound}) and the predicted scheme is not safe ({})",
                         2.0 * fastest,
                         last.unwrap_or_default()
                     );
