@@ -7,7 +7,9 @@
 
 use efgdem::coupling::CouplingError;
 use efgdem::coupling::energy::WorkMeter;
-use efgdem::coupling::scheme::Scheme;
+use efgdem::coupling::scheme::{
+    COMPLIANT_DAMPED_OMEGA_H, COMPLIANT_MAX_OMEGA_H, COMPLIANT_UNDAMPED_OMEGA_H, Scheme,
+};
 use efgdem::model::Model;
 use efgdem::model::ModelError;
 use efgdem::scenario::parse;
@@ -347,10 +349,12 @@ fn the_automatic_scheme_keeps_the_energy_and_the_reaction_of_the_exact_step() {
             choice.why
         );
         if scheme == Scheme::Compliant {
-            // the longest body step that resolves both the contacts'
-            // period and the body's collective mode (ω h ≤ 2)
-            let fastest = choice.omega_dt.max(choice.body_omega_dt);
-            assert_eq!(choice.substeps, (2.0 / fastest).floor() as usize);
+            // the longest body step that resolves both the undamped
+            // contacts' period (ω_c h ≤ 1.75) and the body's collective
+            // mode (ω_b h ≤ 2)
+            let by_contacts = (COMPLIANT_UNDAMPED_OMEGA_H / choice.omega_dt).floor();
+            let by_body = (COMPLIANT_MAX_OMEGA_H / choice.body_omega_dt).floor();
+            assert_eq!(choice.substeps, by_contacts.min(by_body) as usize);
         }
         drop(m);
         let mut m: Model = parse(&src, "wide.toml").unwrap().build().unwrap();
@@ -379,8 +383,8 @@ fn the_automatic_scheme_keeps_the_energy_and_the_reaction_of_the_exact_step() {
 /// the least the choice counts as damped, frictionless; and ζ = 0.2 with
 /// friction 0.5, as `examples/soft_footing.toml`), the automatic scheme
 /// takes the compliant body steps of a footing soft enough (E = 20 MPa)
-/// that its own collective mode does not bound them up to `ω_c h` = 4,
-/// twice the undamped bound: its own account of the energy it created stays
+/// that its own collective mode does not bound them up to `ω_c h` = 4
+/// (1.75 on undamped contacts): its own account of the energy it created stays
 /// within 1 % of the work the footing exchanged, and the mean reaction
 /// over the push within 1 % of the exact step's.
 #[test]
@@ -413,7 +417,7 @@ fn the_automatic_scheme_takes_longer_body_steps_on_damped_contacts() {
         assert!(choice.body_omega_dt < choice.omega_dt, "{}", choice.why);
         assert_eq!(
             choice.substeps,
-            (4.0 / choice.omega_dt).floor() as usize,
+            (COMPLIANT_DAMPED_OMEGA_H / choice.omega_dt).floor() as usize,
             "{}",
             choice.why
         );
