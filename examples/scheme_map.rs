@@ -3,8 +3,9 @@
 //! 5 cm/s into a hexagonal bed of 446 discs (r = 5 mm, k_n = k_s = 10⁷
 //! N/m; undamped and frictionless unless asked: the energy account's only
 //! dissipation is then numerical), for several Young's moduli, each
-//! scheme and substep count forced (past the build's safety rules). Per run: the predicted
-//! scheme's collective gain Γ and ω_c h at that body step, the largest
+//! scheme and substep count forced (past the build's safety rules). Per
+//! run: the predicted scheme's collective gain Γ and ω_c h at that body
+//! step, the largest
 //! |E_diss| over the work at the body steps (the whole coupled system's
 //! energy error), what the sub-cycled scheme's own account says it created
 //! against the work it exchanged, and the footing's mean reaction over the

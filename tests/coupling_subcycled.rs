@@ -384,9 +384,9 @@ fn the_automatic_scheme_keeps_the_energy_and_the_reaction_of_the_exact_step() {
 /// friction 0.5, as `examples/soft_footing.toml`), the automatic scheme
 /// takes the compliant body steps of a footing soft enough (E = 20 MPa)
 /// that its own collective mode does not bound them up to `ω_c h` = 4
-/// (1.75 on undamped contacts): its own account of the energy it created stays
-/// within 1 % of the work the footing exchanged, and the mean reaction
-/// over the push within 1 % of the exact step's.
+/// (1.75 on undamped contacts): its own account of the energy it created
+/// stays within 1 % of the work the footing exchanged, and the mean
+/// reaction over the push within 1 % of the exact step's.
 #[test]
 fn the_automatic_scheme_takes_longer_body_steps_on_damped_contacts() {
     for (zeta, friction) in [("0.05", "0.0"), ("0.2", "0.5")] {
@@ -435,6 +435,54 @@ fn the_automatic_scheme_takes_longer_body_steps_on_damped_contacts() {
             "{created} of {exchanged}"
         );
         assert!((f - f1).abs() <= 0.01 * f1.abs(), "reaction {f} vs {f1}");
+    }
+}
+
+/// The dashpot the choice counts: `ζ_n` of a critical-ratio one, or
+/// `β_n ω / 2` of a stiffness-proportional one at the heaviest disc's
+/// `ω = √(k_n/m)` (here 6 931 rad/s: r = 5 mm, ρ = 2650, k_n = 10⁷), on
+/// either side of the 5 % from which the contacts count as damped.
+#[test]
+fn the_choice_counts_the_contacts_dashpots() {
+    let omega = (1.0e7f64 / (2650.0 * std::f64::consts::PI * 0.005 * 0.005)).sqrt();
+    for (damping, zeta, damped) in [
+        (
+            "kind = \"critical-ratio\", zeta = 0.08".to_string(),
+            0.08,
+            true,
+        ),
+        (
+            format!("kind = \"contact-viscous\", beta = {:e}", 0.2 / omega),
+            0.1,
+            true,
+        ),
+        (
+            format!("kind = \"contact-viscous\", beta = {:e}", 0.06 / omega),
+            0.03,
+            false,
+        ),
+    ] {
+        let src = wide("2.0e7", false).replace(
+            "radius = 0.005 }\n",
+            &format!("radius = 0.005 }}\ndamping = {{ {damping} }}\n"),
+        );
+        let m: Model = parse(&src, "damped.toml").unwrap().build().unwrap();
+        let c = m.coupled().unwrap();
+        let got = efgdem::coupling::scheme::contact_zeta(c);
+        assert!((got - zeta).abs() < 1e-12, "{damping}: ζ = {got}");
+        let choice = c.choice.as_ref().unwrap();
+        let bound = if damped { 4.0 } else { 1.75 };
+        assert_eq!(
+            choice.substeps,
+            (bound / choice.omega_dt).floor() as usize,
+            "{}",
+            choice.why
+        );
+        assert!(
+            choice.why.contains(&format!("ζ = {zeta:.3}")),
+            "{}",
+            choice.why
+        );
     }
 }
 

@@ -312,8 +312,8 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
     let overhead = exact_overhead(m);
     let contacts = max_contacts(m);
     // the compliant scheme's longest body step: the contacts' and the
-    // bodies' own periods resolved (`body_dt`: ω_b Δt)
-    // the contacts' bound on ω_c h, and the body steps each bound allows
+    // bodies' own periods resolved (`body_dt`: ω_b Δt), the contacts'
+    // bound on ω_c h by their dashpots
     let zeta = contact_zeta(m);
     let contact_h = compliant_contact_bound(zeta);
     let within = |bound: f64, w: f64| {
@@ -324,6 +324,7 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
         }
     };
     let by_contacts = within(contact_h, omega_dt);
+    let body_bounds = |body_dt: f64| within(COMPLIANT_MAX_OMEGA_H, body_dt) < by_contacts;
     let compliant_n = |body_dt: f64| {
         let n = by_contacts.min(within(COMPLIANT_MAX_OMEGA_H, body_dt));
         (n.min(CANDIDATES[0] as f64) as usize).max(1)
@@ -334,7 +335,7 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
         format!("the disc–body contacts' ζ = {zeta:.3} < {COMPLIANT_DAMPED_ZETA}: undamped")
     };
     let compliant_why = |n: usize, body_dt: f64| {
-        if within(COMPLIANT_MAX_OMEGA_H, body_dt) < by_contacts {
+        if body_bounds(body_dt) {
             format!(
                 "{n} is the largest with ω_b h ≤ {COMPLIANT_MAX_OMEGA_H}, ω_b the bodies' collective-mode frequency (ω_b Δt = {body_dt:.3}; the contacts' ω_c Δt = {omega_dt:.3})"
             )
@@ -538,16 +539,15 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
                     choice(Scheme::Compliant, nc, examined, body_dt, true, why)
                 }
                 _ if nc < 2 => {
-                    let (what, fastest, bound) =
-                        if within(COMPLIANT_MAX_OMEGA_H, body_dt) < by_contacts {
-                            (
-                                "the bodies' collective mode",
-                                body_dt,
-                                COMPLIANT_MAX_OMEGA_H,
-                            )
-                        } else {
-                            ("the contacts' own period", omega_dt, contact_h)
-                        };
+                    let (what, fastest, bound) = if body_bounds(body_dt) {
+                        (
+                            "the bodies' collective mode",
+                            body_dt,
+                            COMPLIANT_MAX_OMEGA_H,
+                        )
+                    } else {
+                        ("the contacts' own period", omega_dt, contact_h)
+                    };
                     let why = format!(
                         "exact: {what} is resolved by few DEM steps (ω Δt = {fastest:.3}: a body step of 2 would reach ω h = {:.2} > {bound}) and the predicted scheme is not safe ({})",
                         2.0 * fastest,
