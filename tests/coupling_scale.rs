@@ -10,6 +10,9 @@ use efgdem::coupling::CoupledModel;
 use efgdem::geom::Vec2;
 use efgdem::scenario::parse;
 
+#[allow(dead_code)]
+mod common;
+
 fn model(src: &str, direct: bool) -> CoupledModel {
     let src = if direct {
         src.replacen(
@@ -157,11 +160,7 @@ fn footing_with_a_hundred_contacts_boundary_equals_direct() {
 /// The contact forces and disc positions after 40 steps of `src` on
 /// `threads` threads.
 fn run_on(src: &str, threads: usize) -> (Vec<(u32, Vec2)>, Vec<Vec2>) {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("pool");
-    pool.install(|| {
+    common::on_threads(threads, || {
         let mut m = model(src, false);
         for _ in 0..40 {
             m.step().expect("step");
@@ -218,11 +217,7 @@ fn deferred_body_ends_give_the_same_steps() {
         );
         let want = want.save_state().to_bytes();
         for threads in [1, 2] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let got = pool.install(|| {
+            let got = common::on_threads(threads, || {
                 let mut m = build();
                 let mut pending = 0;
                 for step in 1..=40 {

@@ -8,6 +8,9 @@ use efgdem::dem::particles::Particles;
 use efgdem::dem::walls::{Wall, WallMotion};
 use efgdem::dem::{BodyDamping, Granular};
 
+#[allow(dead_code)]
+mod common;
+
 /// `n` polydisperse discs (r ∈ [0.8, 1.2], ρ = 1) loosely packed in a
 /// closed square box, with random velocities of magnitude ~`v`.
 fn gas(n: usize, side: f64, v: f64, law: ContactLaw, seed: u64) -> Granular {
@@ -104,11 +107,7 @@ fn one_and_two_threads_give_bitwise_identical_results() {
         ..Default::default()
     };
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        common::on_threads(threads, || {
             let mut g = gas(6000, 200.0, 3.0, law, 11);
             g.gravity = Vec2::new(0.0, -9.81);
             g.damping = BodyDamping::Local { alpha: 0.1 };
@@ -249,11 +248,7 @@ fn fused_step_equals_public_phases() {
 #[test]
 fn held_discs_take_the_fused_step_bitwise() {
     for threads in [1, 2] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        common::on_threads(threads, || {
             let mut a = settling_gas(10);
             let mut b = a.clone();
             (a.store_forces, b.store_forces) = (false, false);

@@ -18,6 +18,9 @@ use efgdem::run::RunOptions;
 use efgdem::scenario::{self, Scenario};
 use std::path::{Path, PathBuf};
 
+#[allow(dead_code)]
+mod common;
+
 const SIGMA3: f64 = 1.0e5;
 /// Steps of the consolidation; the shearing follows.
 const CONSOLIDATION: usize = 12_000;
@@ -277,12 +280,7 @@ fn drive(sc: &Scenario, threads: usize, dir: &Path) {
         quiet: true,
         ..RunOptions::new(dir)
     };
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap()
-        .install(|| efgdem::run::run(sc, &opts))
-        .unwrap();
+    common::on_threads(threads, || efgdem::run::run(sc, &opts)).unwrap();
 }
 
 #[test]

@@ -11,6 +11,9 @@ use efgdem::dem::contact::ContactLaw;
 use efgdem::dem::particles::{FIX_ROT, FIX_X, FIX_Y, Particles};
 use efgdem::dem::{BodyDamping, Granular};
 
+#[allow(dead_code)]
+mod common;
+
 const ALL: u8 = FIX_X | FIX_Y | FIX_ROT;
 
 /// Bonds made at step 0 between touching discs.
@@ -595,13 +598,7 @@ fn torn(steps: usize, from: Option<&efgdem::dem::state::GranularState>) -> Granu
 /// state, give bitwise the same discs, bonds and breakage events.
 #[test]
 fn bonds_are_bitwise_independent_of_threads_and_restart() {
-    let on = |threads: usize, f: &(dyn Fn() -> Granular + Sync)| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(f)
-    };
+    let on = |threads: usize, f: &(dyn Fn() -> Granular + Sync)| common::on_threads(threads, f);
     let a = on(1, &|| torn(3000, None));
     let b = on(2, &|| torn(3000, None));
     let saved = on(2, &|| torn(500, None)).save_state();

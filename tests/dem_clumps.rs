@@ -12,6 +12,9 @@ use efgdem::dem::particles::Particles;
 use efgdem::dem::walls::{Wall, WallMotion};
 use efgdem::dem::{BodyDamping, Granular};
 
+#[allow(dead_code)]
+mod common;
+
 const RHO: f64 = 1000.0;
 
 /// `[A, ∫x dA, ∫y dA, ∫x² dA, ∫y² dA]` of the union of discs by columns:
@@ -401,16 +404,12 @@ fn step_fused_and_phased(a: &mut Granular, steps: usize) {
 #[test]
 fn a_clumped_step_over_blocks_is_the_phased_step_on_any_threads() {
     let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| {
-                let mut a = pile_of(40, 30, 0, None);
-                step_fused_and_phased(&mut a, 300);
-                assert!(a.particles.len() > 4 * a.contacts.block);
-                bits(&a)
-            })
+        common::on_threads(threads, || {
+            let mut a = pile_of(40, 30, 0, None);
+            step_fused_and_phased(&mut a, 300);
+            assert!(a.particles.len() > 4 * a.contacts.block);
+            bits(&a)
+        })
     };
     assert_eq!(run(1), run(2));
 }
@@ -419,13 +418,7 @@ fn a_clumped_step_over_blocks_is_the_phased_step_on_any_threads() {
 /// a saved state, give bitwise the same discs and clumps.
 #[test]
 fn clumps_are_bitwise_independent_of_threads_and_restart() {
-    let on = |threads: usize, f: &(dyn Fn() -> Granular + Sync)| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(f)
-    };
+    let on = |threads: usize, f: &(dyn Fn() -> Granular + Sync)| common::on_threads(threads, f);
     let a = on(1, &|| pile(3000, None));
     let b = on(2, &|| pile(3000, None));
     let saved = on(2, &|| pile(1000, None)).save_state();

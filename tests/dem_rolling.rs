@@ -213,6 +213,9 @@ use efgdem::dem::contact::ContactLaw;
 use efgdem::dem::particles::Particles;
 use efgdem::dem::walls::{Wall, WallMotion};
 
+#[allow(dead_code)]
+mod common;
+
 const R: f64 = 0.05;
 const RHO: f64 = 2500.0;
 const G: f64 = 9.81;
@@ -457,13 +460,7 @@ fn rolling_resistance_is_bitwise_thread_independent() {
         &src,
         "rolling_friction = 0.3\nrolling_damping = 0.3\nrolling_stiffness = 0.5",
     );
-    let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| dem_hash(&src))
-    };
+    let run = |threads: usize| common::on_threads(threads, || dem_hash(&src));
     let (a, b) = (run(1), run(2));
     println!("1 thread {a:#018x}, 2 threads {b:#018x}");
     assert_eq!(a, b);

@@ -6,6 +6,9 @@ use efgdem::Vec2;
 use efgdem::efg::{EfgBody, ShapeRow};
 use efgdem::scenario;
 
+#[allow(dead_code)]
+mod common;
+
 const SRC: &str = r#"
 [simulation]
 analysis = "dynamic"
@@ -27,11 +30,9 @@ traction = [1.0, 0.0]
 
 fn build(threads: usize) -> EfgBody {
     let sc = scenario::parse(SRC, "t.toml").unwrap();
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap()
-        .install(|| EfgBody::new(&sc.body[0].params(), sc.simulation.gravity).unwrap())
+    common::on_threads(threads, || {
+        EfgBody::new(&sc.body[0].params(), sc.simulation.gravity).unwrap()
+    })
 }
 
 #[test]

@@ -9,6 +9,9 @@ use efgdem::efg::EfgBody;
 use efgdem::geom::Vec2;
 use efgdem::geom::crack::Crack;
 
+#[allow(dead_code)]
+mod common;
+
 const E: f64 = 1000.0;
 
 /// A unit square of density `rho` on rollers (left `ux = 0`, bottom
@@ -251,26 +254,22 @@ fn dynamic_closed_crack_moves_as_the_whole_plate() {
 #[test]
 fn dynamic_contact_restarts_and_threads_bitwise() {
     let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| {
-                let mut b = dynamic(-1.0, true);
-                for _ in 0..60 {
-                    b.advance().unwrap();
-                }
-                let saved = b.save_state();
-                let mut again = dynamic(-1.0, true);
-                again.restore_state(&saved).unwrap();
-                for _ in 0..60 {
-                    b.advance().unwrap();
-                    again.advance().unwrap();
-                }
-                assert_eq!(b.state.u, again.state.u, "restart");
-                assert!(b.faces.force.iter().any(|f| *f != Vec2::ZERO));
-                b.state.u
-            })
+        common::on_threads(threads, || {
+            let mut b = dynamic(-1.0, true);
+            for _ in 0..60 {
+                b.advance().unwrap();
+            }
+            let saved = b.save_state();
+            let mut again = dynamic(-1.0, true);
+            again.restore_state(&saved).unwrap();
+            for _ in 0..60 {
+                b.advance().unwrap();
+                again.advance().unwrap();
+            }
+            assert_eq!(b.state.u, again.state.u, "restart");
+            assert!(b.faces.force.iter().any(|f| *f != Vec2::ZERO));
+            b.state.u
+        })
     };
     assert_eq!(run(1), run(2), "1 vs 2 threads");
 }

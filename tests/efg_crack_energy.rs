@@ -12,6 +12,9 @@ use efgdem::model::Model;
 use efgdem::model::body::BodyRef;
 use efgdem::scenario;
 
+#[allow(dead_code)]
+mod common;
+
 /// The beam's Young modulus (plane stress, thickness 1) and the increment.
 const E: f64 = 1.0e8;
 const DA: f64 = 0.01;
@@ -189,11 +192,7 @@ fn a_coupled_run_restarts_bitwise_across_growths() {
     let whole: Vec<Vec<u8>> = [1, 2]
         .into_iter()
         .map(|t| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(t)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            common::on_threads(t, || {
                 let mut m = beam(2.0e4);
                 for _ in 0..n {
                     m.step().unwrap();

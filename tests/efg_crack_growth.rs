@@ -10,6 +10,9 @@ use efgdem::geom::Vec2;
 use efgdem::geom::crack::Crack;
 use efgdem::geom::polygon::Domain;
 
+#[allow(dead_code)]
+mod common;
+
 fn square(half: f64) -> Domain {
     let sq = [[-half, -half], [half, -half], [half, half], [-half, half]]
         .iter()
@@ -304,17 +307,11 @@ fn efg(m: &efgdem::model::Model) -> &EfgBody {
 #[test]
 fn growing_crack_restarts_bitwise_on_any_thread_count() {
     use efgdem::model::ModelState;
-    let pool = |n| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .unwrap()
-    };
     let (n, k) = (60, 33);
     let whole: Vec<(Vec<u8>, Vec<[usize; 2]>, usize)> = [1, 2]
         .into_iter()
         .map(|t| {
-            pool(t).install(|| {
+            common::on_threads(t, || {
                 let mut a = build(DYNAMIC_PLATE);
                 let mut first = 0;
                 for s in 1..=n {

@@ -14,6 +14,9 @@ use efgdem::model::body::BodyRef;
 use efgdem::scenario;
 use std::process::Command;
 
+#[allow(dead_code)]
+mod common;
+
 fn build(src: &str) -> Model {
     scenario::parse(src, "<loads_drives>")
         .unwrap()
@@ -585,16 +588,12 @@ fn a_servo_footing_is_thread_count_independent() {
     let bytes: Vec<Vec<u8>> = [1, 2]
         .iter()
         .map(|&n| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let mut m = build(&src);
-                    run(&mut m, 800);
-                    assert!(m.body(0).drives()[0].1.measured > 0.0, "touching");
-                    m.save_state().to_bytes()
-                })
+            common::on_threads(n, || {
+                let mut m = build(&src);
+                run(&mut m, 800);
+                assert!(m.body(0).drives()[0].1.measured > 0.0, "touching");
+                m.save_state().to_bytes()
+            })
         })
         .collect();
     assert!(bytes[0] == bytes[1], "1 and 2 threads differ");

@@ -593,12 +593,6 @@ fn restarts_from_step_zero() {
 /// other, and the run in one go on either, all bitwise equal.
 #[test]
 fn restarts_across_thread_counts() {
-    let pool = |n| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .unwrap()
-    };
     for src in [
         packing(0.1, true),
         bed_on_plate("efg", ""),
@@ -607,7 +601,7 @@ fn restarts_across_thread_counts() {
         let (n, k) = (500, 260);
         let mut whole = Vec::new();
         for threads in [1, 2] {
-            whole.push(pool(threads).install(|| {
+            whole.push(common::on_threads(threads, || {
                 let mut a = build(&src);
                 run(&mut a, n);
                 a.save_state().to_bytes()
@@ -615,12 +609,12 @@ fn restarts_across_thread_counts() {
         }
         assert!(whole[0] == whole[1], "1 and 2 threads agree");
         for (save_on, resume_on) in [(1, 2), (2, 1)] {
-            let bytes = pool(save_on).install(|| {
+            let bytes = common::on_threads(save_on, || {
                 let mut b = build(&src);
                 run(&mut b, k);
                 b.save_state().to_bytes()
             });
-            let end = pool(resume_on).install(|| {
+            let end = common::on_threads(resume_on, || {
                 let mut c = build(&src);
                 c.restore_state(&ModelState::from_bytes(&bytes).unwrap())
                     .unwrap();
@@ -716,6 +710,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicUsize;
 
+#[allow(dead_code)]
+mod common;
+
 /// Output every 7 steps and frames every 50 (k is chosen to be a multiple
 /// of neither), with a probe.
 fn with_outputs(src: &str, probe: &str) -> String {
@@ -731,11 +728,7 @@ fn out_dir(tag: &str) -> PathBuf {
 /// `efgdem::run::run` on `threads` threads.
 fn drive(src: &str, threads: usize, opts: RunOptions) -> Result<serde_json::Value, RunError> {
     let sc = scenario::parse(src, "<restart>").unwrap();
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap()
-        .install(|| efgdem::run::run(&sc, &opts))
+    common::on_threads(threads, || efgdem::run::run(&sc, &opts))
 }
 
 fn opts(dir: &Path) -> RunOptions {
@@ -983,16 +976,12 @@ fn restarts_on_1_and_2_threads(src: &str, n: usize, k: usize, check: impl Fn(&Mo
     let ends: Vec<Vec<u8>> = [1, 2]
         .into_iter()
         .map(|threads| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let (a, c, _) = restart(src, n, k);
-                    assert_same(&a, &c);
-                    check(&a);
-                    a.save_state().to_bytes()
-                })
+            common::on_threads(threads, || {
+                let (a, c, _) = restart(src, n, k);
+                assert_same(&a, &c);
+                check(&a);
+                a.save_state().to_bytes()
+            })
         })
         .collect();
     assert!(ends[0] == ends[1], "1 and 2 threads agree");

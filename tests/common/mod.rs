@@ -251,3 +251,14 @@ quantity = "contacts"
         walls = sand_box(0.6, 0.4, "", "")
     )
 }
+
+/// `f` run on a pool of `threads` worker threads (results of the library
+/// must not depend on how many).
+#[allow(dead_code)]
+pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+        .install(f)
+}
