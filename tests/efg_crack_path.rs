@@ -85,7 +85,7 @@ fn crack_path_follows_cotterell_and_rice() {
 
 /// The example as it is (Δa = 0.05, six increments): within the bound.
 #[test]
-#[ignore = "slow: about a minute"]
+#[ignore = "the example at full resolution: 10–20 s; the normal tests take it at half"]
 fn crack_path_example_follows_cotterell_and_rice() {
     let worst = check_path(0.05, 0.01, 6);
     println!("largest difference: {worst:.2} of the bound");
