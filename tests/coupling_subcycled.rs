@@ -379,6 +379,16 @@ fn the_automatic_scheme_keeps_the_energy_and_the_reaction_of_the_exact_step() {
     }
 }
 
+/// `src` (the hex bed) with the discs' `damping` table `{ damping }`.
+fn with_damping(src: String, damping: &str) -> String {
+    let src = src.replace(
+        "radius = 0.005 }\n",
+        &format!("radius = 0.005 }}\ndamping = {{ {damping} }}\n"),
+    );
+    assert!(src.contains(damping));
+    src
+}
+
 /// On a bed whose contacts carry a normal dashpot (ζ = 0.05 of critical,
 /// the least the choice counts as damped, frictionless; and ζ = 0.2 with
 /// friction 0.5, as `examples/soft_footing.toml`), the automatic scheme
@@ -391,17 +401,10 @@ fn the_automatic_scheme_keeps_the_energy_and_the_reaction_of_the_exact_step() {
 fn the_automatic_scheme_takes_longer_body_steps_on_damped_contacts() {
     for (zeta, friction) in [("0.05", "0.0"), ("0.2", "0.5")] {
         let damped = |exact| {
-            let src = wide("2.0e7", exact)
-                .replace(
-                    "radius = 0.005 }\n",
-                    &format!(
-                        "radius = 0.005 }}\ndamping = {{ kind = \"critical-ratio\", zeta = {zeta} }}\n"
-                    ),
-                )
+            let dashpot = format!("kind = \"critical-ratio\", zeta = {zeta}");
+            let src = with_damping(wide("2.0e7", exact), &dashpot)
                 .replace("friction = 0.0\n", &format!("friction = {friction}\n"));
-            assert!(
-                src.contains("critical-ratio") && src.contains(&format!("friction = {friction}\n"))
-            );
+            assert!(src.contains(&format!("friction = {friction}\n")));
             src
         };
         let mut m: Model = parse(&damped(false), "damped.toml")
@@ -462,10 +465,7 @@ fn the_choice_counts_the_contacts_dashpots() {
             false,
         ),
     ] {
-        let src = wide("2.0e7", false).replace(
-            "radius = 0.005 }\n",
-            &format!("radius = 0.005 }}\ndamping = {{ {damping} }}\n"),
-        );
+        let src = with_damping(wide("2.0e7", false), &damping);
         let m: Model = parse(&src, "damped.toml").unwrap().build().unwrap();
         let c = m.coupled().unwrap();
         let got = efgdem::coupling::scheme::contact_zeta(c);

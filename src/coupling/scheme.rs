@@ -29,6 +29,7 @@
 
 use super::{CoupledModel, CouplingError};
 use crate::continuum::{Collective, SolveError};
+use crate::dem::contact::ContactLaw;
 
 /// A coupled scheme ([module docs](self)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -230,7 +231,7 @@ pub fn contact_omega(m: &CoupledModel) -> f64 {
 pub fn contact_zeta(m: &CoupledModel) -> f64 {
     let p = &m.granular.particles;
     let heaviest = p.mass.iter().fold(0.0f64, |a, &b| a.max(b));
-    let zeta = |l: &crate::dem::contact::ContactLaw| {
+    let zeta = |l: &ContactLaw| {
         let omega = if heaviest > 0.0 {
             (l.kn / heaviest).sqrt()
         } else {
@@ -324,12 +325,13 @@ fn choose_for(m: &mut CoupledModel, req: Request) -> Result<Result<Choice, Strin
         }
     };
     let by_contacts = within(contact_h, omega_dt);
-    let body_bounds = |body_dt: f64| within(COMPLIANT_MAX_OMEGA_H, body_dt) < by_contacts;
+    let by_body = |body_dt: f64| within(COMPLIANT_MAX_OMEGA_H, body_dt);
+    let body_bounds = |body_dt: f64| by_body(body_dt) < by_contacts;
     let compliant_n = |body_dt: f64| {
-        let n = by_contacts.min(within(COMPLIANT_MAX_OMEGA_H, body_dt));
+        let n = by_contacts.min(by_body(body_dt));
         (n.min(CANDIDATES[0] as f64) as usize).max(1)
     };
-    let damped = if contact_h == COMPLIANT_DAMPED_OMEGA_H {
+    let damped = if zeta >= COMPLIANT_DAMPED_ZETA {
         format!("the disc–body contacts damped at ζ = {zeta:.3} ≥ {COMPLIANT_DAMPED_ZETA}")
     } else {
         format!("the disc–body contacts' ζ = {zeta:.3} < {COMPLIANT_DAMPED_ZETA}: undamped")

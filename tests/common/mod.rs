@@ -1,5 +1,6 @@
-//! Helpers shared by the CLI tests: the binary, a fresh output directory,
-//! a run that must succeed, and its `summary.json`.
+//! Helpers shared by the tests: the binary, a fresh output directory, a
+//! run that must succeed and its `summary.json`, scenarios used by
+//! several tests, and a closure run on a pool of n threads.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
